@@ -1,0 +1,102 @@
+/*
+ * glow_precompute.h — the Glow linker as a library (what `glow-bake` is a thin CLI over).
+ *
+ * Turns a static scene (any file assimp reads, or `builtin:cornell|furnace|two-rooms`) into a
+ * bake file: surfels (PIC 4.2), a HAC hierarchy (4.3), caches (grid + lightmap texels, 4.4) and
+ * visibility-aware links (4.5, 4.6, App. A). See runtime/src/bake/bake_format.h for the file.
+ *
+ * WHAT IT DOES NOT DO: light anything (that is the runtime), or keep global state.
+ *
+ * ON ERRORS: glow_pc_bake returns a glow_result; the message (naming the file and the problem)
+ * goes to settings.log and is copied to stats.error. The output file is written to a temporary
+ * name and renamed only when complete: a failed or killed bake leaves no file behind.
+ *
+ * ON THREADS: glow_pc_bake may run concurrently with itself on different outputs. Its result is
+ * byte-identical for any settings.threads.
+ */
+#ifndef GLOW_GLOW_PRECOMPUTE_H
+#define GLOW_GLOW_PRECOMPUTE_H
+
+#include "glow/glow.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum glow_pc_quality {
+    GLOW_PC_QUALITY_DEFAULT = 0, /* = moderate */
+    GLOW_PC_QUALITY_LOW,
+    GLOW_PC_QUALITY_MODERATE,    /* PIC: n_S = 32k, n_L = 128, l = 3, ~10k caches */
+    GLOW_PC_QUALITY_HIGH,        /* PIC: n_S = 128k, n_L = 254, l = 4, ~10k caches */
+    GLOW_PC_QUALITY_FORCE_U32 = 0x7FFFFFFF
+} glow_pc_quality;
+
+typedef void (*glow_pc_log_fn)(void *user, glow_log_level level, const char *message);
+/* stage: 0-based index into glow_pc_stage_names; fraction in [0,1] of that stage. */
+typedef void (*glow_pc_progress_fn)(void *user, uint32_t stage, double fraction);
+
+enum { GLOW_PC_STAGE_COUNT = 7 };
+/* "import", "surfels", "hierarchy", "caches", "links", "write", ... */
+GLOW_API const char *glow_pc_stage_name(uint32_t stage);
+
+typedef struct glow_pc_settings {
+    glow_pc_quality quality;  /* presets below; 0 = moderate */
+    uint32_t surfels;         /* n_S, 0 = preset */
+    uint32_t links;           /* n_L per cache, 0 = preset */
+    uint32_t bands;           /* SH bands l (2..8), 0 = preset */
+    float grid_spacing;       /* m, 0 = from the scene size */
+    float texel_density;      /* lightmap texels per m, 0 = from the scene area */
+    uint32_t threads;         /* 0 = all online CPUs */
+    uint32_t seed;            /* 0 is a valid seed; same seed, same bytes */
+    bool sh_links;            /* also write full-SH links (SHLK) */
+    uint32_t relax_iterations;/* 0 = preset */
+    uint32_t rays_per_surfel; /* 0 = 1 */
+    glow_pc_log_fn log;       /* NULL = silent */
+    void *log_user;
+    glow_pc_progress_fn progress; /* NULL = none */
+    void *progress_user;
+} glow_pc_settings;
+
+typedef struct glow_pc_stats {
+    double stage_seconds[GLOW_PC_STAGE_COUNT];
+    size_t stage_peak_rss[GLOW_PC_STAGE_COUNT]; /* bytes, process peak RSS at the stage's end */
+    double total_seconds;
+    /* resolved settings */
+    uint32_t surfels, links_per_cache, bands, threads, seed;
+    float grid_spacing, texel_density;
+    /* counts */
+    uint32_t source_triangles, triangles, materials, textures, textures_missing;
+    uint32_t skipped_degenerate, skipped_duplicate, skipped_nonfinite;
+    uint32_t nodes, levels;
+    uint32_t grid_dims[3], grid_caches, grid_inside;
+    uint32_t lightmap_width, lightmap_height, lightmap_caches, lightmap_invalid, charts;
+    uint32_t caches;
+    uint64_t links;
+    double scene_area;
+    /* file */
+    uint64_t file_size;
+    uint32_t section_count;
+    uint32_t section_fourcc[16];
+    uint64_t section_size[16];
+    double bytes_per_link;    /* LINK section bytes / links */
+    char error[1024];         /* last error message, "" on success */
+} glow_pc_stats;
+
+/** Resolves presets: fills every zero field of `settings` from its quality. \since 0.1 */
+GLOW_API glow_pc_settings glow_pc_settings_resolve(const glow_pc_settings *settings);
+
+/** Validates settings: returns GLOW_ERROR_INVALID_ARGUMENT and writes a message for absurd values
+ * (e.g. bands outside 2..8, surfels < 16 or > 4M, links outside 1..4096). \since 0.1 */
+GLOW_API glow_result glow_pc_settings_validate(const glow_pc_settings *settings, char *message, size_t message_size);
+
+/** Bakes `scene_path` into `out_path` (atomic: temp file + rename). `stats` may be NULL.
+ * \returns GLOW_OK; GLOW_ERROR_IO (missing/unreadable input, unwritable output, disk full),
+ * GLOW_ERROR_UNSUPPORTED (unknown format), GLOW_ERROR_EMPTY_SCENE, GLOW_ERROR_CORRUPT_DATA,
+ * GLOW_ERROR_INVALID_ARGUMENT, GLOW_ERROR_OUT_OF_MEMORY. \since 0.1 */
+GLOW_API glow_result glow_pc_bake(const char *scene_path, const char *out_path, const glow_pc_settings *settings,
+                                  glow_pc_stats *stats);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* GLOW_GLOW_PRECOMPUTE_H */

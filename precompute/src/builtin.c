@@ -1,0 +1,256 @@
+/* builtin.c — procedural test scenes ("builtin:cornell", "builtin:furnace", "builtin:two-rooms").
+ *
+ * Metres, +Y up, counter-clockwise front faces (geometric normal (p1-p0)x(p2-p0)). Room walls face
+ * into the rooms, solid blocks face outwards. Every quad is two triangles (p0,p1,p2), (p0,p2,p3).
+ * Faces of one closed shell are cut along shared grid lines, so every edge of a closed shell is
+ * shared by exactly two triangles (no T-junctions). No UVs; normals are generated (flat) by
+ * glow__scene_finalize, which every builtin goes through. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "pc_internal.h"
+
+typedef struct builder {
+    uint32_t count, cap;
+    float (*pos)[3];
+    uint32_t *mat;
+    bool failed;
+} builder;
+
+static void add_tri(builder *b, const float p0[3], const float p1[3], const float p2[3], uint32_t mat) {
+    if (b->failed) return;
+    if (b->count == b->cap) {
+        uint32_t cap = b->cap ? 2 * b->cap : 64;
+        void *np = realloc(b->pos, (size_t)cap * 3 * sizeof *b->pos);
+        if (!np) {
+            b->failed = true;
+            return;
+        }
+        b->pos = np;
+        void *nm = realloc(b->mat, (size_t)cap * sizeof *b->mat);
+        if (!nm) {
+            b->failed = true;
+            return;
+        }
+        b->mat = nm;
+        b->cap = cap;
+    }
+    memcpy(b->pos[3 * (size_t)b->count + 0], p0, sizeof(float[3]));
+    memcpy(b->pos[3 * (size_t)b->count + 1], p1, sizeof(float[3]));
+    memcpy(b->pos[3 * (size_t)b->count + 2], p2, sizeof(float[3]));
+    b->mat[b->count++] = mat;
+}
+
+/* Quad p0..p3 (a planar convex loop), wound so that its normal points along `facing`. */
+static void add_quad_facing(builder *b, const float p0[3], const float p1[3], const float p2[3], const float p3[3],
+                            const float facing[3], uint32_t mat) {
+    float e1[3], e2[3], n[3];
+    glow__sub(p1, p0, e1);
+    glow__sub(p2, p0, e2);
+    glow__cross(e1, e2, n);
+    if (glow__dot(n, facing) >= 0.0f) {
+        add_tri(b, p0, p1, p2, mat);
+        add_tri(b, p0, p2, p3, mat);
+    } else {
+        add_tri(b, p0, p3, p2, mat);
+        add_tri(b, p0, p2, p1, mat);
+    }
+}
+
+/* An axis-aligned box shell cut along the grid lines splits[axis][0..n[axis]-1] (ascending, the
+ * first and last are the box's extent). inward: faces point into the box (a room), else out.
+ * face_mat[2*axis + side] (side 0 = min, 1 = max). An optional emitter cell: the cell of face
+ * `light_face` whose lower corner (in the face's two other axes, in axis order) equals
+ * light_lo gets light_mat. */
+typedef struct box_desc {
+    const float *splits[3];
+    uint32_t n[3];
+    bool inward;
+    uint32_t face_mat[6];
+    int light_face; /* -1 = none */
+    float light_lo[2], light_hi[2];
+    uint32_t light_mat;
+} box_desc;
+
+static void add_box(builder *b, const box_desc *d) {
+    for (int axis = 0; axis < 3; axis++) {
+        int ua = (axis + 1) % 3, va = (axis + 2) % 3;
+        int lo_a = ua < va ? ua : va, hi_a = ua < va ? va : ua; /* the face's axes in x, y, z order */
+        for (int side = 0; side < 2; side++) {
+            int face = 2 * axis + side;
+            float coord = d->splits[axis][side ? d->n[axis] - 1 : 0];
+            float facing[3] = {0.0f, 0.0f, 0.0f};
+            facing[axis] = (side ? 1.0f : -1.0f) * (d->inward ? -1.0f : 1.0f);
+            for (uint32_t i = 0; i + 1 < d->n[ua]; i++) {
+                for (uint32_t j = 0; j + 1 < d->n[va]; j++) {
+                    float p[4][3];
+                    float u0 = d->splits[ua][i], u1 = d->splits[ua][i + 1];
+                    float v0 = d->splits[va][j], v1 = d->splits[va][j + 1];
+                    const float uu[4] = {u0, u1, u1, u0}, vv[4] = {v0, v0, v1, v1};
+                    for (int k = 0; k < 4; k++) {
+                        p[k][axis] = coord;
+                        p[k][ua] = uu[k];
+                        p[k][va] = vv[k];
+                    }
+                    uint32_t mat = d->face_mat[face];
+                    if (face == d->light_face) {
+                        float cell_lo[3], cell_hi[3]; /* the cell's extent along x, y, z */
+                        cell_lo[axis] = cell_hi[axis] = coord;
+                        cell_lo[ua] = u0;
+                        cell_hi[ua] = u1;
+                        cell_lo[va] = v0;
+                        cell_hi[va] = v1;
+                        if (cell_lo[lo_a] == d->light_lo[0] && cell_lo[hi_a] == d->light_lo[1] &&
+                            cell_hi[lo_a] == d->light_hi[0] && cell_hi[hi_a] == d->light_hi[1])
+                            mat = d->light_mat;
+                    }
+                    add_quad_facing(b, p[0], p[1], p[2], p[3], facing, mat);
+                }
+            }
+        }
+    }
+}
+
+/* A solid block standing on y = 0: square footprint (half-size `half`) centred on (cx, cz),
+ * rotated by `angle` about +Y, `height` tall; 4 sides and a top facing out, no bottom. */
+static void add_block(builder *b, float cx, float cz, float half, float height, float angle, uint32_t mat) {
+    float ca = cosf(angle), sa = sinf(angle);
+    float ax[2] = {ca * half, sa * half}, az[2] = {-sa * half, ca * half};
+    const float sx[4] = {1.0f, 1.0f, -1.0f, -1.0f}, sz[4] = {1.0f, -1.0f, -1.0f, 1.0f};
+    float lo[4][3], hi[4][3];
+    for (int k = 0; k < 4; k++) {
+        lo[k][0] = hi[k][0] = cx + sx[k] * ax[0] + sz[k] * az[0];
+        lo[k][2] = hi[k][2] = cz + sx[k] * ax[1] + sz[k] * az[1];
+        lo[k][1] = 0.0f;
+        hi[k][1] = height;
+    }
+    for (int k = 0; k < 4; k++) {
+        int l = (k + 1) & 3;
+        float out[3] = {0.5f * (lo[k][0] + lo[l][0]) - cx, 0.0f, 0.5f * (lo[k][2] + lo[l][2]) - cz};
+        add_quad_facing(b, lo[k], lo[l], hi[l], hi[k], out, mat);
+    }
+    const float up[3] = {0.0f, 1.0f, 0.0f};
+    add_quad_facing(b, hi[0], hi[1], hi[2], hi[3], up, mat);
+}
+
+static void set_material(glow__material *m, const char *name, float r, float g, float bl, float e0, float e1,
+                         float e2) {
+    snprintf(m->name, sizeof m->name, "%s", name);
+    m->albedo[0] = r;
+    m->albedo[1] = g;
+    m->albedo[2] = bl;
+    m->emission[0] = e0;
+    m->emission[1] = e1;
+    m->emission[2] = e2;
+    m->texture = -1;
+}
+
+enum { CB_FLOOR, CB_CEILING, CB_BACK, CB_FRONT, CB_LEFT, CB_RIGHT, CB_SHORT, CB_TALL, CB_LIGHT, CB_COUNT };
+
+/* McGuire-style 2 m Cornell box, closed on all six sides (a closed room keeps every ray inside,
+ * which the tests and the grid-cache inside/outside logic like better than the open original). */
+static void build_cornell(builder *b, glow__material *m) {
+    const float white[3] = {0.725f, 0.71f, 0.68f};
+    set_material(&m[CB_FLOOR], "floor", white[0], white[1], white[2], 0, 0, 0);
+    set_material(&m[CB_CEILING], "ceiling", white[0], white[1], white[2], 0, 0, 0);
+    set_material(&m[CB_BACK], "back", white[0], white[1], white[2], 0, 0, 0);
+    set_material(&m[CB_FRONT], "front", white[0], white[1], white[2], 0, 0, 0);
+    set_material(&m[CB_LEFT], "left", 0.63f, 0.065f, 0.05f, 0, 0, 0);
+    set_material(&m[CB_RIGHT], "right", 0.14f, 0.45f, 0.091f, 0, 0, 0);
+    set_material(&m[CB_SHORT], "short", white[0], white[1], white[2], 0, 0, 0);
+    set_material(&m[CB_TALL], "tall", white[0], white[1], white[2], 0, 0, 0);
+    set_material(&m[CB_LIGHT], "light", 0.78f, 0.78f, 0.78f, 17.0f, 12.0f, 4.0f);
+
+    static const float xs[2] = {-1.0f, 1.0f}, ys[2] = {0.0f, 2.0f}, zs[2] = {-1.0f, 1.0f};
+    box_desc room = {.splits = {xs, ys, zs},
+                     .n = {2, 2, 2},
+                     .inward = true,
+                     .face_mat = {CB_LEFT, CB_RIGHT, CB_FLOOR, CB_CEILING, CB_BACK, CB_FRONT},
+                     .light_face = -1};
+    add_box(b, &room);
+    /* blocks placed and turned as in CornellBox-Original.obj (0.6 m footprints, ~17 degrees) */
+    add_block(b, 0.33f, 0.37f, 0.3f, 0.6f, atan2f(0.17f, 0.57f), CB_SHORT);
+    add_block(b, -0.335f, -0.29f, 0.3f, 1.2f, atan2f(-0.18f, 0.57f), CB_TALL);
+    /* emitter 2 cm below the ceiling, facing down */
+    const float l0[3] = {-0.24f, 1.98f, -0.22f}, l1[3] = {0.24f, 1.98f, -0.22f};
+    const float l2[3] = {0.24f, 1.98f, 0.22f}, l3[3] = {-0.24f, 1.98f, 0.22f};
+    const float down[3] = {0.0f, -1.0f, 0.0f};
+    add_quad_facing(b, l0, l1, l2, l3, down, CB_LIGHT);
+}
+
+/* White furnace: a closed cube, uniformly emissive and grey; radiance inside converges to
+ * E / (1 - albedo) = 2 everywhere. */
+static void build_furnace(builder *b, glow__material *m) {
+    set_material(&m[0], "wall", 0.5f, 0.5f, 0.5f, 1.0f, 1.0f, 1.0f);
+    static const float s[5] = {-1.0f, -0.5f, 0.0f, 0.5f, 1.0f};
+    box_desc cube = {.splits = {s, s, s}, .n = {5, 5, 5}, .inward = true, .face_mat = {0, 0, 0, 0, 0, 0}, .light_face = -1};
+    add_box(b, &cube);
+}
+
+/* Two closed 4 x 2.5 x 4 m rooms along x, 0.1 m apart. The gap is the separating wall: room A's
+ * +x wall (x = -0.05, facing -x into A) and room B's -x wall (x = +0.05, facing +x into B) are its
+ * two faces, each pointing out of the wall into its room. The wall's top, bottom and end caps are
+ * not modelled: they would face away from both rooms and break the rooms' edge-manifoldness.
+ * Light: a 1 x 1 m cell of room A's ceiling, cut into the ceiling's grid (no T-junctions). */
+static void build_two_rooms(builder *b, glow__material *m) {
+    set_material(&m[0], "wall", 0.7f, 0.7f, 0.7f, 0, 0, 0);
+    set_material(&m[1], "light", 0.7f, 0.7f, 0.7f, 10.0f, 10.0f, 10.0f);
+    static const float xa[4] = {-4.05f, -2.55f, -1.55f, -0.05f}, xb[4] = {0.05f, 1.55f, 2.55f, 4.05f};
+    static const float ys[3] = {0.0f, 1.25f, 2.5f}, zs[4] = {-2.0f, -0.5f, 0.5f, 2.0f};
+    box_desc a = {.splits = {xa, ys, zs},
+                  .n = {4, 3, 4},
+                  .inward = true,
+                  .face_mat = {0, 0, 0, 0, 0, 0},
+                  .light_face = 3, /* +y (ceiling); its cells span x (lo axis) and z (hi axis) */
+                  .light_lo = {-2.55f, -0.5f},
+                  .light_hi = {-1.55f, 0.5f},
+                  .light_mat = 1};
+    add_box(b, &a);
+    box_desc rb = {.splits = {xb, ys, zs}, .n = {4, 3, 4}, .inward = true, .face_mat = {0, 0, 0, 0, 0, 0}, .light_face = -1};
+    add_box(b, &rb);
+}
+
+glow_result glow__scene_builtin(const char *name, glow__log *log, glow__scene *out) {
+    if (!out) return GLOW_ERROR_INVALID_ARGUMENT;
+    memset(out, 0, sizeof *out);
+    if (!name) name = "";
+    uint32_t material_count;
+    void (*build)(builder *, glow__material *);
+    if (strcmp(name, "cornell") == 0) {
+        material_count = CB_COUNT;
+        build = build_cornell;
+    } else if (strcmp(name, "furnace") == 0) {
+        material_count = 1;
+        build = build_furnace;
+    } else if (strcmp(name, "two-rooms") == 0) {
+        material_count = 2;
+        build = build_two_rooms;
+    } else {
+        glow__errorf(log, "builtin:%s: unknown built-in scene (valid: builtin:cornell, builtin:furnace, builtin:two-rooms)",
+                     name);
+        return GLOW_ERROR_UNSUPPORTED;
+    }
+    snprintf(out->source, sizeof out->source, "builtin:%s", name);
+    out->materials = calloc(material_count, sizeof *out->materials);
+    if (!out->materials) {
+        glow__errorf(log, "%s: out of memory", out->source);
+        return GLOW_ERROR_OUT_OF_MEMORY;
+    }
+    out->material_count = material_count;
+    builder b = {0};
+    build(&b, out->materials);
+    out->pos = b.pos;
+    out->tri_material = b.mat;
+    out->tri_count = b.count;
+    if (b.failed) {
+        glow__errorf(log, "%s: out of memory", out->source);
+        glow__scene_free(out);
+        return GLOW_ERROR_OUT_OF_MEMORY;
+    }
+    out->source_tri_count = b.count;
+    glow_result r = glow__scene_finalize(out, log);
+    if (r != GLOW_OK) glow__scene_free(out);
+    return r;
+}

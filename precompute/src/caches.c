@@ -1,0 +1,819 @@
+/* caches.c — cache placement (PIC 4.4): where the indirect light is gathered at runtime.
+ *
+ * Two kinds of cache, grid caches first in the array, then lightmap caches:
+ *  - GRID: one spherical cache per cell centre of a regular grid over the scene's AABB (for dynamic
+ *    objects). A grid point inside solid geometry is no cache: from inside a wall or a closed block
+ *    one sees back faces (walls face into rooms, blocks face out). GRID_RAYS fixed directions (a
+ *    spherical Fibonacci set) are cast; the point is inside when more than GRID_INSIDE_FRACTION of
+ *    the rays that hit something hit a back face and at least a quarter of all rays do (points that
+ *    see mostly sky, outside an open scene, stay: they are air).
+ *  - LIGHTMAP: one hemispherical cache per texel of one atlas, UVs from the mesh's second UV set or
+ *    from charts.c. Every triangle is rasterised conservatively: a texel its UV triangle overlaps
+ *    belongs to the triangle whose UV triangle is nearest to the texel centre (0 when the centre is
+ *    inside; ties: lowest triangle index), and the cache sits at that nearest point, lifted by
+ *    1e-4 x the scene diagonal along the geometric normal. So every triangle owns or shares every
+ *    texel it touches, and tiny triangles still get a texel. A texel whose cache sees back faces
+ *    (LM_RAYS hemisphere rays, LM_INVALID_FRACTION of the hits, at least a quarter of the rays: a
+ *    floor under a box, a wall poking through a floor) is invalid: counted, not a cache.
+ * Maps (grid_map, lm_map): cache index, GLOW_MAP_COPY_BIT | index of a nearby cache for cells that
+ * have none of their own, or GLOW_MAP_EMPTY. Copies are made by a breadth-first dilation in layers
+ * (each layer reads only earlier layers, neighbours in a fixed order: faces, then edges, then
+ * corners), so they do not depend on scan order: the grid dilates GRID_DILATE_PASSES layers; the
+ * lightmap first fills invalid texels from the valid ones of their chart (all layers needed), then
+ * the gutter LM_GUTTER_PASSES layers out (charts.c keeps charts 2 texels apart: a bilinear lookup
+ * inside a chart reads at most one texel beyond its conservative footprint).
+ * Texel density and grid spacing come from the settings or from the targets; with generated charts
+ * the density is corrected from the covered-texel count (a few packing rounds).
+ * All ray work runs through glow__parallel_for with one result per item; the rest is serial, so the
+ * result is the same for any thread count. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bake/bake_format.h"
+#include "charts.h"
+#include "pc_internal.h"
+
+#define NONE 0xFFFFFFFFu
+#define GRID_RAYS 26u
+#define LM_RAYS 16u
+#define GRID_INSIDE_FRACTION 0.4
+#define LM_INVALID_FRACTION 0.3
+#define GRID_DILATE_PASSES 3u
+#define LM_GUTTER_PASSES 2u
+#define LM_PADDING 2u
+#define MAX_GRID_CELLS (8u << 20)
+#define DEFAULT_TARGET_GRID 2000u
+#define DEFAULT_TARGET_LIGHTMAP 8000u
+#define DENSITY_ROUNDS 4
+
+/* ------------------------------------------------------------------ directions */
+static void fibonacci_sphere(uint32_t n, float (*out)[3]) {
+    const double golden = GLOW__PI * (3.0 - sqrt(5.0));
+    for (uint32_t i = 0; i < n; ++i) {
+        double z = 1.0 - (2.0 * i + 1.0) / n, r = sqrt(fmax(0.0, 1.0 - z * z)), phi = golden * i;
+        out[i][0] = (float)(r * cos(phi));
+        out[i][1] = (float)(r * sin(phi));
+        out[i][2] = (float)z;
+    }
+}
+
+/* Local hemisphere directions (z up), cos(theta) in (0.1, 1): no grazing rays. */
+static void fibonacci_hemisphere(uint32_t n, double (*out)[3]) {
+    const double golden = GLOW__PI * (3.0 - sqrt(5.0));
+    for (uint32_t i = 0; i < n; ++i) {
+        double z = 1.0 - 0.9 * (i + 0.5) / n, r = sqrt(fmax(0.0, 1.0 - z * z)), phi = golden * i;
+        out[i][0] = r * cos(phi);
+        out[i][1] = r * sin(phi);
+        out[i][2] = z;
+    }
+}
+
+static void tangent_frame(const double n[3], double t[3], double b[3]) {
+    int ax = 0;
+    if (fabs(n[1]) < fabs(n[ax])) ax = 1;
+    if (fabs(n[2]) < fabs(n[ax])) ax = 2;
+    double a[3] = {0, 0, 0};
+    a[ax] = 1.0;
+    t[0] = a[1] * n[2] - a[2] * n[1];
+    t[1] = a[2] * n[0] - a[0] * n[2];
+    t[2] = a[0] * n[1] - a[1] * n[0];
+    double l = sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
+    for (int k = 0; k < 3; ++k) t[k] /= l;
+    b[0] = n[1] * t[2] - n[2] * t[1];
+    b[1] = n[2] * t[0] - n[0] * t[2];
+    b[2] = n[0] * t[1] - n[1] * t[0];
+}
+
+/* ------------------------------------------------------------------ dilation */
+/* Breadth-first layers into cells with eligible[c] != 0 and map[c] == EMPTY, from every non-empty
+ * cell, at most max_layers layers. nb/nb_count: neighbour offsets in priority order (dx, dy, dz);
+ * dims[2] == 1 for 2-D maps. Returns false on OOM. */
+static bool dilate(uint32_t *map, const uint32_t dims[3], const uint8_t *eligible, const int (*nb)[3],
+                   uint32_t nb_count, uint32_t max_layers) {
+    const size_t nx = dims[0], ny = dims[1], nz = dims[2], n = nx * ny * nz;
+    uint16_t *layer = malloc(n * sizeof *layer);
+    uint32_t *cur = malloc(n * sizeof *cur), *next = malloc(n * sizeof *next);
+    if (!layer || !cur || !next) {
+        free(layer);
+        free(cur);
+        free(next);
+        return false;
+    }
+    size_t cur_len = 0;
+    for (size_t i = 0; i < n; ++i) {
+        layer[i] = map[i] != GLOW_MAP_EMPTY ? 0 : UINT16_MAX;
+        if (map[i] != GLOW_MAP_EMPTY) cur[cur_len++] = (uint32_t)i;
+    }
+    if (max_layers >= UINT16_MAX) max_layers = UINT16_MAX - 1;
+    for (uint32_t pass = 1; pass <= max_layers && cur_len; ++pass) {
+        size_t next_len = 0;
+        for (size_t f = 0; f < cur_len; ++f) {
+            size_t c = cur[f];
+            long x = (long)(c % nx), y = (long)((c / nx) % ny), z = (long)(c / (nx * ny));
+            for (uint32_t k = 0; k < nb_count; ++k) {
+                long qx = x + nb[k][0], qy = y + nb[k][1], qz = z + nb[k][2];
+                if (qx < 0 || qy < 0 || qz < 0 || qx >= (long)nx || qy >= (long)ny || qz >= (long)nz) continue;
+                size_t q = ((size_t)qz * ny + (size_t)qy) * nx + (size_t)qx;
+                if (!eligible[q] || layer[q] != UINT16_MAX || map[q] != GLOW_MAP_EMPTY) continue;
+                layer[q] = (uint16_t)pass;
+                next[next_len++] = (uint32_t)q;
+            }
+        }
+        for (size_t f = 0; f < next_len; ++f) {
+            size_t c = next[f];
+            long x = (long)(c % nx), y = (long)((c / nx) % ny), z = (long)(c / (nx * ny));
+            for (uint32_t k = 0; k < nb_count; ++k) {
+                long qx = x + nb[k][0], qy = y + nb[k][1], qz = z + nb[k][2];
+                if (qx < 0 || qy < 0 || qz < 0 || qx >= (long)nx || qy >= (long)ny || qz >= (long)nz) continue;
+                size_t q = ((size_t)qz * ny + (size_t)qy) * nx + (size_t)qx;
+                if (layer[q] < pass && map[q] != GLOW_MAP_EMPTY) {
+                    map[c] = GLOW_MAP_COPY_BIT | (map[q] & GLOW_MAP_INDEX_MASK);
+                    break;
+                }
+            }
+        }
+        uint32_t *tmp = cur;
+        cur = next;
+        next = tmp;
+        cur_len = next_len;
+    }
+    free(layer);
+    free(cur);
+    free(next);
+    return true;
+}
+
+/* Neighbour offsets sorted by how many axes they step along (faces, edges, corners); dims 2 or 3. */
+static uint32_t neighbour_offsets(int dim, int (*out)[3]) {
+    uint32_t n = 0;
+    for (int steps = 1; steps <= dim; ++steps)
+        for (int dz = dim == 3 ? -1 : 0; dz <= (dim == 3 ? 1 : 0); ++dz)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) {
+                    if (abs(dx) + abs(dy) + abs(dz) != steps) continue;
+                    out[n][0] = dx;
+                    out[n][1] = dy;
+                    out[n][2] = dz;
+                    ++n;
+                }
+    return n;
+}
+
+/* ------------------------------------------------------------------ grid */
+typedef struct grid_job {
+    const glow__rt *rt;
+    float origin[3], spacing;
+    uint32_t dims[3];
+    float dirs[GRID_RAYS][3];
+    uint8_t *inside;
+} grid_job;
+
+static void grid_range(void *p, uint32_t begin, uint32_t end, uint32_t worker) {
+    grid_job *j = p;
+    (void)worker;
+    for (uint32_t c = begin; c < end; ++c) {
+        uint32_t x = c % j->dims[0], y = (c / j->dims[0]) % j->dims[1], z = c / (j->dims[0] * j->dims[1]);
+        float o[3] = {j->origin[0] + j->spacing * (float)x, j->origin[1] + j->spacing * (float)y,
+                      j->origin[2] + j->spacing * (float)z};
+        uint32_t hits = 0, back = 0;
+        for (uint32_t r = 0; r < GRID_RAYS; ++r) {
+            glow__hit h = glow__rt_intersect(j->rt, o, j->dirs[r], 0.0f, INFINITY);
+            if (h.t == INFINITY) continue;
+            ++hits;
+            back += h.back_face;
+        }
+        j->inside[c] = back > GRID_INSIDE_FRACTION * hits && 4 * back >= GRID_RAYS;
+    }
+}
+
+/* Spacing so that the grid over `ext` has about `target` points (flat axes count as one cell). */
+static double spacing_for_target(const double ext[3], double target) {
+    double big = fmax(ext[0], fmax(ext[1], ext[2]));
+    if (!(big > 0.0)) return 1.0;
+    double lo = big / (2.0 * target + 2.0), hi = big * 2.0;
+    for (int it = 0; it < 100; ++it) {
+        double s = sqrt(lo * hi), cnt = 1.0;
+        for (int a = 0; a < 3; ++a) cnt *= fmax(1.0, ext[a] / s);
+        if (cnt > target)
+            lo = s;
+        else
+            hi = s;
+    }
+    return sqrt(lo * hi);
+}
+
+static glow_result build_grid(const glow__scene *scene, const glow__rt *rt, const glow__cache_settings *set,
+                              glow__pool *pool, glow__log *log, glow__caches *out, uint8_t **out_inside) {
+    double ext[3], centre[3];
+    for (int a = 0; a < 3; ++a) {
+        ext[a] = fmax(0.0, (double)scene->bounds_max[a] - scene->bounds_min[a]);
+        centre[a] = 0.5 * ((double)scene->bounds_max[a] + scene->bounds_min[a]);
+    }
+    double s;
+    if (set->grid_spacing > 0.0f) {
+        s = set->grid_spacing;
+    } else {
+        uint32_t target = set->target_grid ? set->target_grid : DEFAULT_TARGET_GRID;
+        s = spacing_for_target(ext, target);
+    }
+    double dims[3], cells = 1.0;
+    for (int it = 0; it < 8; ++it) {
+        cells = 1.0;
+        for (int a = 0; a < 3; ++a) {
+            dims[a] = fmax(1.0, ceil(ext[a] / s - 1e-6));
+            cells *= dims[a];
+        }
+        if (cells <= MAX_GRID_CELLS) break;
+        double grown = s * cbrt(cells / MAX_GRID_CELLS) * 1.01;
+        if (it == 0)
+            glow__warnf(log, "%s: caches: grid spacing %g gives %.0f grid points; using %g (at most %u points)",
+                        scene->source, s, cells, grown, MAX_GRID_CELLS);
+        s = grown;
+    }
+    out->grid_spacing = (float)s;
+    for (int a = 0; a < 3; ++a) {
+        out->grid_dims[a] = (uint32_t)dims[a];
+        out->grid_origin[a] = (float)(centre[a] - 0.5 * dims[a] * s + 0.5 * s);
+    }
+    const uint32_t n = (uint32_t)cells;
+    uint8_t *inside = malloc(n);
+    out->grid_map = malloc((size_t)n * sizeof *out->grid_map);
+    if (!inside || !out->grid_map) {
+        free(inside);
+        glow__errorf(log, "%s: caches: out of memory for %u grid points", scene->source, n);
+        return GLOW_ERROR_OUT_OF_MEMORY;
+    }
+    grid_job j = {.rt = rt, .spacing = out->grid_spacing, .inside = inside};
+    memcpy(j.origin, out->grid_origin, sizeof j.origin);
+    memcpy(j.dims, out->grid_dims, sizeof j.dims);
+    fibonacci_sphere(GRID_RAYS, j.dirs);
+    glow__parallel_for(pool, n, 64, grid_range, &j);
+    uint32_t count = 0;
+    for (uint32_t c = 0; c < n; ++c) {
+        out->grid_map[c] = inside[c] ? GLOW_MAP_EMPTY : count;
+        count += !inside[c];
+    }
+    out->grid_cache_count = count;
+    out->grid_inside = n - count;
+    *out_inside = inside;
+    return GLOW_OK;
+}
+
+/* ------------------------------------------------------------------ lightmap rasterisation */
+static double cross2(const double o[2], const double a[2], const double b[2]) {
+    return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
+}
+
+/* Squared distance from p to triangle t (2-D) and the barycentrics of the nearest point. */
+static double closest_bary(const double p[2], const double t[3][2], double bary[3]) {
+    double area = cross2(t[0], t[1], t[2]);
+    if (area != 0.0) {
+        double w0 = cross2(p, t[1], t[2]) / area, w1 = cross2(p, t[2], t[0]) / area, w2 = 1.0 - w0 - w1;
+        if (w0 >= 0.0 && w1 >= 0.0 && w2 >= 0.0) {
+            bary[0] = w0;
+            bary[1] = w1;
+            bary[2] = w2;
+            return 0.0;
+        }
+    }
+    double best = INFINITY;
+    for (int k = 0; k < 3; ++k) {
+        const double *a = t[k], *b = t[(k + 1) % 3];
+        double ex = b[0] - a[0], ey = b[1] - a[1], l2 = ex * ex + ey * ey;
+        double s = l2 > 0.0 ? ((p[0] - a[0]) * ex + (p[1] - a[1]) * ey) / l2 : 0.0;
+        s = fmin(fmax(s, 0.0), 1.0);
+        double dx = a[0] + s * ex - p[0], dy = a[1] + s * ey - p[1], d2 = dx * dx + dy * dy;
+        if (d2 < best) {
+            best = d2;
+            bary[k] = 1.0 - s;
+            bary[(k + 1) % 3] = s;
+            bary[(k + 2) % 3] = 0.0;
+        }
+    }
+    return best;
+}
+
+/* Does triangle t overlap the unit square at (x0, y0) by more than eps (texels)? Separating axes. */
+static bool tri_box(const double t[3][2], double x0, double y0, double eps) {
+    double mnx = fmin(fmin(t[0][0], t[1][0]), t[2][0]), mxx = fmax(fmax(t[0][0], t[1][0]), t[2][0]);
+    double mny = fmin(fmin(t[0][1], t[1][1]), t[2][1]), mxy = fmax(fmax(t[0][1], t[1][1]), t[2][1]);
+    if (mxx <= x0 + eps || mnx >= x0 + 1.0 - eps || mxy <= y0 + eps || mny >= y0 + 1.0 - eps) return false;
+    for (int k = 0; k < 3; ++k) {
+        double ax = t[(k + 1) % 3][1] - t[k][1], ay = t[k][0] - t[(k + 1) % 3][0];
+        double len = sqrt(ax * ax + ay * ay);
+        if (!(len > 0.0)) continue;
+        double lo = INFINITY, hi = -INFINITY;
+        for (int i = 0; i < 3; ++i) {
+            double p = t[i][0] * ax + t[i][1] * ay;
+            lo = fmin(lo, p);
+            hi = fmax(hi, p);
+        }
+        double c = (x0 + 0.5) * ax + (y0 + 0.5) * ay, r = 0.5 * (fabs(ax) + fabs(ay));
+        if (hi <= c - r + eps * len || lo >= c + r - eps * len) return false;
+    }
+    return true;
+}
+
+static void tri_texels(const float (*uv)[2], size_t t, uint32_t w, uint32_t h, double out[3][2]) {
+    for (int k = 0; k < 3; ++k) {
+        out[k][0] = (double)uv[3 * t + (size_t)k][0] * w;
+        out[k][1] = (double)uv[3 * t + (size_t)k][1] * h;
+    }
+}
+
+/* owner[texel] = triangle whose UV triangle overlaps the texel and is nearest to its centre.
+ * Returns the number of owned texels. */
+static uint32_t rasterise(uint32_t tri_count, const float (*uv)[2], uint32_t w, uint32_t h, uint32_t *owner,
+                          float *dist) {
+    const size_t n = (size_t)w * h;
+    for (size_t i = 0; i < n; ++i) {
+        owner[i] = NONE;
+        dist[i] = INFINITY;
+    }
+    uint32_t covered = 0;
+    for (uint32_t t = 0; t < tri_count; ++t) {
+        double tc[3][2];
+        tri_texels(uv, t, w, h, tc);
+        double mnx = fmin(fmin(tc[0][0], tc[1][0]), tc[2][0]), mxx = fmax(fmax(tc[0][0], tc[1][0]), tc[2][0]);
+        double mny = fmin(fmin(tc[0][1], tc[1][1]), tc[2][1]), mxy = fmax(fmax(tc[0][1], tc[1][1]), tc[2][1]);
+        long x0 = (long)floor(mnx), x1 = (long)floor(mxx), y0 = (long)floor(mny), y1 = (long)floor(mxy);
+        if (x0 < 0) x0 = 0;
+        if (y0 < 0) y0 = 0;
+        if (x1 > (long)w - 1) x1 = (long)w - 1;
+        if (y1 > (long)h - 1) y1 = (long)h - 1;
+        for (long y = y0; y <= y1; ++y)
+            for (long x = x0; x <= x1; ++x) {
+                if (!tri_box((const double(*)[2])tc, (double)x, (double)y, 1e-4)) continue;
+                double p[2] = {x + 0.5, y + 0.5}, bary[3];
+                float d2 = (float)closest_bary(p, (const double(*)[2])tc, bary);
+                size_t i = (size_t)y * w + (size_t)x;
+                if (d2 < dist[i]) {
+                    covered += owner[i] == NONE;
+                    dist[i] = d2;
+                    owner[i] = t;
+                }
+            }
+    }
+    return covered;
+}
+
+/* Unorm16 rounding, as the bake stores lightmap UVs: rasterise what the host will sample. */
+static float quantise(float x) {
+    if (!(x > 0.0f)) return 0.0f;
+    if (x >= 1.0f) return 1.0f;
+    return (float)lrintf(x * 65535.0f) / 65535.0f;
+}
+
+typedef struct lm_job {
+    const glow__scene *scene;
+    const glow__rt *rt;
+    const float (*uv)[2];
+    uint32_t w, h;
+    const uint32_t *texel;  /* candidate texels */
+    const uint32_t *owner;
+    float offset;
+    double dirs[LM_RAYS][3];
+    float (*pos)[3], (*nrm)[3];
+    uint8_t *valid;
+} lm_job;
+
+static void lm_range(void *p, uint32_t begin, uint32_t end, uint32_t worker) {
+    lm_job *j = p;
+    (void)worker;
+    for (uint32_t i = begin; i < end; ++i) {
+        uint32_t texel = j->texel[i], t = j->owner[texel];
+        double tc[3][2], bary[3];
+        tri_texels(j->uv, t, j->w, j->h, tc);
+        double c[2] = {texel % j->w + 0.5, texel / j->w + 0.5};
+        closest_bary(c, (const double(*)[2])tc, bary);
+        const float(*P)[3] = j->scene->pos + 3 * (size_t)t;
+        double pos[3], cen[3], e1[3], e2[3], n[3], dc = 0.0;
+        for (int k = 0; k < 3; ++k) {
+            pos[k] = bary[0] * P[0][k] + bary[1] * P[1][k] + bary[2] * P[2][k];
+            cen[k] = ((double)P[0][k] + P[1][k] + P[2][k]) / 3.0;
+            dc += (cen[k] - pos[k]) * (cen[k] - pos[k]);
+            e1[k] = (double)P[1][k] - P[0][k];
+            e2[k] = (double)P[2][k] - P[0][k];
+        }
+        /* Off the triangle's edges by ~2 offsets (towards the centroid): a point on an edge where
+         * two walls meet lies in the other wall's plane and sees half the room from behind. */
+        dc = sqrt(dc);
+        if (dc > 0.0) {
+            double lambda = fmin(0.5, 2.0 * j->offset / dc);
+            for (int k = 0; k < 3; ++k) pos[k] += lambda * (cen[k] - pos[k]);
+        }
+        n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+        n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+        n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+        double l = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        if (!(l > 0.0) && j->scene->nrm) { /* no geometric normal: the shading normals' mean */
+            for (int k = 0; k < 3; ++k) {
+                const float(*N)[3] = j->scene->nrm + 3 * (size_t)t;
+                n[k] = (double)N[0][k] + N[1][k] + N[2][k];
+            }
+            l = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        }
+        if (l > 0.0) {
+            for (int k = 0; k < 3; ++k) n[k] /= l;
+        } else {
+            n[0] = 0.0;
+            n[1] = 1.0;
+            n[2] = 0.0;
+        }
+        float o[3];
+        for (int k = 0; k < 3; ++k) {
+            o[k] = (float)(pos[k] + j->offset * n[k]);
+            j->pos[i][k] = o[k];
+            j->nrm[i][k] = (float)n[k];
+        }
+        double tb[3], bb[3];
+        tangent_frame(n, tb, bb);
+        uint32_t hits = 0, back = 0;
+        for (uint32_t r = 0; r < LM_RAYS; ++r) {
+            const double *d = j->dirs[r];
+            float dir[3];
+            for (int k = 0; k < 3; ++k) dir[k] = (float)(d[0] * tb[k] + d[1] * bb[k] + d[2] * n[k]);
+            glow__hit hit = glow__rt_intersect(j->rt, o, dir, 0.0f, INFINITY);
+            if (hit.t == INFINITY) continue;
+            ++hits;
+            back += hit.back_face;
+        }
+        j->valid[i] = !(back > LM_INVALID_FRACTION * hits && 4 * back >= LM_RAYS);
+    }
+}
+
+/* ------------------------------------------------------------------ surfel feedback */
+typedef struct fb_job {
+    const glow__scene *scene;
+    const glow__surfels *surfels;
+    const glow__caches *c;
+} fb_job;
+
+static uint32_t nearest_grid_cache(const glow__caches *c, const float p[3]) {
+    const uint32_t *d = c->grid_dims;
+    long cc[3];
+    for (int a = 0; a < 3; ++a) {
+        double f = floor(((double)p[a] - c->grid_origin[a]) / c->grid_spacing + 0.5);
+        cc[a] = f < 0.0 ? 0 : f > d[a] - 1.0 ? (long)d[a] - 1 : (long)f;
+    }
+    long rmax = (long)(d[0] > d[1] ? (d[0] > d[2] ? d[0] : d[2]) : (d[1] > d[2] ? d[1] : d[2]));
+    uint32_t best = NONE;
+    double best_d2 = INFINITY;
+    for (long r = 0; r <= rmax; ++r) {
+        for (long z = cc[2] - r; z <= cc[2] + r; ++z) {
+            if (z < 0 || z >= (long)d[2]) continue;
+            for (long y = cc[1] - r; y <= cc[1] + r; ++y) {
+                if (y < 0 || y >= (long)d[1]) continue;
+                bool shell_yz = labs(z - cc[2]) == r || labs(y - cc[1]) == r;
+                for (long x = cc[0] - r; x <= cc[0] + r; x += (shell_yz || r == 0) ? 1 : 2 * r) {
+                    if (x < 0 || x >= (long)d[0]) continue;
+                    uint32_t v = c->grid_map[((size_t)z * d[1] + (size_t)y) * d[0] + (size_t)x];
+                    if (v == GLOW_MAP_EMPTY || (v & GLOW_MAP_COPY_BIT)) continue;
+                    const float *q = c->caches[v].pos;
+                    double dx = (double)q[0] - p[0], dy = (double)q[1] - p[1], dz = (double)q[2] - p[2];
+                    double d2 = dx * dx + dy * dy + dz * dz;
+                    if (d2 < best_d2 || (d2 == best_d2 && v < best)) {
+                        best_d2 = d2;
+                        best = v;
+                    }
+                }
+            }
+        }
+        double reach = (r + 0.5) * c->grid_spacing;
+        if (best != NONE && best_d2 <= reach * reach) break;
+    }
+    return best;
+}
+
+static void fb_range(void *p, uint32_t begin, uint32_t end, uint32_t worker) {
+    fb_job *j = p;
+    const glow__caches *c = j->c;
+    (void)worker;
+    for (uint32_t i = begin; i < end; ++i) {
+        const glow__surfel *s = &j->surfels->s[i];
+        uint32_t fb = NONE;
+        if (c->lm_map && s->tri < j->scene->tri_count) {
+            const float(*uv)[2] = c->lm_uv + 3 * (size_t)s->tri;
+            double b1 = s->bary[0], b2 = s->bary[1], b0 = 1.0 - b1 - b2;
+            double u = b0 * uv[0][0] + b1 * uv[1][0] + b2 * uv[2][0];
+            double v = b0 * uv[0][1] + b1 * uv[1][1] + b2 * uv[2][1];
+            double fx = floor(u * c->lm_width), fy = floor(v * c->lm_height);
+            uint32_t x = fx < 0.0 ? 0 : fx >= c->lm_width ? c->lm_width - 1 : (uint32_t)fx;
+            uint32_t y = fy < 0.0 ? 0 : fy >= c->lm_height ? c->lm_height - 1 : (uint32_t)fy;
+            uint32_t m = c->lm_map[(size_t)y * c->lm_width + x];
+            if (m != GLOW_MAP_EMPTY) fb = m & GLOW_MAP_INDEX_MASK;
+        }
+        if (fb == NONE && c->grid_cache_count) fb = nearest_grid_cache(c, s->pos);
+        if (fb == NONE) { /* no grid cache at all: the nearest lightmap cache */
+            double best = INFINITY;
+            for (uint32_t k = c->grid_cache_count; k < c->count; ++k) {
+                const float *q = c->caches[k].pos;
+                double dx = (double)q[0] - s->pos[0], dy = (double)q[1] - s->pos[1], dz = (double)q[2] - s->pos[2];
+                double d2 = dx * dx + dy * dy + dz * dz;
+                if (d2 < best) {
+                    best = d2;
+                    fb = k;
+                }
+            }
+        }
+        j->c->surfel_feedback[i] = fb == NONE ? 0u : fb;
+    }
+}
+
+/* ------------------------------------------------------------------ build */
+void glow__caches_free(glow__caches *c) {
+    if (!c) return;
+    free(c->caches);
+    free(c->grid_map);
+    free(c->lm_map);
+    free(c->lm_uv);
+    free(c->surfel_feedback);
+    memset(c, 0, sizeof *c);
+}
+
+typedef struct lm_state {
+    float (*uv)[2];
+    uint32_t w, h;
+    float density;
+    uint32_t *owner;
+    float *dist;
+    uint32_t covered;
+} lm_state;
+
+static void lm_state_free(lm_state *s) {
+    free(s->uv);
+    free(s->owner);
+    free(s->dist);
+    memset(s, 0, sizeof *s);
+}
+
+/* Lays out the lightmap at density d (charts: packed; uv1: atlas side d/sqrt(uv area per m²)) and
+ * rasterises it. */
+static glow_result lm_try(const glow__scene *scene, const glow__chart_set *cs, double uv_ratio, double d,
+                          glow__log *log, lm_state *st) {
+    const uint32_t n = scene->tri_count;
+    glow_result r = GLOW_OK;
+    if (cs) {
+        float used = 0.0f;
+        r = glow__charts_pack(cs, (float)d, LM_PADDING, log, st->uv, &st->w, &st->h, &used);
+        if (r != GLOW_OK) return r;
+        st->density = used;
+    } else {
+        double side = d / sqrt(uv_ratio);
+        double s4 = ceil(side / 4.0 - 1e-9) * 4.0;
+        if (!(s4 >= 4.0)) s4 = 4.0;
+        if (s4 > GLOW__CHART_MAX_ATLAS) {
+            glow__warnf(log, "%s: caches: the lightmap at %g texels per unit would be %.0f texels a side; using %u",
+                        scene->source, d, s4, GLOW__CHART_MAX_ATLAS);
+            s4 = GLOW__CHART_MAX_ATLAS;
+        }
+        st->w = st->h = (uint32_t)s4;
+        st->density = (float)(s4 * sqrt(uv_ratio));
+        memcpy(st->uv, scene->uv1, 3 * (size_t)n * sizeof *st->uv);
+    }
+    for (size_t i = 0; i < 3 * (size_t)n; ++i) {
+        st->uv[i][0] = quantise(st->uv[i][0]);
+        st->uv[i][1] = quantise(st->uv[i][1]);
+    }
+    free(st->owner);
+    free(st->dist);
+    size_t texels = (size_t)st->w * st->h;
+    st->owner = malloc(texels * sizeof *st->owner);
+    st->dist = malloc(texels * sizeof *st->dist);
+    if (!st->owner || !st->dist) {
+        glow__errorf(log, "%s: caches: out of memory for a %ux%u lightmap", scene->source, st->w, st->h);
+        return GLOW_ERROR_OUT_OF_MEMORY;
+    }
+    st->covered = rasterise(n, (const float(*)[2])st->uv, st->w, st->h, st->owner, st->dist);
+    return GLOW_OK;
+}
+
+static glow_result build_lightmap_layout(const glow__scene *scene, const glow__cache_settings *set, glow__log *log,
+                                         glow__caches *out, lm_state *st) {
+    const uint32_t n = scene->tri_count;
+    st->uv = malloc(3 * (size_t)n * sizeof *st->uv);
+    if (!st->uv) {
+        glow__errorf(log, "%s: caches: out of memory for lightmap UVs", scene->source);
+        return GLOW_ERROR_OUT_OF_MEMORY;
+    }
+    double area = 0.0, uv_area = 0.0;
+    for (uint32_t t = 0; t < n; ++t) {
+        const float(*p)[3] = scene->pos + 3 * (size_t)t;
+        double e1[3], e2[3];
+        for (int k = 0; k < 3; ++k) {
+            e1[k] = (double)p[1][k] - p[0][k];
+            e2[k] = (double)p[2][k] - p[0][k];
+        }
+        double cx = e1[1] * e2[2] - e1[2] * e2[1], cy = e1[2] * e2[0] - e1[0] * e2[2],
+               cz = e1[0] * e2[1] - e1[1] * e2[0];
+        area += 0.5 * sqrt(cx * cx + cy * cy + cz * cz);
+        if (scene->uv1) {
+            const float(*q)[2] = scene->uv1 + 3 * (size_t)t;
+            uv_area += 0.5 * fabs(((double)q[1][0] - q[0][0]) * ((double)q[2][1] - q[0][1]) -
+                                  ((double)q[1][1] - q[0][1]) * ((double)q[2][0] - q[0][0]));
+        }
+    }
+    if (!(area > 0.0)) area = 1.0;
+    glow__chart_set cs = {0};
+    double uv_ratio = 0.0;
+    bool use_uv1 = scene->uv1 != NULL;
+    if (use_uv1) {
+        uint32_t outside = 0;
+        for (size_t i = 0; i < 3 * (size_t)n; ++i)
+            for (int k = 0; k < 2; ++k) {
+                float v = scene->uv1[i][k];
+                outside += !(v >= -1e-4f && v <= 1.0f + 1e-4f);
+            }
+        if (outside)
+            glow__warnf(log, "%s: caches: %u lightmap UV coordinates lie outside [0,1]; clamped", scene->source,
+                        outside);
+        uv_ratio = uv_area / area;
+        if (!(uv_ratio > 0.0)) {
+            glow__warnf(log, "%s: caches: the second UV set covers no area; generating lightmap charts",
+                        scene->source);
+            use_uv1 = false;
+        }
+    }
+    if (!use_uv1) {
+        glow_result r = glow__charts_segment(scene, log, &cs);
+        if (r != GLOW_OK) return r;
+        out->chart_count = cs.chart_count;
+    }
+    const glow__chart_set *csp = use_uv1 ? NULL : &cs;
+    glow_result r;
+    if (set->texel_density > 0.0f) {
+        r = lm_try(scene, csp, uv_ratio, set->texel_density, log, st);
+    } else {
+        const double target = set->target_lightmap ? set->target_lightmap : DEFAULT_TARGET_LIGHTMAP;
+        double d = sqrt(target / area), best_d = d, best_err = INFINITY, last_d = d;
+        r = GLOW_OK;
+        for (int round = 0; round < DENSITY_ROUNDS; ++round) {
+            r = lm_try(scene, csp, uv_ratio, d, log, st);
+            if (r != GLOW_OK) break;
+            last_d = d;
+            double q = (st->covered + 1.0) / target, err = q > 1.0 ? q : 1.0 / q;
+            if (err < best_err) {
+                best_err = err;
+                best_d = d;
+            }
+            if (err < 1.2) break;
+            d *= fmin(fmax(sqrt(1.0 / q), 0.25), 4.0);
+        }
+        if (r == GLOW_OK && best_d != last_d) r = lm_try(scene, csp, uv_ratio, best_d, log, st);
+    }
+    glow__charts_free(&cs);
+    if (r != GLOW_OK) return r;
+    out->lm_width = st->w;
+    out->lm_height = st->h;
+    out->texel_density = st->density;
+    return GLOW_OK;
+}
+
+glow_result glow__caches_build(const glow__scene *scene, const glow__rt *rt, const glow__surfels *surfels,
+                               const glow__cache_settings *settings, glow__pool *pool, glow__log *log,
+                               glow__caches *out) {
+    memset(out, 0, sizeof *out);
+    if (!scene || !rt || !settings) {
+        glow__errorf(log, "caches: scene, ray tracer and settings are required");
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    if (!(settings->grid_spacing >= 0.0f) || !isfinite(settings->grid_spacing) ||
+        !(settings->texel_density >= 0.0f) || !isfinite(settings->texel_density)) {
+        glow__errorf(log, "%s: caches: grid spacing %g and texel density %g must be finite and >= 0", scene->source,
+                     (double)settings->grid_spacing, (double)settings->texel_density);
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    glow_result r;
+    uint8_t *inside = NULL;
+    lm_state st = {0};
+    uint32_t *cand = NULL;
+    uint8_t *eligible = NULL;
+    lm_job lj = {0};
+
+    r = build_grid(scene, rt, settings, pool, log, out, &inside);
+    if (r != GLOW_OK) goto fail;
+
+    uint32_t lm_candidates = 0;
+    if (scene->tri_count) {
+        r = build_lightmap_layout(scene, settings, log, out, &st);
+        if (r != GLOW_OK) goto fail;
+        const size_t texels = (size_t)st.w * st.h;
+        cand = malloc(((size_t)st.covered + 1) * sizeof *cand);
+        lj.pos = malloc(((size_t)st.covered + 1) * sizeof *lj.pos);
+        lj.nrm = malloc(((size_t)st.covered + 1) * sizeof *lj.nrm);
+        lj.valid = malloc((size_t)st.covered + 1);
+        if (!cand || !lj.pos || !lj.nrm || !lj.valid) goto oom;
+        for (size_t i = 0; i < texels; ++i)
+            if (st.owner[i] != NONE) cand[lm_candidates++] = (uint32_t)i;
+        double diag = 0.0;
+        for (int a = 0; a < 3; ++a) {
+            double e = (double)scene->bounds_max[a] - scene->bounds_min[a];
+            diag += e * e;
+        }
+        diag = sqrt(diag);
+        lj.scene = scene;
+        lj.rt = rt;
+        lj.uv = (const float(*)[2])st.uv;
+        lj.w = st.w;
+        lj.h = st.h;
+        lj.texel = cand;
+        lj.owner = st.owner;
+        lj.offset = (float)(diag > 0.0 ? 1e-4 * diag : 1e-6);
+        fibonacci_hemisphere(LM_RAYS, lj.dirs);
+        glow__parallel_for(pool, lm_candidates, 64, lm_range, &lj);
+    }
+
+    /* caches: grid first, then valid texels in texel order */
+    uint32_t lm_count = 0;
+    for (uint32_t i = 0; i < lm_candidates; ++i) lm_count += lj.valid[i];
+    out->lm_invalid = lm_candidates - lm_count;
+    out->lm_cache_count = lm_count;
+    out->count = out->grid_cache_count + lm_count;
+    out->caches = calloc((size_t)out->count + 1, sizeof *out->caches);
+    if (!out->caches) goto oom;
+    {
+        const uint32_t *d = out->grid_dims;
+        for (uint32_t c = 0, k = 0; c < d[0] * d[1] * d[2]; ++c) {
+            if (inside[c]) continue;
+            glow__cache *ca = &out->caches[k++];
+            uint32_t x = c % d[0], y = (c / d[0]) % d[1], z = c / (d[0] * d[1]);
+            ca->pos[0] = out->grid_origin[0] + out->grid_spacing * (float)x;
+            ca->pos[1] = out->grid_origin[1] + out->grid_spacing * (float)y;
+            ca->pos[2] = out->grid_origin[2] + out->grid_spacing * (float)z;
+            ca->kind = GLOW_CACHE_KIND_GRID;
+            ca->texel = c;
+        }
+        int nb[26][3];
+        uint32_t nbn = neighbour_offsets(3, nb);
+        if (!dilate(out->grid_map, d, inside, (const int(*)[3])nb, nbn, GRID_DILATE_PASSES)) goto oom;
+    }
+    if (scene->tri_count) {
+        const size_t texels = (size_t)st.w * st.h;
+        out->lm_map = malloc(texels * sizeof *out->lm_map);
+        eligible = calloc(texels, 1);
+        if (!out->lm_map || !eligible) goto oom;
+        for (size_t i = 0; i < texels; ++i) out->lm_map[i] = GLOW_MAP_EMPTY;
+        for (uint32_t i = 0, k = out->grid_cache_count; i < lm_candidates; ++i) {
+            if (!lj.valid[i]) continue;
+            glow__cache *ca = &out->caches[k];
+            memcpy(ca->pos, lj.pos[i], sizeof ca->pos);
+            memcpy(ca->nrm, lj.nrm[i], sizeof ca->nrm);
+            ca->kind = GLOW_CACHE_KIND_LIGHTMAP;
+            ca->texel = cand[i];
+            out->lm_map[cand[i]] = k++;
+        }
+        int nb[26][3];
+        uint32_t nbn = neighbour_offsets(2, nb);
+        const uint32_t dims[3] = {st.w, st.h, 1};
+        /* invalid texels from the valid ones around them (as far as it takes), then the gutter */
+        for (size_t i = 0; i < texels; ++i) eligible[i] = st.owner[i] != NONE;
+        if (!dilate(out->lm_map, dims, eligible, (const int(*)[3])nb, nbn, UINT32_MAX)) goto oom;
+        for (size_t i = 0; i < texels; ++i) eligible[i] = st.owner[i] == NONE;
+        if (!dilate(out->lm_map, dims, eligible, (const int(*)[3])nb, nbn, LM_GUTTER_PASSES)) goto oom;
+        out->lm_uv = st.uv;
+        st.uv = NULL;
+    }
+
+    if (surfels && surfels->count) {
+        if (out->count == 0) {
+            glow__errorf(log, "%s: caches: no cache left (every grid point inside geometry, every texel invalid)",
+                         scene->source);
+            r = GLOW_ERROR_EMPTY_SCENE;
+            goto fail;
+        }
+        out->surfel_feedback = malloc((size_t)surfels->count * sizeof *out->surfel_feedback);
+        if (!out->surfel_feedback) goto oom;
+        fb_job fj = {.scene = scene, .surfels = surfels, .c = out};
+        glow__parallel_for(pool, surfels->count, 256, fb_range, &fj);
+    }
+
+    glow__infof(log,
+                "%s: caches: grid %ux%ux%u at %g: %u caches, %u inside geometry; lightmap %ux%u at %g texels/unit "
+                "(%u charts): %u caches, %u invalid texels",
+                scene->source, out->grid_dims[0], out->grid_dims[1], out->grid_dims[2], (double)out->grid_spacing,
+                out->grid_cache_count, out->grid_inside, out->lm_width, out->lm_height, (double)out->texel_density,
+                out->chart_count, out->lm_cache_count, out->lm_invalid);
+    free(inside);
+    lm_state_free(&st);
+    free(cand);
+    free(eligible);
+    free(lj.pos);
+    free(lj.nrm);
+    free(lj.valid);
+    return GLOW_OK;
+
+oom:
+    glow__errorf(log, "%s: caches: out of memory", scene->source);
+    r = GLOW_ERROR_OUT_OF_MEMORY;
+fail:
+    free(inside);
+    lm_state_free(&st);
+    free(cand);
+    free(eligible);
+    free(lj.pos);
+    free(lj.nrm);
+    free(lj.valid);
+    glow__caches_free(out);
+    return r;
+}

@@ -1,0 +1,35 @@
+/* charts.h — the two halves of Glow's lightmap chart packer (charts.c), exposed so that caches.c can
+ * segment a scene once and pack it at several texel densities while it searches for the density
+ * that meets its texel budget. glow__charts_build (pc_internal.h) is segment + pack + free. */
+#ifndef GLOW_CHARTS_H
+#define GLOW_CHARTS_H
+
+#include "pc_internal.h"
+
+typedef struct glow__chart_set {
+    uint32_t tri_count, chart_count;
+    uint32_t *chart_start;   /* [chart_count + 1] */
+    uint32_t *chart_tris;    /* [tri_count]: chart c holds chart_tris[chart_start[c] .. chart_start[c+1]) */
+    double (*xy)[2];         /* [3*tri_count] corner positions in the chart's plane (m), chart min at 0,0 */
+    double (*extent)[2];     /* [chart_count] chart width >= height (m), after the min-area rotation */
+    uint32_t evicted;        /* triangles moved to a later chart because their projection overlapped */
+} glow__chart_set;
+
+/* Welds corners by exact position, grows planar-ish charts over shared edges (normals within
+ * GLOW__CHART_MAX_ANGLE_DEG of the seed's), projects each onto its mean plane, evicts triangles
+ * whose projection overlaps the chart, and rotates each chart to its minimum-area rectangle. */
+glow_result glow__charts_segment(const glow__scene *scene, glow__log *log, glow__chart_set *out);
+
+/* Packs the charts at `texel_density` texels per m into one atlas (shelf packing, charts' texel
+ * footprints `padding` texels apart and from the border; width and height multiples of 4). When
+ * the atlas would exceed GLOW__CHART_MAX_ATLAS texels a side the density is lowered (warning).
+ * out_uv: [3*tri_count] per-corner UV in [0,1]; out_density: the density used. */
+glow_result glow__charts_pack(const glow__chart_set *cs, float texel_density, uint32_t padding, glow__log *log,
+                              float (*out_uv)[2], uint32_t *out_width, uint32_t *out_height, float *out_density);
+
+void glow__charts_free(glow__chart_set *cs);
+
+#define GLOW__CHART_MAX_ANGLE_DEG 40.0
+#define GLOW__CHART_MAX_ATLAS 4096u
+
+#endif /* GLOW_CHARTS_H */

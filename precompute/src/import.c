@@ -1,0 +1,750 @@
+/* import.c — scene import through assimp (any format it reads), material and texture
+ * extraction, and the cleaning step shared with the built-in scenes (glow__scene_finalize). */
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include <assimp/cimport.h>
+#include <assimp/config.h>
+#include <assimp/material.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+
+#include "pc_internal.h"
+#include "texture.h"
+
+/* strncpy that always terminates (and keeps -Wformat-truncation quiet about long names). */
+static void copy_str(char *dst, size_t size, const char *src) {
+    size_t n = strlen(src);
+    if (n >= size) n = size - 1;
+    memcpy(dst, src, n);
+    dst[n] = 0;
+}
+
+/* An aiString into a C string: bounded by its length (assimp does not always terminate data
+ * within it), control and non-ASCII bytes replaced so log lines stay printable. */
+static void copy_aistring(char *dst, size_t size, const struct aiString *src) {
+    size_t n = src->length;
+    if (n > sizeof src->data - 1) n = sizeof src->data - 1;
+    if (n >= size) n = size - 1;
+    size_t i = 0;
+    for (; i < n && src->data[i]; i++) {
+        unsigned char ch = (unsigned char)src->data[i];
+        dst[i] = (ch < 32 || ch > 126) ? '?' : (char)ch;
+    }
+    dst[i] = 0;
+}
+
+/* Albedo ceiling: keeps every bounce strictly energy-losing (DESIGN: feedback must not diverge). */
+#define ALBEDO_MAX 0.999f
+
+void glow__scene_free(glow__scene *scene) {
+    if (!scene) return;
+    free(scene->pos);
+    free(scene->nrm);
+    free(scene->uv0);
+    free(scene->uv1);
+    free(scene->tri_material);
+    free(scene->tri_source);
+    free(scene->materials);
+    if (scene->textures)
+        for (uint32_t i = 0; i < scene->texture_count; i++) glow__texture_free(&scene->textures[i]);
+    free(scene->textures);
+    memset(scene, 0, sizeof *scene);
+}
+
+/* ================================================================== finalize */
+
+static bool finite3(const float v[3]) { return isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]); }
+
+static double tri_area2(const float a[3], const float b[3], const float c[3], double n[3]) {
+    double e1[3] = {(double)b[0] - a[0], (double)b[1] - a[1], (double)b[2] - a[2]};
+    double e2[3] = {(double)c[0] - a[0], (double)c[1] - a[1], (double)c[2] - a[2]};
+    n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+    return sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]); /* twice the area */
+}
+
+/* Duplicate-face key: the three corners' bit patterns (with -0 folded onto +0), corners sorted,
+ * so the same three positions match whatever the corner order or winding. */
+typedef struct face_key {
+    uint32_t w[9];
+} face_key;
+
+static uint32_t fbits(float f) {
+    uint32_t u;
+    if (f == 0.0f) f = 0.0f; /* -0 -> +0 */
+    memcpy(&u, &f, sizeof u);
+    return u;
+}
+
+static int corner_cmp(const uint32_t *a, const uint32_t *b) {
+    for (int k = 0; k < 3; k++)
+        if (a[k] != b[k]) return a[k] < b[k] ? -1 : 1;
+    return 0;
+}
+
+/* Returns the winding parity of the sort (0 even, 1 odd). */
+static int make_key(const float (*p)[3], face_key *key) {
+    uint32_t c[3][3];
+    for (int i = 0; i < 3; i++)
+        for (int k = 0; k < 3; k++) c[i][k] = fbits(p[i][k]);
+    int order[3] = {0, 1, 2}, parity = 0;
+    /* 3-element sorting network, counting swaps */
+    static const int pairs[3][2] = {{0, 1}, {1, 2}, {0, 1}};
+    for (int s = 0; s < 3; s++) {
+        int i = pairs[s][0], j = pairs[s][1];
+        if (corner_cmp(c[order[i]], c[order[j]]) > 0) {
+            int t = order[i];
+            order[i] = order[j];
+            order[j] = t;
+            parity ^= 1;
+        }
+    }
+    for (int i = 0; i < 3; i++)
+        for (int k = 0; k < 3; k++) key->w[3 * i + k] = c[order[i]][k];
+    return parity;
+}
+
+static uint64_t key_hash(const face_key *k) {
+    uint64_t h = 0x9E3779B97F4A7C15ull;
+    for (int i = 0; i < 9; i++) {
+        h ^= k->w[i];
+        h *= 0xFF51AFD7ED558CCDull;
+        h ^= h >> 33;
+    }
+    return h;
+}
+
+static void geometric_normal(const float (*p)[3], float out[3]) {
+    double n[3];
+    double len = tri_area2(p[0], p[1], p[2], n);
+    if (len > 0.0) {
+        for (int k = 0; k < 3; k++) out[k] = (float)(n[k] / len);
+    } else {
+        out[0] = 0.0f;
+        out[1] = 1.0f;
+        out[2] = 0.0f;
+    }
+}
+
+static glow_result finalize_materials(glow__scene *s, glow__log *log) {
+    uint32_t nonfinite = 0, clamped = 0, negative_emission = 0;
+    const char *first_nonfinite = NULL, *first_clamped = NULL;
+    for (uint32_t i = 0; i < s->material_count; i++) {
+        glow__material *m = &s->materials[i];
+        m->name[sizeof m->name - 1] = 0;
+        for (int k = 0; k < 3; k++) {
+            if (!isfinite(m->albedo[k]) || !isfinite(m->emission[k])) {
+                if (!nonfinite++) first_nonfinite = m->name;
+                if (!isfinite(m->albedo[k])) m->albedo[k] = 0.0f;
+                if (!isfinite(m->emission[k])) m->emission[k] = 0.0f;
+            }
+            if (m->albedo[k] < 0.0f || m->albedo[k] > ALBEDO_MAX) {
+                if (!clamped++) first_clamped = m->name;
+                m->albedo[k] = m->albedo[k] < 0.0f ? 0.0f : ALBEDO_MAX;
+            }
+            if (m->emission[k] < 0.0f) {
+                negative_emission++;
+                m->emission[k] = 0.0f;
+            }
+        }
+        if (m->texture < -1 || m->texture >= (int)s->texture_count) m->texture = -1;
+    }
+    if (nonfinite)
+        glow__warnf(log, "%s: %u non-finite material colour values (first in material '%s') replaced by 0", s->source,
+                    nonfinite, first_nonfinite);
+    if (clamped)
+        glow__warnf(log, "%s: %u albedo values outside [0, %.3f] clamped (first in material '%s'; energy conservation)",
+                    s->source, clamped, (double)ALBEDO_MAX, first_clamped);
+    if (negative_emission)
+        glow__warnf(log, "%s: %u negative emission values replaced by 0", s->source, negative_emission);
+    return GLOW_OK;
+}
+
+glow_result glow__scene_finalize(glow__scene *s, glow__log *log) {
+    if (!s) return GLOW_ERROR_INVALID_ARGUMENT;
+    if (!s->source[0]) snprintf(s->source, sizeof s->source, "%s", "scene");
+    if (s->tri_count && (!s->pos || !s->tri_material)) {
+        glow__errorf(log, "%s: scene has triangles but no positions or materials", s->source);
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    if (s->tri_count > UINT32_MAX / 3) {
+        glow__errorf(log, "%s: too many triangles (%u)", s->source, s->tri_count);
+        return GLOW_ERROR_UNSUPPORTED;
+    }
+    for (uint32_t t = 0; t < s->tri_count; t++) {
+        if (s->tri_material[t] >= s->material_count) {
+            glow__errorf(log, "%s: triangle %u uses material %u of %u", s->source, t, s->tri_material[t],
+                         s->material_count);
+            return GLOW_ERROR_CORRUPT_DATA;
+        }
+    }
+    if (!s->tri_source && s->tri_count) {
+        s->tri_source = malloc((size_t)s->tri_count * sizeof *s->tri_source);
+        if (!s->tri_source) goto oom;
+        for (uint32_t t = 0; t < s->tri_count; t++) s->tri_source[t] = t;
+    }
+    if (!s->source_tri_count) s->source_tri_count = s->tri_count;
+    finalize_materials(s, log);
+
+    const uint32_t n = s->tri_count;
+    uint8_t *drop = calloc(n ? n : 1, 1); /* 0 keep, 1 non-finite, 2 degenerate, 3 duplicate */
+    if (!drop) goto oom;
+
+    /* bounds of the finite triangles: the degenerate threshold is relative to the scene size */
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    uint32_t first_nonfinite = 0;
+    for (uint32_t t = 0; t < n; t++) {
+        const float (*p)[3] = s->pos + 3 * (size_t)t;
+        if (!finite3(p[0]) || !finite3(p[1]) || !finite3(p[2])) {
+            if (!s->skipped_nonfinite++) first_nonfinite = s->tri_source[t];
+            drop[t] = 1;
+            continue;
+        }
+        for (int i = 0; i < 3; i++)
+            for (int k = 0; k < 3; k++) {
+                if (p[i][k] < lo[k]) lo[k] = p[i][k];
+                if (p[i][k] > hi[k]) hi[k] = p[i][k];
+            }
+    }
+    double diag2 = 0.0;
+    if (lo[0] <= hi[0])
+        for (int k = 0; k < 3; k++) diag2 += (hi[k] - lo[k]) * (hi[k] - lo[k]);
+    const double min_area = 1e-12 * diag2;
+
+    for (uint32_t t = 0; t < n; t++) {
+        if (drop[t]) continue;
+        const float (*p)[3] = s->pos + 3 * (size_t)t;
+        double nn[3];
+        double area = 0.5 * tri_area2(p[0], p[1], p[2], nn);
+        if (!(area > min_area)) { /* also catches repeated corners (area exactly 0) */
+            drop[t] = 2;
+            s->skipped_degenerate++;
+        }
+    }
+
+    /* coincident duplicates: open-addressing hash over the sorted corner bit patterns; the
+     * first triangle in order is kept, so the result does not depend on anything but the input */
+    {
+        uint32_t cap = 16;
+        while (cap < 2u * n && cap < 0x80000000u) cap <<= 1;
+        uint32_t *table = malloc((size_t)cap * sizeof *table);
+        face_key *keys = malloc((size_t)(n ? n : 1) * sizeof *keys);
+        uint8_t *parity = malloc(n ? n : 1);
+        if (!table || !keys || !parity) {
+            free(table);
+            free(keys);
+            free(parity);
+            free(drop);
+            goto oom;
+        }
+        memset(table, 0xFF, (size_t)cap * sizeof *table);
+        uint32_t opposite = 0, first_dup = 0;
+        for (uint32_t t = 0; t < n; t++) {
+            if (drop[t]) continue;
+            parity[t] = (uint8_t)make_key((const float (*)[3])(s->pos + 3 * (size_t)t), &keys[t]);
+            uint32_t slot = (uint32_t)key_hash(&keys[t]) & (cap - 1);
+            for (;;) {
+                uint32_t o = table[slot];
+                if (o == UINT32_MAX) {
+                    table[slot] = t;
+                    break;
+                }
+                if (memcmp(&keys[o], &keys[t], sizeof keys[t]) == 0) {
+                    drop[t] = 3;
+                    if (!s->skipped_duplicate++) first_dup = s->tri_source[t];
+                    if (parity[o] != parity[t]) opposite++;
+                    break;
+                }
+                slot = (slot + 1) & (cap - 1);
+            }
+        }
+        free(table);
+        free(keys);
+        free(parity);
+        if (s->skipped_duplicate && opposite)
+            glow__warnf(log,
+                        "%s: %u coincident duplicate triangles skipped (first: triangle %u; %u of them with opposite "
+                        "winding, so those surfaces are kept one-sided)",
+                        s->source, s->skipped_duplicate, first_dup, opposite);
+        else if (s->skipped_duplicate)
+            glow__warnf(log, "%s: %u coincident duplicate triangles skipped (first: triangle %u)", s->source,
+                        s->skipped_duplicate, first_dup);
+    }
+    if (s->skipped_nonfinite)
+        glow__warnf(log, "%s: %u triangles with a non-finite (NaN/Inf) vertex skipped (first: triangle %u)", s->source,
+                    s->skipped_nonfinite, first_nonfinite);
+    if (s->skipped_degenerate)
+        glow__warnf(log, "%s: %u degenerate (zero-area or repeated-vertex) triangles skipped", s->source,
+                    s->skipped_degenerate);
+
+    /* compact every per-triangle and per-corner array in place */
+    uint32_t kept = 0;
+    for (uint32_t t = 0; t < n; t++) {
+        if (drop[t]) continue;
+        if (kept != t) {
+            memcpy(s->pos[3 * (size_t)kept], s->pos[3 * (size_t)t], sizeof(float[3][3]));
+            if (s->nrm) memcpy(s->nrm[3 * (size_t)kept], s->nrm[3 * (size_t)t], sizeof(float[3][3]));
+            if (s->uv0) memcpy(s->uv0[3 * (size_t)kept], s->uv0[3 * (size_t)t], sizeof(float[3][2]));
+            if (s->uv1) memcpy(s->uv1[3 * (size_t)kept], s->uv1[3 * (size_t)t], sizeof(float[3][2]));
+            s->tri_material[kept] = s->tri_material[t];
+            s->tri_source[kept] = s->tri_source[t];
+        }
+        kept++;
+    }
+    free(drop);
+    s->tri_count = kept;
+    if (kept == 0) {
+        glow__errorf(log,
+                     "%s: no usable triangles (%u in the file; %u degenerate, %u non-finite, %u duplicate skipped)",
+                     s->source, s->source_tri_count, s->skipped_degenerate, s->skipped_nonfinite,
+                     s->skipped_duplicate);
+        return GLOW_ERROR_EMPTY_SCENE;
+    }
+
+    /* normals: flat geometric ones when absent; given ones normalised, bad ones replaced */
+    if (!s->nrm) {
+        s->nrm = malloc((size_t)kept * 3 * sizeof *s->nrm);
+        if (!s->nrm) goto oom;
+        for (uint32_t t = 0; t < kept; t++) {
+            float g[3];
+            geometric_normal((const float (*)[3])(s->pos + 3 * (size_t)t), g);
+            for (int i = 0; i < 3; i++) memcpy(s->nrm[3 * (size_t)t + i], g, sizeof g);
+        }
+        s->normals_generated = true;
+    } else {
+        uint32_t bad = 0, first_bad = 0;
+        for (uint32_t t = 0; t < kept; t++) {
+            for (int i = 0; i < 3; i++) {
+                float *v = s->nrm[3 * (size_t)t + i];
+                double len = finite3(v) ? sqrt((double)v[0] * v[0] + (double)v[1] * v[1] + (double)v[2] * v[2]) : 0.0;
+                if (len > 1e-20 && isfinite(len)) {
+                    for (int k = 0; k < 3; k++) v[k] = (float)(v[k] / len);
+                } else {
+                    if (!bad++) first_bad = s->tri_source[t];
+                    geometric_normal((const float (*)[3])(s->pos + 3 * (size_t)t), v);
+                }
+            }
+        }
+        if (bad)
+            glow__warnf(log, "%s: %u zero or non-finite vertex normals replaced by the face normal (first: triangle %u)",
+                        s->source, bad, first_bad);
+    }
+
+    /* UVs: non-finite -> 0 */
+    float (*uvs[2])[2] = {s->uv0, s->uv1};
+    for (int set = 0; set < 2; set++) {
+        if (!uvs[set]) continue;
+        uint32_t bad = 0;
+        for (size_t c = 0; c < (size_t)kept * 3; c++)
+            for (int k = 0; k < 2; k++)
+                if (!isfinite(uvs[set][c][k])) {
+                    uvs[set][c][k] = 0.0f;
+                    bad++;
+                }
+        if (bad) glow__warnf(log, "%s: %u non-finite UV%d coordinates replaced by 0", s->source, bad, set);
+    }
+
+    /* bounds and area of what is kept */
+    double area = 0.0;
+    for (int k = 0; k < 3; k++) {
+        s->bounds_min[k] = INFINITY;
+        s->bounds_max[k] = -INFINITY;
+    }
+    for (uint32_t t = 0; t < kept; t++) {
+        const float (*p)[3] = s->pos + 3 * (size_t)t;
+        double nn[3];
+        area += 0.5 * tri_area2(p[0], p[1], p[2], nn);
+        for (int i = 0; i < 3; i++)
+            for (int k = 0; k < 3; k++) {
+                if (p[i][k] < s->bounds_min[k]) s->bounds_min[k] = p[i][k];
+                if (p[i][k] > s->bounds_max[k]) s->bounds_max[k] = p[i][k];
+            }
+    }
+    s->area = area;
+    return GLOW_OK;
+
+oom:
+    glow__errorf(log, "%s: out of memory while cleaning the scene", s->source);
+    return GLOW_ERROR_OUT_OF_MEMORY;
+}
+
+/* ================================================================== assimp import */
+
+typedef struct tex_slot {
+    char key[4200]; /* resolved path, or "*N" for embedded textures */
+} tex_slot;
+
+typedef struct import_ctx {
+    const char *path;
+    char dir[4096];
+    const struct aiScene *ai;
+    glow__scene *s;
+    glow__log *log;
+    tex_slot *slots;        /* parallel to s->textures */
+    char (*missing)[512];   /* distinct texture names that failed */
+    uint32_t missing_count, missing_cap;
+} import_ctx;
+
+static bool note_missing(import_ctx *c, const char *name) {
+    for (uint32_t i = 0; i < c->missing_count; i++)
+        if (strcmp(c->missing[i], name) == 0) return false; /* already reported */
+    c->s->textures_missing++;
+    if (c->missing_count == c->missing_cap) {
+        uint32_t cap = c->missing_cap ? 2 * c->missing_cap : 8;
+        void *p = realloc(c->missing, (size_t)cap * sizeof *c->missing);
+        if (!p) return true; /* cannot remember it: at worst it is reported twice */
+        c->missing = p;
+        c->missing_cap = cap;
+    }
+    copy_str(c->missing[c->missing_count++], sizeof *c->missing, name);
+    return true;
+}
+
+/* Returns the texture index, -1 when it could not be loaded (reported, counted), or -2 when out
+ * of memory. */
+static int load_texture(import_ctx *c, const char *name, const char *material) {
+    glow__scene *s = c->s;
+    char key[4200], why[256] = "";
+    const struct aiTexture *embedded = NULL;
+    char resolved[4096];
+    if (name[0] == '*') { /* embedded: "*N" indexes aiScene::mTextures */
+        char *end = NULL;
+        unsigned long idx = strtoul(name + 1, &end, 10);
+        if (end && *end == 0 && end != name + 1 && idx < c->ai->mNumTextures) embedded = c->ai->mTextures[idx];
+        copy_str(key, sizeof key, name);
+    } else {
+        for (unsigned i = 0; i < c->ai->mNumTextures; i++) /* some formats embed by file name */
+            if (c->ai->mTextures[i] && c->ai->mTextures[i]->mFilename.length == strlen(name) &&
+                strncmp(c->ai->mTextures[i]->mFilename.data, name, sizeof c->ai->mTextures[i]->mFilename.data) == 0) {
+                embedded = c->ai->mTextures[i];
+                break;
+            }
+        if (embedded) {
+            key[0] = '*';
+            copy_str(key + 1, sizeof key - 1, name);
+        } else if (glow__texture_resolve(c->dir, name, resolved, sizeof resolved)) {
+            copy_str(key, sizeof key, resolved);
+        } else {
+            if (note_missing(c, name))
+                glow__warnf(c->log, "%s: texture '%s' (material '%s') not found; using the material colour", c->path,
+                            name, material);
+            return -1;
+        }
+    }
+    for (uint32_t i = 0; i < s->texture_count; i++)
+        if (strcmp(c->slots[i].key, key) == 0) return (int)i;
+
+    glow__texture tex;
+    glow_result r;
+    if (name[0] == '*' && !embedded) {
+        r = GLOW_ERROR_CORRUPT_DATA;
+        snprintf(why, sizeof why, "no such embedded texture (the file has %u)", c->ai->mNumTextures);
+        memset(&tex, 0, sizeof tex);
+    } else if (embedded && embedded->mHeight == 0) {
+        r = glow__texture_load_memory(embedded->pcData, embedded->mWidth, key, &tex, why, sizeof why);
+    } else if (embedded) {
+        if ((size_t)embedded->mWidth * embedded->mHeight > ((size_t)1 << 26)) {
+            r = GLOW_ERROR_UNSUPPORTED;
+            snprintf(why, sizeof why, "embedded image too large");
+            memset(&tex, 0, sizeof tex);
+        } else {
+            /* aiTexel is b, g, r, a */
+            r = glow__texture_from_srgb8((const uint8_t *)embedded->pcData, (int)embedded->mWidth,
+                                         (int)embedded->mHeight, 4, 2, 1, 0, key, &tex, why, sizeof why);
+        }
+    } else {
+        r = glow__texture_load_file(resolved, &tex, why, sizeof why);
+    }
+    if (r == GLOW_ERROR_OUT_OF_MEMORY) return -2;
+    if (r != GLOW_OK) {
+        if (note_missing(c, name))
+            glow__warnf(c->log, "%s: texture '%s' (material '%s'): %s; using the material colour", c->path, name,
+                        material, why);
+        return -1;
+    }
+    void *nt = realloc(s->textures, ((size_t)s->texture_count + 1) * sizeof *s->textures);
+    if (!nt) {
+        glow__texture_free(&tex);
+        return -2;
+    }
+    s->textures = nt;
+    void *ns = realloc(c->slots, ((size_t)s->texture_count + 1) * sizeof *c->slots);
+    if (!ns) {
+        glow__texture_free(&tex);
+        return -2;
+    }
+    c->slots = ns;
+    copy_str(c->slots[s->texture_count].key, sizeof c->slots[s->texture_count].key, key);
+    s->textures[s->texture_count] = tex;
+    return (int)s->texture_count++;
+}
+
+static glow_result import_materials(import_ctx *c) {
+    glow__scene *s = c->s;
+    const struct aiScene *ai = c->ai;
+    uint32_t count = ai->mNumMaterials ? ai->mNumMaterials : 1;
+    s->materials = calloc(count, sizeof *s->materials);
+    if (!s->materials) return GLOW_ERROR_OUT_OF_MEMORY;
+    s->material_count = count;
+    for (uint32_t i = 0; i < count; i++) {
+        glow__material *m = &s->materials[i];
+        m->texture = -1;
+        m->albedo[0] = m->albedo[1] = m->albedo[2] = 0.5f;
+        snprintf(m->name, sizeof m->name, "material%u", i);
+        if (!ai->mNumMaterials) {
+            snprintf(m->name, sizeof m->name, "%s", "default");
+            continue;
+        }
+        const struct aiMaterial *am = ai->mMaterials[i];
+        if (!am) continue;
+        struct aiString name;
+        if (aiGetMaterialString(am, AI_MATKEY_NAME, &name) == aiReturn_SUCCESS && name.length)
+            copy_aistring(m->name, sizeof m->name, &name);
+        struct aiColor4D col;
+        /* glTF's baseColorFactor when present (assimp also mirrors it as the diffuse colour),
+         * else OBJ's Kd / the format's diffuse colour */
+        bool pbr = aiGetMaterialColor(am, AI_MATKEY_BASE_COLOR, &col) == aiReturn_SUCCESS;
+        if (pbr || aiGetMaterialColor(am, AI_MATKEY_COLOR_DIFFUSE, &col) == aiReturn_SUCCESS) {
+            m->albedo[0] = col.r;
+            m->albedo[1] = col.g;
+            m->albedo[2] = col.b;
+        }
+        if (aiGetMaterialColor(am, AI_MATKEY_COLOR_EMISSIVE, &col) == aiReturn_SUCCESS) {
+            float intensity = 1.0f;
+            unsigned int one = 1;
+            if (aiGetMaterialFloatArray(am, AI_MATKEY_EMISSIVE_INTENSITY, &intensity, &one) != aiReturn_SUCCESS)
+                intensity = 1.0f;
+            m->emission[0] = col.r * intensity;
+            m->emission[1] = col.g * intensity;
+            m->emission[2] = col.b * intensity;
+        }
+        enum aiTextureType type = aiTextureType_NONE;
+        if (aiGetMaterialTextureCount(am, aiTextureType_BASE_COLOR) > 0) type = aiTextureType_BASE_COLOR;
+        else if (aiGetMaterialTextureCount(am, aiTextureType_DIFFUSE) > 0) type = aiTextureType_DIFFUSE;
+        struct aiString tpath;
+        if (type != aiTextureType_NONE &&
+            aiGetMaterialTexture(am, type, 0, &tpath, NULL, NULL, NULL, NULL, NULL, NULL) == aiReturn_SUCCESS &&
+            tpath.length) {
+            /* file names keep their bytes (UTF-8 names must still resolve); just bound them */
+            char tname[sizeof tpath.data];
+            size_t tl = tpath.length < sizeof tname - 1 ? tpath.length : sizeof tname - 1;
+            memcpy(tname, tpath.data, tl);
+            tname[tl] = 0;
+            int t = load_texture(c, tname, m->name);
+            if (t == -2) return GLOW_ERROR_OUT_OF_MEMORY;
+            m->texture = t;
+            /* Albedo = factor x texture. glTF defines the factor as a multiplier. For OBJ/MTL we
+             * use the texture alone (factor 1, kept just below 1 by ALBEDO_MAX) and ignore Kd
+             * when map_Kd loads: exporters such as 3ds Max (Sponza's) and Blender write the
+             * colour swatch that the map replaces, and Sponza's Kd (0.53..1.0, roughly each
+             * map's own tint) times its maps (linear means 0.27..0.73) would darken and
+             * double-tint every surface to 0.2..0.5. Kd remains the fallback when the map
+             * is missing or undecodable. */
+            if (t >= 0 && !pbr) m->albedo[0] = m->albedo[1] = m->albedo[2] = ALBEDO_MAX;
+        }
+    }
+    return GLOW_OK;
+}
+
+static glow_result import_meshes(import_ctx *c) {
+    glow__scene *s = c->s;
+    const struct aiScene *ai = c->ai;
+    uint64_t total = 0;
+    uint32_t meshes_with_tris = 0, with_uv0 = 0, with_uv1 = 0, with_nrm = 0;
+    for (unsigned m = 0; m < ai->mNumMeshes; m++) {
+        const struct aiMesh *me = ai->mMeshes[m];
+        if (!me || !me->mVertices) continue;
+        uint32_t tris = 0;
+        for (unsigned f = 0; f < me->mNumFaces; f++)
+            if (me->mFaces[f].mNumIndices == 3) tris++;
+        if (!tris) continue;
+        total += tris;
+        meshes_with_tris++;
+        if (me->mTextureCoords[0]) with_uv0++;
+        if (me->mTextureCoords[1]) with_uv1++;
+        if (me->mNormals) with_nrm++;
+    }
+    if (total == 0) return GLOW_OK; /* finalize reports the empty scene */
+    if (total > UINT32_MAX / 3) {
+        glow__errorf(c->log, "%s: too many triangles (%llu)", c->path, (unsigned long long)total);
+        return GLOW_ERROR_UNSUPPORTED;
+    }
+    const size_t n = (size_t)total;
+    bool has_uv1 = with_uv1 == meshes_with_tris;
+    if (with_uv1 && !has_uv1)
+        glow__warnf(c->log,
+                    "%s: only %u of %u meshes have a second UV set; ignoring it (lightmap UVs will be generated)",
+                    c->path, with_uv1, meshes_with_tris);
+    s->pos = malloc(n * 3 * sizeof *s->pos);
+    s->tri_material = malloc(n * sizeof *s->tri_material);
+    s->tri_source = malloc(n * sizeof *s->tri_source);
+    if (with_nrm) s->nrm = malloc(n * 3 * sizeof *s->nrm);
+    if (with_uv0) s->uv0 = malloc(n * 3 * sizeof *s->uv0);
+    if (has_uv1) s->uv1 = malloc(n * 3 * sizeof *s->uv1);
+    if (!s->pos || !s->tri_material || !s->tri_source || (with_nrm && !s->nrm) || (with_uv0 && !s->uv0) ||
+        (has_uv1 && !s->uv1))
+        return GLOW_ERROR_OUT_OF_MEMORY;
+
+    uint32_t t = 0, bad_index = 0, bad_material = 0;
+    for (unsigned m = 0; m < ai->mNumMeshes; m++) {
+        const struct aiMesh *me = ai->mMeshes[m];
+        if (!me || !me->mVertices) continue;
+        uint32_t mat = me->mMaterialIndex;
+        if (mat >= s->material_count) {
+            bad_material++;
+            mat = 0;
+        }
+        for (unsigned f = 0; f < me->mNumFaces; f++) {
+            const struct aiFace *face = &me->mFaces[f];
+            if (face->mNumIndices != 3) continue;
+            bool ok = face->mIndices[0] < me->mNumVertices && face->mIndices[1] < me->mNumVertices &&
+                      face->mIndices[2] < me->mNumVertices;
+            if (!ok) bad_index++;
+            for (int i = 0; i < 3; i++) {
+                size_t corner = 3 * (size_t)t + (size_t)i;
+                /* an out-of-range index collapses the triangle: finalize counts it as degenerate */
+                unsigned v = ok ? face->mIndices[i] : 0;
+                s->pos[corner][0] = me->mVertices[v].x;
+                s->pos[corner][1] = me->mVertices[v].y;
+                s->pos[corner][2] = me->mVertices[v].z;
+                if (s->uv0) {
+                    const struct aiVector3D *uv = me->mTextureCoords[0];
+                    s->uv0[corner][0] = uv ? uv[v].x : 0.0f;
+                    s->uv0[corner][1] = uv ? uv[v].y : 0.0f;
+                }
+                if (s->uv1) {
+                    s->uv1[corner][0] = me->mTextureCoords[1][v].x;
+                    s->uv1[corner][1] = me->mTextureCoords[1][v].y;
+                }
+            }
+            if (s->nrm) {
+                if (me->mNormals) {
+                    for (int i = 0; i < 3; i++) {
+                        unsigned v = ok ? face->mIndices[i] : 0;
+                        s->nrm[3 * (size_t)t + i][0] = me->mNormals[v].x;
+                        s->nrm[3 * (size_t)t + i][1] = me->mNormals[v].y;
+                        s->nrm[3 * (size_t)t + i][2] = me->mNormals[v].z;
+                    }
+                } else { /* this mesh has none while others do: its face normals */
+                    float g[3];
+                    geometric_normal((const float (*)[3])(s->pos + 3 * (size_t)t), g);
+                    for (int i = 0; i < 3; i++) memcpy(s->nrm[3 * (size_t)t + i], g, sizeof g);
+                }
+            }
+            s->tri_material[t] = mat;
+            s->tri_source[t] = t;
+            t++;
+        }
+    }
+    s->tri_count = t;
+    s->source_tri_count = t;
+    if (bad_index)
+        glow__warnf(c->log, "%s: %u triangles reference vertices out of range (dropped as degenerate)", c->path,
+                    bad_index);
+    if (bad_material) glow__warnf(c->log, "%s: %u meshes reference a missing material", c->path, bad_material);
+    return GLOW_OK;
+}
+
+static glow_result load_file(const char *path, glow__log *log, glow__scene *out) {
+    struct stat st;
+    if (stat(path, &st) != 0) {
+        if (errno == ENOENT || errno == ENOTDIR) glow__errorf(log, "%s: no such file", path);
+        else glow__errorf(log, "%s: cannot access (%s)", path, strerror(errno));
+        return GLOW_ERROR_IO;
+    }
+    if (S_ISDIR(st.st_mode)) {
+        glow__errorf(log, "%s: is a directory, not a scene file", path);
+        return GLOW_ERROR_IO;
+    }
+    if (!S_ISREG(st.st_mode)) {
+        glow__errorf(log, "%s: not a regular file", path);
+        return GLOW_ERROR_IO;
+    }
+    FILE *f = fopen(path, "rb");
+    if (!f) {
+        glow__errorf(log, "%s: cannot open (%s)", path, strerror(errno));
+        return GLOW_ERROR_IO;
+    }
+    int byte = fgetc(f);
+    bool read_error = ferror(f) != 0;
+    fclose(f);
+    if (read_error) {
+        glow__errorf(log, "%s: cannot read", path);
+        return GLOW_ERROR_IO;
+    }
+    if (byte == EOF) {
+        glow__errorf(log, "%s: file is empty (no triangles)", path);
+        return GLOW_ERROR_EMPTY_SCENE;
+    }
+
+    /* Triangulate + pre-transform into world space; keep the hierarchy so meshes keep the
+     * file's order (tri_source); drop point and line primitives. No JoinIdenticalVertices,
+     * FindDegenerates or GenNormals: duplicates, degenerates and normals are handled (and
+     * counted) deterministically by glow__scene_finalize. No GenUVCoords either: it only
+     * matters for formats with procedural (spherical, box...) mappings. */
+    struct aiPropertyStore *props = aiCreatePropertyStore();
+    if (!props) {
+        glow__errorf(log, "%s: out of memory", path);
+        return GLOW_ERROR_OUT_OF_MEMORY;
+    }
+    aiSetImportPropertyInteger(props, AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+    aiSetImportPropertyInteger(props, AI_CONFIG_PP_PTV_KEEP_HIERARCHY, 1);
+    const struct aiScene *ai = aiImportFileExWithProperties(
+        path, aiProcess_Triangulate | aiProcess_PreTransformVertices | aiProcess_SortByPType, NULL, props);
+    aiReleasePropertyStore(props);
+    if (!ai) {
+        const char *err = aiGetErrorString();
+        glow__errorf(log, "%s: unsupported or unreadable scene format (assimp: %s)", path,
+                     err && err[0] ? err : "unknown error");
+        return GLOW_ERROR_UNSUPPORTED;
+    }
+
+    import_ctx c;
+    memset(&c, 0, sizeof c);
+    c.path = path;
+    c.ai = ai;
+    c.s = out;
+    c.log = log;
+    const char *slash = strrchr(path, '/');
+    if (slash) snprintf(c.dir, sizeof c.dir, "%.*s", (int)(slash - path) + (slash == path ? 1 : 0), path);
+    else snprintf(c.dir, sizeof c.dir, "%s", ".");
+
+    glow_result r = import_materials(&c);
+    if (r == GLOW_OK) r = import_meshes(&c);
+    if (r == GLOW_ERROR_OUT_OF_MEMORY) glow__errorf(log, "%s: out of memory while importing", path);
+    aiReleaseImport(ai);
+    free(c.slots);
+    free(c.missing);
+    if (r != GLOW_OK) return r;
+    return glow__scene_finalize(out, log);
+}
+
+glow_result glow__scene_load(const char *path, glow__log *log, glow__scene *out) {
+    if (!out) return GLOW_ERROR_INVALID_ARGUMENT;
+    memset(out, 0, sizeof *out);
+    if (!path || !path[0]) {
+        glow__errorf(log, "scene path is empty");
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    if (strncmp(path, "builtin:", 8) == 0) return glow__scene_builtin(path + 8, log, out);
+    snprintf(out->source, sizeof out->source, "%s", path);
+    glow_result r = load_file(path, log, out);
+    if (r != GLOW_OK) {
+        glow__scene_free(out);
+        return r;
+    }
+    glow__infof(log,
+                "%s: %u triangles (%u in the file: %u degenerate, %u duplicate, %u non-finite skipped), %u materials, "
+                "%u textures (%u missing), normals %s, %s",
+                path, out->tri_count, out->source_tri_count, out->skipped_degenerate, out->skipped_duplicate,
+                out->skipped_nonfinite, out->material_count, out->texture_count, out->textures_missing,
+                out->normals_generated ? "generated" : "from the file",
+                out->uv1 ? "lightmap UVs from the file" : "no lightmap UVs");
+    return GLOW_OK;
+}

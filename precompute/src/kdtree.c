@@ -1,0 +1,199 @@
+/* kdtree.c — static 3-d tree over points for k-nearest-neighbour queries.
+ *
+ * Built once over a point set (median split on the widest axis of each node's bounding box, leaf
+ * buckets of at most LEAF_SIZE points), then queried read-only: any number of threads may call
+ * glow__kdtree_knn on the same tree at once. Results are ordered by (squared distance, index), so
+ * equal distances are broken by the smaller index and a query's answer does not depend on the tree's
+ * traversal order. Used by surfel relaxation (surfels.c) and by other modules (cache placement). */
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "pc_internal.h"
+
+#define LEAF_SIZE 8u
+#define NO_CHILD UINT32_MAX
+#define MAX_DEPTH 96
+
+typedef struct kd_node {
+    float lo[3], hi[3];   /* bounding box of the node's points */
+    uint32_t begin, end;  /* range in the permuted point array */
+    uint32_t left, right; /* NO_CHILD for leaves */
+    uint32_t min_index;   /* smallest original index in the node (ties at equal distance) */
+} kd_node;
+
+struct glow__kdtree {
+    uint32_t count;
+    float (*pts)[3];      /* points in tree order */
+    uint32_t *index;      /* original index of each point in tree order */
+    kd_node *nodes;
+    uint32_t node_count, node_cap;
+};
+
+/* (coordinate, index) ordering: a strict total order (NaN sorts as +infinity), so selection is
+ * deterministic and the partition scans always stop. */
+static int less_on_axis(const float (*points)[3], uint32_t a, uint32_t b, int axis) {
+    float ca = points[a][axis], cb = points[b][axis];
+    if (isnan(ca)) ca = INFINITY;
+    if (isnan(cb)) cb = INFINITY;
+    if (ca < cb) return 1;
+    if (ca > cb) return 0;
+    return a < b;
+}
+
+/* Quickselect: afterwards idx[k] is the element of rank k and everything before it ranks lower. */
+static void select_kth(const float (*points)[3], uint32_t *idx, uint32_t n, uint32_t k, int axis) {
+    uint32_t lo = 0, hi = n - 1;
+    while (hi > lo) {
+        /* median of three as pivot */
+        uint32_t mid = lo + (hi - lo) / 2;
+        if (less_on_axis(points, idx[mid], idx[lo], axis)) { uint32_t t = idx[mid]; idx[mid] = idx[lo]; idx[lo] = t; }
+        if (less_on_axis(points, idx[hi], idx[lo], axis)) { uint32_t t = idx[hi]; idx[hi] = idx[lo]; idx[lo] = t; }
+        if (less_on_axis(points, idx[hi], idx[mid], axis)) { uint32_t t = idx[hi]; idx[hi] = idx[mid]; idx[mid] = t; }
+        uint32_t pivot = idx[mid];
+        /* Hoare partition around the pivot value */
+        uint32_t i = lo, j = hi;
+        for (;;) {
+            while (less_on_axis(points, idx[i], pivot, axis)) ++i;
+            while (less_on_axis(points, pivot, idx[j], axis)) --j;
+            if (i >= j) break;
+            uint32_t t = idx[i]; idx[i] = idx[j]; idx[j] = t;
+            ++i;
+            --j;
+        }
+        /* now [lo, j] <= pivot <= [j+1, hi] */
+        if (k <= j) hi = j;
+        else lo = j + 1;
+    }
+}
+
+static uint32_t new_node(glow__kdtree *t) {
+    if (t->node_count == t->node_cap) return NO_CHILD; /* capacity is computed up front */
+    return t->node_count++;
+}
+
+static uint32_t build_rec(glow__kdtree *t, const float (*points)[3], uint32_t begin, uint32_t end, int depth) {
+    uint32_t ni = new_node(t);
+    if (ni == NO_CHILD) return NO_CHILD;
+    kd_node *nd = &t->nodes[ni];
+    nd->begin = begin;
+    nd->end = end;
+    nd->left = nd->right = NO_CHILD;
+    nd->min_index = UINT32_MAX;
+    for (int a = 0; a < 3; ++a) { nd->lo[a] = FLT_MAX; nd->hi[a] = -FLT_MAX; }
+    for (uint32_t i = begin; i < end; ++i) {
+        if (t->index[i] < nd->min_index) nd->min_index = t->index[i];
+        const float *p = points[t->index[i]];
+        for (int a = 0; a < 3; ++a) {
+            if (p[a] < nd->lo[a]) nd->lo[a] = p[a];
+            if (p[a] > nd->hi[a]) nd->hi[a] = p[a];
+        }
+    }
+    if (end - begin <= LEAF_SIZE || depth >= MAX_DEPTH) return ni;
+    int axis = 0;
+    float ext = nd->hi[0] - nd->lo[0];
+    for (int a = 1; a < 3; ++a)
+        if (nd->hi[a] - nd->lo[a] > ext) { ext = nd->hi[a] - nd->lo[a]; axis = a; }
+    uint32_t n = end - begin, half = n / 2;
+    select_kth(points, t->index + begin, n, half, axis);
+    uint32_t l = build_rec(t, points, begin, begin + half, depth + 1);
+    uint32_t r = build_rec(t, points, begin + half, end, depth + 1);
+    t->nodes[ni].left = l;
+    t->nodes[ni].right = r;
+    return ni;
+}
+
+glow__kdtree *glow__kdtree_build(const float (*points)[3], uint32_t count) {
+    glow__kdtree *t = calloc(1, sizeof *t);
+    if (!t) return NULL;
+    t->count = count;
+    if (count == 0) return t;
+    /* median splits of n > LEAF_SIZE points: leaves hold > LEAF_SIZE/2 points -> < 2n/(LEAF_SIZE/2) + 1 nodes */
+    t->node_cap = 2u * (count / (LEAF_SIZE / 2u) + 1u) + 1u;
+    t->nodes = malloc((size_t)t->node_cap * sizeof *t->nodes);
+    t->index = malloc((size_t)count * sizeof *t->index);
+    t->pts = malloc((size_t)count * sizeof *t->pts);
+    if (!t->nodes || !t->index || !t->pts) {
+        glow__kdtree_free(t);
+        return NULL;
+    }
+    for (uint32_t i = 0; i < count; ++i) t->index[i] = i;
+    if (build_rec(t, points, 0, count, 0) == NO_CHILD) { /* cannot happen: capacity bound above */
+        glow__kdtree_free(t);
+        return NULL;
+    }
+    for (uint32_t i = 0; i < count; ++i) memcpy(t->pts[i], points[t->index[i]], sizeof t->pts[i]);
+    return t;
+}
+
+void glow__kdtree_free(glow__kdtree *tree) {
+    if (!tree) return;
+    free(tree->nodes);
+    free(tree->index);
+    free(tree->pts);
+    free(tree);
+}
+
+static float box_dist2(const kd_node *nd, const float q[3]) {
+    float d2 = 0.0f;
+    for (int a = 0; a < 3; ++a) {
+        float d = 0.0f;
+        if (q[a] < nd->lo[a]) d = nd->lo[a] - q[a];
+        else if (q[a] > nd->hi[a]) d = q[a] - nd->hi[a];
+        d2 += d * d;
+    }
+    return d2;
+}
+
+/* (d2, index) lexicographic: true when a ranks before b */
+static int before(float da, uint32_t ia, float db, uint32_t ib) { return da < db || (da == db && ia < ib); }
+
+uint32_t glow__kdtree_knn(const glow__kdtree *tree, const float q[3], uint32_t k, uint32_t exclude,
+                          uint32_t *out_index, float *out_dist2) {
+    if (!tree || tree->count == 0 || k == 0) return 0;
+    uint32_t found = 0;
+    struct { uint32_t node; float d2; } stack[MAX_DEPTH + 4];
+    int sp = 0;
+    stack[sp].node = 0;
+    stack[sp].d2 = box_dist2(&tree->nodes[0], q);
+    ++sp;
+    while (sp > 0) {
+        --sp;
+        uint32_t ni = stack[sp].node;
+        const kd_node *nd = &tree->nodes[ni];
+        /* prune: a box that cannot hold a point ranking before the current k-th candidate (equal
+         * distance still wins on a smaller index; min_index keeps masses of coincident points cheap) */
+        if (found == k && !before(stack[sp].d2, nd->min_index, out_dist2[k - 1], out_index[k - 1])) continue;
+        if (nd->left == NO_CHILD) {
+            for (uint32_t i = nd->begin; i < nd->end; ++i) {
+                uint32_t id = tree->index[i];
+                if (id == exclude) continue;
+                const float *p = tree->pts[i];
+                float dx = p[0] - q[0], dy = p[1] - q[1], dz = p[2] - q[2];
+                float d2 = dx * dx + dy * dy + dz * dz;
+                if (found == k && !before(d2, id, out_dist2[k - 1], out_index[k - 1])) continue;
+                uint32_t j = found < k ? found++ : k - 1;
+                while (j > 0 && before(d2, id, out_dist2[j - 1], out_index[j - 1])) {
+                    out_dist2[j] = out_dist2[j - 1];
+                    out_index[j] = out_index[j - 1];
+                    --j;
+                }
+                out_dist2[j] = d2;
+                out_index[j] = id;
+            }
+            continue;
+        }
+        float dl = box_dist2(&tree->nodes[nd->left], q);
+        float dr = box_dist2(&tree->nodes[nd->right], q);
+        /* push the farther child first so the nearer one is searched first */
+        if (dl <= dr) {
+            stack[sp].node = nd->right; stack[sp].d2 = dr; ++sp;
+            stack[sp].node = nd->left; stack[sp].d2 = dl; ++sp;
+        } else {
+            stack[sp].node = nd->left; stack[sp].d2 = dl; ++sp;
+            stack[sp].node = nd->right; stack[sp].d2 = dr; ++sp;
+        }
+    }
+    return found;
+}

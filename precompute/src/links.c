@@ -1,0 +1,352 @@
+/* links.c — link generation (PIC 4.5, 4.6, App. A).
+ *
+ * For every cache, independently (so the result does not depend on the thread count):
+ *  1. every leaf surfel's solid angle seen from the cache, with visibility from Embree occlusion
+ *     rays (rays_per_surfel rays to points on the surfel's disc; the fraction that arrives);
+ *     back-facing surfels and, for lightmap caches, surfels below the cache's horizon get zero;
+ *  2. the visible solid angle ω and the ω-weighted direction summed up the hierarchy (one sweep over
+ *     the nodes in index order: children always precede parents);
+ *  3. the cut refined top-down: start at the root, always split the node with the largest visible
+ *     solid angle, drop nodes that are not visible at all, until n_L nodes remain or every node in
+ *     the cut is a leaf. The cut therefore covers all of the visible scene (Σ ω is preserved);
+ *  4. one link per cut node, runtime-projection encoding (4.6): factor = surfel_area / node_area
+ *     (flux -> radiosity, the 1/π and 1/surfel_area are the bake's factor_scale), the cone with the
+ *     same visible solid angle (1 - cos α = ω / 2π) and the mean visible direction.
+ *  With full_sh, also PIC Eq. 2: c_lm = Σ_visible-leaves ω_i y_lm(dir_i) per cut node, times factor
+ *  (the per-leaf sum is the Monte-Carlo estimate with one sample per leaf surfel, App. A).
+ */
+#include <math.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bake/bake_format.h"
+#include "pc_internal.h"
+
+typedef struct link_job {
+    const glow__scene *scene;
+    const glow__rt *rt;
+    const glow__surfels *surfels;
+    const glow__hierarchy *h;
+    const glow__caches *caches;
+    const glow__link_settings *settings;
+    glow__links *out;
+    uint32_t *leaf_first, *leaf_end; /* per node: its leaves are [first, end) (DFS leaf order) */
+    float ray_eps;                   /* scene-scale offset for ray starts and ends */
+    /* per-worker scratch */
+    uint32_t workers;
+    float **omega;                   /* [workers][node_count] */
+    float **dirsum;                  /* [workers][node_count*3] */
+    uint32_t **heap;                 /* [workers][node_count] */
+    double *visible_total;           /* per cache, summed in cache order afterwards */
+    atomic_uint done;
+    glow__progress_fn progress;
+    void *progress_user;
+} link_job;
+
+/* max-heap on omega, ties broken by the smaller node index, so the cut is deterministic */
+static bool heap_less(const float *omega, uint32_t a, uint32_t b) {
+    if (omega[a] != omega[b]) return omega[a] < omega[b];
+    return a > b;
+}
+static void heap_push(uint32_t *heap, uint32_t *n, const float *omega, uint32_t v) {
+    uint32_t i = (*n)++;
+    heap[i] = v;
+    while (i > 0) {
+        uint32_t p = (i - 1) / 2;
+        if (!heap_less(omega, heap[p], heap[i])) break;
+        uint32_t t = heap[p]; heap[p] = heap[i]; heap[i] = t;
+        i = p;
+    }
+}
+static uint32_t heap_pop(uint32_t *heap, uint32_t *n, const float *omega) {
+    uint32_t top = heap[0];
+    heap[0] = heap[--(*n)];
+    uint32_t i = 0;
+    for (;;) {
+        uint32_t l = 2 * i + 1, r = l + 1, m = i;
+        if (l < *n && heap_less(omega, heap[m], heap[l])) m = l;
+        if (r < *n && heap_less(omega, heap[m], heap[r])) m = r;
+        if (m == i) break;
+        uint32_t t = heap[m]; heap[m] = heap[i]; heap[i] = t;
+        i = m;
+    }
+    return top;
+}
+
+/* Solid angle of a disc of area `area` at distance d, tilted by cos_s: exact on-axis disc formula
+ * 2π(1 - d/sqrt(d² + R²)) times the tilt; tends to area*cos_s/d² far away, stays ≤ 2π close up. */
+static float disc_solid_angle(float area, float d2, float cos_s) {
+    float r2 = area / (float)GLOW__PI;
+    float d = sqrtf(d2);
+    return (float)(2.0 * GLOW__PI) * (1.0f - d / sqrtf(d2 + r2)) * cos_s;
+}
+
+/* Deterministic per-(cache, surfel, ray) point on the surfel disc (for rays_per_surfel > 1). */
+static void disc_point(const glow__surfel *s, float radius, uint32_t k, uint32_t count, float out[3]) {
+    /* Fibonacci spiral on the disc: area-uniform, no randomness needed. */
+    float t[3], b[3];
+    const float *n = s->nrm;
+    float a[3] = {fabsf(n[0]) < 0.9f ? 1.0f : 0.0f, fabsf(n[0]) < 0.9f ? 0.0f : 1.0f, 0.0f};
+    glow__cross(n, a, t);
+    float tl = sqrtf(glow__dot(t, t));
+    for (int i = 0; i < 3; ++i) t[i] /= tl;
+    glow__cross(n, t, b);
+    float rr = radius * sqrtf(((float)k + 0.5f) / (float)count);
+    float phi = (float)k * 2.39996323f;
+    float c = cosf(phi) * rr, d = sinf(phi) * rr;
+    for (int i = 0; i < 3; ++i) out[i] = s->pos[i] + c * t[i] + d * b[i];
+}
+
+static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
+    const glow__hierarchy *h = job->h;
+    const glow__surfels *S = job->surfels;
+    const glow__cache *cache = &job->caches->caches[ci];
+    const glow__link_settings *set = job->settings;
+    float *omega = job->omega[worker];
+    float *dirsum = job->dirsum[worker];
+    uint32_t *heap = job->heap[worker];
+    const uint32_t n = S->count;
+    const bool hemi = cache->kind == GLOW_CACHE_KIND_LIGHTMAP;
+    const uint32_t rays = set->rays_per_surfel ? set->rays_per_surfel : 1u;
+    const float eps = job->ray_eps;
+    const float radius = sqrtf(S->area / (float)GLOW__PI);
+
+    /* 1. leaves: candidate solid angles, then visibility in packets of 16 rays from the cache. */
+    uint32_t pending_idx[16];
+    float pending_dir[16][3], pending_tfar[16];
+    uint8_t occ[16];
+    uint32_t pending = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        const glow__surfel *s = &S->s[i];
+        float d[3];
+        glow__sub(s->pos, cache->pos, d);
+        float d2 = glow__dot(d, d);
+        omega[i] = 0.0f;
+        dirsum[3 * i] = dirsum[3 * i + 1] = dirsum[3 * i + 2] = 0.0f;
+        if (!(d2 > 0.0f)) continue;
+        float inv = 1.0f / sqrtf(d2);
+        float cos_s = -glow__dot(s->nrm, d) * inv;
+        if (cos_s <= 0.0f) continue;
+        if (hemi && glow__dot(cache->nrm, d) * inv <= 0.0f) continue;
+        float w = disc_solid_angle(S->area, d2, cos_s);
+        if (!(w > 0.0f)) continue;
+        for (int k = 0; k < 3; ++k) dirsum[3 * i + k] = d[k] * inv;
+        if (rays == 1) {
+            omega[i] = w; /* tentatively visible; the packet below clears it when blocked */
+            pending_idx[pending] = i;
+            float len = sqrtf(d2);
+            for (int k = 0; k < 3; ++k) pending_dir[pending][k] = d[k] * inv;
+            pending_tfar[pending] = len - eps;
+            if (++pending == 16) {
+                glow__rt_occluded16(job->rt, cache->pos, (const float(*)[3])pending_dir, pending_tfar, 16, eps, occ);
+                for (uint32_t q = 0; q < 16; ++q)
+                    if (occ[q]) omega[pending_idx[q]] = 0.0f;
+                pending = 0;
+            }
+        } else {
+            uint32_t seen = 0;
+            for (uint32_t k = 0; k < rays; ++k) {
+                float p[3], dd[3];
+                disc_point(s, radius, k, rays, p);
+                glow__sub(p, cache->pos, dd);
+                float len = sqrtf(glow__dot(dd, dd));
+                if (!(len > 2.0f * eps)) { seen++; continue; }
+                if (!glow__rt_occluded(job->rt, cache->pos, dd, eps / len, 1.0f - eps / len)) seen++;
+            }
+            omega[i] = w * (float)seen / (float)rays;
+        }
+    }
+    if (pending) {
+        glow__rt_occluded16(job->rt, cache->pos, (const float(*)[3])pending_dir, pending_tfar, pending, eps, occ);
+        for (uint32_t q = 0; q < pending; ++q)
+            if (occ[q]) omega[pending_idx[q]] = 0.0f;
+    }
+    double leaf_total = 0.0;
+    for (uint32_t i = 0; i < n; ++i) {
+        for (int k = 0; k < 3; ++k) dirsum[3 * i + k] *= omega[i];
+        leaf_total += omega[i];
+    }
+    job->visible_total[ci] = leaf_total;
+
+    /* 2. sums up the tree: children precede parents in node order. */
+    for (uint32_t v = n; v < h->node_count; ++v) {
+        const glow__node *nd = &h->nodes[v];
+        uint32_t a = nd->child[0], b = nd->child[1];
+        omega[v] = omega[a] + omega[b];
+        for (int k = 0; k < 3; ++k) dirsum[3 * v + k] = dirsum[3 * a + k] + dirsum[3 * b + k];
+    }
+
+    /* 3. cut refinement. The heap holds the current cut; split the most important internal node. */
+    uint32_t nl = set->links_per_cache;
+    uint32_t hn = 0, leaves_in_cut = 0;
+    uint32_t root = h->node_count - 1;
+    if (omega[root] > 0.0f) heap_push(heap, &hn, omega, root);
+    /* Leaves cannot be split: they move from the heap to `leafcut`. The heap never holds more
+     * than nl + 1 nodes (each split adds at most one to the cut, which stops at nl). */
+    uint32_t *leafcut = heap + nl + 2;
+    while (hn > 0 && hn + leaves_in_cut < nl) {
+        uint32_t v = heap_pop(heap, &hn, omega);
+        const glow__node *nd = &h->nodes[v];
+        if (nd->child[0] == GLOW_NODE_NONE) {
+            leafcut[leaves_in_cut++] = v;
+            continue;
+        }
+        for (int c = 0; c < 2; ++c)
+            if (omega[nd->child[c]] > 0.0f) heap_push(heap, &hn, omega, nd->child[c]);
+    }
+    /* Cut = heap contents + leafcut. Sort by node index for a stable, cache-friendly order. */
+    uint32_t cut_n = 0;
+    glow__link *L = job->out->links + (size_t)ci * nl;
+    uint32_t *cut = leafcut + leaves_in_cut; /* room after leafcut */
+    memcpy(cut, leafcut, leaves_in_cut * sizeof *cut);
+    memcpy(cut + leaves_in_cut, heap, hn * sizeof *cut);
+    cut_n = leaves_in_cut + hn;
+    /* insertion sort would be O(n_L²); n_L <= 4096 so use qsort-free shell sort */
+    for (uint32_t gap = cut_n / 2; gap > 0; gap /= 2)
+        for (uint32_t i = gap; i < cut_n; ++i) {
+            uint32_t t = cut[i], j = i;
+            while (j >= gap && cut[j - gap] > t) { cut[j] = cut[j - gap]; j -= gap; }
+            cut[j] = t;
+        }
+
+    /* 4. links */
+    const uint32_t bands = job->out->sh_bands;
+    const uint32_t nc = bands * bands;
+    float *shout = job->out->sh ? job->out->sh + (size_t)ci * nl * nc : NULL;
+    if (shout) memset(shout, 0, (size_t)nl * nc * sizeof(float));
+    for (uint32_t j = 0; j < nl; ++j) {
+        glow__link *lk = &L[j];
+        if (j >= cut_n) {
+            memset(lk, 0, sizeof *lk);
+            lk->dir[2] = 1.0f;
+            continue;
+        }
+        uint32_t v = cut[j];
+        const glow__node *nd = &h->nodes[v];
+        lk->node = v;
+        lk->factor = S->area / nd->area;
+        float om = omega[v];
+        float omc = om / (float)(2.0 * GLOW__PI);
+        lk->one_minus_cos = omc > 2.0f ? 2.0f : omc;
+        float *ds = &dirsum[3 * v];
+        float len = sqrtf(glow__dot(ds, ds));
+        if (len > 1e-12f * om && len > 0.0f) {
+            for (int k = 0; k < 3; ++k) lk->dir[k] = ds[k] / len;
+        } else {
+            float d[3];
+            glow__sub(nd->pos, cache->pos, d);
+            float dl = sqrtf(glow__dot(d, d));
+            if (dl > 0.0f) for (int k = 0; k < 3; ++k) lk->dir[k] = d[k] / dl;
+            else { lk->dir[0] = lk->dir[1] = 0.0f; lk->dir[2] = 1.0f; }
+        }
+        if (shout) {
+            /* PIC Eq. 2 over this node's visible leaves: Σ ω_i y(dir_i), in units of the runtime
+             * projection (multiplied by factor; factor_scale applied at runtime). */
+            float y[64];
+            float *c = shout + (size_t)j * nc;
+            for (uint32_t i = job->leaf_first[v]; i < job->leaf_end[v]; ++i) {
+                if (!(omega[i] > 0.0f)) continue;
+                float dir[3];
+                float *dd = &dirsum[3 * i];
+                for (int k = 0; k < 3; ++k) dir[k] = dd[k] / omega[i];
+                glow__sh_eval(bands, dir, y);
+                for (uint32_t q = 0; q < nc; ++q) c[q] += omega[i] * y[q];
+            }
+            for (uint32_t q = 0; q < nc; ++q) c[q] *= lk->factor;
+        }
+    }
+}
+
+static void link_range(void *ctx, uint32_t begin, uint32_t end, uint32_t worker) {
+    link_job *job = ctx;
+    for (uint32_t c = begin; c < end; ++c) {
+        link_cache(job, c, worker);
+        unsigned done = atomic_fetch_add(&job->done, 1u) + 1u;
+        if (worker == 0 && job->progress) /* < 1: the pipeline reports the stage end itself */
+            job->progress(job->progress_user, 0.999 * (double)done / job->caches->count);
+    }
+}
+
+glow_result glow__links_build(const glow__scene *scene, const glow__rt *rt, const glow__surfels *surfels,
+                              const glow__hierarchy *h, const glow__caches *caches,
+                              const glow__link_settings *settings, glow__pool *pool, glow__log *log,
+                              glow__progress_fn progress, void *progress_user, glow__links *out) {
+    memset(out, 0, sizeof *out);
+    uint32_t nl = settings->links_per_cache;
+    if (nl == 0 || settings->sh_bands < 1 || settings->sh_bands > 8) {
+        glow__errorf(log, "links: invalid settings (links %u, bands %u)", nl, settings->sh_bands);
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    out->cache_count = caches->count;
+    out->per_cache = nl;
+    out->sh_bands = settings->sh_bands;
+    out->links = calloc((size_t)caches->count * nl + 1, sizeof *out->links);
+    if (settings->full_sh)
+        out->sh = calloc((size_t)caches->count * nl * settings->sh_bands * settings->sh_bands + 1, sizeof(float));
+    link_job job = {.scene = scene, .rt = rt, .surfels = surfels, .h = h, .caches = caches, .settings = settings,
+                    .out = out, .progress = progress, .progress_user = progress_user};
+    atomic_init(&job.done, 0u);
+    job.workers = glow__pool_threads(pool);
+    job.omega = calloc(job.workers, sizeof *job.omega);
+    job.dirsum = calloc(job.workers, sizeof *job.dirsum);
+    job.heap = calloc(job.workers, sizeof *job.heap);
+    job.visible_total = calloc((size_t)caches->count + 1, sizeof(double));
+    job.leaf_first = malloc((size_t)h->node_count * sizeof(uint32_t));
+    job.leaf_end = malloc((size_t)h->node_count * sizeof(uint32_t));
+    bool ok = out->links && (!settings->full_sh || out->sh) && job.omega && job.dirsum && job.heap &&
+              job.visible_total && job.leaf_first && job.leaf_end;
+    for (uint32_t w = 0; ok && w < job.workers; ++w) {
+        job.omega[w] = malloc((size_t)h->node_count * sizeof(float));
+        job.dirsum[w] = malloc((size_t)h->node_count * 3 * sizeof(float));
+        /* heap (nl + 2) + leaf cut (nl) + sorted cut (<= nl + 2) */
+        job.heap[w] = malloc(((size_t)3u * nl + 8u) * sizeof(uint32_t));
+        ok = job.omega[w] && job.dirsum[w] && job.heap[w];
+    }
+    glow_result res = GLOW_OK;
+    if (!ok) {
+        glow__errorf(log, "links: out of memory for %u caches x %u links", caches->count, nl);
+        res = GLOW_ERROR_OUT_OF_MEMORY;
+        goto done;
+    }
+    /* leaf ranges: leaves are in DFS order, so every subtree owns a contiguous range */
+    for (uint32_t v = 0; v < h->node_count; ++v) {
+        if (v < h->leaf_count) {
+            job.leaf_first[v] = v;
+            job.leaf_end[v] = v + 1;
+        } else {
+            uint32_t a = h->nodes[v].child[0], b = h->nodes[v].child[1];
+            job.leaf_first[v] = job.leaf_first[a] < job.leaf_first[b] ? job.leaf_first[a] : job.leaf_first[b];
+            job.leaf_end[v] = job.leaf_end[a] > job.leaf_end[b] ? job.leaf_end[a] : job.leaf_end[b];
+        }
+    }
+    {
+        float ext[3];
+        glow__sub(scene->bounds_max, scene->bounds_min, ext);
+        float diag = sqrtf(glow__dot(ext, ext));
+        job.ray_eps = 1e-4f * (diag > 0.0f ? diag : 1.0f);
+    }
+    glow__parallel_for(pool, caches->count, 4, link_range, &job);
+    for (uint32_t c = 0; c < caches->count; ++c) out->visible_solid_angle_total += job.visible_total[c];
+done:
+    for (uint32_t w = 0; w < job.workers; ++w) {
+        if (job.omega) free(job.omega[w]);
+        if (job.dirsum) free(job.dirsum[w]);
+        if (job.heap) free(job.heap[w]);
+    }
+    free(job.omega);
+    free(job.dirsum);
+    free(job.heap);
+    free(job.visible_total);
+    free(job.leaf_first);
+    free(job.leaf_end);
+    if (res != GLOW_OK) glow__links_free(out);
+    return res;
+}
+
+void glow__links_free(glow__links *l) {
+    if (!l) return;
+    free(l->links);
+    free(l->sh);
+    memset(l, 0, sizeof *l);
+}

@@ -1,0 +1,273 @@
+/*
+ * pc_internal.h — internal data structures of the linker (precompute). Not installed.
+ *
+ * Pipeline (glow_pc_bake in pipeline.c):
+ *   import.c / builtin.c   -> glow__scene        triangles, materials, textures (cleaned)
+ *   rt.c                   -> glow__rt           Embree scene over the triangles
+ *   surfels.c              -> glow__surfels      PIC 4.2: Halton placement + tangential relaxation
+ *   hierarchy.c            -> glow__hierarchy    PIC 4.3: HAC with k-d tree NN search; REORDERS surfels
+ *   caches.c, charts.c     -> glow__caches       PIC 4.4: grid + lightmap texels, surfel feedback
+ *   links.c                -> glow__links        PIC 4.5/4.6/App. A
+ *   bake_write.c           -> file               runtime/src/bake/bake_format.h
+ *
+ * Conventions: every array is allocated with malloc/calloc and freed by the matching *_free();
+ * functions return glow_result and report problems through glow__log (one message naming the
+ * file and the problem). Work that takes time runs through glow__parallel_for and must give
+ * identical results for any thread count (no reductions whose order depends on scheduling).
+ */
+#ifndef GLOW_PC_INTERNAL_H
+#define GLOW_PC_INTERNAL_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "glow/glow.h"
+#include "glow/glow_precompute.h"
+
+#define GLOW__PI 3.14159265358979323846
+
+/* ---------------------------------------------------------------- logging (log.c) */
+typedef struct glow__log {
+    glow_pc_log_fn fn;    /* may be NULL: silent */
+    void *user;
+    char last_error[1024]; /* the last error message, also passed to fn */
+    uint32_t warning_count;
+} glow__log;
+
+void glow__errorf(glow__log *log, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+void glow__warnf(glow__log *log, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+void glow__infof(glow__log *log, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+
+/* ---------------------------------------------------------------- threads (pool.c) */
+typedef struct glow__pool glow__pool;
+/* fn is called with disjoint ranges [begin, end) covering [0, count); worker < thread count. */
+typedef void (*glow__range_fn)(void *ctx, uint32_t begin, uint32_t end, uint32_t worker);
+glow__pool *glow__pool_create(uint32_t threads); /* 0 = number of online CPUs */
+void glow__pool_destroy(glow__pool *pool);
+uint32_t glow__pool_threads(const glow__pool *pool);
+/* Blocks until done. grain = items per task (0 = automatic). Safe with pool == NULL (serial). */
+void glow__parallel_for(glow__pool *pool, uint32_t count, uint32_t grain, glow__range_fn fn, void *ctx);
+
+/* ---------------------------------------------------------------- scene (import.c, builtin.c) */
+typedef struct glow__texture {
+    int width, height;
+    int level_count;          /* box-filtered mip chain, level 0 = full size */
+    float *levels[16];        /* linear RGB, width>>k * height>>k * 3 floats each */
+    char path[512];
+} glow__texture;
+
+typedef struct glow__material {
+    char name[64];
+    float albedo[3];          /* linear RGB reflectance (Kd / baseColorFactor), clamped to [0,1) */
+    float emission[3];        /* emitted radiance W/(m²·sr) (Ke / emissiveFactor*strength) */
+    int texture;              /* index into scene->textures, or -1 */
+} glow__material;
+
+typedef struct glow__scene {
+    uint32_t tri_count;
+    float (*pos)[3];          /* [3*tri_count] corner positions (unwelded) */
+    float (*nrm)[3];          /* [3*tri_count] corner shading normals, unit (generated when absent) */
+    float (*uv0)[2];          /* [3*tri_count] material UVs, or NULL */
+    float (*uv1)[2];          /* [3*tri_count] lightmap UVs (the mesh's second UV set), or NULL */
+    uint32_t *tri_material;   /* [tri_count] */
+    uint32_t *tri_source;     /* [tri_count] index of the triangle in the file's order */
+    uint32_t material_count;
+    glow__material *materials;
+    uint32_t texture_count;
+    glow__texture *textures;
+    float bounds_min[3], bounds_max[3];
+    double area;              /* sum of triangle areas */
+    /* import statistics */
+    uint32_t source_tri_count;
+    uint32_t skipped_degenerate;  /* zero area or repeated index */
+    uint32_t skipped_nonfinite;   /* NaN/Inf in a vertex */
+    uint32_t skipped_duplicate;   /* coincident duplicate faces (same three positions) */
+    uint32_t textures_missing;
+    bool normals_generated;
+    char source[512];             /* file path or builtin:NAME */
+} glow__scene;
+
+/* Loads `path` (any assimp format) or `builtin:NAME`. On failure logs "PATH: problem". */
+glow_result glow__scene_load(const char *path, glow__log *log, glow__scene *out);
+glow_result glow__scene_builtin(const char *name, glow__log *log, glow__scene *out);
+/* Shared cleaning step used by both: drops degenerate / non-finite / duplicate triangles (counting
+ * them), fills bounds and area, generates normals when nrm == NULL. Exposed for tests. */
+glow_result glow__scene_finalize(glow__scene *scene, glow__log *log);
+void glow__scene_free(glow__scene *scene);
+/* Linear RGB albedo texture lookup: bilinear, wrapped, from the mip level matching footprint
+ * (the sample's footprint width in UV units, 0 = finest). */
+void glow__texture_sample(const glow__texture *tex, float u, float v, float footprint, float out_rgb[3]);
+
+/* ---------------------------------------------------------------- ray tracing (rt.c) */
+typedef struct glow__rt glow__rt;
+glow_result glow__rt_create(const glow__scene *scene, glow__log *log, glow__rt **out);
+void glow__rt_destroy(glow__rt *rt);
+/* true when anything blocks the segment org + t*dir, t in (tnear, tfar). dir need not be unit. */
+bool glow__rt_occluded(const glow__rt *rt, const float org[3], const float dir[3], float tnear, float tfar);
+/* Occlusion for n <= 16 rays sharing an origin; out_occluded[i] = 1 when blocked. */
+void glow__rt_occluded16(const glow__rt *rt, const float org[3], const float (*dir)[3], const float *tfar,
+                         uint32_t n, float tnear, uint8_t *out_occluded);
+typedef struct glow__hit {
+    float t;                  /* INFINITY when nothing was hit */
+    uint32_t tri;             /* scene triangle index */
+    float u, v;               /* barycentrics of corners 1 and 2 */
+    bool back_face;           /* ray hit the side opposite the triangle's geometric normal
+                                 (geometric normal = (p1-p0)x(p2-p0), CCW front) */
+} glow__hit;
+glow__hit glow__rt_intersect(const glow__rt *rt, const float org[3], const float dir[3], float tnear, float tfar);
+
+/* ---------------------------------------------------------------- surfels (surfels.c) */
+typedef struct glow__surfel {
+    float pos[3];
+    float nrm[3];             /* unit; the triangle's shading normal at the surfel */
+    float albedo[3];          /* material albedo x texture, linear */
+    float emission[3];        /* W/(m²·sr) */
+    uint32_t tri;             /* scene triangle it lies on */
+    float bary[2];            /* barycentrics (of corners 1, 2) on tri */
+    uint32_t material;
+} glow__surfel;
+
+typedef struct glow__surfels {
+    uint32_t count;
+    glow__surfel *s;
+    float area;               /* every surfel's area: scene area / count */
+} glow__surfels;
+
+typedef struct glow__surfel_settings {
+    uint32_t count;           /* target n_S (exact: placement yields exactly this many) */
+    uint32_t seed;            /* scrambles the Halton sequence */
+    uint32_t relax_iterations;/* 0 = none */
+} glow__surfel_settings;
+
+glow_result glow__surfels_place(const glow__scene *scene, const glow__surfel_settings *settings,
+                                glow__pool *pool, glow__log *log, glow__surfels *out);
+void glow__surfels_free(glow__surfels *s);
+
+/* ---------------------------------------------------------------- k-d tree (kdtree.c) */
+/* Static 3-d tree over points for k-nearest-neighbour queries (relaxation, cache placement). */
+typedef struct glow__kdtree glow__kdtree;
+glow__kdtree *glow__kdtree_build(const float (*points)[3], uint32_t count);
+void glow__kdtree_free(glow__kdtree *tree);
+/* Up to k nearest points to q (excluding index `exclude`, pass UINT32_MAX for none), sorted by
+ * distance; returns how many were found. */
+uint32_t glow__kdtree_knn(const glow__kdtree *tree, const float q[3], uint32_t k, uint32_t exclude,
+                          uint32_t *out_index, float *out_dist2);
+
+/* ---------------------------------------------------------------- hierarchy (hierarchy.c) */
+typedef struct glow__node {
+    uint32_t child[2];        /* GLOW_NODE_NONE for leaves */
+    uint32_t parent;          /* GLOW_NODE_NONE for the root */
+    uint32_t level;           /* 0 for leaves, 1 + max(children) otherwise */
+    float pos[3];             /* area-weighted centre */
+    float nrm[3];             /* normalised area-weighted mean normal (may be 0 if they cancel) */
+    float area;               /* sum of leaf areas */
+} glow__node;
+
+typedef struct glow__hierarchy {
+    uint32_t leaf_count, node_count;  /* node_count = 2*leaf_count - 1 */
+    glow__node *nodes;                /* leaves [0, leaf_count) = surfels in order; then internal
+                                         nodes sorted by level; root = node_count - 1 */
+    uint32_t level_count;             /* max level + 1 */
+    uint32_t *level_start;            /* [level_count + 1] */
+} glow__hierarchy;
+
+/* HAC with the PIC metric (Cn = 0.1, Cb = 0.02). Reorders surfels->s in place (depth-first leaf
+ * order, so siblings are neighbours in memory). */
+glow_result glow__hierarchy_build(glow__surfels *surfels, const float scene_min[3], const float scene_max[3],
+                                  glow__pool *pool, glow__log *log, glow__hierarchy *out);
+void glow__hierarchy_free(glow__hierarchy *h);
+
+/* ---------------------------------------------------------------- caches (caches.c, charts.c) */
+typedef struct glow__cache {
+    float pos[3];
+    float nrm[3];             /* lightmap: surface normal; grid: 0,0,0 (spherical) */
+    uint32_t kind;            /* GLOW_CACHE_KIND_GRID / _LIGHTMAP (bake_format.h) */
+    uint32_t texel;           /* grid cell index or lightmap texel index (y*w + x) */
+} glow__cache;
+
+typedef struct glow__cache_settings {
+    float grid_spacing;       /* m; 0 = from the scene size (target_grid caches) */
+    float texel_density;      /* texels per m; 0 = from the scene area (target_lightmap texels) */
+    uint32_t target_grid;     /* used when grid_spacing == 0 */
+    uint32_t target_lightmap; /* used when texel_density == 0 */
+    uint32_t seed;
+} glow__cache_settings;
+
+typedef struct glow__caches {
+    uint32_t count;
+    glow__cache *caches;      /* grid caches first, then lightmap caches */
+    uint32_t grid_cache_count, lm_cache_count;
+    /* grid */
+    float grid_origin[3], grid_spacing;
+    uint32_t grid_dims[3];
+    uint32_t *grid_map;       /* [dims product]: cache index | GLOW_MAP_COPY_BIT | GLOW_MAP_EMPTY */
+    uint32_t grid_inside;     /* grid points rejected as inside solid geometry */
+    /* lightmap (one atlas) */
+    uint32_t lm_width, lm_height;
+    float texel_density;
+    uint32_t *lm_map;         /* [w*h], same encoding as grid_map */
+    uint32_t lm_invalid;      /* texels that saw back faces (filled from neighbours) */
+    float (*lm_uv)[2];        /* [3*tri_count] lightmap UV per triangle corner, in [0,1] */
+    uint32_t chart_count;     /* 0 when the mesh's own second UV set was used */
+    /* per surfel (in the hierarchy's surfel order): cache whose light it re-emits */
+    uint32_t *surfel_feedback;
+} glow__caches;
+
+glow_result glow__caches_build(const glow__scene *scene, const glow__rt *rt, const glow__surfels *surfels,
+                               const glow__cache_settings *settings, glow__pool *pool, glow__log *log,
+                               glow__caches *out);
+void glow__caches_free(glow__caches *c);
+
+/* Glow's own chart packer (charts.c): per-corner UVs in [0,1] for a w x h atlas at `texel_density`
+ * texels per m with `padding` texels between charts. Chooses w, h (multiples of 4). */
+glow_result glow__charts_build(const glow__scene *scene, float texel_density, uint32_t padding, glow__log *log,
+                               float (*out_uv)[2], uint32_t *out_width, uint32_t *out_height,
+                               uint32_t *out_chart_count);
+
+/* ---------------------------------------------------------------- SH maths (sh_math.c) */
+/* Real orthonormal SH basis, l bands -> l*l values, index = k*k + k + m (m in [-k, k]).
+ * Same convention as runtime/src/sh.c. dir must be unit. */
+void glow__sh_eval(uint32_t bands, const float dir[3], float *out);
+/* Cone factor k_l(x) (DESIGN §3): SH projection of a cone's indicator, x = cos(half-angle). */
+double glow__cone_factor(uint32_t l, double x);
+
+/* ---------------------------------------------------------------- links (links.c) */
+typedef struct glow__link_settings {
+    uint32_t links_per_cache; /* n_L */
+    uint32_t sh_bands;        /* l */
+    bool full_sh;             /* also project full-SH links (PIC Eq. 2) */
+    uint32_t rays_per_surfel; /* visibility rays per (cache, surfel) */
+    uint32_t seed;
+} glow__link_settings;
+
+typedef struct glow__link {
+    uint32_t node;
+    float factor;             /* surfel_area / node area (times factor_scale at runtime) */
+    float one_minus_cos;      /* 1 - cos(alpha) of the equal-visible-solid-angle cone */
+    float dir[3];             /* mean visible direction, unit */
+} glow__link;
+
+typedef struct glow__links {
+    uint32_t cache_count, per_cache;   /* links[c * per_cache + j] */
+    glow__link *links;
+    float *sh;                /* full-SH: [cache_count * per_cache * bands²] or NULL */
+    uint32_t sh_bands;
+    double visible_solid_angle_total;  /* sum over caches of visible solid angle (diagnostic) */
+} glow__links;
+
+typedef void (*glow__progress_fn)(void *user, double fraction);
+glow_result glow__links_build(const glow__scene *scene, const glow__rt *rt, const glow__surfels *surfels,
+                              const glow__hierarchy *h, const glow__caches *caches,
+                              const glow__link_settings *settings, glow__pool *pool, glow__log *log,
+                              glow__progress_fn progress, void *progress_user, glow__links *out);
+void glow__links_free(glow__links *l);
+
+/* ---------------------------------------------------------------- small vector helpers */
+static inline float glow__dot(const float a[3], const float b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+static inline void glow__sub(const float a[3], const float b[3], float o[3]) { o[0] = a[0] - b[0]; o[1] = a[1] - b[1]; o[2] = a[2] - b[2]; }
+static inline void glow__cross(const float a[3], const float b[3], float o[3]) {
+    o[0] = a[1] * b[2] - a[2] * b[1]; o[1] = a[2] * b[0] - a[0] * b[2]; o[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+#endif /* GLOW_PC_INTERNAL_H */

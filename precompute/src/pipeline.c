@@ -1,0 +1,420 @@
+/* pipeline.c — glow_pc_bake: import -> ray-tracing BVH -> surfels -> hierarchy -> caches -> links ->
+ * bake file. Owns the presets, option validation, per-stage timing and peak memory, and the
+ * serialisation of the in-memory results into the sections of bake_format.h. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "bake/bake_format.h"
+#include "bake_write.h"
+#include "pc_internal.h"
+
+static const char *const stage_names[GLOW_PC_STAGE_COUNT] = {"import", "bvh", "surfels", "hierarchy",
+                                                             "caches", "links", "write"};
+enum { ST_IMPORT, ST_BVH, ST_SURFELS, ST_HIER, ST_CACHES, ST_LINKS, ST_WRITE };
+
+const char *glow_pc_stage_name(uint32_t stage) { return stage < GLOW_PC_STAGE_COUNT ? stage_names[stage] : "?"; }
+
+typedef struct preset {
+    uint32_t surfels, links, bands, grid, lightmap, relax;
+} preset;
+static const preset presets[4] = {
+    /* default = moderate */ {32768, 128, 3, 2000, 8000, 6},
+    /* low      */ {8192, 64, 3, 500, 2000, 4},
+    /* moderate */ {32768, 128, 3, 2000, 8000, 6},
+    /* high     */ {131072, 254, 4, 2000, 8000, 6},
+};
+
+static const preset *preset_of(glow_pc_quality q) {
+    return (unsigned)q <= GLOW_PC_QUALITY_HIGH ? &presets[q] : &presets[0];
+}
+
+glow_pc_settings glow_pc_settings_resolve(const glow_pc_settings *in) {
+    glow_pc_settings s = in ? *in : (glow_pc_settings){0};
+    const preset *p = preset_of(s.quality);
+    if (s.quality == GLOW_PC_QUALITY_DEFAULT) s.quality = GLOW_PC_QUALITY_MODERATE;
+    if (!s.surfels) s.surfels = p->surfels;
+    if (!s.links) s.links = p->links;
+    if (!s.bands) s.bands = p->bands;
+    if (!s.relax_iterations) s.relax_iterations = p->relax;
+    if (!s.rays_per_surfel) s.rays_per_surfel = 1;
+    return s;
+}
+
+glow_result glow_pc_settings_validate(const glow_pc_settings *s, char *msg, size_t n) {
+#define BAD(...) do { if (msg && n) snprintf(msg, n, __VA_ARGS__); return GLOW_ERROR_INVALID_ARGUMENT; } while (0)
+    if ((unsigned)s->quality > GLOW_PC_QUALITY_HIGH) BAD("quality %u is not low, moderate or high", (unsigned)s->quality);
+    if (s->surfels && (s->surfels < 16 || s->surfels > (1u << 22)))
+        BAD("--surfels %u is out of range (16..4194304)", s->surfels);
+    if (s->links && s->links > 4096) BAD("--links %u is out of range (1..4096)", s->links);
+    if (s->bands && (s->bands < 2 || s->bands > 8)) BAD("--bands %u is out of range (2..8)", s->bands);
+    if (s->grid_spacing != 0.0f && !(isfinite(s->grid_spacing) && s->grid_spacing > 0.0f))
+        BAD("--grid-spacing %g must be a positive finite length", (double)s->grid_spacing);
+    if (s->texel_density != 0.0f && !(isfinite(s->texel_density) && s->texel_density > 0.0f))
+        BAD("--texel-density %g must be a positive finite number of texels per unit", (double)s->texel_density);
+    if (s->threads > 1024) BAD("--threads %u is out of range (0..1024)", s->threads);
+    if (s->rays_per_surfel > 256) BAD("rays per surfel %u is out of range (1..256)", s->rays_per_surfel);
+    if (s->relax_iterations > 1000) BAD("relaxation iterations %u is out of range", s->relax_iterations);
+#undef BAD
+    return GLOW_OK;
+}
+
+/* ------------------------------------------------------------------ timing and memory */
+static double now_seconds(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Per-stage peak RSS: reset the kernel's high-water mark (Linux >= 4.0, "5" > clear_refs) before a
+ * stage and read VmHWM after it. Where that is not possible the value is the process peak so far. */
+static void peak_reset(void) {
+    FILE *f = fopen("/proc/self/clear_refs", "w");
+    if (!f) return;
+    fputs("5", f);
+    fclose(f);
+}
+static size_t peak_read(void) {
+    FILE *f = fopen("/proc/self/status", "r");
+    if (!f) return 0;
+    char line[256];
+    size_t kb = 0;
+    while (fgets(line, sizeof line, f))
+        if (strncmp(line, "VmHWM:", 6) == 0) {
+            kb = (size_t)strtoull(line + 6, NULL, 10);
+            break;
+        }
+    fclose(f);
+    return kb * 1024u;
+}
+
+typedef struct progress_ctx {
+    const glow_pc_settings *s;
+    uint32_t stage;
+} progress_ctx;
+static void stage_progress(void *user, double f) {
+    progress_ctx *p = user;
+    if (p->s->progress) p->s->progress(p->s->progress_user, p->stage, f);
+}
+
+/* ------------------------------------------------------------------ serialisation */
+static uint16_t unorm16(float x) {
+    if (!(x > 0.0f)) return 0;
+    if (x >= 1.0f) return 65535;
+    return (uint16_t)lrintf(x * 65535.0f);
+}
+
+typedef struct sections {
+    glow__section_data s[16];
+    uint32_t n;
+    void *owned[16];
+} sections;
+
+static void add_section(sections *ss, uint32_t fourcc, void *data, uint64_t size) {
+    ss->owned[ss->n] = data;
+    ss->s[ss->n] = (glow__section_data){.fourcc = fourcc, .version = 1, .data = data, .size = size};
+    ss->n++;
+}
+
+static glow_result serialise(const glow_pc_settings *set, const glow__scene *sc, const glow__surfels *sf,
+                             const glow__hierarchy *h, const glow__caches *ca, const glow__links *lk,
+                             sections *ss, glow__log *log) {
+    const uint32_t nl = lk->per_cache;
+    const uint32_t blocks = (nl + GLOW_LINK_BLOCK - 1) / GLOW_LINK_BLOCK;
+    /* META */
+    glow_bake_meta *m = calloc(1, sizeof *m);
+    glow_bake_material *mat = calloc(sc->material_count ? sc->material_count : 1, sizeof *mat);
+    glow_bake_surfel *su = calloc(sf->count, sizeof *su);
+    glow_bake_node *no = calloc(h->node_count, sizeof *no);
+    uint32_t *lv = calloc((size_t)h->level_count + 1, sizeof *lv);
+    glow_bake_cache *cc = calloc(ca->count ? ca->count : 1, sizeof *cc);
+    size_t grid_cells = (size_t)ca->grid_dims[0] * ca->grid_dims[1] * ca->grid_dims[2];
+    uint32_t *gm = grid_cells ? malloc(grid_cells * sizeof *gm) : NULL;
+    size_t lm_texels = (size_t)ca->lm_width * ca->lm_height;
+    uint32_t *lmm = lm_texels ? malloc(lm_texels * sizeof *lmm) : NULL;
+    glow_bake_link_block *lb = calloc((size_t)ca->count * blocks + 1, sizeof *lb);
+    size_t shlk_block = glow_bake_shlk_block_size(lk->sh_bands);
+    uint8_t *sh = lk->sh ? calloc((size_t)ca->count * blocks + 1, shlk_block) : NULL;
+    glow_bake_triangle *tr = calloc(sc->tri_count, sizeof *tr);
+    if (!m || !mat || !su || !no || !lv || !cc || (grid_cells && !gm) || (lm_texels && !lmm) || !lb ||
+        (lk->sh && !sh) || !tr) {
+        free(m); free(mat); free(su); free(no); free(lv); free(cc); free(gm); free(lmm); free(lb); free(sh); free(tr);
+        glow__errorf(log, "write: out of memory while serialising the bake");
+        return GLOW_ERROR_OUT_OF_MEMORY;
+    }
+
+    m->surfel_count = sf->count;
+    m->node_count = h->node_count;
+    m->level_count = h->level_count;
+    m->cache_count = ca->count;
+    m->grid_cache_count = ca->grid_cache_count;
+    m->lightmap_cache_count = ca->lm_cache_count;
+    m->links_per_cache = nl;
+    m->link_blocks_per_cache = blocks;
+    m->sh_bands = set->bands;
+    m->link_kind = GLOW_LINK_KIND_RUNTIME_PROJECTION | (lk->sh ? GLOW_LINK_KIND_FULL_SH : 0u);
+    m->material_count = sc->material_count;
+    m->triangle_count = sc->tri_count;
+    memcpy(m->bounds_min, sc->bounds_min, sizeof m->bounds_min);
+    memcpy(m->bounds_max, sc->bounds_max, sizeof m->bounds_max);
+    m->surfel_area = sf->area;
+    m->factor_scale = (float)(1.0 / (GLOW__PI * (double)sf->area));
+    memcpy(m->grid_origin, ca->grid_origin, sizeof m->grid_origin);
+    m->grid_spacing = ca->grid_spacing;
+    memcpy(m->grid_dims, ca->grid_dims, sizeof m->grid_dims);
+    m->lightmap_count = lm_texels ? 1u : 0u;
+    m->lightmap_width = ca->lm_width;
+    m->lightmap_height = ca->lm_height;
+    m->texel_density = ca->texel_density;
+    m->seed = set->seed;
+    m->scene_area = sc->area;
+    m->source_triangles = sc->source_tri_count;
+    m->skipped_degenerate = sc->skipped_degenerate;
+    m->skipped_duplicate = sc->skipped_duplicate;
+    m->skipped_nonfinite = sc->skipped_nonfinite;
+    m->chart_count = ca->chart_count;
+    m->lightmap_invalid_texels = ca->lm_invalid;
+    m->quality = (uint32_t)set->quality;
+    m->rays_per_surfel = set->rays_per_surfel;
+
+    for (uint32_t i = 0; i < sc->material_count; ++i) {
+        const glow__material *src = &sc->materials[i];
+        size_t len = strnlen(src->name, sizeof mat[i].name - 1); /* truncate, keep NUL */
+        memcpy(mat[i].name, src->name, len);
+        memcpy(mat[i].albedo, src->albedo, sizeof mat[i].albedo);
+        memcpy(mat[i].emission, src->emission, sizeof mat[i].emission);
+        mat[i].flags = src->texture >= 0 ? 1u : 0u;
+    }
+    for (uint32_t i = 0; i < sf->count; ++i) {
+        const glow__surfel *s = &sf->s[i];
+        memcpy(su[i].position, s->pos, 12);
+        memcpy(su[i].normal, s->nrm, 12);
+        memcpy(su[i].albedo, s->albedo, 12);
+        memcpy(su[i].emission, s->emission, 12);
+        su[i].material = s->material;
+        su[i].feedback = ca->surfel_feedback[i];
+        su[i].triangle = s->tri;
+    }
+    for (uint32_t i = 0; i < h->node_count; ++i) {
+        const glow__node *n = &h->nodes[i];
+        no[i].child[0] = n->child[0];
+        no[i].child[1] = n->child[1];
+        no[i].parent = n->parent;
+        no[i].area = n->area;
+        memcpy(no[i].position, n->pos, 12);
+        no[i].normal_oct = glow__oct_encode(n->nrm);
+    }
+    memcpy(lv, h->level_start, ((size_t)h->level_count + 1) * sizeof *lv);
+    for (uint32_t i = 0; i < ca->count; ++i) {
+        const glow__cache *c = &ca->caches[i];
+        memcpy(cc[i].position, c->pos, 12);
+        cc[i].normal_oct = c->kind == GLOW_CACHE_KIND_LIGHTMAP ? glow__oct_encode(c->nrm) : 0u;
+        cc[i].kind = c->kind;
+        cc[i].texel = c->texel;
+    }
+    if (gm) memcpy(gm, ca->grid_map, grid_cells * sizeof *gm);
+    if (lmm) memcpy(lmm, ca->lm_map, lm_texels * sizeof *lmm);
+    for (uint32_t c = 0; c < ca->count; ++c)
+        for (uint32_t j = 0; j < blocks * GLOW_LINK_BLOCK; ++j) {
+            glow_bake_link_block *b = &lb[(size_t)c * blocks + j / GLOW_LINK_BLOCK];
+            uint32_t lane = j % GLOW_LINK_BLOCK;
+            if (j >= nl) { /* padding lanes: factor 0 */
+                b->dir_v[lane] = 0;
+                continue;
+            }
+            const glow__link *L = &lk->links[(size_t)c * nl + j];
+            b->node[lane] = L->node;
+            b->factor[lane] = glow__half_from_float(L->factor);
+            b->one_minus_cos[lane] = glow__half_from_float(L->one_minus_cos);
+            glow__oct_encode2(L->dir, &b->dir_u[lane], &b->dir_v[lane]);
+            if (sh) {
+                uint8_t *blk = sh + ((size_t)c * blocks + j / GLOW_LINK_BLOCK) * shlk_block;
+                uint32_t *node = (uint32_t *)blk;
+                uint16_t *coef = (uint16_t *)(blk + 64);
+                node[lane] = L->node;
+                const float *src = lk->sh + ((size_t)c * nl + j) * lk->sh_bands * lk->sh_bands;
+                for (uint32_t q = 0; q < lk->sh_bands * lk->sh_bands; ++q)
+                    coef[q * GLOW_LINK_BLOCK + lane] = glow__half_from_float(src[q]);
+            }
+        }
+    for (uint32_t t = 0; t < sc->tri_count; ++t) {
+        const float(*p)[3] = sc->pos + 3 * (size_t)t;
+        memcpy(tr[t].position, p, 36);
+        for (int k = 0; k < 3; ++k) {
+            tr[t].lm_uv[2 * k] = unorm16(ca->lm_uv[3 * (size_t)t + k][0]);
+            tr[t].lm_uv[2 * k + 1] = unorm16(ca->lm_uv[3 * (size_t)t + k][1]);
+        }
+        tr[t].material = sc->tri_material[t];
+        tr[t].source = sc->tri_source[t];
+        float e1[3], e2[3], ng[3];
+        glow__sub(p[1], p[0], e1);
+        glow__sub(p[2], p[0], e2);
+        glow__cross(e1, e2, ng);
+        float l = sqrtf(glow__dot(ng, ng));
+        for (int k = 0; k < 3; ++k) ng[k] = l > 0.0f ? ng[k] / l : 0.0f;
+        tr[t].normal_oct = glow__oct_encode(ng);
+    }
+
+    add_section(ss, GLOW_SECTION_META, m, sizeof *m);
+    add_section(ss, GLOW_SECTION_MATL, mat, (uint64_t)sc->material_count * sizeof *mat);
+    add_section(ss, GLOW_SECTION_SURF, su, (uint64_t)sf->count * sizeof *su);
+    add_section(ss, GLOW_SECTION_NODE, no, (uint64_t)h->node_count * sizeof *no);
+    add_section(ss, GLOW_SECTION_LEVL, lv, ((uint64_t)h->level_count + 1) * sizeof *lv);
+    add_section(ss, GLOW_SECTION_CACH, cc, (uint64_t)ca->count * sizeof *cc);
+    if (gm) add_section(ss, GLOW_SECTION_GRID, gm, grid_cells * sizeof *gm);
+    else free(gm);
+    if (lmm) add_section(ss, GLOW_SECTION_LMAP, lmm, lm_texels * sizeof *lmm);
+    else free(lmm);
+    add_section(ss, GLOW_SECTION_LINK, lb, (uint64_t)ca->count * blocks * sizeof *lb);
+    if (sh) add_section(ss, GLOW_SECTION_SHLK, sh, (uint64_t)ca->count * blocks * shlk_block);
+    add_section(ss, GLOW_SECTION_GEOM, tr, (uint64_t)sc->tri_count * sizeof *tr);
+    return GLOW_OK;
+}
+
+/* ------------------------------------------------------------------ the bake */
+static void log_adapter(void *user, glow_log_level level, const char *msg) {
+    const glow_pc_settings *s = user;
+    if (s->log) s->log(s->log_user, level, msg);
+}
+
+glow_result glow_pc_bake(const char *scene_path, const char *out_path, const glow_pc_settings *settings_in,
+                         glow_pc_stats *stats) {
+    glow_pc_stats local_stats;
+    if (!stats) stats = &local_stats;
+    memset(stats, 0, sizeof *stats);
+    glow_pc_settings zero = {0};
+    glow_pc_settings set = glow_pc_settings_resolve(settings_in ? settings_in : &zero);
+    glow__log log = {.fn = log_adapter, .user = &set};
+    if (!scene_path || !out_path) {
+        glow__errorf(&log, "glow_pc_bake: scene and output paths are required");
+        snprintf(stats->error, sizeof stats->error, "%s", log.last_error);
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    char msg[512];
+    glow_result res = glow_pc_settings_validate(&set, msg, sizeof msg);
+    if (res != GLOW_OK) {
+        glow__errorf(&log, "%s", msg);
+        snprintf(stats->error, sizeof stats->error, "%s", log.last_error);
+        return res;
+    }
+    const preset *p = preset_of(set.quality);
+    glow__scene scene = {0};
+    glow__rt *rt = NULL;
+    glow__surfels surfels = {0};
+    glow__hierarchy hier = {0};
+    glow__caches caches = {0};
+    glow__links links = {0};
+    sections ss = {0};
+    glow__pool *pool = glow__pool_create(set.threads);
+    if (!pool) {
+        glow__errorf(&log, "cannot start %u threads", set.threads);
+        res = GLOW_ERROR_OUT_OF_MEMORY;
+        goto done;
+    }
+    stats->threads = glow__pool_threads(pool);
+    double t_all = now_seconds(), t0;
+    progress_ctx pc = {.s = &set};
+#define STAGE_BEGIN(k) do { pc.stage = (k); peak_reset(); t0 = now_seconds(); stage_progress(&pc, 0.0); } while (0)
+#define STAGE_END(k) do { stats->stage_seconds[k] = now_seconds() - t0; stats->stage_peak_rss[k] = peak_read(); \
+                          stage_progress(&pc, 1.0); } while (0)
+
+    STAGE_BEGIN(ST_IMPORT);
+    res = glow__scene_load(scene_path, &log, &scene);
+    STAGE_END(ST_IMPORT);
+    if (res != GLOW_OK) goto done;
+    stats->source_triangles = scene.source_tri_count;
+    stats->triangles = scene.tri_count;
+    stats->materials = scene.material_count;
+    stats->textures = scene.texture_count;
+    stats->textures_missing = scene.textures_missing;
+    stats->skipped_degenerate = scene.skipped_degenerate;
+    stats->skipped_duplicate = scene.skipped_duplicate;
+    stats->skipped_nonfinite = scene.skipped_nonfinite;
+    stats->scene_area = scene.area;
+
+    STAGE_BEGIN(ST_BVH);
+    res = glow__rt_create(&scene, &log, &rt);
+    STAGE_END(ST_BVH);
+    if (res != GLOW_OK) goto done;
+
+    STAGE_BEGIN(ST_SURFELS);
+    glow__surfel_settings ssurf = {.count = set.surfels, .seed = set.seed, .relax_iterations = set.relax_iterations};
+    res = glow__surfels_place(&scene, &ssurf, pool, &log, &surfels);
+    STAGE_END(ST_SURFELS);
+    if (res != GLOW_OK) goto done;
+    stats->surfels = surfels.count;
+
+    STAGE_BEGIN(ST_HIER);
+    res = glow__hierarchy_build(&surfels, scene.bounds_min, scene.bounds_max, pool, &log, &hier);
+    STAGE_END(ST_HIER);
+    if (res != GLOW_OK) goto done;
+    stats->nodes = hier.node_count;
+    stats->levels = hier.level_count;
+
+    STAGE_BEGIN(ST_CACHES);
+    glow__cache_settings scache = {.grid_spacing = set.grid_spacing, .texel_density = set.texel_density,
+                                   .target_grid = p->grid, .target_lightmap = p->lightmap, .seed = set.seed};
+    res = glow__caches_build(&scene, rt, &surfels, &scache, pool, &log, &caches);
+    STAGE_END(ST_CACHES);
+    if (res != GLOW_OK) goto done;
+    stats->grid_spacing = caches.grid_spacing;
+    stats->texel_density = caches.texel_density;
+    memcpy(stats->grid_dims, caches.grid_dims, sizeof stats->grid_dims);
+    stats->grid_caches = caches.grid_cache_count;
+    stats->grid_inside = caches.grid_inside;
+    stats->lightmap_width = caches.lm_width;
+    stats->lightmap_height = caches.lm_height;
+    stats->lightmap_caches = caches.lm_cache_count;
+    stats->lightmap_invalid = caches.lm_invalid;
+    stats->charts = caches.chart_count;
+    stats->caches = caches.count;
+
+    {   /* refuse link tables that cannot fit before trying (each link costs ~28 B while baking) */
+        double bytes = (double)caches.count * set.links * (sizeof(glow__link) + (set.sh_links ? 4.0 * set.bands * set.bands : 0.0));
+        if (bytes > 64.0 * 1024 * 1024 * 1024) {
+            glow__errorf(&log, "%s: %u caches x %u links would need %.1f GiB; lower --links or the cache density",
+                         scene_path, caches.count, set.links, bytes / (1024.0 * 1024 * 1024));
+            res = GLOW_ERROR_INVALID_ARGUMENT;
+            goto done;
+        }
+    }
+    STAGE_BEGIN(ST_LINKS);
+    glow__link_settings slink = {.links_per_cache = set.links, .sh_bands = set.bands, .full_sh = set.sh_links,
+                                 .rays_per_surfel = set.rays_per_surfel, .seed = set.seed};
+    res = glow__links_build(&scene, rt, &surfels, &hier, &caches, &slink, pool, &log, stage_progress, &pc, &links);
+    STAGE_END(ST_LINKS);
+    if (res != GLOW_OK) goto done;
+    stats->links = (uint64_t)caches.count * set.links;
+    stats->links_per_cache = set.links;
+    stats->bands = set.bands;
+    stats->seed = set.seed;
+
+    STAGE_BEGIN(ST_WRITE);
+    res = serialise(&set, &scene, &surfels, &hier, &caches, &links, &ss, &log);
+    if (res == GLOW_OK) res = glow__bake_write_file(out_path, ss.s, ss.n, &log, &stats->file_size);
+    STAGE_END(ST_WRITE);
+    if (res != GLOW_OK) goto done;
+    stats->section_count = ss.n;
+    for (uint32_t i = 0; i < ss.n && i < 16; ++i) {
+        stats->section_fourcc[i] = ss.s[i].fourcc;
+        stats->section_size[i] = ss.s[i].size;
+        if (ss.s[i].fourcc == GLOW_SECTION_LINK && stats->links)
+            stats->bytes_per_link = (double)ss.s[i].size / (double)stats->links;
+    }
+    stats->total_seconds = now_seconds() - t_all;
+#undef STAGE_BEGIN
+#undef STAGE_END
+done:
+    for (uint32_t i = 0; i < ss.n; ++i) free(ss.owned[i]);
+    glow__links_free(&links);
+    glow__caches_free(&caches);
+    glow__hierarchy_free(&hier);
+    glow__surfels_free(&surfels);
+    glow__rt_destroy(rt);
+    glow__scene_free(&scene);
+    glow__pool_destroy(pool);
+    if (res != GLOW_OK) snprintf(stats->error, sizeof stats->error, "%s", log.last_error);
+    return res;
+}

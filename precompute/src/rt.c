@@ -1,0 +1,138 @@
+/* rt.c — the linker's ray queries over the scene, on Embree 3. Triangles are the scene's own
+ * unwelded corners (vertex 3i+k is corner k of triangle i), so Embree's primID is our triangle index.
+ * All queries are thread-safe (Embree's rtcIntersect/rtcOccluded are). */
+#include <embree3/rtcore.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "pc_internal.h"
+
+struct glow__rt {
+    RTCDevice device;
+    RTCScene scene;
+    const glow__scene *src;
+    bool ray16;
+};
+
+static void embree_error(void *user, enum RTCError code, const char *str) {
+    glow__log *log = user;
+    glow__errorf(log, "embree: error %d: %s", (int)code, str ? str : "");
+}
+
+glow_result glow__rt_create(const glow__scene *scene, glow__log *log, glow__rt **out) {
+    *out = NULL;
+    glow__rt *rt = calloc(1, sizeof *rt);
+    if (!rt) return GLOW_ERROR_OUT_OF_MEMORY;
+    rt->src = scene;
+    rt->device = rtcNewDevice(NULL);
+    if (!rt->device) {
+        glow__errorf(log, "embree: cannot create device (error %d)", (int)rtcGetDeviceError(NULL));
+        free(rt);
+        return GLOW_ERROR_UNSUPPORTED;
+    }
+    rtcSetDeviceErrorFunction(rt->device, embree_error, log);
+    rt->ray16 = rtcGetDeviceProperty(rt->device, RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED) != 0;
+    rt->scene = rtcNewScene(rt->device);
+    rtcSetSceneBuildQuality(rt->scene, RTC_BUILD_QUALITY_HIGH);
+    rtcSetSceneFlags(rt->scene, RTC_SCENE_FLAG_ROBUST);
+    RTCGeometry geom = rtcNewGeometry(rt->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    uint32_t n = scene->tri_count;
+    float *v = rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+                                       (size_t)3 * n);
+    uint32_t *idx = rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), n);
+    if (!v || !idx) {
+        rtcReleaseGeometry(geom);
+        glow__rt_destroy(rt);
+        glow__errorf(log, "embree: out of memory for %u triangles", n);
+        return GLOW_ERROR_OUT_OF_MEMORY;
+    }
+    memcpy(v, scene->pos, (size_t)n * 9 * sizeof(float));
+    for (uint32_t i = 0; i < 3 * n; ++i) idx[i] = i;
+    rtcCommitGeometry(geom);
+    rtcAttachGeometry(rt->scene, geom);
+    rtcReleaseGeometry(geom);
+    rtcCommitScene(rt->scene);
+    if (rtcGetDeviceError(rt->device) != RTC_ERROR_NONE) {
+        glow__rt_destroy(rt);
+        return GLOW_ERROR_UNSUPPORTED;
+    }
+    *out = rt;
+    return GLOW_OK;
+}
+
+void glow__rt_destroy(glow__rt *rt) {
+    if (!rt) return;
+    if (rt->scene) rtcReleaseScene(rt->scene);
+    if (rt->device) rtcReleaseDevice(rt->device);
+    free(rt);
+}
+
+bool glow__rt_occluded(const glow__rt *rt, const float org[3], const float dir[3], float tnear, float tfar) {
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    struct RTCRay ray = {0};
+    ray.org_x = org[0]; ray.org_y = org[1]; ray.org_z = org[2];
+    ray.dir_x = dir[0]; ray.dir_y = dir[1]; ray.dir_z = dir[2];
+    ray.tnear = tnear;
+    ray.tfar = tfar;
+    ray.mask = 0xFFFFFFFFu;
+    rtcOccluded1(rt->scene, &ctx, &ray);
+    return ray.tfar < 0.0f; /* Embree sets tfar = -inf on a hit */
+}
+
+void glow__rt_occluded16(const glow__rt *rt, const float org[3], const float (*dir)[3], const float *tfar, uint32_t n,
+                         float tnear, uint8_t *out_occluded) {
+    if (n > 16) n = 16;
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    _Alignas(64) struct RTCRay16 r;
+    _Alignas(64) int valid[16];
+    for (uint32_t i = 0; i < 16; ++i) {
+        bool on = i < n;
+        valid[i] = on ? -1 : 0;
+        r.org_x[i] = org[0]; r.org_y[i] = org[1]; r.org_z[i] = org[2];
+        r.dir_x[i] = on ? dir[i][0] : 0.0f;
+        r.dir_y[i] = on ? dir[i][1] : 0.0f;
+        r.dir_z[i] = on ? dir[i][2] : 1.0f;
+        r.tnear[i] = tnear;
+        r.tfar[i] = on ? tfar[i] : 0.0f;
+        r.time[i] = 0.0f;
+        r.mask[i] = 0xFFFFFFFFu;
+        r.id[i] = i;
+        r.flags[i] = 0;
+    }
+    rtcOccluded16(valid, rt->scene, &ctx, &r);
+    for (uint32_t i = 0; i < n; ++i) out_occluded[i] = r.tfar[i] < 0.0f;
+}
+
+glow__hit glow__rt_intersect(const glow__rt *rt, const float org[3], const float dir[3], float tnear, float tfar) {
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    struct RTCRayHit rh;
+    memset(&rh, 0, sizeof rh);
+    rh.ray.org_x = org[0]; rh.ray.org_y = org[1]; rh.ray.org_z = org[2];
+    rh.ray.dir_x = dir[0]; rh.ray.dir_y = dir[1]; rh.ray.dir_z = dir[2];
+    rh.ray.tnear = tnear;
+    rh.ray.tfar = tfar;
+    rh.ray.mask = 0xFFFFFFFFu;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(rt->scene, &ctx, &rh);
+    glow__hit hit = {.t = INFINITY, .tri = UINT32_MAX};
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return hit;
+    hit.t = rh.ray.tfar;
+    hit.tri = rh.hit.primID;
+    hit.u = rh.hit.u;
+    hit.v = rh.hit.v;
+    /* Our own front-face convention, independent of Embree's Ng sign: (p1-p0) x (p2-p0). */
+    const float(*p)[3] = rt->src->pos + 3 * (size_t)hit.tri;
+    float e1[3], e2[3], ng[3];
+    glow__sub(p[1], p[0], e1);
+    glow__sub(p[2], p[0], e2);
+    glow__cross(e1, e2, ng);
+    hit.back_face = glow__dot(ng, dir) > 0.0f;
+    return hit;
+}

@@ -1,0 +1,396 @@
+/* surfels.c — surfel placement (PIC 4.2).
+ *
+ * 1. Area-proportional spawning: every surfel has the same area a = scene area / n. Triangles are
+ *    walked in order with a running cumulative area C (double); triangle t spawns
+ *    floor(C_end / a) - floor(C_start / a) surfels, so the area of triangles too small to spawn one
+ *    accumulates until it does (PIC: "the area of too-small triangles is accumulated"). The last
+ *    triangle's end is pinned to n, so the total is exactly n whatever the rounding.
+ * 2. Positions: surfel i (global index) takes the 2-d Halton point (radical inverses in bases 2 and
+ *    3) of index i, shifted modulo 1 by a Cranley-Patterson rotation derived from a hash of the seed,
+ *    and mapped to the triangle with the square-root warp. Consecutive Halton points are stratified,
+ *    so the block of points a triangle receives covers it evenly.
+ * 3. Tangential relaxation: each iteration builds a k-d tree over the current positions; every
+ *    surfel is pushed away from its K nearest neighbours that face the same way (dot > 0.5) and lie
+ *    closer than 2r (r = sqrt(a/pi)), the push is projected onto its tangent plane, and the move is
+ *    done in barycentric space and clamped to the surfel's own triangle (closest point), so no surfel
+ *    ever leaves its triangle. Jacobi update: displacements are computed from the old positions into
+ *    a new array, so the result does not depend on the thread count. Relaxation never changes area.
+ *
+ * Per surfel: position, interpolated shading normal, albedo (material albedo x texture sampled at
+ * the interpolated uv0 with a footprint of one surfel), emission, triangle, barycentrics, material.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "pc_internal.h"
+
+#define RELAX_NEIGHBOURS 6u
+#define RELAX_STEP 0.4      /* fraction of the overlap (2r - d) moved per neighbour and iteration (Jacobi:
+                               * stable below ~0.5 for hexagonal neighbourhoods; 0.4 spread best in tests) */
+#define RELAX_MAX_MOVE 0.5  /* a surfel moves at most this many radii per iteration */
+
+/* ------------------------------------------------------------------ helpers */
+static uint32_t hash32(uint32_t x) {
+    /* lowbias32 (Chris Wellons) */
+    x ^= x >> 16;
+    x *= 0x7feb352dU;
+    x ^= x >> 15;
+    x *= 0x846ca68bU;
+    x ^= x >> 16;
+    return x;
+}
+
+static double radical_inverse2(uint32_t i) {
+    i = (i << 16) | (i >> 16);
+    i = ((i & 0x00ff00ffu) << 8) | ((i & 0xff00ff00u) >> 8);
+    i = ((i & 0x0f0f0f0fu) << 4) | ((i & 0xf0f0f0f0u) >> 4);
+    i = ((i & 0x33333333u) << 2) | ((i & 0xccccccccu) >> 2);
+    i = ((i & 0x55555555u) << 1) | ((i & 0xaaaaaaaau) >> 1);
+    return (double)i * (1.0 / 4294967296.0);
+}
+
+static double radical_inverse3(uint32_t i) {
+    double inv = 1.0 / 3.0, f = inv, r = 0.0;
+    while (i > 0) {
+        r += f * (double)(i % 3u);
+        i /= 3u;
+        f *= inv;
+    }
+    return r;
+}
+
+static double frac1(double x) {
+    x -= floor(x);
+    return x >= 1.0 ? 0.0 : x;
+}
+
+static double tri_area_d(const glow__scene *scene, uint32_t t) {
+    const float *p0 = scene->pos[3 * t], *p1 = scene->pos[3 * t + 1], *p2 = scene->pos[3 * t + 2];
+    double e1[3], e2[3];
+    for (int k = 0; k < 3; ++k) {
+        e1[k] = (double)p1[k] - p0[k];
+        e2[k] = (double)p2[k] - p0[k];
+    }
+    double c0 = e1[1] * e2[2] - e1[2] * e2[1], c1 = e1[2] * e2[0] - e1[0] * e2[2], c2 = e1[0] * e2[1] - e1[1] * e2[0];
+    return 0.5 * sqrt(c0 * c0 + c1 * c1 + c2 * c2);
+}
+
+/* Fills every field of s that follows from (tri, bary): position, normal, albedo, emission, material. */
+static void surfel_eval(const glow__scene *scene, double surfel_area, glow__surfel *s) {
+    uint32_t t = s->tri;
+    double b1 = s->bary[0], b2 = s->bary[1], b0 = 1.0 - b1 - b2;
+    const float *p0 = scene->pos[3 * t], *p1 = scene->pos[3 * t + 1], *p2 = scene->pos[3 * t + 2];
+    for (int k = 0; k < 3; ++k)
+        s->pos[k] = (float)((double)p0[k] + b1 * ((double)p1[k] - p0[k]) + b2 * ((double)p2[k] - p0[k]));
+    double n[3];
+    const float *n0 = scene->nrm[3 * t], *n1 = scene->nrm[3 * t + 1], *n2 = scene->nrm[3 * t + 2];
+    for (int k = 0; k < 3; ++k) n[k] = b0 * n0[k] + b1 * n1[k] + b2 * n2[k];
+    double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (!(len > 1e-12)) {
+        /* corner normals cancel here: fall back to the geometric normal */
+        double e1[3], e2[3];
+        for (int k = 0; k < 3; ++k) {
+            e1[k] = (double)p1[k] - p0[k];
+            e2[k] = (double)p2[k] - p0[k];
+        }
+        n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+        n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+        n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+        len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        if (!(len > 0.0)) { n[0] = 0.0; n[1] = 0.0; n[2] = 1.0; len = 1.0; }
+    }
+    for (int k = 0; k < 3; ++k) s->nrm[k] = (float)(n[k] / len);
+
+    uint32_t m = scene->tri_material[t];
+    s->material = m;
+    const glow__material *mat = &scene->materials[m];
+    float tex[3] = {1.0f, 1.0f, 1.0f};
+    if (mat->texture >= 0 && (uint32_t)mat->texture < scene->texture_count && scene->uv0) {
+        const float *u0 = scene->uv0[3 * t], *u1 = scene->uv0[3 * t + 1], *u2 = scene->uv0[3 * t + 2];
+        double u = b0 * u0[0] + b1 * u1[0] + b2 * u2[0];
+        double v = b0 * u0[1] + b1 * u1[1] + b2 * u2[1];
+        double uv_area = 0.5 * fabs(((double)u1[0] - u0[0]) * ((double)u2[1] - u0[1]) -
+                                    ((double)u2[0] - u0[0]) * ((double)u1[1] - u0[1]));
+        double ta = tri_area_d(scene, t);
+        double footprint = ta > 0.0 ? sqrt(surfel_area * uv_area / ta) : 0.0;
+        glow__texture_sample(&scene->textures[mat->texture], (float)u, (float)v, (float)footprint, tex);
+    }
+    for (int k = 0; k < 3; ++k) {
+        s->albedo[k] = mat->albedo[k] * tex[k];
+        s->emission[k] = mat->emission[k];
+    }
+}
+
+/* Closest point of triangle (a, a+e1, a+e2) to q (relative to a: d = q - a), as barycentrics
+ * (v, w) of corners 1 and 2 (Ericson, Real-Time Collision Detection 5.1.5). */
+static void closest_bary(const double e1[3], const double e2[3], const double d[3], double *out_v, double *out_w) {
+    double d1 = e1[0] * d[0] + e1[1] * d[1] + e1[2] * d[2];
+    double d2 = e2[0] * d[0] + e2[1] * d[1] + e2[2] * d[2];
+    if (d1 <= 0.0 && d2 <= 0.0) { *out_v = 0.0; *out_w = 0.0; return; }
+    double e11 = e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2];
+    double e22 = e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2];
+    double e12 = e1[0] * e2[0] + e1[1] * e2[1] + e1[2] * e2[2];
+    /* vertex region B: q - b = d - e1 */
+    double d3 = d1 - e11, d4 = d2 - e12;
+    if (d3 >= 0.0 && d4 <= d3) { *out_v = 1.0; *out_w = 0.0; return; }
+    double vc = d1 * d4 - d3 * d2;
+    if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) { *out_v = d1 / (d1 - d3); *out_w = 0.0; return; }
+    /* vertex region C: q - c = d - e2 */
+    double d5 = d1 - e12, d6 = d2 - e22;
+    if (d6 >= 0.0 && d5 <= d6) { *out_v = 0.0; *out_w = 1.0; return; }
+    double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) { *out_v = 0.0; *out_w = d2 / (d2 - d6); return; }
+    double va = d3 * d6 - d5 * d4;
+    if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
+        double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        *out_v = 1.0 - w;
+        *out_w = w;
+        return;
+    }
+    double denom = 1.0 / (va + vb + vc);
+    *out_v = vb * denom;
+    *out_w = vc * denom;
+}
+
+static void clamp_bary(double *v, double *w) {
+    if (!(*v >= 0.0)) *v = 0.0;
+    if (!(*w >= 0.0)) *w = 0.0;
+    if (*v > 1.0) *v = 1.0;
+    if (*w > 1.0) *w = 1.0;
+    double s = *v + *w;
+    if (s > 1.0) { *v /= s; *w /= s; }
+}
+
+/* Stores clamped barycentrics as floats, keeping v + w <= 1 after rounding. */
+static void set_bary(glow__surfel *s, double v, double w) {
+    float fv = (float)v, fw = (float)w;
+    if (fv + fw > 1.0f) fw = 1.0f - fv;
+    if (fw < 0.0f) fw = 0.0f;
+    s->bary[0] = fv;
+    s->bary[1] = fw;
+}
+
+/* ------------------------------------------------------------------ placement */
+typedef struct place_ctx {
+    const glow__scene *scene;
+    const uint32_t *surfel_tri;
+    glow__surfel *s;
+    double area;
+    double rot[2];
+} place_ctx;
+
+static void place_range(void *vctx, uint32_t begin, uint32_t end, uint32_t worker) {
+    (void)worker;
+    place_ctx *c = vctx;
+    for (uint32_t i = begin; i < end; ++i) {
+        glow__surfel *s = &c->s[i];
+        memset(s, 0, sizeof *s);
+        s->tri = c->surfel_tri[i];
+        double u1 = frac1(radical_inverse2(i) + c->rot[0]);
+        double u2 = frac1(radical_inverse3(i) + c->rot[1]);
+        double su = sqrt(u1);
+        double v = su * (1.0 - u2), w = su * u2;
+        clamp_bary(&v, &w);
+        set_bary(s, v, w);
+        surfel_eval(c->scene, c->area, s);
+    }
+}
+
+/* ------------------------------------------------------------------ relaxation */
+typedef struct relax_ctx {
+    const glow__scene *scene;
+    const glow__kdtree *tree;
+    const glow__surfel *old;
+    float (*new_bary)[2];
+    double radius;            /* interaction radius 2r */
+    double max_move;
+} relax_ctx;
+
+static void relax_range(void *vctx, uint32_t begin, uint32_t end, uint32_t worker) {
+    (void)worker;
+    relax_ctx *c = vctx;
+    const glow__scene *scene = c->scene;
+    uint32_t nb[RELAX_NEIGHBOURS];
+    float nd2[RELAX_NEIGHBOURS];
+    const double R = c->radius;
+    for (uint32_t i = begin; i < end; ++i) {
+        const glow__surfel *s = &c->old[i];
+        c->new_bary[i][0] = s->bary[0];
+        c->new_bary[i][1] = s->bary[1];
+        uint32_t found = glow__kdtree_knn(c->tree, s->pos, RELAX_NEIGHBOURS, i, nb, nd2);
+        double disp[3] = {0.0, 0.0, 0.0};
+        bool any = false;
+        for (uint32_t k = 0; k < found; ++k) {
+            const glow__surfel *o = &c->old[nb[k]];
+            if (glow__dot(s->nrm, o->nrm) <= 0.5f) continue;
+            double dv[3] = {(double)s->pos[0] - o->pos[0], (double)s->pos[1] - o->pos[1], (double)s->pos[2] - o->pos[2]};
+            double d = sqrt(dv[0] * dv[0] + dv[1] * dv[1] + dv[2] * dv[2]);
+            if (d >= R) continue;
+            double f;
+            if (d < 1e-9 * R) {
+                /* coincident: push along a deterministic pseudo-random direction from the pair's
+                 * indices (any vector will do; it is made tangential below) */
+                uint32_t h = hash32(i * 0x9e3779b9u ^ hash32(nb[k]));
+                double ang = (double)h * (2.0 * GLOW__PI / 4294967296.0);
+                dv[0] = cos(ang);
+                dv[1] = sin(ang);
+                dv[2] = cos(3.0 * ang);
+                f = RELAX_STEP * R;
+            } else {
+                f = RELAX_STEP * (R - d) / d;
+            }
+            for (int a = 0; a < 3; ++a) disp[a] += f * dv[a];
+            any = true;
+        }
+        if (!any) continue;
+        /* tangential: remove the component along the surfel's normal */
+        double dn = disp[0] * s->nrm[0] + disp[1] * s->nrm[1] + disp[2] * s->nrm[2];
+        for (int a = 0; a < 3; ++a) disp[a] -= dn * s->nrm[a];
+        double len = sqrt(disp[0] * disp[0] + disp[1] * disp[1] + disp[2] * disp[2]);
+        if (len > c->max_move) for (int a = 0; a < 3; ++a) disp[a] *= c->max_move / len;
+        /* move in barycentric space, clamped to the surfel's own triangle */
+        uint32_t t = s->tri;
+        const float *p0 = scene->pos[3 * t], *p1 = scene->pos[3 * t + 1], *p2 = scene->pos[3 * t + 2];
+        double e1[3], e2[3], q[3];
+        for (int a = 0; a < 3; ++a) {
+            e1[a] = (double)p1[a] - p0[a];
+            e2[a] = (double)p2[a] - p0[a];
+            q[a] = (double)s->bary[0] * e1[a] + (double)s->bary[1] * e2[a] + disp[a];
+        }
+        double v, w;
+        closest_bary(e1, e2, q, &v, &w);
+        clamp_bary(&v, &w);
+        c->new_bary[i][0] = (float)v;
+        c->new_bary[i][1] = (float)w;
+    }
+}
+
+typedef struct eval_ctx {
+    const glow__scene *scene;
+    const float (*bary)[2];
+    glow__surfel *s;
+    double area;
+} eval_ctx;
+
+static void eval_range(void *vctx, uint32_t begin, uint32_t end, uint32_t worker) {
+    (void)worker;
+    eval_ctx *c = vctx;
+    for (uint32_t i = begin; i < end; ++i) {
+        glow__surfel *s = &c->s[i];
+        if (s->bary[0] == c->bary[i][0] && s->bary[1] == c->bary[i][1]) continue;
+        set_bary(s, c->bary[i][0], c->bary[i][1]);
+        surfel_eval(c->scene, c->area, s);
+    }
+}
+
+/* ------------------------------------------------------------------ entry point */
+glow_result glow__surfels_place(const glow__scene *scene, const glow__surfel_settings *settings,
+                                glow__pool *pool, glow__log *log, glow__surfels *out) {
+    if (!out) return GLOW_ERROR_INVALID_ARGUMENT;
+    memset(out, 0, sizeof *out);
+    if (!scene || !settings) {
+        glow__errorf(log, "surfels: no scene or settings");
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    const char *src = scene->source[0] ? scene->source : "scene";
+    if (settings->count == 0) {
+        glow__errorf(log, "%s: surfel count must be at least 1", src);
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    if (scene->tri_count == 0 || !scene->pos || !scene->nrm || !scene->tri_material || !scene->materials) {
+        glow__errorf(log, "%s: no triangles to place surfels on", src);
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    if (!(scene->area > 0.0) || !isfinite(scene->area)) {
+        glow__errorf(log, "%s: scene area %g is not positive and finite", src, scene->area);
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    for (uint32_t t = 0; t < scene->tri_count; ++t) {
+        if (scene->tri_material[t] >= scene->material_count) {
+            glow__errorf(log, "%s: triangle %u has material %u of %u", src, t, scene->tri_material[t],
+                         scene->material_count);
+            return GLOW_ERROR_INVALID_ARGUMENT;
+        }
+    }
+    const uint32_t n = settings->count, tri_count = scene->tri_count;
+    const double a = scene->area / (double)n;
+
+    glow__surfel *s = malloc((size_t)n * sizeof *s);
+    uint32_t *surfel_tri = malloc((size_t)n * sizeof *surfel_tri);
+    if (!s || !surfel_tri) {
+        free(s);
+        free(surfel_tri);
+        glow__errorf(log, "%s: out of memory for %u surfels", src, n);
+        return GLOW_ERROR_OUT_OF_MEMORY;
+    }
+
+    /* area-proportional spawning with the running cumulative area (in units of the total, so the
+     * triangles' own sum is the reference and the last triangle ends exactly at n) */
+    double total = 0.0;
+    for (uint32_t t = 0; t < tri_count; ++t) total += tri_area_d(scene, t);
+    if (!(total > 0.0) || !isfinite(total)) {
+        free(s);
+        free(surfel_tri);
+        glow__errorf(log, "%s: triangles have no area", src);
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    double cum = 0.0;
+    uint32_t spawned = 0;
+    for (uint32_t t = 0; t < tri_count; ++t) {
+        cum += tri_area_d(scene, t);
+        double e = floor(cum / total * (double)n);
+        uint32_t upto = e >= (double)n ? n : (uint32_t)e;
+        if (t + 1 == tri_count) upto = n;
+        while (spawned < upto) surfel_tri[spawned++] = t;
+    }
+
+    uint32_t h0 = hash32(settings->seed ^ 0x68bc21ebu), h1 = hash32(h0 ^ 0x02e5be93u);
+    place_ctx pc = {.scene = scene, .surfel_tri = surfel_tri, .s = s, .area = a,
+                    .rot = {(double)h0 / 4294967296.0, (double)h1 / 4294967296.0}};
+    glow__parallel_for(pool, n, 0, place_range, &pc);
+    free(surfel_tri);
+
+    if (settings->relax_iterations > 0 && n > 1) {
+        float (*bary)[2] = malloc((size_t)n * sizeof *bary);
+        float (*pts)[3] = malloc((size_t)n * sizeof *pts);
+        if (!bary || !pts) {
+            free(bary);
+            free(pts);
+            free(s);
+            glow__errorf(log, "%s: out of memory relaxing %u surfels", src, n);
+            return GLOW_ERROR_OUT_OF_MEMORY;
+        }
+        double r = sqrt(a / GLOW__PI);
+        for (uint32_t it = 0; it < settings->relax_iterations; ++it) {
+            for (uint32_t i = 0; i < n; ++i) memcpy(pts[i], s[i].pos, sizeof pts[i]);
+            glow__kdtree *tree = glow__kdtree_build((const float (*)[3])pts, n);
+            if (!tree) {
+                free(bary);
+                free(pts);
+                free(s);
+                glow__errorf(log, "%s: out of memory building the surfel k-d tree", src);
+                return GLOW_ERROR_OUT_OF_MEMORY;
+            }
+            relax_ctx rc = {.scene = scene, .tree = tree, .old = s, .new_bary = bary,
+                            .radius = 2.0 * r, .max_move = RELAX_MAX_MOVE * r};
+            glow__parallel_for(pool, n, 0, relax_range, &rc);
+            glow__kdtree_free(tree);
+            eval_ctx ec = {.scene = scene, .bary = (const float (*)[2])bary, .s = s, .area = a};
+            glow__parallel_for(pool, n, 0, eval_range, &ec);
+        }
+        free(bary);
+        free(pts);
+    }
+
+    out->count = n;
+    out->s = s;
+    out->area = (float)a;
+    return GLOW_OK;
+}
+
+void glow__surfels_free(glow__surfels *s) {
+    if (!s) return;
+    free(s->s);
+    memset(s, 0, sizeof *s);
+}

@@ -1,0 +1,398 @@
+/* glow-bake — the Glow linker CLI, a thin layer over glow_precompute.h.
+ *
+ *   glow-bake SCENE -o OUT.glow [options]     bake a scene
+ *   glow-bake --info FILE [--json]           describe an existing bake
+ *
+ * Exit codes: 0 success, 1 the bake or the file failed (message on stderr), 2 bad command line. */
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "bake/bake_format.h"
+#include "glow/glow.h"
+#include "glow/glow_precompute.h"
+
+static const char *usage_text =
+    "usage: glow-bake SCENE -o OUT.glow [options]\n"
+    "       glow-bake --info FILE.glow [--json]\n"
+    "\n"
+    "Bakes a static scene into a Glow bake: surfels, HAC hierarchy, caches (grid + lightmap\n"
+    "texels) and visibility-aware links for real-time multi-bounce indirect light.\n"
+    "\n"
+    "SCENE is any file assimp reads (OBJ+MTL, glTF 2.0 / GLB, FBX, ...) or a built-in scene:\n"
+    "  builtin:cornell     Cornell box (closed), emissive ceiling light\n"
+    "  builtin:furnace     closed box, uniform albedo 0.5, uniformly emissive walls\n"
+    "  builtin:two-rooms   two closed rooms sharing one thin wall (light-leak tests)\n"
+    "\n"
+    "Options:\n"
+    "  -o, --output FILE      bake file to write (required); written atomically\n"
+    "  --quality PRESET       low | moderate (default) | high\n"
+    "                           low:      n_S=8192,   n_L=64,  l=3, ~2.5k caches\n"
+    "                           moderate: n_S=32768,  n_L=128, l=3, ~10k caches (PIC moderate)\n"
+    "                           high:     n_S=131072, n_L=254, l=4, ~10k caches (PIC high)\n"
+    "  --surfels N            number of leaf surfels n_S (16..4194304)\n"
+    "  --links N              links per cache n_L (1..4096)\n"
+    "  --bands L              SH bands l (2..8; l*l coefficients)\n"
+    "  --grid-spacing M       grid cache spacing in scene units (default: from the scene size)\n"
+    "  --texel-density D      lightmap texels per scene unit (default: from the scene area)\n"
+    "  --threads N            worker threads (default: all CPUs); output is identical for any N\n"
+    "  --seed S               sampling seed (default 0); same input and seed give the same bytes\n"
+    "  --sh-links             also store full-SH links (PIC Eq. 2) next to runtime-projection links\n"
+    "  --rays N               visibility rays per (cache, surfel) pair (default 1)\n"
+    "  --json                 print the summary (or --info) as JSON on stdout\n"
+    "  -q, --quiet            no progress output\n"
+    "  --info FILE            validate and describe an existing bake\n"
+    "  -h, --help             this text\n"
+    "  --version              print versions\n"
+    "\n"
+    "Progress goes to stderr (a bar with an ETA on a terminal, plain lines otherwise); the summary\n"
+    "to stdout. Exit status: 0 success, 1 failure (message names the file and the problem),\n"
+    "2 bad command line.\n";
+
+static int usage_error(const char *fmt, ...) {
+    va_list ap;
+    va_start(ap, fmt);
+    fputs("glow-bake: ", stderr);
+    vfprintf(stderr, fmt, ap);
+    fputs("\n(see glow-bake --help)\n", stderr);
+    va_end(ap);
+    return 2;
+}
+
+static bool parse_u32(const char *s, uint32_t lo, uint32_t hi, uint32_t *out) {
+    if (!s || !*s || *s == '-' || *s == '+') return false;
+    char *end;
+    errno = 0;
+    unsigned long long v = strtoull(s, &end, 10);
+    if (errno || *end || v < lo || v > hi) return false;
+    *out = (uint32_t)v;
+    return true;
+}
+static bool parse_pos_float(const char *s, float *out) {
+    if (!s || !*s) return false;
+    char *end;
+    errno = 0;
+    float v = strtof(s, &end);
+    if (errno || *end || !isfinite(v) || !(v > 0.0f)) return false;
+    *out = v;
+    return true;
+}
+
+/* ---------------------------------------------------------------- progress display */
+typedef struct progress_state {
+    bool tty, quiet;
+    uint32_t stage;
+    double stage_start, last_print, bake_start;
+} progress_state;
+
+static double mono(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static void on_progress(void *user, uint32_t stage, double f) {
+    progress_state *p = user;
+    if (p->quiet) return;
+    double t = mono();
+    if (f <= 0.0) {
+        p->stage = stage;
+        p->stage_start = t;
+        p->last_print = 0.0;
+        if (!p->tty) fprintf(stderr, "glow-bake: [%u/%d] %s ...\n", stage + 1, GLOW_PC_STAGE_COUNT, glow_pc_stage_name(stage));
+        return;
+    }
+    double el = t - p->stage_start;
+    if (f >= 1.0) {
+        if (p->tty)
+            fprintf(stderr, "\r\033[K[%u/%d] %-9s done in %.2f s\n", stage + 1, GLOW_PC_STAGE_COUNT,
+                    glow_pc_stage_name(stage), el);
+        else
+            fprintf(stderr, "glow-bake: [%u/%d] %s done in %.2f s\n", stage + 1, GLOW_PC_STAGE_COUNT,
+                    glow_pc_stage_name(stage), el);
+        return;
+    }
+    if (!p->tty || t - p->last_print < 0.1) return;
+    p->last_print = t;
+    int width = 30, fill = (int)(f * width);
+    char bar[64];
+    for (int i = 0; i < width; ++i) bar[i] = i < fill ? '#' : '.';
+    bar[width] = 0;
+    double eta = f > 0.01 ? el * (1.0 - f) / f : -1.0;
+    if (eta >= 0.0)
+        fprintf(stderr, "\r\033[K[%u/%d] %-9s %s %5.1f%%  ETA %.0f s", stage + 1, GLOW_PC_STAGE_COUNT,
+                glow_pc_stage_name(stage), bar, 100.0 * f, eta);
+    else
+        fprintf(stderr, "\r\033[K[%u/%d] %-9s %s %5.1f%%", stage + 1, GLOW_PC_STAGE_COUNT, glow_pc_stage_name(stage),
+                bar, 100.0 * f);
+    fflush(stderr);
+}
+
+static void on_log(void *user, glow_log_level level, const char *msg) {
+    progress_state *p = user;
+    if (level == GLOW_LOG_ERROR) return; /* printed once by main, after the bake returns */
+    if (level == GLOW_LOG_INFO && p->quiet) return;
+    if (level > GLOW_LOG_INFO) return;
+    if (p->tty) fputs("\r\033[K", stderr);
+    fprintf(stderr, "glow-bake: %s: %s\n", level == GLOW_LOG_WARNING ? "warning" : "info", msg);
+}
+
+static void fourcc_str(uint32_t f, char out[5]) {
+    for (int i = 0; i < 4; ++i) {
+        char c = (char)((f >> (8 * i)) & 0xFF);
+        out[i] = (c >= 32 && c < 127) ? c : '?';
+    }
+    out[4] = 0;
+}
+
+static void json_string(const char *s) {
+    putchar('"');
+    for (; *s; ++s) {
+        unsigned char c = (unsigned char)*s;
+        if (c == '"' || c == '\\') printf("\\%c", c);
+        else if (c < 32) printf("\\u%04x", c);
+        else putchar(c);
+    }
+    putchar('"');
+}
+
+static void print_summary(const char *scene, const char *out, const glow_pc_stats *s, bool json) {
+    char fc[5];
+    if (json) {
+        printf("{\n  \"scene\": ");
+        json_string(scene);
+        printf(",\n  \"output\": ");
+        json_string(out);
+        printf(",\n  \"threads\": %u,\n  \"seed\": %u,\n  \"total_seconds\": %.4f,\n", s->threads, s->seed,
+               s->total_seconds);
+        printf("  \"stages\": [");
+        for (int i = 0; i < GLOW_PC_STAGE_COUNT; ++i)
+            printf("%s\n    {\"name\": \"%s\", \"seconds\": %.4f, \"peak_rss_bytes\": %zu}", i ? "," : "",
+                   glow_pc_stage_name((uint32_t)i), s->stage_seconds[i], s->stage_peak_rss[i]);
+        printf("\n  ],\n");
+        printf("  \"scene_stats\": {\"source_triangles\": %u, \"triangles\": %u, \"skipped_degenerate\": %u, "
+               "\"skipped_duplicate\": %u, \"skipped_nonfinite\": %u, \"materials\": %u, \"textures\": %u, "
+               "\"textures_missing\": %u, \"area\": %.6g},\n",
+               s->source_triangles, s->triangles, s->skipped_degenerate, s->skipped_duplicate, s->skipped_nonfinite,
+               s->materials, s->textures, s->textures_missing, s->scene_area);
+        printf("  \"surfels\": %u,\n  \"nodes\": %u,\n  \"levels\": %u,\n", s->surfels, s->nodes, s->levels);
+        printf("  \"caches\": {\"total\": %u, \"grid\": %u, \"grid_dims\": [%u, %u, %u], \"grid_spacing\": %.6g, "
+               "\"grid_inside_rejected\": %u, \"lightmap\": %u, \"lightmap_size\": [%u, %u], \"texel_density\": %.6g, "
+               "\"lightmap_invalid\": %u, \"charts\": %u},\n",
+               s->caches, s->grid_caches, s->grid_dims[0], s->grid_dims[1], s->grid_dims[2], (double)s->grid_spacing,
+               s->grid_inside, s->lightmap_caches, s->lightmap_width, s->lightmap_height, (double)s->texel_density,
+               s->lightmap_invalid, s->charts);
+        printf("  \"links\": {\"per_cache\": %u, \"total\": %llu, \"bands\": %u, \"bytes_per_link\": %.3f},\n",
+               s->links_per_cache, (unsigned long long)s->links, s->bands, s->bytes_per_link);
+        printf("  \"file_bytes\": %llu,\n  \"sections\": [", (unsigned long long)s->file_size);
+        for (uint32_t i = 0; i < s->section_count && i < 16; ++i) {
+            fourcc_str(s->section_fourcc[i], fc);
+            printf("%s\n    {\"fourcc\": \"%s\", \"bytes\": %llu}", i ? "," : "", fc,
+                   (unsigned long long)s->section_size[i]);
+        }
+        printf("\n  ]\n}\n");
+        return;
+    }
+    printf("glow-bake: %s -> %s\n", scene, out);
+    printf("  scene     %u triangles kept of %u (skipped: %u degenerate, %u duplicate, %u non-finite), "
+           "%u materials, %u textures (%u missing), area %.6g\n",
+           s->triangles, s->source_triangles, s->skipped_degenerate, s->skipped_duplicate, s->skipped_nonfinite,
+           s->materials, s->textures, s->textures_missing, s->scene_area);
+    printf("  surfels   %u   nodes %u   levels %u\n", s->surfels, s->nodes, s->levels);
+    printf("  caches    %u = grid %u (%ux%ux%u, spacing %.4g, %u inside solids) + lightmap %u (%ux%u, %.4g texels/unit, "
+           "%u charts, %u invalid texels)\n",
+           s->caches, s->grid_caches, s->grid_dims[0], s->grid_dims[1], s->grid_dims[2], (double)s->grid_spacing,
+           s->grid_inside, s->lightmap_caches, s->lightmap_width, s->lightmap_height, (double)s->texel_density,
+           s->charts, s->lightmap_invalid);
+    printf("  links     %llu (%u per cache, l=%u), %.2f bytes per link\n", (unsigned long long)s->links,
+           s->links_per_cache, s->bands, s->bytes_per_link);
+    printf("  file      %llu bytes:", (unsigned long long)s->file_size);
+    for (uint32_t i = 0; i < s->section_count && i < 16; ++i) {
+        fourcc_str(s->section_fourcc[i], fc);
+        printf(" %s %llu", fc, (unsigned long long)s->section_size[i]);
+    }
+    printf("\n  time      %.2f s total (%u threads):", s->total_seconds, s->threads);
+    for (int i = 0; i < GLOW_PC_STAGE_COUNT; ++i)
+        printf(" %s %.2f", glow_pc_stage_name((uint32_t)i), s->stage_seconds[i]);
+    printf("\n  peak RSS  ");
+    for (int i = 0; i < GLOW_PC_STAGE_COUNT; ++i)
+        printf("%s%s %.1f MiB", i ? ", " : "", glow_pc_stage_name((uint32_t)i), (double)s->stage_peak_rss[i] / 1048576.0);
+    printf("\n");
+}
+
+/* ---------------------------------------------------------------- --info */
+static void info_logger(void *user, glow_log_level level, glow_result code, const char *message, const char *file,
+                        int line) {
+    (void)user; (void)file; (void)line;
+    if (level == GLOW_LOG_ERROR) fprintf(stderr, "glow-bake: %s (%s)\n", message, glow_result_string(code));
+}
+
+static int run_info(const char *path, bool json) {
+    glow_context *ctx = NULL;
+    glow_context_desc cd = {.api_version = GLOW_VERSION, .logger = {.log = info_logger}};
+    if (glow_context_create(&cd, &ctx) != GLOW_OK) return 1;
+    glow_bake *bake = NULL;
+    glow_result r = glow_bake_load_file(ctx, path, &bake);
+    if (r != GLOW_OK) {
+        glow_context_destroy(ctx);
+        return 1;
+    }
+    glow_bake_info in;
+    glow_bake_get_info(bake, &in);
+    /* the section table, read from the (already validated) file */
+    glow_bake_header hdr;
+    glow_bake_section sec[GLOW_BAKE_MAX_SECTIONS];
+    uint32_t nsec = 0;
+    FILE *f = fopen(path, "rb");
+    if (f && fread(&hdr, sizeof hdr, 1, f) == 1) {
+        nsec = hdr.section_count < GLOW_BAKE_MAX_SECTIONS ? hdr.section_count : GLOW_BAKE_MAX_SECTIONS;
+        if (fread(sec, sizeof sec[0], nsec, f) != nsec) nsec = 0;
+    }
+    if (f) fclose(f);
+    double links = (double)in.cache_count * in.links_per_cache;
+    char fc[5];
+    if (json) {
+        printf("{\n  \"file\": ");
+        json_string(path);
+        printf(",\n  \"format\": [%u, %u],\n  \"file_bytes\": %llu,\n", in.format_major, in.format_minor,
+               (unsigned long long)in.file_size);
+        printf("  \"surfels\": %u,\n  \"surfel_area\": %.6g,\n  \"scene_area\": %.6g,\n  \"nodes\": %u,\n  \"levels\": %u,\n",
+               in.surfel_count, (double)in.surfel_area, in.scene_area, in.node_count, in.level_count);
+        printf("  \"caches\": {\"total\": %u, \"grid\": %u, \"grid_dims\": [%u, %u, %u], \"grid_spacing\": %.6g, "
+               "\"lightmap\": %u, \"lightmap_size\": [%u, %u], \"texel_density\": %.6g},\n",
+               in.cache_count, in.grid_cache_count, in.grid_dims[0], in.grid_dims[1], in.grid_dims[2],
+               (double)in.grid_spacing, in.lightmap_cache_count, in.lightmap_width, in.lightmap_height,
+               (double)in.texel_density);
+        printf("  \"links\": {\"per_cache\": %u, \"total\": %.0f, \"bands\": %u, \"full_sh\": %s},\n", in.links_per_cache,
+               links, in.sh_bands, (in.link_kind & GLOW_LINK_KIND_FULL_SH) ? "true" : "false");
+        printf("  \"materials\": %u,\n  \"triangles\": %u,\n", in.material_count, in.triangle_count);
+        printf("  \"bounds\": [[%.6g, %.6g, %.6g], [%.6g, %.6g, %.6g]],\n", (double)in.bounds_min[0],
+               (double)in.bounds_min[1], (double)in.bounds_min[2], (double)in.bounds_max[0], (double)in.bounds_max[1],
+               (double)in.bounds_max[2]);
+        printf("  \"sections\": [");
+        for (uint32_t i = 0; i < nsec; ++i) {
+            fourcc_str(sec[i].fourcc, fc);
+            printf("%s\n    {\"fourcc\": \"%s\", \"bytes\": %llu, \"crc32\": \"%08x\"}", i ? "," : "", fc,
+                   (unsigned long long)sec[i].size, sec[i].crc32);
+        }
+        printf("\n  ]\n}\n");
+    } else {
+        printf("%s: Glow bake format %u.%u, %llu bytes (valid)\n", path, in.format_major, in.format_minor,
+               (unsigned long long)in.file_size);
+        printf("  surfels   %u (area %.6g each, scene %.6g)   nodes %u   levels %u\n", in.surfel_count,
+               (double)in.surfel_area, in.scene_area, in.node_count, in.level_count);
+        printf("  caches    %u = grid %u (%ux%ux%u, spacing %.4g) + lightmap %u (%ux%u, %.4g texels/unit)\n",
+               in.cache_count, in.grid_cache_count, in.grid_dims[0], in.grid_dims[1], in.grid_dims[2],
+               (double)in.grid_spacing, in.lightmap_cache_count, in.lightmap_width, in.lightmap_height,
+               (double)in.texel_density);
+        printf("  links     %.0f (%u per cache, l=%u%s)\n", links, in.links_per_cache, in.sh_bands,
+               (in.link_kind & GLOW_LINK_KIND_FULL_SH) ? ", with full-SH links" : "");
+        printf("  scene     %u triangles, %u materials, bounds (%.4g %.4g %.4g)-(%.4g %.4g %.4g)\n", in.triangle_count,
+               in.material_count, (double)in.bounds_min[0], (double)in.bounds_min[1], (double)in.bounds_min[2],
+               (double)in.bounds_max[0], (double)in.bounds_max[1], (double)in.bounds_max[2]);
+        printf("  sections ");
+        for (uint32_t i = 0; i < nsec; ++i) {
+            fourcc_str(sec[i].fourcc, fc);
+            printf(" %s %llu", fc, (unsigned long long)sec[i].size);
+        }
+        printf("\n");
+    }
+    glow_bake_destroy(bake);
+    glow_context_destroy(ctx);
+    return 0;
+}
+
+int main(int argc, char **argv) {
+    glow_pc_settings s = {0};
+    const char *scene = NULL, *out = NULL, *info = NULL;
+    bool json = false, quiet = false;
+    for (int i = 1; i < argc; ++i) {
+        const char *a = argv[i];
+        const char *v = i + 1 < argc ? argv[i + 1] : NULL;
+#define NEED_VALUE() do { if (!v) return usage_error("option %s needs a value", a); ++i; } while (0)
+        if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
+            fputs(usage_text, stdout);
+            return 0;
+        } else if (!strcmp(a, "--version")) {
+            printf("glow-bake %d.%d.%d (bake format %u.%u)\n", GLOW_VERSION_MAJOR, GLOW_VERSION_MINOR,
+                   GLOW_VERSION_PATCH, GLOW_BAKE_FORMAT_VERSION_MAJOR, GLOW_BAKE_FORMAT_VERSION_MINOR);
+            return 0;
+        } else if (!strcmp(a, "-o") || !strcmp(a, "--output")) {
+            NEED_VALUE();
+            out = v;
+        } else if (!strcmp(a, "--info")) {
+            NEED_VALUE();
+            info = v;
+        } else if (!strcmp(a, "--quality")) {
+            NEED_VALUE();
+            if (!strcmp(v, "low")) s.quality = GLOW_PC_QUALITY_LOW;
+            else if (!strcmp(v, "moderate")) s.quality = GLOW_PC_QUALITY_MODERATE;
+            else if (!strcmp(v, "high")) s.quality = GLOW_PC_QUALITY_HIGH;
+            else return usage_error("--quality '%s': expected low, moderate or high", v);
+        } else if (!strcmp(a, "--surfels")) {
+            NEED_VALUE();
+            if (!parse_u32(v, 16, 1u << 22, &s.surfels)) return usage_error("--surfels '%s': expected an integer in 16..4194304", v);
+        } else if (!strcmp(a, "--links")) {
+            NEED_VALUE();
+            if (!parse_u32(v, 1, 4096, &s.links)) return usage_error("--links '%s': expected an integer in 1..4096", v);
+        } else if (!strcmp(a, "--bands")) {
+            NEED_VALUE();
+            if (!parse_u32(v, 2, 8, &s.bands)) return usage_error("--bands '%s': expected an integer in 2..8", v);
+        } else if (!strcmp(a, "--grid-spacing")) {
+            NEED_VALUE();
+            if (!parse_pos_float(v, &s.grid_spacing)) return usage_error("--grid-spacing '%s': expected a positive length", v);
+        } else if (!strcmp(a, "--texel-density")) {
+            NEED_VALUE();
+            if (!parse_pos_float(v, &s.texel_density)) return usage_error("--texel-density '%s': expected a positive number", v);
+        } else if (!strcmp(a, "--threads")) {
+            NEED_VALUE();
+            if (!parse_u32(v, 1, 1024, &s.threads)) return usage_error("--threads '%s': expected an integer in 1..1024", v);
+        } else if (!strcmp(a, "--seed")) {
+            NEED_VALUE();
+            if (!parse_u32(v, 0, UINT32_MAX, &s.seed)) return usage_error("--seed '%s': expected an integer in 0..4294967295", v);
+        } else if (!strcmp(a, "--rays")) {
+            NEED_VALUE();
+            if (!parse_u32(v, 1, 256, &s.rays_per_surfel)) return usage_error("--rays '%s': expected an integer in 1..256", v);
+        } else if (!strcmp(a, "--sh-links")) {
+            s.sh_links = true;
+        } else if (!strcmp(a, "--json")) {
+            json = true;
+        } else if (!strcmp(a, "-q") || !strcmp(a, "--quiet")) {
+            quiet = true;
+        } else if (a[0] == '-' && a[1] != 0) {
+            return usage_error("unknown option '%s'", a);
+        } else {
+            if (scene) return usage_error("more than one scene given ('%s' and '%s')", scene, a);
+            scene = a;
+        }
+#undef NEED_VALUE
+    }
+    if (info) {
+        if (scene || out) return usage_error("--info takes only a bake file (and --json)");
+        return run_info(info, json);
+    }
+    if (!scene) return usage_error("no scene given");
+    if (!out) return usage_error("no output file given (-o OUT.glow)");
+    char msg[512];
+    if (glow_pc_settings_validate(&s, msg, sizeof msg) != GLOW_OK) return usage_error("%s", msg);
+
+    progress_state ps = {.tty = isatty(2) != 0, .quiet = quiet};
+    s.progress = on_progress;
+    s.progress_user = &ps;
+    s.log = on_log;
+    s.log_user = &ps;
+    glow_pc_stats stats;
+    glow_result r = glow_pc_bake(scene, out, &s, &stats);
+    if (r != GLOW_OK) {
+        if (ps.tty) fputs("\r\033[K", stderr);
+        fprintf(stderr, "glow-bake: error: %s\n", stats.error[0] ? stats.error : glow_result_string(r));
+        return 1;
+    }
+    print_summary(scene, out, &stats, json);
+    return 0;
+}

@@ -1,0 +1,729 @@
+/* bake.c — glow_bake: loads a bake (bake/bake_format.h) into one aligned allocation and
+ * validates every byte the runtime will ever read before anything uses it.
+ *
+ * Order of checks (the first failure is reported, logged with its code and returned):
+ *   1. size < 64                                   TRUNCATED
+ *   2. magic != "GLOW"                             BAD_MAGIC
+ *   3. major != 1                                  VERSION_MISMATCH (before the CRC: a future major
+ *                                                  may lay out its header differently)
+ *   4. header CRC                                  BAD_CHECKSUM
+ *   5. header.file_size vs the bytes present       TRUNCATED when fewer, CORRUPT_DATA when more
+ *   6. header_size, section_count, table bounds    CORRUPT_DATA
+ *   7. table CRC                                   BAD_CHECKSUM
+ *   8. every entry: alignment, inside the file, after the table, no overlap, no duplicate
+ *      fourcc                                      CORRUPT_DATA
+ *   9. every payload CRC (unknown sections too)    BAD_CHECKSUM
+ *  10. known sections: version 1, required ones present, META counts consistent, every size
+ *      equal to what META implies (64-bit maths, overflow-checked)           CORRUPT_DATA
+ *  11. contents: non-finite / out-of-domain floats CORRUPT_DATA; indices and tree structure
+ *      OUT_OF_RANGE (see validate_* below for the full list).
+ * Unknown fourccs are CRC-checked and otherwise skipped.
+ */
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "runtime_internal.h"
+
+#define BAKE_HEADER_SIZE ((uint64_t)sizeof(glow_bake_header))
+#define BAKE_ENTRY_SIZE ((uint64_t)sizeof(glow_bake_section))
+#define MAX_SH_BANDS 16u
+
+enum { S_META, S_MATL, S_SURF, S_NODE, S_LEVL, S_CACH, S_GRID, S_LMAP, S_LINK, S_SHLK, S_GEOM, S_KNOWN_COUNT };
+
+static const uint32_t known_fourcc[S_KNOWN_COUNT] = {
+    GLOW_SECTION_META, GLOW_SECTION_MATL, GLOW_SECTION_SURF, GLOW_SECTION_NODE, GLOW_SECTION_LEVL, GLOW_SECTION_CACH,
+    GLOW_SECTION_GRID, GLOW_SECTION_LMAP, GLOW_SECTION_LINK, GLOW_SECTION_SHLK, GLOW_SECTION_GEOM,
+};
+
+typedef struct section_ref {
+    int present;
+    uint64_t offset, size;
+} section_ref;
+
+struct glow_bake {
+    glow_context *ctx;
+    const unsigned char *data; /* the file image, GLOW_BAKE_ALIGN-aligned, inside this allocation */
+    uint64_t size;
+    uint32_t section_count;
+    const glow_bake_section *table;
+    section_ref known[S_KNOWN_COUNT];
+    glow_bake_meta meta; /* copy (also readable in place through glow__bake_meta) */
+    uint16_t major, minor;
+};
+
+/* Offset of the file image inside the allocation. */
+#define BAKE_DATA_OFFSET (((sizeof(struct glow_bake) + GLOW_BAKE_ALIGN - 1u) / GLOW_BAKE_ALIGN) * GLOW_BAKE_ALIGN)
+
+/* --------------------------------------------------------------------------- reporting */
+typedef struct vstate {
+    glow_context *ctx;
+    const char *name; /* file path, or "bake (memory)" */
+    const unsigned char *data;
+    uint64_t size;
+} vstate;
+
+static glow_result failf(const vstate *v, glow_result code, int line, const char *fmt, ...) GLOW__PRINTF(4, 5);
+static glow_result failf(const vstate *v, glow_result code, int line, const char *fmt, ...) {
+    char msg[896];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    glow__ctx_log(v->ctx, GLOW_LOG_ERROR, code, __FILE__, line, "%s: %s", v->name, msg);
+    return code;
+}
+#define FAIL(code, ...) return failf(v, (code), __LINE__, __VA_ARGS__)
+
+typedef struct fourcc_str {
+    char s[5];
+} fourcc_str;
+static fourcc_str fourcc_name(uint32_t f) {
+    fourcc_str r;
+    for (int i = 0; i < 4; i++) {
+        unsigned char c = (unsigned char)(f >> (8 * i));
+        r.s[i] = (c >= 0x20 && c < 0x7F) ? (char)c : '?';
+    }
+    r.s[4] = 0;
+    return r;
+}
+
+/* --------------------------------------------------------------------------- bounds-checked reads */
+/* true when [offset, offset + len) lies inside the v's bytes (no overflow possible). */
+static int in_bounds(const vstate *v, uint64_t offset, uint64_t len) {
+    return offset <= v->size && len <= v->size - offset;
+}
+/* Copies len bytes at offset into dst; 0 when out of bounds (nothing copied). */
+static int read_at(const vstate *v, uint64_t offset, void *dst, uint64_t len) {
+    if (!in_bounds(v, offset, len)) return 0;
+    memcpy(dst, v->data + offset, (size_t)len);
+    return 1;
+}
+static int mul_u64(uint64_t a, uint64_t b, uint64_t *out) {
+    if (a != 0 && b > UINT64_MAX / a) return 0;
+    *out = a * b;
+    return 1;
+}
+static int host_is_little_endian(void) {
+    const uint32_t one = 1;
+    unsigned char b;
+    memcpy(&b, &one, 1);
+    return b == 1;
+}
+
+static int finite3(const float *p) { return isfinite(p[0]) && isfinite(p[1]) && isfinite(p[2]); }
+
+/* --------------------------------------------------------------------------- header + table */
+static glow_result check_header(const vstate *v, glow_bake_header *out_hdr) {
+    if (v->size < BAKE_HEADER_SIZE)
+        FAIL(GLOW_ERROR_TRUNCATED, "%llu bytes, shorter than the %u-byte bake header", (unsigned long long)v->size,
+             (unsigned)BAKE_HEADER_SIZE);
+    glow_bake_header h;
+    read_at(v, 0, &h, sizeof h);
+    if (memcmp(h.magic, GLOW_BAKE_MAGIC, 4) != 0)
+        FAIL(GLOW_ERROR_BAD_MAGIC, "not a Glow bake (magic %02x %02x %02x %02x, expected \"GLOW\")",
+             (unsigned char)h.magic[0], (unsigned char)h.magic[1], (unsigned char)h.magic[2],
+             (unsigned char)h.magic[3]);
+    if (h.major != GLOW_BAKE_FORMAT_VERSION_MAJOR)
+        FAIL(GLOW_ERROR_VERSION_MISMATCH,
+             "bake format version %u.%u; this runtime reads format version %u.x (re-bake with a matching glow-bake)",
+             (unsigned)h.major, (unsigned)h.minor, (unsigned)GLOW_BAKE_FORMAT_VERSION_MAJOR);
+    glow_bake_header z = h;
+    z.header_crc32 = 0;
+    uint32_t crc = glow__crc32(0, &z, sizeof z);
+    if (crc != h.header_crc32)
+        FAIL(GLOW_ERROR_BAD_CHECKSUM, "header CRC-32 mismatch (stored 0x%08x, computed 0x%08x)", h.header_crc32, crc);
+    if (h.file_size > v->size)
+        FAIL(GLOW_ERROR_TRUNCATED, "truncated: header says %llu bytes, only %llu present",
+             (unsigned long long)h.file_size, (unsigned long long)v->size);
+    if (h.file_size < v->size)
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "header says %llu bytes but the data is %llu bytes",
+             (unsigned long long)h.file_size, (unsigned long long)v->size);
+    if (h.header_size != sizeof(glow_bake_header))
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "header_size %u, expected %u", h.header_size, (unsigned)BAKE_HEADER_SIZE);
+    if (h.section_count > GLOW_BAKE_MAX_SECTIONS)
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "section_count %u exceeds the maximum %u", h.section_count,
+             GLOW_BAKE_MAX_SECTIONS);
+    uint64_t table_size = (uint64_t)h.section_count * BAKE_ENTRY_SIZE;
+    if (!in_bounds(v, BAKE_HEADER_SIZE, table_size))
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "section table (%u entries) extends past the end of the file", h.section_count);
+    crc = glow__crc32(0, v->data + BAKE_HEADER_SIZE, (size_t)table_size);
+    if (crc != h.table_crc32)
+        FAIL(GLOW_ERROR_BAD_CHECKSUM, "section table CRC-32 mismatch (stored 0x%08x, computed 0x%08x)", h.table_crc32,
+             crc);
+    *out_hdr = h;
+    return GLOW_OK;
+}
+
+static glow_result check_table(const vstate *v, const glow_bake_header *h, glow_bake_section *entries) {
+    uint32_t n = h->section_count;
+    uint64_t table_end = BAKE_HEADER_SIZE + (uint64_t)n * BAKE_ENTRY_SIZE;
+    for (uint32_t i = 0; i < n; i++) read_at(v, BAKE_HEADER_SIZE + i * BAKE_ENTRY_SIZE, &entries[i], BAKE_ENTRY_SIZE);
+    for (uint32_t i = 0; i < n; i++) {
+        const glow_bake_section *e = &entries[i];
+        fourcc_str fn = fourcc_name(e->fourcc);
+        if (e->offset % GLOW_BAKE_ALIGN != 0)
+            FAIL(GLOW_ERROR_CORRUPT_DATA, "section '%s' offset %llu is not a multiple of %u", fn.s,
+                 (unsigned long long)e->offset, GLOW_BAKE_ALIGN);
+        if (e->offset < table_end)
+            FAIL(GLOW_ERROR_CORRUPT_DATA, "section '%s' offset %llu overlaps the header or section table", fn.s,
+                 (unsigned long long)e->offset);
+        if (!in_bounds(v, e->offset, e->size))
+            FAIL(GLOW_ERROR_CORRUPT_DATA, "section '%s' [%llu, +%llu) extends past the end of the file (%llu bytes)",
+                 fn.s, (unsigned long long)e->offset, (unsigned long long)e->size, (unsigned long long)v->size);
+        for (uint32_t j = 0; j < i; j++) {
+            const glow_bake_section *o = &entries[j];
+            if (o->fourcc == e->fourcc) FAIL(GLOW_ERROR_CORRUPT_DATA, "duplicate section '%s'", fn.s);
+            if (e->size && o->size && e->offset < o->offset + o->size && o->offset < e->offset + e->size)
+                FAIL(GLOW_ERROR_CORRUPT_DATA, "sections '%s' and '%s' overlap", fourcc_name(o->fourcc).s, fn.s);
+        }
+    }
+    for (uint32_t i = 0; i < n; i++) {
+        const glow_bake_section *e = &entries[i];
+        uint32_t crc = glow__crc32(0, v->data + e->offset, (size_t)e->size);
+        if (crc != e->crc32)
+            FAIL(GLOW_ERROR_BAD_CHECKSUM, "section '%s' CRC-32 mismatch (stored 0x%08x, computed 0x%08x)",
+                 fourcc_name(e->fourcc).s, e->crc32, crc);
+    }
+    return GLOW_OK;
+}
+
+/* --------------------------------------------------------------------------- META and sizes */
+static glow_result check_section_size(const vstate *v, const section_ref *s, uint32_t fourcc, uint64_t count,
+                                      uint64_t elem_size, const char *what) {
+    uint64_t expect;
+    if (!mul_u64(count, elem_size, &expect) || s->size != expect)
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "section '%s' is %llu bytes; %s needs %llu x %llu bytes", fourcc_name(fourcc).s,
+             (unsigned long long)s->size, what, (unsigned long long)count, (unsigned long long)elem_size);
+    return GLOW_OK;
+}
+
+typedef struct derived {
+    uint64_t grid_cells, lm_texels, link_blocks, shlk_block_size;
+} derived;
+
+static glow_result check_meta(const vstate *v, const glow_bake_meta *m, section_ref *sec, derived *d) {
+    glow_result r;
+    /* counts */
+    if (m->surfel_count == 0) FAIL(GLOW_ERROR_CORRUPT_DATA, "META: surfel_count is 0");
+    if ((uint64_t)m->node_count != 2u * (uint64_t)m->surfel_count - 1u)
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "META: node_count %u, expected 2 * surfel_count - 1 = %llu", m->node_count,
+             (unsigned long long)(2u * (uint64_t)m->surfel_count - 1u));
+    if (m->level_count == 0 || m->level_count > m->node_count)
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "META: level_count %u not in [1, node_count = %u]", m->level_count,
+             m->node_count);
+    if ((uint64_t)m->grid_cache_count + m->lightmap_cache_count != m->cache_count)
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "META: grid_cache_count %u + lightmap_cache_count %u != cache_count %u",
+             m->grid_cache_count, m->lightmap_cache_count, m->cache_count);
+    if ((uint64_t)m->link_blocks_per_cache != ((uint64_t)m->links_per_cache + GLOW_LINK_BLOCK - 1u) / GLOW_LINK_BLOCK)
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "META: link_blocks_per_cache %u, expected ceil(links_per_cache %u / %u)",
+             m->link_blocks_per_cache, m->links_per_cache, GLOW_LINK_BLOCK);
+    if (m->sh_bands == 0 || m->sh_bands > MAX_SH_BANDS)
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "META: sh_bands %u not in [1, %u]", m->sh_bands, MAX_SH_BANDS);
+    if (m->lightmap_count > 1) FAIL(GLOW_ERROR_CORRUPT_DATA, "META: lightmap_count %u (0 or 1 supported)", m->lightmap_count);
+    /* floats */
+    if (!finite3(m->bounds_min) || !finite3(m->bounds_max))
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "META: non-finite scene bounds");
+    if (!isfinite(m->surfel_area) || m->surfel_area < 0.0f || !isfinite(m->scene_area) || m->scene_area < 0.0)
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "META: surfel_area %g / scene_area %g not finite and >= 0", (double)m->surfel_area,
+             m->scene_area);
+    if (!isfinite(m->factor_scale)) FAIL(GLOW_ERROR_CORRUPT_DATA, "META: non-finite factor_scale");
+    if (!finite3(m->grid_origin) || !isfinite(m->grid_spacing) || !isfinite(m->texel_density))
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "META: non-finite grid origin / spacing or texel density");
+
+    /* derived sizes (64-bit, overflow-checked) */
+    uint64_t xy;
+    if (!mul_u64(m->grid_dims[0], m->grid_dims[1], &xy) || !mul_u64(xy, m->grid_dims[2], &d->grid_cells))
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "META: grid_dims %u x %u x %u overflow", m->grid_dims[0], m->grid_dims[1],
+             m->grid_dims[2]);
+    if (d->grid_cells > 0 && !(m->grid_spacing > 0.0f))
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "META: grid_spacing %g must be > 0 for a grid of %llu cells",
+             (double)m->grid_spacing, (unsigned long long)d->grid_cells);
+    d->lm_texels = m->lightmap_count ? (uint64_t)m->lightmap_width * m->lightmap_height : 0u;
+    d->link_blocks = (uint64_t)m->cache_count * m->link_blocks_per_cache;
+    d->shlk_block_size = glow_bake_shlk_block_size(m->sh_bands);
+
+    /* presence */
+    static const int required[] = {S_META, S_SURF, S_NODE, S_LEVL, S_CACH, S_LINK, S_MATL};
+    for (size_t i = 0; i < sizeof required / sizeof required[0]; i++)
+        if (!sec[required[i]].present)
+            FAIL(GLOW_ERROR_CORRUPT_DATA, "missing required section '%s'", fourcc_name(known_fourcc[required[i]]).s);
+    if (d->grid_cells > 0 && !sec[S_GRID].present)
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "missing section 'GRID' (grid of %llu cells)", (unsigned long long)d->grid_cells);
+    if (m->lightmap_count > 0 && !sec[S_LMAP].present)
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "missing section 'LMAP' (lightmap_count %u)", m->lightmap_count);
+    int full_sh = (m->link_kind & GLOW_LINK_KIND_FULL_SH) != 0;
+    if (full_sh && !sec[S_SHLK].present)
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "missing section 'SHLK' (link_kind 0x%x has full-SH links)", m->link_kind);
+    if (!full_sh && sec[S_SHLK].present)
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "section 'SHLK' present but link_kind 0x%x has no full-SH links", m->link_kind);
+
+    /* sizes */
+    if ((r = check_section_size(v, &sec[S_MATL], GLOW_SECTION_MATL, m->material_count, sizeof(glow_bake_material),
+                                "material_count")))
+        return r;
+    if ((r = check_section_size(v, &sec[S_SURF], GLOW_SECTION_SURF, m->surfel_count, sizeof(glow_bake_surfel),
+                                "surfel_count")))
+        return r;
+    if ((r = check_section_size(v, &sec[S_NODE], GLOW_SECTION_NODE, m->node_count, sizeof(glow_bake_node),
+                                "node_count")))
+        return r;
+    if ((r = check_section_size(v, &sec[S_LEVL], GLOW_SECTION_LEVL, (uint64_t)m->level_count + 1u, sizeof(uint32_t),
+                                "level_count + 1")))
+        return r;
+    if ((r = check_section_size(v, &sec[S_CACH], GLOW_SECTION_CACH, m->cache_count, sizeof(glow_bake_cache),
+                                "cache_count")))
+        return r;
+    if (sec[S_GRID].present &&
+        (r = check_section_size(v, &sec[S_GRID], GLOW_SECTION_GRID, d->grid_cells, sizeof(uint32_t), "grid cells")))
+        return r;
+    if (sec[S_LMAP].present && (r = check_section_size(v, &sec[S_LMAP], GLOW_SECTION_LMAP, d->lm_texels,
+                                                       sizeof(uint32_t), "lightmap texels")))
+        return r;
+    if ((r = check_section_size(v, &sec[S_LINK], GLOW_SECTION_LINK, d->link_blocks, sizeof(glow_bake_link_block),
+                                "cache_count * link_blocks_per_cache")))
+        return r;
+    if (sec[S_SHLK].present && (r = check_section_size(v, &sec[S_SHLK], GLOW_SECTION_SHLK, d->link_blocks,
+                                                       d->shlk_block_size, "full-SH link blocks")))
+        return r;
+    if (sec[S_GEOM].present && (r = check_section_size(v, &sec[S_GEOM], GLOW_SECTION_GEOM, m->triangle_count,
+                                                       sizeof(glow_bake_triangle), "triangle_count")))
+        return r;
+    return GLOW_OK;
+}
+
+/* --------------------------------------------------------------------------- contents */
+static const void *payload(const vstate *v, const section_ref *s) { return v->data + s->offset; }
+
+static glow_result check_materials(const vstate *v, const glow_bake_meta *m, const glow_bake_material *mat) {
+    for (uint32_t i = 0; i < m->material_count; i++) {
+        if (mat[i].name[sizeof mat[i].name - 1] != 0)
+            FAIL(GLOW_ERROR_CORRUPT_DATA, "material %u: name is not NUL-terminated", i);
+        if (!finite3(mat[i].albedo) || !finite3(mat[i].emission))
+            FAIL(GLOW_ERROR_CORRUPT_DATA, "material %u: non-finite albedo or emission", i);
+    }
+    return GLOW_OK;
+}
+
+static glow_result check_surfels(const vstate *v, const glow_bake_meta *m, const glow_bake_surfel *s, int has_geom) {
+    for (uint32_t i = 0; i < m->surfel_count; i++) {
+        if (!finite3(s[i].position) || !finite3(s[i].normal) || !finite3(s[i].albedo) || !finite3(s[i].emission))
+            FAIL(GLOW_ERROR_CORRUPT_DATA, "surfel %u: non-finite position, normal, albedo or emission", i);
+        if (s[i].material >= m->material_count)
+            FAIL(GLOW_ERROR_OUT_OF_RANGE, "surfel %u: material %u out of range (material_count %u)", i, s[i].material,
+                 m->material_count);
+        if (s[i].feedback >= m->cache_count)
+            FAIL(GLOW_ERROR_OUT_OF_RANGE, "surfel %u: feedback cache %u out of range (cache_count %u)", i,
+                 s[i].feedback, m->cache_count);
+        if (has_geom && s[i].triangle >= m->triangle_count)
+            FAIL(GLOW_ERROR_OUT_OF_RANGE, "surfel %u: triangle %u out of range (triangle_count %u)", i, s[i].triangle,
+                 m->triangle_count);
+    }
+    return GLOW_OK;
+}
+
+static glow_result check_tree(const vstate *v, const glow_bake_meta *m, const glow_bake_node *nd,
+                              const uint32_t *ls) {
+    const uint32_t nn = m->node_count, ns = m->surfel_count, nl = m->level_count;
+    /* level starts: 0 = ls[0], ls[1] = surfel_count, non-decreasing, ls[level_count] = node_count */
+    if (ls[0] != 0 || ls[1] != ns || ls[nl] != nn)
+        FAIL(GLOW_ERROR_OUT_OF_RANGE,
+             "LEVL: level starts must run from 0 (got %u) to node_count %u (got %u) with level 1 at surfel_count %u "
+             "(got %u)",
+             ls[0], nn, ls[nl], ns, ls[1]);
+    for (uint32_t k = 0; k < nl; k++)
+        if (ls[k + 1] < ls[k]) FAIL(GLOW_ERROR_OUT_OF_RANGE, "LEVL: level start %u (%u) < level start %u (%u)", k + 1, ls[k + 1], k, ls[k]);
+    for (uint32_t i = 0; i < nn; i++) {
+        const glow_bake_node *n = &nd[i];
+        for (int c = 0; c < 2; c++)
+            if (n->child[c] != GLOW_NODE_NONE && n->child[c] >= nn)
+                FAIL(GLOW_ERROR_OUT_OF_RANGE, "node %u: child %u out of range (node_count %u)", i, n->child[c], nn);
+        if (n->parent != GLOW_NODE_NONE && n->parent >= nn)
+            FAIL(GLOW_ERROR_OUT_OF_RANGE, "node %u: parent %u out of range (node_count %u)", i, n->parent, nn);
+        if (!isfinite(n->area) || n->area < 0.0f || !finite3(n->position))
+            FAIL(GLOW_ERROR_CORRUPT_DATA, "node %u: non-finite or negative area / position", i);
+    }
+    /* leaves: no children */
+    for (uint32_t i = 0; i < ns; i++)
+        if (nd[i].child[0] != GLOW_NODE_NONE || nd[i].child[1] != GLOW_NODE_NONE)
+            FAIL(GLOW_ERROR_OUT_OF_RANGE, "node %u is a leaf (< surfel_count %u) but has children %u, %u", i, ns,
+                 nd[i].child[0], nd[i].child[1]);
+    /* internal nodes of level k: two distinct children from lower levels whose parent is this node */
+    for (uint32_t k = 1; k < nl; k++) {
+        for (uint32_t i = ls[k]; i < ls[k + 1]; i++) {
+            const glow_bake_node *n = &nd[i];
+            if (n->child[0] == GLOW_NODE_NONE || n->child[1] == GLOW_NODE_NONE || n->child[0] == n->child[1])
+                FAIL(GLOW_ERROR_OUT_OF_RANGE, "node %u (level %u): needs two distinct children, has %u, %u", i, k,
+                     n->child[0], n->child[1]);
+            for (int c = 0; c < 2; c++) {
+                if (n->child[c] >= ls[k])
+                    FAIL(GLOW_ERROR_OUT_OF_RANGE, "node %u (level %u): child %u is not in a lower level (< %u)", i, k,
+                         n->child[c], ls[k]);
+                if (nd[n->child[c]].parent != i)
+                    FAIL(GLOW_ERROR_OUT_OF_RANGE, "node %u: child %u names parent %u", i, n->child[c],
+                         nd[n->child[c]].parent);
+            }
+        }
+    }
+    /* parents: only the root (node_count - 1) has none; every parent lists its child */
+    for (uint32_t i = 0; i < nn; i++) {
+        uint32_t p = nd[i].parent;
+        if (i == nn - 1) {
+            if (p != GLOW_NODE_NONE) FAIL(GLOW_ERROR_OUT_OF_RANGE, "root node %u has parent %u", i, p);
+        } else if (p == GLOW_NODE_NONE) {
+            FAIL(GLOW_ERROR_OUT_OF_RANGE, "node %u has no parent but is not the root (%u)", i, nn - 1);
+        } else if (nd[p].child[0] != i && nd[p].child[1] != i) {
+            FAIL(GLOW_ERROR_OUT_OF_RANGE, "node %u names parent %u, which does not list it as a child", i, p);
+        }
+    }
+    return GLOW_OK;
+}
+
+static glow_result check_caches(const vstate *v, const glow_bake_meta *m, const derived *d,
+                                const glow_bake_cache *c) {
+    for (uint32_t i = 0; i < m->cache_count; i++) {
+        uint32_t want = i < m->grid_cache_count ? GLOW_CACHE_KIND_GRID : GLOW_CACHE_KIND_LIGHTMAP;
+        if (c[i].kind != GLOW_CACHE_KIND_GRID && c[i].kind != GLOW_CACHE_KIND_LIGHTMAP)
+            FAIL(GLOW_ERROR_OUT_OF_RANGE, "cache %u: unknown kind %u", i, c[i].kind);
+        if (c[i].kind != want)
+            FAIL(GLOW_ERROR_OUT_OF_RANGE, "cache %u: kind %u, but caches [0, %u) are grid caches and the rest lightmap",
+                 i, c[i].kind, m->grid_cache_count);
+        uint64_t limit = want == GLOW_CACHE_KIND_GRID ? d->grid_cells : d->lm_texels;
+        if (c[i].texel >= limit)
+            FAIL(GLOW_ERROR_OUT_OF_RANGE, "cache %u: texel/cell %u out of range (%llu)", i, c[i].texel,
+                 (unsigned long long)limit);
+        if (!finite3(c[i].position)) FAIL(GLOW_ERROR_CORRUPT_DATA, "cache %u: non-finite position", i);
+    }
+    return GLOW_OK;
+}
+
+/* Map entries: GLOW_MAP_EMPTY, or (index | optional copy bit) with index in [lo, hi). */
+static glow_result check_map(const vstate *v, const char *what, const uint32_t *map, uint64_t count, uint32_t lo,
+                             uint32_t hi) {
+    for (uint64_t i = 0; i < count; i++) {
+        uint32_t e = map[i];
+        if (e == GLOW_MAP_EMPTY) continue;
+        uint32_t idx = e & GLOW_MAP_INDEX_MASK;
+        if (idx < lo || idx >= hi)
+            FAIL(GLOW_ERROR_OUT_OF_RANGE, "%s entry %llu: cache %u out of range [%u, %u)", what, (unsigned long long)i,
+                 idx, lo, hi);
+    }
+    return GLOW_OK;
+}
+
+static int half_nonneg_finite(uint16_t h) { return h < 0x7C00u || h == 0x8000u; }
+
+static glow_result check_links(const vstate *v, const glow_bake_meta *m, const derived *d,
+                               const glow_bake_link_block *b) {
+    const uint32_t bpc = m->link_blocks_per_cache;
+    for (uint64_t i = 0; i < d->link_blocks; i++) {
+        const glow_bake_link_block *blk = &b[i];
+        uint64_t first = (i % bpc) * GLOW_LINK_BLOCK; /* link index of lane 0 within its cache */
+        for (uint32_t j = 0; j < GLOW_LINK_BLOCK; j++) {
+            if (blk->node[j] >= m->node_count)
+                FAIL(GLOW_ERROR_OUT_OF_RANGE, "LINK cache %llu link %llu: node %u out of range (node_count %u)",
+                     (unsigned long long)(i / bpc), (unsigned long long)(first + j), blk->node[j], m->node_count);
+            uint16_t f = blk->factor[j], omc = blk->one_minus_cos[j];
+            if (!half_nonneg_finite(f) || !(omc <= 0x4000u || omc == 0x8000u)) /* 0x4000 = 2.0 */
+                FAIL(GLOW_ERROR_CORRUPT_DATA,
+                     "LINK cache %llu link %llu: factor %g / one_minus_cos %g must be finite, >= 0 and (1 - cos) <= 2",
+                     (unsigned long long)(i / bpc), (unsigned long long)(first + j), (double)glow__half_to_float(f),
+                     (double)glow__half_to_float(omc));
+            if (first + j >= m->links_per_cache && (f & 0x7FFFu) != 0)
+                FAIL(GLOW_ERROR_CORRUPT_DATA, "LINK cache %llu: unused lane %llu has factor %g (must be 0)",
+                     (unsigned long long)(i / bpc), (unsigned long long)(first + j), (double)glow__half_to_float(f));
+        }
+    }
+    return GLOW_OK;
+}
+
+static glow_result check_shlk(const vstate *v, const glow_bake_meta *m, const derived *d, const unsigned char *p) {
+    const uint64_t coeffs = (uint64_t)m->sh_bands * m->sh_bands * GLOW_LINK_BLOCK;
+    for (uint64_t i = 0; i < d->link_blocks; i++) {
+        const unsigned char *blk = p + i * d->shlk_block_size;
+        const uint32_t *node = (const uint32_t *)blk;
+        const uint16_t *coeff = (const uint16_t *)(blk + 64);
+        for (uint32_t j = 0; j < GLOW_LINK_BLOCK; j++)
+            if (node[j] >= m->node_count)
+                FAIL(GLOW_ERROR_OUT_OF_RANGE, "SHLK block %llu lane %u: node %u out of range (node_count %u)",
+                     (unsigned long long)i, j, node[j], m->node_count);
+        for (uint64_t k = 0; k < coeffs; k++)
+            if ((coeff[k] & 0x7C00u) == 0x7C00u)
+                FAIL(GLOW_ERROR_CORRUPT_DATA, "SHLK block %llu: non-finite coefficient %llu", (unsigned long long)i,
+                     (unsigned long long)k);
+    }
+    return GLOW_OK;
+}
+
+static glow_result check_geom(const vstate *v, const glow_bake_meta *m, const glow_bake_triangle *t) {
+    for (uint32_t i = 0; i < m->triangle_count; i++) {
+        if (!finite3(t[i].position) || !finite3(t[i].position + 3) || !finite3(t[i].position + 6))
+            FAIL(GLOW_ERROR_CORRUPT_DATA, "GEOM triangle %u: non-finite position", i);
+        if (t[i].material >= m->material_count)
+            FAIL(GLOW_ERROR_OUT_OF_RANGE, "GEOM triangle %u: material %u out of range (material_count %u)", i,
+                 t[i].material, m->material_count);
+    }
+    return GLOW_OK;
+}
+
+/* Validates v's bytes (which must be GLOW_BAKE_ALIGN-aligned) and fills the bake's views. */
+static glow_result validate(const vstate *v, struct glow_bake *b) {
+    glow_result r;
+    glow_bake_header h;
+    if ((r = check_header(v, &h))) return r;
+    glow_bake_section entries[GLOW_BAKE_MAX_SECTIONS];
+    if ((r = check_table(v, &h, entries))) return r;
+
+    section_ref sec[S_KNOWN_COUNT];
+    memset(sec, 0, sizeof sec);
+    for (uint32_t i = 0; i < h.section_count; i++) {
+        for (int k = 0; k < S_KNOWN_COUNT; k++) {
+            if (entries[i].fourcc != known_fourcc[k]) continue;
+            if (entries[i].version != 1)
+                FAIL(GLOW_ERROR_CORRUPT_DATA, "section '%s' has layout version %u; format %u.x defines version 1",
+                     fourcc_name(entries[i].fourcc).s, entries[i].version, (unsigned)GLOW_BAKE_FORMAT_VERSION_MAJOR);
+            sec[k].present = 1;
+            sec[k].offset = entries[i].offset;
+            sec[k].size = entries[i].size;
+        }
+    }
+    if (!sec[S_META].present) FAIL(GLOW_ERROR_CORRUPT_DATA, "missing required section 'META'");
+    if (sec[S_META].size != sizeof(glow_bake_meta))
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "section 'META' is %llu bytes, expected %u", (unsigned long long)sec[S_META].size,
+             (unsigned)sizeof(glow_bake_meta));
+    glow_bake_meta m;
+    read_at(v, sec[S_META].offset, &m, sizeof m);
+    derived d = {0, 0, 0, 0};
+    if ((r = check_meta(v, &m, sec, &d))) return r;
+
+    /* From here every section is inside the buffer, aligned and exactly as large as META says. */
+    if ((r = check_materials(v, &m, payload(v, &sec[S_MATL])))) return r;
+    if ((r = check_surfels(v, &m, payload(v, &sec[S_SURF]), sec[S_GEOM].present))) return r;
+    if ((r = check_tree(v, &m, payload(v, &sec[S_NODE]), payload(v, &sec[S_LEVL])))) return r;
+    if ((r = check_caches(v, &m, &d, payload(v, &sec[S_CACH])))) return r;
+    if (sec[S_GRID].present &&
+        (r = check_map(v, "GRID", payload(v, &sec[S_GRID]), d.grid_cells, 0u, m.grid_cache_count)))
+        return r;
+    if (sec[S_LMAP].present && (r = check_map(v, "LMAP", payload(v, &sec[S_LMAP]), d.lm_texels, m.grid_cache_count,
+                                              m.cache_count)))
+        return r;
+    if ((r = check_links(v, &m, &d, payload(v, &sec[S_LINK])))) return r;
+    if (sec[S_SHLK].present && (r = check_shlk(v, &m, &d, payload(v, &sec[S_SHLK])))) return r;
+    if (sec[S_GEOM].present && (r = check_geom(v, &m, payload(v, &sec[S_GEOM])))) return r;
+
+    b->data = v->data;
+    b->size = v->size;
+    b->section_count = h.section_count;
+    b->table = (const glow_bake_section *)(v->data + BAKE_HEADER_SIZE);
+    memcpy(b->known, sec, sizeof sec);
+    b->meta = m;
+    b->major = h.major;
+    b->minor = h.minor;
+    return GLOW_OK;
+}
+
+/* --------------------------------------------------------------------------- public API */
+glow_result glow_bake_peek_version(const void *data, size_t size, uint32_t *out_major, uint32_t *out_minor) {
+    if (out_major) *out_major = 0;
+    if (out_minor) *out_minor = 0;
+    if (!data && size) return GLOW_ERROR_INVALID_ARGUMENT;
+    if (size < sizeof(glow_bake_header)) return GLOW_ERROR_TRUNCATED;
+    glow_bake_header h;
+    memcpy(&h, data, sizeof h);
+    if (memcmp(h.magic, GLOW_BAKE_MAGIC, 4) != 0) return GLOW_ERROR_BAD_MAGIC;
+    if (out_major) *out_major = h.major;
+    if (out_minor) *out_minor = h.minor;
+    return GLOW_OK;
+}
+
+/* Allocates the bake block with room for `size` file bytes after the struct. */
+static struct glow_bake *bake_alloc(glow_context *ctx, const char *name, uint64_t size) {
+    if (size > (uint64_t)SIZE_MAX - BAKE_DATA_OFFSET) {
+        GLOW__LOG_ERROR(ctx, GLOW_ERROR_OUT_OF_MEMORY, "%s: %llu bytes do not fit in memory", name,
+                        (unsigned long long)size);
+        return NULL;
+    }
+    struct glow_bake *b = glow__ctx_alloc(ctx, BAKE_DATA_OFFSET + (size_t)size, GLOW_BAKE_ALIGN);
+    if (!b) {
+        GLOW__LOG_ERROR(ctx, GLOW_ERROR_OUT_OF_MEMORY, "%s: out of memory allocating %llu bytes", name,
+                        (unsigned long long)(BAKE_DATA_OFFSET + size));
+        return NULL;
+    }
+    memset(b, 0, sizeof *b);
+    b->ctx = ctx;
+    return b;
+}
+
+static unsigned char *bake_bytes(struct glow_bake *b) { return (unsigned char *)b + BAKE_DATA_OFFSET; }
+
+/* Validates the bytes already copied into b; frees b on failure. */
+static glow_result bake_finish(struct glow_bake *b, const char *name, uint64_t size, glow_bake **out_bake) {
+    vstate v = {b->ctx, name, bake_bytes(b), size};
+    glow_result r = validate(&v, b);
+    if (r != GLOW_OK) {
+        glow__ctx_free(b->ctx, b);
+        return r;
+    }
+    *out_bake = b;
+    return GLOW_OK;
+}
+
+static glow_result check_load_args(glow_context *context, const char *fn, const void *p, glow_bake **out_bake) {
+    if (out_bake) *out_bake = NULL;
+    if (!context || !out_bake || !p) {
+        GLOW__LOG_ERROR(context, GLOW_ERROR_INVALID_ARGUMENT, "%s: context, data/path and out_bake must not be NULL",
+                        fn);
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    if (!host_is_little_endian()) {
+        GLOW__LOG_ERROR(context, GLOW_ERROR_UNSUPPORTED, "%s: bakes are little-endian; this host is not", fn);
+        return GLOW_ERROR_UNSUPPORTED;
+    }
+    return GLOW_OK;
+}
+
+glow_result glow_bake_load(glow_context *context, const void *data, size_t size, glow_bake **out_bake) {
+    static const char name[] = "bake (memory)";
+    glow_result r = check_load_args(context, "glow_bake_load", size ? data : (const void *)name, out_bake);
+    if (r != GLOW_OK) return r;
+    if (size < sizeof(glow_bake_header)) { /* nothing worth copying */
+        vstate v = {context, name, (const unsigned char *)data, size};
+        glow_bake_header h;
+        return check_header(&v, &h);
+    }
+    struct glow_bake *b = bake_alloc(context, name, size);
+    if (!b) return GLOW_ERROR_OUT_OF_MEMORY;
+    memcpy(bake_bytes(b), data, size); /* validate the copy: the caller's buffer may change under us */
+    return bake_finish(b, name, size, out_bake);
+}
+
+glow_result glow_bake_load_file(glow_context *context, const char *path, glow_bake **out_bake) {
+    glow_result r = check_load_args(context, "glow_bake_load_file", path, out_bake);
+    if (r != GLOW_OK) return r;
+    FILE *f = fopen(path, "rb");
+    if (!f) {
+        int e = errno;
+        GLOW__LOG_ERROR(context, GLOW_ERROR_IO, "%s: cannot open: %s", path, e ? strerror(e) : "unknown error");
+        return GLOW_ERROR_IO;
+    }
+    int c = fgetc(f); /* catches directories and unreadable files before seeking */
+    if (c == EOF && ferror(f)) {
+        int e = errno;
+        fclose(f);
+        GLOW__LOG_ERROR(context, GLOW_ERROR_IO, "%s: read failed: %s", path, e ? strerror(e) : "unknown error");
+        return GLOW_ERROR_IO;
+    }
+    long end = -1;
+    if (fseek(f, 0, SEEK_END) == 0) end = ftell(f);
+    if (end < 0 || fseek(f, 0, SEEK_SET) != 0) {
+        int e = errno;
+        fclose(f);
+        GLOW__LOG_ERROR(context, GLOW_ERROR_IO, "%s: cannot determine the file size: %s", path,
+                        e ? strerror(e) : "not seekable");
+        return GLOW_ERROR_IO;
+    }
+    uint64_t size = (uint64_t)end;
+    if (size < sizeof(glow_bake_header)) {
+        unsigned char small[sizeof(glow_bake_header)];
+        size_t got = fread(small, 1, (size_t)size, f);
+        fclose(f);
+        vstate v = {context, path, small, got};
+        glow_bake_header h;
+        return check_header(&v, &h);
+    }
+    struct glow_bake *b = bake_alloc(context, path, size);
+    if (!b) {
+        fclose(f);
+        return GLOW_ERROR_OUT_OF_MEMORY;
+    }
+    size_t got = fread(bake_bytes(b), 1, (size_t)size, f);
+    int read_error = ferror(f);
+    int e = errno;
+    fclose(f);
+    if (read_error) {
+        glow__ctx_free(context, b);
+        GLOW__LOG_ERROR(context, GLOW_ERROR_IO, "%s: read failed: %s", path, e ? strerror(e) : "unknown error");
+        return GLOW_ERROR_IO;
+    }
+    /* A file that shrank since ftell: validate what arrived (reports TRUNCATED). */
+    return bake_finish(b, path, got, out_bake);
+}
+
+glow_result glow_bake_get_info(const glow_bake *bake, glow_bake_info *out_info) {
+    if (!bake || !out_info) return GLOW_ERROR_INVALID_ARGUMENT;
+    const glow_bake_meta *m = &bake->meta;
+    glow_bake_info i;
+    memset(&i, 0, sizeof i);
+    i.format_major = bake->major;
+    i.format_minor = bake->minor;
+    i.surfel_count = m->surfel_count;
+    i.node_count = m->node_count;
+    i.level_count = m->level_count;
+    i.cache_count = m->cache_count;
+    i.grid_cache_count = m->grid_cache_count;
+    i.lightmap_cache_count = m->lightmap_cache_count;
+    i.links_per_cache = m->links_per_cache;
+    i.sh_bands = m->sh_bands;
+    i.link_kind = m->link_kind;
+    i.material_count = m->material_count;
+    i.triangle_count = m->triangle_count; /* as META says, also when GEOM is absent */
+    for (int k = 0; k < 3; k++) {
+        i.grid_dims[k] = m->grid_dims[k];
+        i.bounds_min[k] = m->bounds_min[k];
+        i.bounds_max[k] = m->bounds_max[k];
+    }
+    i.lightmap_count = m->lightmap_count;
+    i.lightmap_width = m->lightmap_width;
+    i.lightmap_height = m->lightmap_height;
+    i.surfel_area = m->surfel_area;
+    i.grid_spacing = m->grid_spacing;
+    i.texel_density = m->texel_density;
+    i.scene_area = m->scene_area;
+    i.file_size = bake->size;
+    *out_info = i;
+    return GLOW_OK;
+}
+
+void glow_bake_destroy(glow_bake *bake) {
+    if (!bake) return;
+    glow__ctx_free(bake->ctx, bake);
+}
+
+/* --------------------------------------------------------------------------- internal views */
+static const void *known_ptr(const glow_bake *b, int k) {
+    return b->known[k].present ? (const void *)(b->data + b->known[k].offset) : NULL;
+}
+const glow_bake_meta *glow__bake_meta(const glow_bake *b) { return known_ptr(b, S_META); }
+const glow_bake_material *glow__bake_materials(const glow_bake *b) { return known_ptr(b, S_MATL); }
+const glow_bake_surfel *glow__bake_surfels(const glow_bake *b) { return known_ptr(b, S_SURF); }
+const glow_bake_node *glow__bake_nodes(const glow_bake *b) { return known_ptr(b, S_NODE); }
+const uint32_t *glow__bake_level_starts(const glow_bake *b) { return known_ptr(b, S_LEVL); }
+const glow_bake_cache *glow__bake_caches(const glow_bake *b) { return known_ptr(b, S_CACH); }
+const uint32_t *glow__bake_grid_map(const glow_bake *b) {
+    uint64_t cells = (uint64_t)b->meta.grid_dims[0] * b->meta.grid_dims[1] * b->meta.grid_dims[2];
+    return cells ? known_ptr(b, S_GRID) : NULL;
+}
+const uint32_t *glow__bake_lightmap_map(const glow_bake *b) {
+    return b->meta.lightmap_count ? known_ptr(b, S_LMAP) : NULL;
+}
+const glow_bake_link_block *glow__bake_link_blocks(const glow_bake *b) { return known_ptr(b, S_LINK); }
+const void *glow__bake_shlk_blocks(const glow_bake *b) { return known_ptr(b, S_SHLK); }
+const glow_bake_triangle *glow__bake_triangles(const glow_bake *b) { return known_ptr(b, S_GEOM); }
+
+const void *glow__bake_section(const glow_bake *b, uint32_t fourcc, uint64_t *out_size) {
+    if (out_size) *out_size = 0;
+    for (uint32_t i = 0; i < b->section_count; i++) {
+        if (b->table[i].fourcc != fourcc) continue;
+        if (out_size) *out_size = b->table[i].size;
+        return b->data + b->table[i].offset;
+    }
+    return NULL;
+}
+
+const void *glow__bake_data(const glow_bake *b, uint64_t *out_size) {
+    if (out_size) *out_size = b->size;
+    return b->data;
+}
+
+glow_context *glow__bake_context(const glow_bake *b) { return b->ctx; }

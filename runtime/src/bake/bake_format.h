@@ -1,0 +1,239 @@
+/*
+ * bake_format.h — the on-disk layout of a Glow bake (.glow), shared by the writer
+ * (precompute/src/bake_write.c) and the reader (runtime/src/bake.c). One header, so the two
+ * cannot drift; every size and offset is _Static_assert'ed below.
+ *
+ * File layout (all little-endian, no pointers, loadable with one read or mmap):
+ *
+ *   [glow_bake_header]           64 bytes at offset 0
+ *   [glow_bake_section x N]      32 bytes each, right after the header (the section table)
+ *   [section payloads]           each at a 64-byte aligned offset, in table order, zero padding between
+ *
+ * The header carries its own CRC-32 (computed with header_crc32 = 0) and the CRC-32 of the section
+ * table; each section entry carries the CRC-32 of its payload. CRC-32 is the zlib/PNG polynomial
+ * (0xEDB88320, reflected), so `crc32()` from zlib reproduces every value.
+ *
+ * Versioning: `major` changes when any layout below changes (a reader refuses other majors);
+ * `minor` grows when sections are added (readers skip unknown fourccs).
+ *
+ * Units: positions in scene units (the file's own; "m" below means that unit), areas in m²,
+ * albedo is linear-RGB reflectance in [0,1], emission is emitted radiance W/(m²·sr) per unit
+ * of the scene's emission scale.
+ */
+#ifndef GLOW_BAKE_FORMAT_H
+#define GLOW_BAKE_FORMAT_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#define GLOW_BAKE_MAGIC "GLOW"
+#define GLOW_BAKE_FORMAT_VERSION_MAJOR 1u
+#define GLOW_BAKE_FORMAT_VERSION_MINOR 0u
+#define GLOW_BAKE_ALIGN 64u
+#define GLOW_BAKE_MAX_SECTIONS 64u
+
+#define GLOW_FOURCC(a, b, c, d) \
+    ((uint32_t)(a) | ((uint32_t)(b) << 8) | ((uint32_t)(c) << 16) | ((uint32_t)(d) << 24))
+
+/* Section fourccs (append only). */
+#define GLOW_SECTION_META GLOW_FOURCC('M', 'E', 'T', 'A') /* glow_bake_meta, exactly one */
+#define GLOW_SECTION_MATL GLOW_FOURCC('M', 'A', 'T', 'L') /* glow_bake_material[material_count] */
+#define GLOW_SECTION_SURF GLOW_FOURCC('S', 'U', 'R', 'F') /* glow_bake_surfel[surfel_count] */
+#define GLOW_SECTION_NODE GLOW_FOURCC('N', 'O', 'D', 'E') /* glow_bake_node[node_count] */
+#define GLOW_SECTION_LEVL GLOW_FOURCC('L', 'E', 'V', 'L') /* uint32_t[level_count + 1] level starts */
+#define GLOW_SECTION_CACH GLOW_FOURCC('C', 'A', 'C', 'H') /* glow_bake_cache[cache_count] */
+#define GLOW_SECTION_GRID GLOW_FOURCC('G', 'R', 'I', 'D') /* uint32_t[dx*dy*dz] cell -> cache map */
+#define GLOW_SECTION_LMAP GLOW_FOURCC('L', 'M', 'A', 'P') /* uint32_t[w*h] texel -> cache map */
+#define GLOW_SECTION_LINK GLOW_FOURCC('L', 'I', 'N', 'K') /* glow_bake_link_block[cache_count*blocks] */
+#define GLOW_SECTION_SHLK GLOW_FOURCC('S', 'H', 'L', 'K') /* full-SH links (optional), see below */
+#define GLOW_SECTION_GEOM GLOW_FOURCC('G', 'E', 'O', 'M') /* glow_bake_triangle[triangle_count] */
+
+/* Cache-map entries (GRID and LMAP): the low 31 bits index the cache array. */
+#define GLOW_MAP_EMPTY 0xFFFFFFFFu   /* no cache here; samples read zero */
+#define GLOW_MAP_COPY_BIT 0x80000000u /* not a cache of its own: a dilated copy of cache (v & ~bit) */
+#define GLOW_MAP_INDEX_MASK 0x7FFFFFFFu
+
+#define GLOW_NODE_NONE 0xFFFFFFFFu /* child of a leaf, parent of the root */
+
+/* Cache kinds. */
+#define GLOW_CACHE_KIND_GRID 1u     /* spherical cache at a grid point (dynamic objects) */
+#define GLOW_CACHE_KIND_LIGHTMAP 2u /* cache at a lightmap texel centre (hemisphere above nrm) */
+
+/* Link encodings (meta.link_kind bits; LINK is always present, SHLK only with bit 1). */
+#define GLOW_LINK_KIND_RUNTIME_PROJECTION 1u
+#define GLOW_LINK_KIND_FULL_SH 2u
+
+#define GLOW_LINK_BLOCK 16u /* links per SoA block; caches own whole blocks */
+
+/* ------------------------------------------------------------------------------------------ */
+typedef struct glow_bake_header {
+    /*  0 */ char magic[4];          /* "GLOW" */
+    /*  4 */ uint16_t major;         /* GLOW_BAKE_FORMAT_VERSION_MAJOR */
+    /*  6 */ uint16_t minor;         /* GLOW_BAKE_FORMAT_VERSION_MINOR */
+    /*  8 */ uint32_t header_size;   /* sizeof(glow_bake_header) */
+    /* 12 */ uint32_t section_count; /* entries in the section table */
+    /* 16 */ uint64_t file_size;     /* total bytes, must equal the file's size */
+    /* 24 */ uint32_t flags;         /* 0 */
+    /* 28 */ uint32_t table_crc32;   /* CRC-32 of the section table */
+    /* 32 */ uint32_t header_crc32;  /* CRC-32 of these 64 bytes with this field zero */
+    /* 36 */ uint32_t reserved[7];
+} glow_bake_header; /* 64 */
+
+typedef struct glow_bake_section {
+    /*  0 */ uint32_t fourcc;
+    /*  4 */ uint32_t version; /* per-section layout version, 1 */
+    /*  8 */ uint64_t offset;  /* from file start, multiple of GLOW_BAKE_ALIGN */
+    /* 16 */ uint64_t size;    /* payload bytes */
+    /* 24 */ uint32_t crc32;   /* CRC-32 of the payload */
+    /* 28 */ uint32_t reserved;
+} glow_bake_section; /* 32 */
+
+typedef struct glow_bake_meta {
+    /*   0 */ uint32_t surfel_count;      /* leaves n_S */
+    /*   4 */ uint32_t node_count;        /* all nodes, leaves first: 2*n_S - 1 for a binary HAC */
+    /*   8 */ uint32_t level_count;       /* pull levels, level 0 = leaves */
+    /*  12 */ uint32_t cache_count;       /* grid caches first, then lightmap caches */
+    /*  16 */ uint32_t grid_cache_count;
+    /*  20 */ uint32_t lightmap_cache_count;
+    /*  24 */ uint32_t links_per_cache;   /* n_L (unused slots have factor 0) */
+    /*  28 */ uint32_t link_blocks_per_cache; /* ceil(n_L / GLOW_LINK_BLOCK) */
+    /*  32 */ uint32_t sh_bands;          /* l the linker aimed for (full-SH links carry l*l) */
+    /*  36 */ uint32_t link_kind;         /* GLOW_LINK_KIND_* bits */
+    /*  40 */ uint32_t material_count;
+    /*  44 */ uint32_t triangle_count;    /* triangles kept (GEOM entries) */
+    /*  48 */ float bounds_min[3];        /* scene AABB, m */
+    /*  60 */ float surfel_area;          /* area of every leaf surfel, m² */
+    /*  64 */ float bounds_max[3];
+    /*  76 */ float factor_scale;         /* 1/(pi * surfel_area): multiplies every stored factor */
+    /*  80 */ float grid_origin[3];       /* centre of grid cell (0,0,0), m */
+    /*  92 */ float grid_spacing;         /* m */
+    /*  96 */ uint32_t grid_dims[3];      /* cells in x, y, z (x fastest in GRID) */
+    /* 108 */ uint32_t lightmap_count;    /* 0 or 1 atlases */
+    /* 112 */ uint32_t lightmap_width;
+    /* 116 */ uint32_t lightmap_height;
+    /* 120 */ float texel_density;        /* texels per m */
+    /* 124 */ uint32_t seed;
+    /* 128 */ double scene_area;          /* m², sum of kept triangle areas == surfel_count*surfel_area */
+    /* 136 */ uint32_t source_triangles;  /* triangles read from the file */
+    /* 140 */ uint32_t skipped_degenerate;/* zero-area / repeated-index triangles */
+    /* 144 */ uint32_t skipped_duplicate; /* coincident duplicate faces */
+    /* 148 */ uint32_t skipped_nonfinite; /* NaN/Inf vertices */
+    /* 152 */ uint32_t chart_count;       /* generated lightmap charts (0 = mesh's own UV set) */
+    /* 156 */ uint32_t lightmap_invalid_texels; /* texels seeing back faces, filled from neighbours */
+    /* 160 */ uint32_t quality;           /* 0 custom, 1 low, 2 moderate, 3 high */
+    /* 164 */ uint32_t rays_per_surfel;   /* visibility rays per (cache, surfel) pair */
+    /* 168 */ uint32_t reserved[22];
+} glow_bake_meta; /* 256 */
+
+typedef struct glow_bake_material {
+    /*  0 */ char name[32];      /* NUL-terminated, truncated */
+    /* 32 */ float albedo[3];    /* Kd / baseColorFactor, linear RGB */
+    /* 44 */ uint32_t flags;     /* bit 0: has albedo texture (baked into surfel albedo) */
+    /* 48 */ float emission[3];  /* emitted radiance W/(m²·sr) (Ke / emissiveFactor) */
+    /* 60 */ uint32_t reserved;
+} glow_bake_material; /* 64 */
+
+typedef struct glow_bake_surfel {
+    /*  0 */ float position[3];  /* m */
+    /* 12 */ float normal[3];    /* unit */
+    /* 24 */ float albedo[3];    /* linear RGB reflectance, texture folded in */
+    /* 36 */ float emission[3];  /* emitted radiance W/(m²·sr) at this surfel */
+    /* 48 */ uint32_t material;  /* index into MATL */
+    /* 52 */ uint32_t feedback;  /* cache index whose light the surfel re-emits (multi-bounce) */
+    /* 56 */ uint32_t triangle;  /* GEOM index it lies on */
+    /* 60 */ uint32_t reserved;
+} glow_bake_surfel; /* 64 */
+
+/* Nodes: leaves [0, surfel_count) are the surfels in SURF order; internal nodes follow,
+ * sorted by level (height above the leaves), so the pull is a sweep over LEVL ranges
+ * 1..level_count-1, each node reading two nodes of lower levels. Root = node_count - 1. */
+typedef struct glow_bake_node {
+    /*  0 */ uint32_t child[2];   /* GLOW_NODE_NONE for leaves */
+    /*  8 */ uint32_t parent;     /* GLOW_NODE_NONE for the root */
+    /* 12 */ float area;          /* m², sum of the leaves below */
+    /* 16 */ float position[3];   /* area-weighted centre, m */
+    /* 28 */ uint32_t normal_oct; /* area-weighted mean normal, octahedral snorm16x2 (x low) */
+} glow_bake_node; /* 32 */
+
+typedef struct glow_bake_cache {
+    /*  0 */ float position[3];   /* m */
+    /* 12 */ uint32_t normal_oct; /* lightmap: surface normal; grid: 0 */
+    /* 16 */ uint32_t kind;       /* GLOW_CACHE_KIND_* */
+    /* 20 */ uint32_t texel;      /* grid: cell index (x fastest); lightmap: y*width + x */
+    /* 24 */ uint32_t reserved[2];
+} glow_bake_cache; /* 32 */
+
+/* Runtime-projection links (PIC 4.6), SoA blocks of 16 so the solver vectorises across links.
+ * Link j of cache c is block c*link_blocks_per_cache + j/16, lane j%16. Its contribution to the
+ * cache's radiance SH (band l, order m) is
+ *     flux[node] * meta.factor_scale * factor * k_l(1 - one_minus_cos) * y_lm(dir)
+ * with k_l the cone factors of DESIGN §3 and dir = oct_decode(dir_u, dir_v).
+ * factor = (surfel_area / node.area): flux -> radiosity / pi, folded with factor_scale.
+ * one_minus_cos = 1 - cos(alpha), alpha the half-angle of the cone whose solid angle equals the
+ * node's solid angle visible from the cache (occlusion included). Unused lanes: factor 0, node 0. */
+typedef struct glow_bake_link_block {
+    /*   0 */ uint32_t node[GLOW_LINK_BLOCK];
+    /*  64 */ uint16_t factor[GLOW_LINK_BLOCK];        /* IEEE half */
+    /*  96 */ uint16_t one_minus_cos[GLOW_LINK_BLOCK]; /* IEEE half, in [0, 2] */
+    /* 128 */ int16_t dir_u[GLOW_LINK_BLOCK];          /* octahedral direction, snorm16 */
+    /* 160 */ int16_t dir_v[GLOW_LINK_BLOCK];
+} glow_bake_link_block; /* 192 = 12 bytes per link */
+
+/* Full-SH links (PIC Eq. 2, Monte-Carlo projection), SHLK: the same cut as LINK, per block of
+ * 16 links: uint32_t node[16] followed by IEEE-half coeff[sh_bands*sh_bands][16] (coefficient-major),
+ * each the SH projection of the visible sender divided by (pi * node.area) and by factor_scale.
+ * Block size = 64 + 32 * sh_bands². */
+static inline size_t glow_bake_shlk_block_size(uint32_t sh_bands) {
+    return (size_t)64u + (size_t)32u * sh_bands * sh_bands;
+}
+
+/* Geometry the host needs to sample the lightmap (Glow may have generated the lightmap UVs). */
+typedef struct glow_bake_triangle {
+    /*  0 */ float position[9];   /* three corners, m */
+    /* 36 */ uint16_t lm_uv[6];   /* lightmap UV per corner, unorm16 of [0,1] */
+    /* 48 */ uint32_t material;
+    /* 52 */ uint32_t source;     /* index of the triangle in the imported file's order */
+    /* 56 */ uint32_t normal_oct; /* geometric normal */
+    /* 60 */ uint32_t reserved;
+} glow_bake_triangle; /* 64 */
+
+_Static_assert(sizeof(glow_bake_header) == 64, "header is 64 bytes");
+_Static_assert(offsetof(glow_bake_header, file_size) == 16, "header layout");
+_Static_assert(offsetof(glow_bake_header, header_crc32) == 32, "header layout");
+_Static_assert(sizeof(glow_bake_section) == 32, "section entry is 32 bytes");
+_Static_assert(offsetof(glow_bake_section, offset) == 8, "section layout");
+_Static_assert(offsetof(glow_bake_section, crc32) == 24, "section layout");
+_Static_assert(sizeof(glow_bake_meta) == 256, "meta is 256 bytes");
+_Static_assert(offsetof(glow_bake_meta, bounds_min) == 48, "meta layout");
+_Static_assert(offsetof(glow_bake_meta, grid_origin) == 80, "meta layout");
+_Static_assert(offsetof(glow_bake_meta, scene_area) == 128, "meta layout");
+_Static_assert(offsetof(glow_bake_meta, reserved) == 168, "meta layout");
+_Static_assert(sizeof(glow_bake_material) == 64, "material is 64 bytes");
+_Static_assert(offsetof(glow_bake_material, emission) == 48, "material layout");
+_Static_assert(sizeof(glow_bake_surfel) == 64, "surfel is 64 bytes");
+_Static_assert(offsetof(glow_bake_surfel, material) == 48, "surfel layout");
+_Static_assert(sizeof(glow_bake_node) == 32, "node is 32 bytes");
+_Static_assert(offsetof(glow_bake_node, position) == 16, "node layout");
+_Static_assert(sizeof(glow_bake_cache) == 32, "cache is 32 bytes");
+_Static_assert(offsetof(glow_bake_cache, kind) == 16, "cache layout");
+_Static_assert(sizeof(glow_bake_link_block) == 192, "link block is 12 bytes per link");
+_Static_assert(offsetof(glow_bake_link_block, dir_u) == 128, "link block layout");
+_Static_assert(sizeof(glow_bake_triangle) == 64, "triangle is 64 bytes");
+_Static_assert(offsetof(glow_bake_triangle, material) == 48, "triangle layout");
+
+/* CRC-32 (zlib polynomial). The runtime may only depend on libc (DESIGN §2), so it carries this
+ * small table-driven version instead of linking zlib; tests/format checks it against zlib. */
+uint32_t glow__crc32(uint32_t crc, const void *data, size_t size);
+
+/* Octahedral unit-vector encoding, snorm16 x2 packed (x in the low 16 bits). Shared by writer
+ * and reader. */
+uint32_t glow__oct_encode(const float n[3]);
+void glow__oct_decode(uint32_t packed, float out_n[3]);
+void glow__oct_encode2(const float n[3], int16_t *out_u, int16_t *out_v);
+void glow__oct_decode2(int16_t u, int16_t v, float out_n[3]);
+
+/* IEEE half conversions (round to nearest even; no F16C dependency). */
+uint16_t glow__half_from_float(float f);
+float glow__half_to_float(uint16_t h);
+
+#endif /* GLOW_BAKE_FORMAT_H */

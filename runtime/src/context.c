@@ -1,0 +1,123 @@
+/* context.c — glow_context: the host's allocator and logger hooks, shared by everything the
+ * runtime creates. A context is immutable after creation, so any thread may use it. */
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "runtime_internal.h"
+
+struct glow_context {
+    glow_allocator allocator; /* both hooks set, or both NULL (aligned malloc) */
+    glow_logger logger;       /* log NULL = silent */
+    atomic_ullong live;       /* allocations not yet freed */
+};
+
+static int is_pow2(size_t v) { return v != 0 && (v & (v - 1)) == 0; }
+
+static void *default_alloc(size_t size, size_t align) {
+    /* C11 aligned_alloc wants size to be a multiple of the alignment (ASan checks it). */
+    size_t rounded = (size + align - 1) & ~(align - 1);
+    if (rounded < size) return NULL; /* overflow */
+    return aligned_alloc(align, rounded);
+}
+
+void *glow__ctx_alloc(glow_context *ctx, size_t size, size_t align) {
+    if (align == 0) align = 16;
+    if (!is_pow2(align)) return NULL;
+    if (align < sizeof(void *)) align = sizeof(void *);
+    if (size == 0) size = 1;
+    void *p = ctx->allocator.alloc ? ctx->allocator.alloc(ctx->allocator.user, size, align)
+                                   : default_alloc(size, align);
+    if (p && ((uintptr_t)p & (align - 1)) != 0) {
+        /* A host allocator that ignores the alignment would break every typed view of a bake. */
+        GLOW__LOG_ERROR(ctx, GLOW_ERROR_OUT_OF_MEMORY,
+                        "host allocator returned %p, not aligned to %zu bytes as requested", p, align);
+        if (ctx->allocator.free) ctx->allocator.free(ctx->allocator.user, p);
+        return NULL;
+    }
+    if (p) atomic_fetch_add_explicit(&ctx->live, 1u, memory_order_relaxed);
+    return p;
+}
+
+void glow__ctx_free(glow_context *ctx, void *ptr) {
+    if (!ptr) return;
+    atomic_fetch_sub_explicit(&ctx->live, 1u, memory_order_relaxed);
+    if (ctx->allocator.free)
+        ctx->allocator.free(ctx->allocator.user, ptr);
+    else
+        free(ptr);
+}
+
+uint64_t glow__ctx_live_allocations(const glow_context *ctx) {
+    return ctx ? (uint64_t)atomic_load_explicit(&((glow_context *)ctx)->live, memory_order_relaxed) : 0u;
+}
+
+void glow__ctx_logv(glow_context *ctx, glow_log_level level, glow_result code, const char *file, int line,
+                    const char *fmt, va_list ap) {
+    if (!ctx || !ctx->logger.log) return;
+    char buf[1024];
+    int n = vsnprintf(buf, sizeof buf, fmt, ap);
+    if (n < 0) snprintf(buf, sizeof buf, "(message could not be formatted)");
+    ctx->logger.log(ctx->logger.user, level, code, buf, file, line);
+}
+
+void glow__ctx_log(glow_context *ctx, glow_log_level level, glow_result code, const char *file, int line,
+                   const char *fmt, ...) {
+    va_list ap;
+    va_start(ap, fmt);
+    glow__ctx_logv(ctx, level, code, file, line, fmt, ap);
+    va_end(ap);
+}
+
+glow_result glow_context_create(const glow_context_desc *desc, glow_context **out_context) {
+    if (out_context) *out_context = NULL;
+    if (!desc || !out_context) return GLOW_ERROR_INVALID_ARGUMENT;
+
+    /* A stand-in so problems with the desc itself reach the host's logger. */
+    glow_context tmp;
+    memset(&tmp, 0, sizeof tmp);
+    tmp.logger = desc->logger;
+
+    if (desc->api_version / 10000u != (uint32_t)GLOW_VERSION_MAJOR) {
+        GLOW__LOG_ERROR(&tmp, GLOW_ERROR_VERSION_MISMATCH,
+                        "glow_context_create: api_version %u is version %u.%u.%u; this runtime is %d.%d.%d "
+                        "(major versions must match)",
+                        desc->api_version, desc->api_version / 10000u, desc->api_version / 100u % 100u,
+                        desc->api_version % 100u, GLOW_VERSION_MAJOR, GLOW_VERSION_MINOR, GLOW_VERSION_PATCH);
+        return GLOW_ERROR_VERSION_MISMATCH;
+    }
+    if ((desc->allocator.alloc == NULL) != (desc->allocator.free == NULL)) {
+        GLOW__LOG_ERROR(&tmp, GLOW_ERROR_INVALID_ARGUMENT,
+                        "glow_context_create: allocator.alloc and allocator.free must both be set or both be NULL");
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    tmp.allocator = desc->allocator;
+    atomic_init(&tmp.live, 0u);
+
+    glow_context *ctx = glow__ctx_alloc(&tmp, sizeof *ctx, _Alignof(glow_context));
+    if (!ctx) {
+        GLOW__LOG_ERROR(&tmp, GLOW_ERROR_OUT_OF_MEMORY, "glow_context_create: out of memory (%zu bytes)",
+                        sizeof *ctx);
+        return GLOW_ERROR_OUT_OF_MEMORY;
+    }
+    ctx->allocator = desc->allocator;
+    ctx->logger = desc->logger;
+    atomic_init(&ctx->live, 0u); /* the context's own block is not counted */
+    *out_context = ctx;
+    return GLOW_OK;
+}
+
+void glow_context_destroy(glow_context *context) {
+    if (!context) return;
+    uint64_t live = glow__ctx_live_allocations(context);
+    if (live != 0)
+        GLOW__LOG_WARNING(context, GLOW_ERROR_INVALID_OPERATION,
+                          "glow_context_destroy: %llu allocation(s) still live (a bake or system was not destroyed)",
+                          (unsigned long long)live);
+    glow_allocator a = context->allocator;
+    if (a.free)
+        a.free(a.user, context);
+    else
+        free(context);
+}

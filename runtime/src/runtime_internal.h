@@ -1,0 +1,79 @@
+/*
+ * runtime_internal.h — what the runtime's source files share with each other (and with tests).
+ * Not installed; only runtime/src/ and tests/ include it.
+ *
+ *   context.c  glow_context: allocator + logger hooks, and the glow__ctx_* helpers below
+ *   result.c   glow_result_string
+ *   bake.c     glow_bake: load + full validation, and the typed section accessors below
+ *   bake/format_util.c  CRC-32, octahedral and half conversions (declared in bake/bake_format.h)
+ */
+#ifndef GLOW_RUNTIME_INTERNAL_H
+#define GLOW_RUNTIME_INTERNAL_H
+
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "bake/bake_format.h"
+#include "glow/glow.h"
+
+#if defined(__GNUC__) || defined(__clang__)
+#define GLOW__PRINTF(fmt_index, first_arg) __attribute__((format(printf, fmt_index, first_arg)))
+#else
+#define GLOW__PRINTF(fmt_index, first_arg)
+#endif
+
+/* ---------------------------------------------------------------- context (context.c) */
+
+/* Allocates `size` bytes aligned to `align` (a power of two; 0 = 16) through the context's
+ * allocator. size 0 is treated as 1. Returns NULL on failure (logs nothing: the caller knows
+ * what it was allocating and reports GLOW_ERROR_OUT_OF_MEMORY with that). ctx must not be NULL. */
+void *glow__ctx_alloc(glow_context *ctx, size_t size, size_t align);
+/* Frees what glow__ctx_alloc returned (NULL is a no-op). */
+void glow__ctx_free(glow_context *ctx, void *ptr);
+
+/* Formats one message and hands it to the context's logger with `level` and `code`; `file` and
+ * `line` name the runtime source location (use the GLOW__LOG* macros). ctx may be NULL (silent).
+ * Messages longer than 1023 bytes are truncated. Reentrant. */
+void glow__ctx_log(glow_context *ctx, glow_log_level level, glow_result code, const char *file, int line,
+                   const char *fmt, ...) GLOW__PRINTF(6, 7);
+void glow__ctx_logv(glow_context *ctx, glow_log_level level, glow_result code, const char *file, int line,
+                    const char *fmt, va_list ap);
+
+#define GLOW__LOG_ERROR(ctx, code, ...) glow__ctx_log((ctx), GLOW_LOG_ERROR, (code), __FILE__, __LINE__, __VA_ARGS__)
+#define GLOW__LOG_WARNING(ctx, code, ...) \
+    glow__ctx_log((ctx), GLOW_LOG_WARNING, (code), __FILE__, __LINE__, __VA_ARGS__)
+
+/* Live allocations made through glow__ctx_alloc and not yet freed (leak checks in tests). */
+uint64_t glow__ctx_live_allocations(const glow_context *ctx);
+
+/* ---------------------------------------------------------------- bake (bake.c) */
+/* Typed views of a loaded (fully validated) bake. The bake's bytes live in one allocation aligned
+ * to GLOW_BAKE_ALIGN, so every pointer below is 64-byte aligned. Counts are in glow__bake_meta().
+ * Pointers are valid until glow_bake_destroy. None is NULL for a loaded bake except where noted
+ * (a section of size 0 still yields a valid, non-dereferenceable pointer). */
+const glow_bake_meta *glow__bake_meta(const glow_bake *bake);
+const glow_bake_material *glow__bake_materials(const glow_bake *bake); /* [material_count] */
+const glow_bake_surfel *glow__bake_surfels(const glow_bake *bake);     /* [surfel_count] */
+const glow_bake_node *glow__bake_nodes(const glow_bake *bake);         /* [node_count] */
+const uint32_t *glow__bake_level_starts(const glow_bake *bake);        /* [level_count + 1] */
+const glow_bake_cache *glow__bake_caches(const glow_bake *bake);       /* [cache_count] */
+/* [grid_dims[0]*grid_dims[1]*grid_dims[2]]; NULL when the grid has no cells. */
+const uint32_t *glow__bake_grid_map(const glow_bake *bake);
+/* [lightmap_width*lightmap_height]; NULL when lightmap_count == 0. */
+const uint32_t *glow__bake_lightmap_map(const glow_bake *bake);
+/* [cache_count * link_blocks_per_cache] */
+const glow_bake_link_block *glow__bake_link_blocks(const glow_bake *bake);
+/* Full-SH link blocks, glow_bake_shlk_block_size(sh_bands) bytes each, same count as the LINK
+ * blocks; NULL unless link_kind has GLOW_LINK_KIND_FULL_SH. */
+const void *glow__bake_shlk_blocks(const glow_bake *bake);
+/* [triangle_count]; NULL when the bake has no GEOM section. */
+const glow_bake_triangle *glow__bake_triangles(const glow_bake *bake);
+/* Any section by fourcc (also ones this runtime does not know); NULL when absent. */
+const void *glow__bake_section(const glow_bake *bake, uint32_t fourcc, uint64_t *out_size);
+/* The whole file image (header first) and its size. */
+const void *glow__bake_data(const glow_bake *bake, uint64_t *out_size);
+/* The context the bake was loaded with. */
+glow_context *glow__bake_context(const glow_bake *bake);
+
+#endif /* GLOW_RUNTIME_INTERNAL_H */

@@ -1,0 +1,90 @@
+#!/usr/bin/env bash
+# CLI behaviour of glow-bake: help, bad options (exit 2), bad inputs (exit 1, message names the file,
+# no output left behind), a real bake + --info round trip, JSON summary, determinism across thread
+# counts, and a killed bake leaving no file.
+#   usage: test_cli.sh BIN_DIR SHARED_DIR
+set -u
+BIN=$1/glow-bake
+SHARED=${2:-}
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+fails=0
+pass() { echo "ok   $1"; }
+fail() { echo "FAIL $1"; fails=$((fails + 1)); }
+
+# expect CODE NAME CMD... : run, check the exit status, keep stderr in $T/err
+expect() {
+  local want=$1 name=$2; shift 2
+  "$@" >"$T/out" 2>"$T/err"; local got=$?
+  if [ "$got" = "$want" ]; then pass "$name (exit $got)"; else fail "$name: exit $got, wanted $want"; sed 's/^/     /' "$T/err" | head -5; fi
+}
+err_has() { if grep -q -- "$1" "$T/err"; then pass "  message mentions '$1'"; else fail "  message lacks '$1':"; sed 's/^/     /' "$T/err" | head -5; fi; }
+no_file() { if [ ! -e "$1" ] && ! ls "$1".tmp.* >/dev/null 2>&1; then pass "  no output left at $1"; else fail "  output left at $1"; fi; }
+
+SMALL=(--surfels 1024 --links 32 --grid-spacing 0.5 --texel-density 3 -q)
+
+expect 0 "--help" "$BIN" --help
+grep -q -- "--sh-links" "$T/out" && grep -q -- "--texel-density" "$T/out" && pass "  help lists the options" || fail "  help incomplete"
+expect 2 "no arguments" "$BIN"
+expect 2 "unknown option" "$BIN" builtin:cornell -o "$T/a.glow" --frobnicate; err_has "frobnicate"
+expect 2 "bad quality" "$BIN" builtin:cornell -o "$T/a.glow" --quality ultra; err_has "ultra"
+expect 2 "negative surfels" "$BIN" builtin:cornell -o "$T/a.glow" --surfels -5; err_has "surfels"
+expect 2 "absurd surfels" "$BIN" builtin:cornell -o "$T/a.glow" --surfels 99999999999; err_has "surfels"
+expect 2 "bands 9" "$BIN" builtin:cornell -o "$T/a.glow" --bands 9; err_has "bands"
+expect 2 "zero links" "$BIN" builtin:cornell -o "$T/a.glow" --links 0
+expect 2 "nan grid spacing" "$BIN" builtin:cornell -o "$T/a.glow" --grid-spacing nan
+expect 2 "negative texel density" "$BIN" builtin:cornell -o "$T/a.glow" --texel-density -1
+expect 2 "missing value" "$BIN" builtin:cornell -o
+expect 2 "no output" "$BIN" builtin:cornell
+no_file "$T/a.glow"
+
+expect 1 "missing scene" "$BIN" "$T/nope.obj" -o "$T/b.glow" -q; err_has "nope.obj"; no_file "$T/b.glow"
+printf 'this is not a mesh\n\x00\x01\x02' > "$T/garbage.glb"
+expect 1 "garbage scene" "$BIN" "$T/garbage.glb" -o "$T/b.glow" -q; err_has "garbage.glb"; no_file "$T/b.glow"
+: > "$T/empty.obj"
+expect 1 "empty scene" "$BIN" "$T/empty.obj" -o "$T/b.glow" -q; err_has "empty.obj"; no_file "$T/b.glow"
+expect 1 "unknown builtin" "$BIN" builtin:teapot -o "$T/b.glow" -q; err_has "teapot"
+expect 1 "unwritable output" "$BIN" builtin:cornell -o "$T/no/such/dir/x.glow" "${SMALL[@]}"; err_has "x.glow"
+
+# a real bake, its summary, --info and --json
+expect 0 "bake cornell" "$BIN" builtin:cornell -o "$T/c1.glow" "${SMALL[@]}" --threads 1
+grep -q "bytes per link" "$T/out" && pass "  summary printed" || fail "  no summary"
+expect 0 "--info" "$BIN" --info "$T/c1.glow"
+grep -q "valid" "$T/out" && grep -q "surfels   1024" "$T/out" && pass "  info describes the bake" || { fail "  info output"; cat "$T/out"; }
+expect 0 "--info --json" "$BIN" --info "$T/c1.glow" --json
+grep -q '"surfels": 1024' "$T/out" && pass "  info json" || fail "  info json"
+expect 0 "bake --json" "$BIN" builtin:cornell -o "$T/c2.glow" "${SMALL[@]}" --threads 3 --json
+grep -q '"bytes_per_link"' "$T/out" && grep -q '"stages"' "$T/out" && pass "  json summary" || fail "  json summary"
+if cmp -s "$T/c1.glow" "$T/c2.glow"; then pass "same bytes with 1 and 3 threads"; else fail "bake differs across thread counts"; fi
+expect 0 "bake other seed" "$BIN" builtin:cornell -o "$T/c3.glow" "${SMALL[@]}" --seed 7
+if cmp -s "$T/c1.glow" "$T/c3.glow"; then fail "seed has no effect"; else pass "seed changes the bake"; fi
+
+# a corrupted bake is refused by --info with a named problem
+cp "$T/c1.glow" "$T/bad.glow"; printf '\x55' | dd of="$T/bad.glow" bs=1 seek=5000 conv=notrunc 2>/dev/null
+expect 1 "--info on corrupted bake" "$BIN" --info "$T/bad.glow"; err_has "checksum\|CRC\|crc"
+head -c 100 "$T/c1.glow" > "$T/short.glow"
+expect 1 "--info on truncated bake" "$BIN" --info "$T/short.glow"; err_has "short.glow"
+
+# existing output survives a failed bake
+cp "$T/c1.glow" "$T/keep.glow"
+expect 1 "failed bake over existing file" "$BIN" "$T/nope.obj" -o "$T/keep.glow" -q
+cmp -s "$T/c1.glow" "$T/keep.glow" && pass "  existing file untouched" || fail "  existing file changed"
+
+# a killed bake leaves no bake file
+"$BIN" builtin:cornell -o "$T/killed.glow" --surfels 16384 --links 128 -q &
+pid=$!
+sleep 1
+if kill -0 $pid 2>/dev/null; then pass "bake still running after 1 s"; else fail "bake finished before it could be killed"; fi
+kill -9 $pid 2>/dev/null; wait $pid 2>/dev/null
+no_file "$T/killed.glow"
+
+# the shared Cornell box (two coincident duplicate faces: skipped and counted)
+if [ -n "$SHARED" ] && [ -f "$SHARED/scenes/cornell-box/CornellBox-Original.obj" ]; then
+  expect 0 "bake shared CornellBox-Original" "$BIN" "$SHARED/scenes/cornell-box/CornellBox-Original.obj" -o "$T/o.glow" "${SMALL[@]}" --json
+  grep -q '"skipped_duplicate": 4' "$T/out" && pass "  2 duplicate quads (4 triangles) skipped" || { fail "  duplicates"; grep skipped "$T/out"; }
+else
+  echo "skip shared scenes (not found)"
+fi
+
+echo "$fails failure(s)"
+[ "$fails" = 0 ]

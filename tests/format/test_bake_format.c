@@ -1,0 +1,1392 @@
+/* test_bake_format.c — the bake container: writer, reader validation (every error class, exact
+ * result and logged code), CRC-32 against zlib, half and octahedral codecs, atomic file writes,
+ * and the frozen golden v1 bake (tests/data/golden_v1.glow).
+ *
+ * The golden file is never regenerated silently: run this test once with
+ * GLOW_REGENERATE_GOLDEN=1 to rewrite it (and then update GOLDEN_SIZE / GOLDEN_CRC below). */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include <cmocka.h>
+
+#include <dirent.h>
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+#include <zlib.h>
+
+#include "bake/bake_format.h"
+#include "bake_write.h"
+#include "glow/glow.h"
+#include "runtime_internal.h"
+
+#define GOLDEN_PATH GLOW_TEST_DATA_DIR "/golden_v1.glow"
+/* Frozen properties of tests/data/golden_v1.glow (zlib crc32 of the whole file). */
+#define GOLDEN_SIZE 1792u
+#define GOLDEN_CRC 0x21b22897u
+
+/* ------------------------------------------------------------------------------ helpers */
+typedef struct test_log {
+    int count;
+    glow_result last_code;
+    glow_log_level last_level;
+    char last_message[1024];
+} test_log;
+
+static void test_logger(void *user, glow_log_level level, glow_result code, const char *message, const char *file,
+                        int line) {
+    test_log *l = user;
+    l->count++;
+    l->last_code = code;
+    l->last_level = level;
+    snprintf(l->last_message, sizeof l->last_message, "%s", message);
+    assert_non_null(file);
+    assert_true(line > 0);
+}
+
+static glow_context *make_ctx(test_log *log) {
+    memset(log, 0, sizeof *log);
+    glow_context_desc d;
+    memset(&d, 0, sizeof d);
+    d.api_version = GLOW_VERSION;
+    d.logger.log = test_logger;
+    d.logger.user = log;
+    glow_context *ctx = NULL;
+    assert_int_equal(glow_context_create(&d, &ctx), GLOW_OK);
+    assert_non_null(ctx);
+    return ctx;
+}
+
+static uint32_t rng_state = 0x12345678u;
+static uint32_t rng(void) { /* xorshift32 */
+    uint32_t x = rng_state;
+    x ^= x << 13;
+    x ^= x >> 17;
+    x ^= x << 5;
+    return rng_state = x;
+}
+static float rngf(void) { return (float)(rng() >> 8) * (1.0f / 16777216.0f); }
+
+static uint32_t u32_at(const unsigned char *p) { uint32_t v; memcpy(&v, p, 4); return v; }
+static uint64_t u64_at(const unsigned char *p) { uint64_t v; memcpy(&v, p, 8); return v; }
+static void put_u16(unsigned char *p, uint16_t v) { memcpy(p, &v, 2); }
+static void put_u32(unsigned char *p, uint32_t v) { memcpy(p, &v, 4); }
+static void put_u64(unsigned char *p, uint64_t v) { memcpy(p, &v, 8); }
+
+/* Recomputes every CRC of an image (payloads, table, header) with zlib, so a patched field is
+ * what the reader trips over. Tolerates nonsense (only entries that fit are refreshed). */
+static void refresh_crcs(unsigned char *img, size_t size) {
+    if (size < 64) return;
+    uint32_t n = u32_at(img + 12);
+    if (n > GLOW_BAKE_MAX_SECTIONS) n = GLOW_BAKE_MAX_SECTIONS;
+    if (64u + 32u * (size_t)n > size) n = (uint32_t)((size - 64) / 32);
+    for (uint32_t i = 0; i < n; i++) {
+        unsigned char *e = img + 64 + 32 * i;
+        uint64_t off = u64_at(e + 8), sz = u64_at(e + 16);
+        if (off <= size && sz <= size - off) put_u32(e + 24, (uint32_t)crc32(0L, img + off, (uInt)sz));
+    }
+    put_u32(img + 28, (uint32_t)crc32(0L, img + 64, (uInt)(32u * u32_at(img + 12) <= size - 64 ? 32u * u32_at(img + 12) : 0)));
+    put_u32(img + 32, 0);
+    put_u32(img + 32, (uint32_t)crc32(0L, img, 64));
+}
+
+/* Index of the table entry with `fourcc`, or -1. */
+static int find_entry(const unsigned char *img, uint32_t fourcc) {
+    uint32_t n = u32_at(img + 12);
+    for (uint32_t i = 0; i < n; i++)
+        if (u32_at(img + 64 + 32 * i) == fourcc) return (int)i;
+    return -1;
+}
+static unsigned char *entry_ptr(unsigned char *img, uint32_t fourcc) {
+    int i = find_entry(img, fourcc);
+    assert_true(i >= 0);
+    return img + 64 + 32 * i;
+}
+static unsigned char *payload_ptr(unsigned char *img, uint32_t fourcc) {
+    return img + u64_at(entry_ptr(img, fourcc) + 8);
+}
+
+/* Loads and checks the exact result AND the logged code; returns the bake on GLOW_OK. */
+#define EXPECT_LOAD(img, size, code) expect_load((img), (size), (code), NULL, __LINE__)
+#define EXPECT_LOAD_MSG(img, size, code, needle) expect_load((img), (size), (code), (needle), __LINE__)
+static void expect_load(const void *img, size_t size, glow_result code, const char *needle, int line) {
+    test_log log;
+    glow_context *ctx = make_ctx(&log);
+    glow_bake *bake = (glow_bake *)(uintptr_t)1;
+    glow_result r = glow_bake_load(ctx, img, size, &bake);
+    if (r != code)
+        fail_msg("line %d: glow_bake_load returned %s, expected %s (log: %s)", line, glow_result_string(r),
+                 glow_result_string(code), log.count ? log.last_message : "-");
+    if (code == GLOW_OK) {
+        if (log.count != 0) fail_msg("line %d: a valid bake logged: %s", line, log.last_message);
+        assert_non_null(bake);
+    } else {
+        if (bake != NULL) fail_msg("line %d: out_bake not NULL on failure", line);
+        if (log.count < 1) fail_msg("line %d: failure was not logged", line);
+        if (log.last_code != code)
+            fail_msg("line %d: logged code %s, expected %s (%s)", line, glow_result_string(log.last_code),
+                     glow_result_string(code), log.last_message);
+        if (log.last_level != GLOW_LOG_ERROR) fail_msg("line %d: logged at level %d", line, (int)log.last_level);
+        if (needle && !strstr(log.last_message, needle))
+            fail_msg("line %d: message \"%s\" does not mention \"%s\"", line, log.last_message, needle);
+    }
+    glow_bake_destroy(bake);
+    glow_context_destroy(ctx);
+}
+
+/* ------------------------------------------------------------------------------ a hand-built bake */
+/* Scene: a 1 x 1 floor quad (y = 0) split into two triangles, one surfel each (area 0.5): a grey
+ * floor surfel and an emissive one; a 3-node tree; a 1x1x2 grid with one cache and a 2x2
+ * lightmap with one cache; 2 links per cache (1 block each); 2 materials; GEOM. Halves and
+ * octahedral values are literals, so the golden file does not depend on the codecs under test.
+ * FROZEN: the golden file is this bake. Change a copy in a test, never this function. */
+#define SHLK_BANDS 2u
+#define SHLK_BLOCK (64u + 32u * SHLK_BANDS * SHLK_BANDS)
+typedef struct test_bake {
+    glow_bake_meta meta;
+    glow_bake_material mat[2];
+    glow_bake_surfel surf[2];
+    glow_bake_node node[3];
+    uint32_t levl[4]; /* level_count + 1 used */
+    glow_bake_cache cache[2];
+    uint32_t grid[2];
+    uint32_t lmap[4];
+    glow_bake_link_block link[2];
+    unsigned char shlk[2 * SHLK_BLOCK];
+    glow_bake_triangle tri[2];
+} test_bake;
+
+#define OCT_UP 0x7FFF0000u /* (0, 1, 0): u = 0, v = 32767 */
+
+static void set3(float *d, float x, float y, float z) { d[0] = x; d[1] = y; d[2] = z; }
+
+static void build_golden(test_bake *b) {
+    memset(b, 0, sizeof *b);
+    glow_bake_meta *m = &b->meta;
+    m->surfel_count = 2;
+    m->node_count = 3;
+    m->level_count = 2;
+    m->cache_count = 2;
+    m->grid_cache_count = 1;
+    m->lightmap_cache_count = 1;
+    m->links_per_cache = 2;
+    m->link_blocks_per_cache = 1;
+    m->sh_bands = SHLK_BANDS;
+    m->link_kind = GLOW_LINK_KIND_RUNTIME_PROJECTION;
+    m->material_count = 2;
+    m->triangle_count = 2;
+    set3(m->bounds_min, 0.0f, 0.0f, 0.0f);
+    set3(m->bounds_max, 1.0f, 0.0f, 1.0f);
+    m->surfel_area = 0.5f;
+    m->factor_scale = 0.636619772f; /* 1 / (pi * 0.5) */
+    set3(m->grid_origin, 0.5f, 0.25f, 0.25f);
+    m->grid_spacing = 0.5f;
+    m->grid_dims[0] = 1;
+    m->grid_dims[1] = 1;
+    m->grid_dims[2] = 2;
+    m->lightmap_count = 1;
+    m->lightmap_width = 2;
+    m->lightmap_height = 2;
+    m->texel_density = 2.0f;
+    m->seed = 7;
+    m->scene_area = 1.0;
+    m->source_triangles = 3;
+    m->skipped_degenerate = 1;
+    m->quality = 0;
+    m->rays_per_surfel = 1;
+
+    snprintf(b->mat[0].name, sizeof b->mat[0].name, "floor");
+    set3(b->mat[0].albedo, 0.5f, 0.5f, 0.5f);
+    snprintf(b->mat[1].name, sizeof b->mat[1].name, "lamp");
+    set3(b->mat[1].albedo, 0.8f, 0.7f, 0.6f);
+    set3(b->mat[1].emission, 2.0f, 1.5f, 1.0f);
+
+    set3(b->surf[0].position, 0.75f, 0.0f, 0.25f);
+    set3(b->surf[0].normal, 0.0f, 1.0f, 0.0f);
+    set3(b->surf[0].albedo, 0.5f, 0.5f, 0.5f);
+    b->surf[0].material = 0;
+    b->surf[0].feedback = 1;
+    b->surf[0].triangle = 0;
+    set3(b->surf[1].position, 0.25f, 0.0f, 0.75f);
+    set3(b->surf[1].normal, 0.0f, 1.0f, 0.0f);
+    set3(b->surf[1].albedo, 0.8f, 0.7f, 0.6f);
+    set3(b->surf[1].emission, 2.0f, 1.5f, 1.0f);
+    b->surf[1].material = 1;
+    b->surf[1].feedback = 1;
+    b->surf[1].triangle = 1;
+
+    for (int i = 0; i < 2; i++) {
+        b->node[i].child[0] = b->node[i].child[1] = GLOW_NODE_NONE;
+        b->node[i].parent = 2;
+        b->node[i].area = 0.5f;
+        memcpy(b->node[i].position, b->surf[i].position, sizeof b->node[i].position);
+        b->node[i].normal_oct = OCT_UP;
+    }
+    b->node[2].child[0] = 0;
+    b->node[2].child[1] = 1;
+    b->node[2].parent = GLOW_NODE_NONE;
+    b->node[2].area = 1.0f;
+    set3(b->node[2].position, 0.5f, 0.0f, 0.5f);
+    b->node[2].normal_oct = OCT_UP;
+    b->levl[0] = 0;
+    b->levl[1] = 2;
+    b->levl[2] = 3;
+
+    set3(b->cache[0].position, 0.5f, 0.25f, 0.75f);
+    b->cache[0].kind = GLOW_CACHE_KIND_GRID;
+    b->cache[0].texel = 1;
+    set3(b->cache[1].position, 0.25f, 0.0f, 0.25f);
+    b->cache[1].normal_oct = OCT_UP;
+    b->cache[1].kind = GLOW_CACHE_KIND_LIGHTMAP;
+    b->cache[1].texel = 0;
+    b->grid[0] = 0u | GLOW_MAP_COPY_BIT;
+    b->grid[1] = 0u;
+    b->lmap[0] = 1u;
+    b->lmap[1] = 1u | GLOW_MAP_COPY_BIT;
+    b->lmap[2] = GLOW_MAP_EMPTY;
+    b->lmap[3] = 1u | GLOW_MAP_COPY_BIT;
+
+    /* cache 0 (grid, above the floor) sees the root and leaf 0; cache 1 sees leaf 1 and leaf 0 */
+    b->link[0].node[0] = 2;
+    b->link[0].factor[0] = 0x3800;        /* 0.5 */
+    b->link[0].one_minus_cos[0] = 0x34CD; /* ~0.3 */
+    b->link[0].dir_u[0] = 0;
+    b->link[0].dir_v[0] = -32767; /* (0, -1, 0) */
+    b->link[0].node[1] = 0;
+    b->link[0].factor[1] = 0x3C00;        /* 1.0 */
+    b->link[0].one_minus_cos[1] = 0x2E66; /* ~0.1 */
+    b->link[0].dir_u[1] = 8192;
+    b->link[0].dir_v[1] = -24575;
+    b->link[1].node[0] = 1;
+    b->link[1].factor[0] = 0x3C00;
+    b->link[1].one_minus_cos[0] = 0x3266; /* ~0.2 */
+    b->link[1].dir_u[0] = 0;
+    b->link[1].dir_v[0] = 32767;
+    b->link[1].node[1] = 0;
+    b->link[1].factor[1] = 0x3C00;
+    b->link[1].one_minus_cos[1] = 0x2A66; /* ~0.05 */
+    b->link[1].dir_u[1] = 16383;
+    b->link[1].dir_v[1] = 16384;
+
+    /* SHLK (only written when a test asks): same cut, coefficients 0.25 */
+    for (int blk = 0; blk < 2; blk++) {
+        unsigned char *p = b->shlk + blk * SHLK_BLOCK;
+        memcpy(p, b->link[blk].node, 64);
+        for (uint32_t k = 0; k < SHLK_BANDS * SHLK_BANDS * 16u; k++) put_u16(p + 64 + 2 * k, 0x3400);
+    }
+
+    float t0[9] = {0, 0, 0, 1, 0, 0, 1, 0, 1}, t1[9] = {0, 0, 0, 1, 0, 1, 0, 0, 1};
+    memcpy(b->tri[0].position, t0, sizeof t0);
+    memcpy(b->tri[1].position, t1, sizeof t1);
+    uint16_t uv0[6] = {0, 0, 65535, 0, 65535, 65535}, uv1[6] = {0, 0, 65535, 65535, 0, 65535};
+    memcpy(b->tri[0].lm_uv, uv0, sizeof uv0);
+    memcpy(b->tri[1].lm_uv, uv1, sizeof uv1);
+    b->tri[0].material = 0;
+    b->tri[0].source = 0;
+    b->tri[0].normal_oct = OCT_UP;
+    b->tri[1].material = 1;
+    b->tri[1].source = 2;
+    b->tri[1].normal_oct = OCT_UP;
+}
+
+enum { WITH_SHLK = 1, NO_GEOM = 2, NO_GRID = 4, NO_LMAP = 8, EXTRA_UNKNOWN = 16 };
+
+static uint32_t sections_of(const test_bake *b, int flags, glow__section_data *s) {
+    static const unsigned char unknown_payload[5] = {1, 2, 3, 4, 5};
+    uint32_t n = 0;
+#define ADD(fc, ptr, sz) (s[n].fourcc = (fc), s[n].version = 1, s[n].data = (ptr), s[n].size = (sz), n++)
+    ADD(GLOW_SECTION_META, &b->meta, sizeof b->meta);
+    ADD(GLOW_SECTION_MATL, b->mat, sizeof b->mat);
+    ADD(GLOW_SECTION_SURF, b->surf, sizeof b->surf);
+    ADD(GLOW_SECTION_NODE, b->node, sizeof b->node);
+    ADD(GLOW_SECTION_LEVL, b->levl, (b->meta.level_count + 1u) * sizeof(uint32_t));
+    ADD(GLOW_SECTION_CACH, b->cache, sizeof b->cache);
+    if (!(flags & NO_GRID)) ADD(GLOW_SECTION_GRID, b->grid, sizeof b->grid);
+    if (!(flags & NO_LMAP)) ADD(GLOW_SECTION_LMAP, b->lmap, sizeof b->lmap);
+    if (flags & EXTRA_UNKNOWN) ADD(GLOW_FOURCC('Z', 'Z', 'Z', 'Z'), unknown_payload, sizeof unknown_payload);
+    ADD(GLOW_SECTION_LINK, b->link, sizeof b->link);
+    if (flags & WITH_SHLK) ADD(GLOW_SECTION_SHLK, b->shlk, sizeof b->shlk);
+    if (!(flags & NO_GEOM)) ADD(GLOW_SECTION_GEOM, b->tri, sizeof b->tri);
+#undef ADD
+    return n;
+}
+
+static unsigned char *write_bake(const test_bake *b, int flags, size_t *out_size) {
+    glow__section_data s[16];
+    uint32_t n = sections_of(b, flags, s);
+    void *img = NULL;
+    uint64_t size = 0;
+    assert_int_equal(glow__bake_write_memory(s, n, &img, &size), GLOW_OK);
+    assert_non_null(img);
+    *out_size = (size_t)size;
+    return img;
+}
+
+/* Builds the golden bake, lets `patch` change it, writes it and expects `code` on load. */
+#define EXPECT_PATCHED(flags, code, needle, ...)                     \
+    do {                                                             \
+        test_bake tb_;                                               \
+        build_golden(&tb_);                                          \
+        test_bake *b = &tb_;                                         \
+        __VA_ARGS__;                                                 \
+        size_t sz_;                                                  \
+        unsigned char *img_ = write_bake(b, (flags), &sz_);          \
+        expect_load(img_, sz_, (code), (needle), __LINE__);          \
+        free(img_);                                                  \
+    } while (0)
+
+/* ------------------------------------------------------------------------------ valid loads */
+static void check_golden_contents(const glow_bake *bake) {
+    glow_bake_info info;
+    assert_int_equal(glow_bake_get_info(bake, &info), GLOW_OK);
+    assert_int_equal(info.format_major, 1);
+    assert_int_equal(info.format_minor, 0);
+    assert_int_equal(info.surfel_count, 2);
+    assert_int_equal(info.node_count, 3);
+    assert_int_equal(info.level_count, 2);
+    assert_int_equal(info.cache_count, 2);
+    assert_int_equal(info.grid_cache_count, 1);
+    assert_int_equal(info.lightmap_cache_count, 1);
+    assert_int_equal(info.links_per_cache, 2);
+    assert_int_equal(info.sh_bands, 2);
+    assert_int_equal(info.link_kind, GLOW_LINK_KIND_RUNTIME_PROJECTION);
+    assert_int_equal(info.material_count, 2);
+    assert_int_equal(info.triangle_count, 2);
+    assert_int_equal(info.grid_dims[0], 1);
+    assert_int_equal(info.grid_dims[1], 1);
+    assert_int_equal(info.grid_dims[2], 2);
+    assert_int_equal(info.lightmap_count, 1);
+    assert_int_equal(info.lightmap_width, 2);
+    assert_int_equal(info.lightmap_height, 2);
+    assert_true(info.bounds_max[0] == 1.0f && info.bounds_max[1] == 0.0f && info.bounds_max[2] == 1.0f);
+    assert_true(info.surfel_area == 0.5f && info.grid_spacing == 0.5f && info.texel_density == 2.0f);
+    assert_true(info.scene_area == 1.0);
+
+    const glow_bake_meta *m = glow__bake_meta(bake);
+    assert_non_null(m);
+    assert_int_equal(m->seed, 7);
+    assert_int_equal(m->source_triangles, 3);
+    assert_true(((uintptr_t)m % GLOW_BAKE_ALIGN) == 0);
+    const glow_bake_surfel *s = glow__bake_surfels(bake);
+    assert_true(s[1].position[0] == 0.25f && s[1].position[2] == 0.75f && s[1].emission[1] == 1.5f);
+    assert_int_equal(s[1].material, 1);
+    const glow_bake_material *mat = glow__bake_materials(bake);
+    assert_string_equal(mat[1].name, "lamp");
+    const glow_bake_node *nd = glow__bake_nodes(bake);
+    assert_int_equal(nd[2].child[1], 1);
+    assert_int_equal(nd[0].parent, 2);
+    assert_int_equal(glow__bake_level_starts(bake)[1], 2);
+    const glow_bake_cache *c = glow__bake_caches(bake);
+    assert_int_equal(c[1].kind, GLOW_CACHE_KIND_LIGHTMAP);
+    assert_int_equal(glow__bake_grid_map(bake)[0], GLOW_MAP_COPY_BIT);
+    assert_int_equal(glow__bake_lightmap_map(bake)[2], GLOW_MAP_EMPTY);
+    const glow_bake_link_block *lb = glow__bake_link_blocks(bake);
+    assert_int_equal(lb[0].node[0], 2);
+    assert_int_equal(lb[1].factor[0], 0x3C00);
+    assert_int_equal(lb[1].dir_v[1], 16384);
+    assert_true(((uintptr_t)lb % GLOW_BAKE_ALIGN) == 0);
+    assert_null(glow__bake_shlk_blocks(bake));
+    const glow_bake_triangle *t = glow__bake_triangles(bake);
+    assert_non_null(t);
+    assert_int_equal(t[1].source, 2);
+    assert_int_equal(t[0].lm_uv[4], 65535);
+    uint64_t sz = 0;
+    assert_non_null(glow__bake_section(bake, GLOW_SECTION_LEVL, &sz));
+    assert_int_equal(sz, 12);
+    assert_null(glow__bake_section(bake, GLOW_FOURCC('N', 'O', 'N', 'E'), &sz));
+    assert_int_equal(sz, 0);
+}
+
+static void test_load_valid(void **state) {
+    (void)state;
+    test_bake tb;
+    build_golden(&tb);
+    size_t size;
+    unsigned char *img = write_bake(&tb, 0, &size);
+    EXPECT_LOAD(img, size, GLOW_OK);
+
+    test_log log;
+    glow_context *ctx = make_ctx(&log);
+    glow_bake *bake = NULL;
+    assert_int_equal(glow_bake_load(ctx, img, size, &bake), GLOW_OK);
+    memset(img, 0xAB, size); /* the bake holds a copy */
+    free(img);
+    check_golden_contents(bake);
+    glow_bake_info info;
+    assert_int_equal(glow_bake_get_info(bake, &info), GLOW_OK);
+    assert_int_equal(info.file_size, size);
+    assert_int_equal(glow__ctx_live_allocations(ctx), 1);
+    assert_ptr_equal(glow__bake_context(bake), ctx);
+    glow_bake_destroy(bake);
+    assert_int_equal(glow__ctx_live_allocations(ctx), 0);
+    glow_bake_destroy(NULL);
+    assert_int_equal(log.count, 0);
+    glow_context_destroy(ctx);
+    glow_context_destroy(NULL);
+}
+
+static void test_load_variants(void **state) {
+    (void)state;
+    /* full-SH links */
+    EXPECT_PATCHED(WITH_SHLK, GLOW_OK, NULL, b->meta.link_kind |= GLOW_LINK_KIND_FULL_SH);
+    {
+        test_bake tb;
+        build_golden(&tb);
+        tb.meta.link_kind |= GLOW_LINK_KIND_FULL_SH;
+        size_t size;
+        unsigned char *img = write_bake(&tb, WITH_SHLK, &size);
+        test_log log;
+        glow_context *ctx = make_ctx(&log);
+        glow_bake *bake = NULL;
+        assert_int_equal(glow_bake_load(ctx, img, size, &bake), GLOW_OK);
+        const unsigned char *sh = glow__bake_shlk_blocks(bake);
+        assert_non_null(sh);
+        assert_int_equal(u32_at(sh + SHLK_BLOCK), 1); /* block 1, lane 0 node */
+        glow_bake_destroy(bake);
+        glow_context_destroy(ctx);
+        free(img);
+    }
+    /* without GEOM: triangle indices are not checked */
+    EXPECT_PATCHED(NO_GEOM, GLOW_OK, NULL, b->surf[0].triangle = 99);
+    /* unknown sections are skipped */
+    EXPECT_PATCHED(EXTRA_UNKNOWN, GLOW_OK, NULL, (void)b);
+    /* a single surfel: the leaf is the root, one level */
+    {
+        test_bake tb;
+        build_golden(&tb);
+        tb.meta.surfel_count = 1;
+        tb.meta.node_count = 1;
+        tb.meta.level_count = 1;
+        tb.node[0].parent = GLOW_NODE_NONE;
+        tb.levl[1] = 1;
+        for (int i = 0; i < 2; i++) tb.link[i].node[0] = tb.link[i].node[1] = 0;
+        glow__section_data s[16];
+        uint32_t n = sections_of(&tb, 0, s);
+        for (uint32_t i = 0; i < n; i++) {
+            if (s[i].fourcc == GLOW_SECTION_SURF) s[i].size = sizeof(glow_bake_surfel);
+            if (s[i].fourcc == GLOW_SECTION_NODE) s[i].size = sizeof(glow_bake_node);
+            if (s[i].fourcc == GLOW_SECTION_LEVL) s[i].size = 2 * sizeof(uint32_t);
+        }
+        void *img;
+        uint64_t size;
+        assert_int_equal(glow__bake_write_memory(s, n, &img, &size), GLOW_OK);
+        EXPECT_LOAD(img, (size_t)size, GLOW_OK);
+        tb.node[0].parent = 0; /* the root must have no parent */
+        free(img);
+        assert_int_equal(glow__bake_write_memory(s, n, &img, &size), GLOW_OK);
+        EXPECT_LOAD_MSG(img, (size_t)size, GLOW_ERROR_OUT_OF_RANGE, "root node 0");
+        free(img);
+    }
+    /* a bake without a lightmap: lightmap caches must go too (cache 1 would point at no texel) */
+    EXPECT_PATCHED(NO_LMAP, GLOW_ERROR_OUT_OF_RANGE, "cache 1: texel/cell 0 out of range (0)",
+                   b->meta.lightmap_count = 0);
+}
+
+/* ------------------------------------------------------------------------------ container errors */
+static void test_truncated(void **state) {
+    (void)state;
+    test_bake tb;
+    build_golden(&tb);
+    size_t size;
+    unsigned char *img = write_bake(&tb, 0, &size);
+    uint32_t n = u32_at(img + 12);
+    size_t lens[] = {0, 10, 63, 64, 65, 64 + 32 * (size_t)n - 1, 64 + 32 * (size_t)n, size / 2, size - 64, size - 1};
+    for (size_t i = 0; i < sizeof lens / sizeof lens[0]; i++) {
+        /* a fresh allocation of exactly that length, so ASan catches any read past it */
+        unsigned char *cut = malloc(lens[i] ? lens[i] : 1);
+        memcpy(cut, img, lens[i]);
+        expect_load(cut, lens[i], GLOW_ERROR_TRUNCATED, lens[i] >= 64 ? "truncated" : "shorter", __LINE__);
+        free(cut);
+    }
+    EXPECT_LOAD(NULL, 0, GLOW_ERROR_TRUNCATED);
+    free(img);
+}
+
+static void test_magic_version(void **state) {
+    (void)state;
+    test_bake tb;
+    build_golden(&tb);
+    size_t size;
+    unsigned char *img = write_bake(&tb, 0, &size);
+    unsigned char *p = malloc(size);
+
+    memcpy(p, img, size);
+    p[0] = 'X';
+    EXPECT_LOAD_MSG(p, size, GLOW_ERROR_BAD_MAGIC, "not a Glow bake");
+    memcpy(p, img, size);
+    memcpy(p, "glow", 4);
+    refresh_crcs(p, size);
+    EXPECT_LOAD(p, size, GLOW_ERROR_BAD_MAGIC);
+
+    memcpy(p, img, size);
+    put_u16(p + 4, 2);
+    refresh_crcs(p, size);
+    EXPECT_LOAD_MSG(p, size, GLOW_ERROR_VERSION_MISMATCH, "version 2.0");
+    EXPECT_LOAD_MSG(p, size, GLOW_ERROR_VERSION_MISMATCH, "reads format version 1");
+    put_u16(p + 4, 0);
+    refresh_crcs(p, size);
+    EXPECT_LOAD(p, size, GLOW_ERROR_VERSION_MISMATCH);
+    /* a newer minor loads */
+    memcpy(p, img, size);
+    put_u16(p + 6, 7);
+    refresh_crcs(p, size);
+    EXPECT_LOAD(p, size, GLOW_OK);
+
+    /* peek_version: header only, no context */
+    uint32_t major = 9, minor = 9;
+    assert_int_equal(glow_bake_peek_version(img, size, &major, &minor), GLOW_OK);
+    assert_int_equal(major, 1);
+    assert_int_equal(minor, 0);
+    assert_int_equal(glow_bake_peek_version(p, 64, &major, &minor), GLOW_OK);
+    assert_int_equal(minor, 7);
+    put_u16(p + 4, 3);
+    assert_int_equal(glow_bake_peek_version(p, 64, &major, &minor), GLOW_OK);
+    assert_int_equal(major, 3);
+    assert_int_equal(glow_bake_peek_version(img, 63, &major, &minor), GLOW_ERROR_TRUNCATED);
+    assert_int_equal(glow_bake_peek_version(NULL, 0, &major, &minor), GLOW_ERROR_TRUNCATED);
+    p[1] = 'X';
+    assert_int_equal(glow_bake_peek_version(p, size, &major, &minor), GLOW_ERROR_BAD_MAGIC);
+    free(p);
+    free(img);
+}
+
+static void test_checksums(void **state) {
+    (void)state;
+    test_bake tb;
+    build_golden(&tb);
+    size_t size;
+    unsigned char *img = write_bake(&tb, 0, &size);
+    unsigned char *p = malloc(size);
+    /* a flipped bit in every section's payload */
+    uint32_t n = u32_at(img + 12);
+    for (uint32_t i = 0; i < n; i++) {
+        memcpy(p, img, size);
+        uint64_t off = u64_at(p + 64 + 32 * i + 8), sz = u64_at(p + 64 + 32 * i + 16);
+        p[off + sz / 2] ^= 0x10;
+        EXPECT_LOAD_MSG(p, size, GLOW_ERROR_BAD_CHECKSUM, "CRC-32 mismatch");
+    }
+    memcpy(p, img, size);
+    p[24] ^= 1; /* header flags */
+    EXPECT_LOAD_MSG(p, size, GLOW_ERROR_BAD_CHECKSUM, "header CRC");
+    memcpy(p, img, size);
+    p[64 + 4] ^= 1; /* section table: META version */
+    EXPECT_LOAD_MSG(p, size, GLOW_ERROR_BAD_CHECKSUM, "table CRC");
+    memcpy(p, img, size);
+    p[32] ^= 1; /* the header CRC itself */
+    EXPECT_LOAD(p, size, GLOW_ERROR_BAD_CHECKSUM);
+    /* padding between payloads is not covered by any CRC and may be anything */
+    memcpy(p, img, size);
+    uint64_t meta_end = u64_at(entry_ptr(p, GLOW_SECTION_META) + 8) + sizeof(glow_bake_meta);
+    uint64_t matl_off = u64_at(entry_ptr(p, GLOW_SECTION_MATL) + 8);
+    assert_true(matl_off == meta_end); /* 256 is aligned: no padding there; find one that has */
+    uint64_t levl_end = u64_at(entry_ptr(p, GLOW_SECTION_LEVL) + 8) + 12;
+    assert_int_equal(p[levl_end], 0);
+    p[levl_end] = 0x5A;
+    EXPECT_LOAD(p, size, GLOW_OK);
+    free(p);
+    free(img);
+}
+
+static void test_container_structure(void **state) {
+    (void)state;
+    test_bake tb;
+    build_golden(&tb);
+    size_t size;
+    unsigned char *img = write_bake(&tb, 0, &size);
+    unsigned char *p = malloc(size + 64);
+
+    /* file_size field smaller than the data: trailing bytes */
+    memcpy(p, img, size);
+    p[size] = 0;
+    EXPECT_LOAD_MSG(p, size + 1, GLOW_ERROR_CORRUPT_DATA, "header says");
+    memcpy(p, img, size);
+    put_u64(p + 16, size - 1);
+    refresh_crcs(p, size);
+    EXPECT_LOAD(p, size, GLOW_ERROR_CORRUPT_DATA);
+    /* file_size larger than the data: truncated */
+    memcpy(p, img, size);
+    put_u64(p + 16, size + 100);
+    refresh_crcs(p, size);
+    EXPECT_LOAD(p, size, GLOW_ERROR_TRUNCATED);
+    /* header_size */
+    memcpy(p, img, size);
+    put_u32(p + 8, 128);
+    refresh_crcs(p, size);
+    EXPECT_LOAD_MSG(p, size, GLOW_ERROR_CORRUPT_DATA, "header_size");
+    /* section_count over the maximum, and a table running past the end */
+    memcpy(p, img, size);
+    put_u32(p + 12, GLOW_BAKE_MAX_SECTIONS + 1);
+    refresh_crcs(p, size);
+    EXPECT_LOAD_MSG(p, size, GLOW_ERROR_CORRUPT_DATA, "section_count");
+    memcpy(p, img, size);
+    put_u32(p + 12, 0xFFFFFFFFu);
+    refresh_crcs(p, size);
+    EXPECT_LOAD(p, size, GLOW_ERROR_CORRUPT_DATA);
+    /* unaligned offset */
+    memcpy(p, img, size);
+    put_u64(entry_ptr(p, GLOW_SECTION_NODE) + 8, u64_at(entry_ptr(p, GLOW_SECTION_NODE) + 8) + 4);
+    refresh_crcs(p, size);
+    EXPECT_LOAD_MSG(p, size, GLOW_ERROR_CORRUPT_DATA, "multiple of 64");
+    /* overlapping sections */
+    memcpy(p, img, size);
+    put_u64(entry_ptr(p, GLOW_SECTION_NODE) + 8, u64_at(entry_ptr(p, GLOW_SECTION_SURF) + 8));
+    refresh_crcs(p, size);
+    EXPECT_LOAD_MSG(p, size, GLOW_ERROR_CORRUPT_DATA, "overlap");
+    /* a section inside the header / table */
+    memcpy(p, img, size);
+    put_u64(entry_ptr(p, GLOW_SECTION_NODE) + 8, 64);
+    refresh_crcs(p, size);
+    EXPECT_LOAD(p, size, GLOW_ERROR_CORRUPT_DATA);
+    /* a section past the end (size and offset, including 64-bit wrap-around) */
+    memcpy(p, img, size);
+    put_u64(entry_ptr(p, GLOW_SECTION_GEOM) + 16, size);
+    refresh_crcs(p, size);
+    EXPECT_LOAD_MSG(p, size, GLOW_ERROR_CORRUPT_DATA, "past the end");
+    memcpy(p, img, size);
+    put_u64(entry_ptr(p, GLOW_SECTION_GEOM) + 16, UINT64_MAX - 63);
+    refresh_crcs(p, size);
+    EXPECT_LOAD(p, size, GLOW_ERROR_CORRUPT_DATA);
+    memcpy(p, img, size);
+    put_u64(entry_ptr(p, GLOW_SECTION_GEOM) + 8, UINT64_MAX - 63);
+    refresh_crcs(p, size);
+    EXPECT_LOAD(p, size, GLOW_ERROR_CORRUPT_DATA);
+    /* duplicate fourcc */
+    memcpy(p, img, size);
+    put_u32(entry_ptr(p, GLOW_SECTION_GEOM), GLOW_SECTION_MATL);
+    refresh_crcs(p, size);
+    EXPECT_LOAD_MSG(p, size, GLOW_ERROR_CORRUPT_DATA, "duplicate section 'MATL'");
+    /* section layout version */
+    memcpy(p, img, size);
+    put_u32(entry_ptr(p, GLOW_SECTION_CACH) + 4, 2);
+    refresh_crcs(p, size);
+    EXPECT_LOAD_MSG(p, size, GLOW_ERROR_CORRUPT_DATA, "layout version");
+    /* missing required sections (renamed to an unknown fourcc, which is otherwise skipped) */
+    static const uint32_t required[] = {GLOW_SECTION_META, GLOW_SECTION_SURF, GLOW_SECTION_NODE, GLOW_SECTION_LEVL,
+                                        GLOW_SECTION_CACH, GLOW_SECTION_LINK, GLOW_SECTION_MATL, GLOW_SECTION_GRID,
+                                        GLOW_SECTION_LMAP};
+    for (size_t i = 0; i < sizeof required / sizeof required[0]; i++) {
+        memcpy(p, img, size);
+        put_u32(entry_ptr(p, required[i]), GLOW_FOURCC('X', 'X', 'X', (int)('0' + i)));
+        refresh_crcs(p, size);
+        char needle[32];
+        snprintf(needle, sizeof needle, "'%.4s'", (const char *)&required[i]);
+        EXPECT_LOAD_MSG(p, size, GLOW_ERROR_CORRUPT_DATA, needle);
+    }
+    /* GEOM is optional */
+    memcpy(p, img, size);
+    put_u32(entry_ptr(p, GLOW_SECTION_GEOM), GLOW_FOURCC('X', 'G', 'E', 'O'));
+    refresh_crcs(p, size);
+    EXPECT_LOAD(p, size, GLOW_OK);
+    /* the META section must be exactly one glow_bake_meta */
+    memcpy(p, img, size);
+    put_u64(entry_ptr(p, GLOW_SECTION_META) + 16, 128);
+    refresh_crcs(p, size);
+    EXPECT_LOAD_MSG(p, size, GLOW_ERROR_CORRUPT_DATA, "'META'");
+    free(p);
+    free(img);
+}
+
+/* ------------------------------------------------------------------------------ META and sizes */
+static void test_meta_counts(void **state) {
+    (void)state;
+    EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "node_count", b->meta.surfel_count = 3);
+    EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "surfel_count is 0", b->meta.surfel_count = 0);
+    EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "node_count", b->meta.node_count = 5);
+    EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "level_count", b->meta.level_count = 0);
+    EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "level_count", b->meta.level_count = 4);
+    {   /* LEVL size disagreeing with META.level_count (patched in the image, CRCs refreshed) */
+        test_bake tb;
+        build_golden(&tb);
+        size_t size;
+        unsigned char *img = write_bake(&tb, 0, &size);
+        put_u32(payload_ptr(img, GLOW_SECTION_META) + offsetof(glow_bake_meta, level_count), 3);
+        refresh_crcs(img, size);
+        EXPECT_LOAD_MSG(img, size, GLOW_ERROR_CORRUPT_DATA, "'LEVL'");
+        free(img);
+    }
+    EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "cache_count", b->meta.cache_count = 3);
+    EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "'CACH'", b->meta.cache_count = 3; b->meta.grid_cache_count = 2);
+    EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "link_blocks_per_cache", b->meta.links_per_cache = 17);
+    EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "'LINK'", b->meta.links_per_cache = 17;
+                   b->meta.link_blocks_per_cache = 2);
+    EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "'MATL'", b->meta.material_count = 3);
+    EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "'GEOM'", b->meta.triangle_count = 1);
+    EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "'GRID'", b->meta.grid_dims[0] = 2);
+    EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "overflow", b->meta.grid_dims[0] = 0xFFFFFFFFu;
+                   b->meta.grid_dims[1] = 0xFFFFFFFFu; b->meta.grid_dims[2] = 0xFFFFFFFFu);
+    EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "'LMAP'", b->meta.lightmap_width = 0x80000000u;
+                   b->meta.lightmap_height = 0x80000000u);
+    EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "lightmap_count", b->meta.lightmap_count = 2);
+    EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "sh_bands", b->meta.sh_bands = 0);
+    EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "sh_bands", b->meta.sh_bands = 0x10000u);
+    EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "grid_spacing", b->meta.grid_spacing = 0.0f);
+    /* conditional sections */
+    EXPECT_PATCHED(NO_GRID, GLOW_ERROR_CORRUPT_DATA, "'GRID'", (void)b);
+    EXPECT_PATCHED(NO_LMAP, GLOW_ERROR_CORRUPT_DATA, "'LMAP'", (void)b);
+    EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "'SHLK'", b->meta.link_kind |= GLOW_LINK_KIND_FULL_SH);
+    EXPECT_PATCHED(WITH_SHLK, GLOW_ERROR_CORRUPT_DATA, "'SHLK'", (void)b);
+    EXPECT_PATCHED(WITH_SHLK, GLOW_ERROR_CORRUPT_DATA, "'SHLK'", b->meta.link_kind |= GLOW_LINK_KIND_FULL_SH;
+                   b->meta.sh_bands = 3);
+    /* non-finite META floats */
+    EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "bounds", b->meta.bounds_min[1] = NAN);
+    EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "bounds", b->meta.bounds_max[2] = INFINITY);
+    EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "surfel_area", b->meta.surfel_area = NAN);
+    EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "scene_area", b->meta.scene_area = -1.0);
+    EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "factor_scale", b->meta.factor_scale = INFINITY);
+    EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "grid origin", b->meta.grid_origin[0] = NAN);
+}
+
+/* ------------------------------------------------------------------------------ indices */
+static void test_out_of_range(void **state) {
+    (void)state;
+    const glow_result R = GLOW_ERROR_OUT_OF_RANGE;
+    /* nodes */
+    EXPECT_PATCHED(0, R, "node 2: child 3 out of range", b->node[2].child[0] = 3);
+    EXPECT_PATCHED(0, R, "parent 7 out of range", b->node[1].parent = 7);
+    EXPECT_PATCHED(0, R, "not in a lower level", b->node[2].child[1] = 2);
+    EXPECT_PATCHED(0, R, "two distinct children", b->node[2].child[1] = 0);
+    EXPECT_PATCHED(0, R, "two distinct children", b->node[2].child[1] = GLOW_NODE_NONE);
+    EXPECT_PATCHED(0, R, "is a leaf", b->node[0].child[0] = 1);
+    EXPECT_PATCHED(0, R, "root node", b->node[2].parent = 0);
+    EXPECT_PATCHED(0, R, "node 2: child 1 names parent", b->node[1].parent = GLOW_NODE_NONE);
+    EXPECT_PATCHED(0, R, "names parent", b->node[1].parent = 1);
+    EXPECT_PATCHED(0, R, "LEVL", b->levl[1] = 1);
+    EXPECT_PATCHED(0, R, "LEVL", b->levl[0] = 1);
+    EXPECT_PATCHED(0, R, "LEVL", b->levl[2] = 2);
+    EXPECT_PATCHED(0, R, "LEVL: level start 3 (3) < level start 2 (4)", b->meta.level_count = 3; b->levl[2] = 4;
+                   b->levl[3] = 3);
+    EXPECT_PATCHED(0, GLOW_OK, NULL, b->meta.level_count = 3; b->levl[2] = 2; b->levl[3] = 3); /* an empty level */
+    /* surfels */
+    EXPECT_PATCHED(0, R, "surfel 1: material 2", b->surf[1].material = 2);
+    EXPECT_PATCHED(0, R, "feedback cache 2", b->surf[0].feedback = 2);
+    EXPECT_PATCHED(0, R, "triangle 2", b->surf[1].triangle = 2);
+    /* caches */
+    EXPECT_PATCHED(0, R, "unknown kind 3", b->cache[1].kind = 3);
+    EXPECT_PATCHED(0, R, "kind 2", b->cache[0].kind = GLOW_CACHE_KIND_LIGHTMAP);
+    EXPECT_PATCHED(0, R, "texel/cell 2", b->cache[0].texel = 2);
+    EXPECT_PATCHED(0, R, "texel/cell 4", b->cache[1].texel = 4);
+    /* maps */
+    EXPECT_PATCHED(0, R, "GRID entry 1", b->grid[1] = 2);
+    EXPECT_PATCHED(0, R, "GRID entry 0", b->grid[0] = 1u | GLOW_MAP_COPY_BIT); /* a lightmap cache */
+    EXPECT_PATCHED(0, R, "LMAP entry 2", b->lmap[2] = 0x7FFFFFFFu);
+    EXPECT_PATCHED(0, R, "LMAP entry 0", b->lmap[0] = 0); /* a grid cache */
+    /* links */
+    EXPECT_PATCHED(0, R, "node 3 out of range", b->link[1].node[1] = 3);
+    EXPECT_PATCHED(0, R, "link 15: node", b->link[0].node[15] = 0xFFFFFFFFu);
+    EXPECT_PATCHED(WITH_SHLK, R, "SHLK block 1", b->meta.link_kind |= GLOW_LINK_KIND_FULL_SH;
+                   put_u32(b->shlk + SHLK_BLOCK + 8, 3));
+    /* geometry */
+    EXPECT_PATCHED(0, R, "GEOM triangle 1: material 2", b->tri[1].material = 2);
+}
+
+static void test_non_finite(void **state) {
+    (void)state;
+    const glow_result C = GLOW_ERROR_CORRUPT_DATA;
+    EXPECT_PATCHED(0, C, "surfel 1", b->surf[1].position[0] = NAN);
+    EXPECT_PATCHED(0, C, "surfel 0", b->surf[0].normal[2] = -INFINITY);
+    EXPECT_PATCHED(0, C, "surfel 1", b->surf[1].albedo[1] = NAN);
+    EXPECT_PATCHED(0, C, "surfel 1", b->surf[1].emission[2] = INFINITY);
+    EXPECT_PATCHED(0, C, "node 2", b->node[2].area = NAN);
+    EXPECT_PATCHED(0, C, "node 0", b->node[0].area = -1.0f);
+    EXPECT_PATCHED(0, C, "cache 1", b->cache[1].position[1] = NAN);
+    EXPECT_PATCHED(0, C, "material 1", b->mat[1].emission[0] = INFINITY);
+    EXPECT_PATCHED(0, C, "material 0: name", memset(b->mat[0].name, 'a', sizeof b->mat[0].name));
+    EXPECT_PATCHED(0, C, "GEOM triangle 0", b->tri[0].position[7] = NAN);
+    /* link halves: factor finite and >= 0, one_minus_cos finite in [0, 2] */
+    EXPECT_PATCHED(0, C, "LINK cache 0 link 1", b->link[0].factor[1] = 0x7E00);  /* NaN */
+    EXPECT_PATCHED(0, C, "LINK cache 1 link 0", b->link[1].factor[0] = 0x7C00);  /* Inf */
+    EXPECT_PATCHED(0, C, "LINK cache 1 link 0", b->link[1].factor[0] = 0xBC00);  /* -1 */
+    EXPECT_PATCHED(0, C, "LINK cache 0 link 0", b->link[0].one_minus_cos[0] = 0x4001); /* > 2 */
+    EXPECT_PATCHED(0, C, "LINK cache 0 link 0", b->link[0].one_minus_cos[0] = 0xB800); /* -0.5 */
+    EXPECT_PATCHED(0, C, "LINK cache 0 link 0", b->link[0].one_minus_cos[0] = 0x7E00);
+    EXPECT_PATCHED(0, C, "unused lane", b->link[1].factor[5] = 0x3C00);
+    EXPECT_PATCHED(0, GLOW_OK, NULL, b->link[0].one_minus_cos[0] = 0x4000; b->link[0].factor[0] = 0x8000);
+    EXPECT_PATCHED(WITH_SHLK, C, "SHLK block 0: non-finite", b->meta.link_kind |= GLOW_LINK_KIND_FULL_SH;
+                   put_u16(b->shlk + 64 + 2 * 37, 0xFC00));
+}
+
+/* ------------------------------------------------------------------------------ context, results */
+typedef struct count_alloc {
+    int allocs, frees, fail_after;
+} count_alloc;
+static void *ca_alloc(void *user, size_t size, size_t align) {
+    count_alloc *c = user;
+    if (c->fail_after >= 0 && c->allocs >= c->fail_after) return NULL;
+    c->allocs++;
+    size_t rounded = (size + align - 1) / align * align;
+    return aligned_alloc(align, rounded);
+}
+static void ca_free(void *user, void *p) {
+    count_alloc *c = user;
+    c->frees++;
+    free(p);
+}
+
+static void test_context_and_results(void **state) {
+    (void)state;
+    test_log log;
+    memset(&log, 0, sizeof log);
+    glow_context_desc d;
+    memset(&d, 0, sizeof d);
+    glow_context *ctx = (glow_context *)(uintptr_t)1;
+    assert_int_equal(glow_context_create(NULL, &ctx), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_null(ctx);
+    assert_int_equal(glow_context_create(&d, NULL), GLOW_ERROR_INVALID_ARGUMENT);
+    d.logger.log = test_logger;
+    d.logger.user = &log;
+    d.api_version = 10000u; /* 1.0.0 */
+    assert_int_equal(glow_context_create(&d, &ctx), GLOW_ERROR_VERSION_MISMATCH);
+    assert_int_equal(log.last_code, GLOW_ERROR_VERSION_MISMATCH);
+    assert_null(ctx);
+    d.api_version = GLOW_VERSION;
+    count_alloc ca = {0, 0, -1};
+    d.allocator.alloc = ca_alloc;
+    d.allocator.user = &ca;
+    assert_int_equal(glow_context_create(&d, &ctx), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(log.last_code, GLOW_ERROR_INVALID_ARGUMENT);
+    d.allocator.free = ca_free;
+    assert_int_equal(glow_context_create(&d, &ctx), GLOW_OK);
+
+    test_bake tb;
+    build_golden(&tb);
+    size_t size;
+    unsigned char *img = write_bake(&tb, 0, &size);
+    glow_bake *bake = NULL;
+    assert_int_equal(glow_bake_load(ctx, img, size, &bake), GLOW_OK);
+    assert_int_equal(ca.allocs, 2);
+    glow_bake_destroy(bake);
+    assert_int_equal(ca.frees, 1);
+    /* out of memory while loading */
+    ca.fail_after = ca.allocs;
+    log.count = 0;
+    assert_int_equal(glow_bake_load(ctx, img, size, &bake), GLOW_ERROR_OUT_OF_MEMORY);
+    assert_null(bake);
+    assert_int_equal(log.last_code, GLOW_ERROR_OUT_OF_MEMORY);
+    /* NULL arguments */
+    assert_int_equal(glow_bake_load(ctx, NULL, size, &bake), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(log.last_code, GLOW_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(glow_bake_load(NULL, img, size, &bake), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(glow_bake_load(ctx, img, size, NULL), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(glow_bake_load_file(ctx, NULL, &bake), GLOW_ERROR_INVALID_ARGUMENT);
+    glow_bake_info info;
+    assert_int_equal(glow_bake_get_info(NULL, &info), GLOW_ERROR_INVALID_ARGUMENT);
+    glow_context_destroy(ctx);
+    assert_int_equal(ca.allocs, ca.frees);
+    free(img);
+
+    /* a context with live allocations warns on destroy */
+    glow_context *c2 = make_ctx(&log);
+    void *leak = glow__ctx_alloc(c2, 100, 64);
+    assert_non_null(leak);
+    assert_true(((uintptr_t)leak % 64) == 0);
+    assert_null(glow__ctx_alloc(c2, 100, 48)); /* not a power of two */
+    glow__ctx_free(c2, leak);
+    leak = glow__ctx_alloc(c2, 1, 0);
+    log.count = 0;
+    glow_context_destroy(c2); /* warns, does not free the block */
+    assert_int_equal(log.count, 1);
+    assert_int_equal(log.last_level, GLOW_LOG_WARNING);
+    assert_int_equal(log.last_code, GLOW_ERROR_INVALID_OPERATION);
+    free(leak);
+
+    /* result strings name their code */
+    static const struct { glow_result r; const char *name; } codes[] = {
+        {GLOW_OK, "GLOW_OK"},
+        {GLOW_ERROR_INVALID_ARGUMENT, "GLOW_ERROR_INVALID_ARGUMENT"},
+        {GLOW_ERROR_INVALID_OPERATION, "GLOW_ERROR_INVALID_OPERATION"},
+        {GLOW_ERROR_OUT_OF_MEMORY, "GLOW_ERROR_OUT_OF_MEMORY"},
+        {GLOW_ERROR_IO, "GLOW_ERROR_IO"},
+        {GLOW_ERROR_CORRUPT_DATA, "GLOW_ERROR_CORRUPT_DATA"},
+        {GLOW_ERROR_VERSION_MISMATCH, "GLOW_ERROR_VERSION_MISMATCH"},
+        {GLOW_ERROR_UNSUPPORTED, "GLOW_ERROR_UNSUPPORTED"},
+        {GLOW_ERROR_HOST_CALLBACK, "GLOW_ERROR_HOST_CALLBACK"},
+        {GLOW_ERROR_TRUNCATED, "GLOW_ERROR_TRUNCATED"},
+        {GLOW_ERROR_BAD_MAGIC, "GLOW_ERROR_BAD_MAGIC"},
+        {GLOW_ERROR_BAD_CHECKSUM, "GLOW_ERROR_BAD_CHECKSUM"},
+        {GLOW_ERROR_OUT_OF_RANGE, "GLOW_ERROR_OUT_OF_RANGE"},
+        {GLOW_ERROR_EMPTY_SCENE, "GLOW_ERROR_EMPTY_SCENE"},
+    };
+    for (size_t i = 0; i < sizeof codes / sizeof codes[0]; i++) {
+        const char *s = glow_result_string(codes[i].r);
+        size_t n = strlen(codes[i].name);
+        assert_int_equal(strncmp(s, codes[i].name, n), 0);
+        assert_int_equal(s[n], ':');
+    }
+    assert_non_null(glow_result_string((glow_result)999));
+}
+
+/* ------------------------------------------------------------------------------ codecs */
+static void test_crc32_vs_zlib(void **state) {
+    (void)state;
+    enum { N = 1 << 16 };
+    unsigned char *buf = malloc(N + 16);
+    for (int i = 0; i < N + 16; i++) buf[i] = (unsigned char)rng();
+    assert_int_equal(glow__crc32(0, "123456789", 9), 0xCBF43926u); /* the CRC-32 check value */
+    assert_int_equal(glow__crc32(0, buf, 0), 0);
+    for (int t = 0; t < 300; t++) {
+        size_t len = t < 40 ? (size_t)t : (size_t)(rng() % N);
+        size_t off = rng() % 16; /* misaligned starts */
+        uint32_t seed = t % 3 == 0 ? 0u : rng();
+        uLong ref = crc32((uLong)seed, buf + off, (uInt)len);
+        assert_int_equal(glow__crc32(seed, buf + off, len), (uint32_t)ref);
+    }
+    /* chaining = one call */
+    uint32_t a = glow__crc32(0, buf, 1000);
+    a = glow__crc32(a, buf + 1000, 3333);
+    assert_int_equal(a, (uint32_t)crc32(0L, buf, 4333));
+    free(buf);
+}
+
+static float bits_to_float(uint32_t x) { float f; memcpy(&f, &x, 4); return f; }
+static uint32_t float_to_bits(float f) { uint32_t x; memcpy(&x, &f, 4); return x; }
+
+static void test_half(void **state) {
+    (void)state;
+    /* every non-NaN pattern survives half -> float -> half */
+    int nan_count = 0;
+    for (uint32_t h = 0; h < 65536u; h++) {
+        float f = glow__half_to_float((uint16_t)h);
+        if ((h & 0x7C00u) == 0x7C00u && (h & 0x3FFu)) {
+            assert_true(isnan(f));
+            assert_true(isnan(glow__half_to_float(glow__half_from_float(f))));
+            nan_count++;
+            continue;
+        }
+        if (glow__half_from_float(f) != h) fail_msg("half 0x%04x -> %a -> 0x%04x", h, (double)f, glow__half_from_float(f));
+    }
+    assert_int_equal(nan_count, 2 * 1023);
+    /* values computed by hand */
+    assert_true(glow__half_to_float(0x3C00) == 1.0f);
+    assert_true(glow__half_to_float(0xC000) == -2.0f);
+    assert_true(glow__half_to_float(0x7BFF) == 65504.0f);
+    assert_true(glow__half_to_float(0x0001) == ldexpf(1.0f, -24));
+    assert_true(glow__half_to_float(0x03FF) == ldexpf(1023.0f, -24));
+    assert_true(isinf(glow__half_to_float(0xFC00)) && glow__half_to_float(0xFC00) < 0);
+    assert_int_equal(glow__half_from_float(65519.0f), 0x7BFF);
+    assert_int_equal(glow__half_from_float(65520.0f), 0x7C00); /* tie -> even -> overflow */
+    assert_int_equal(glow__half_from_float(1e10f), 0x7C00);
+    assert_int_equal(glow__half_from_float(-INFINITY), 0xFC00);
+    assert_int_equal(glow__half_from_float(ldexpf(1.0f, -25)), 0x0000);           /* tie -> even 0 */
+    assert_int_equal(glow__half_from_float(ldexpf(1.0f, -25) * 1.0000001f), 0x0001);
+    assert_int_equal(glow__half_from_float(ldexpf(3.0f, -25)), 0x0002);           /* 1.5 ulp -> 2 */
+    assert_int_equal(glow__half_from_float(ldexpf(1.0f, -26)), 0x0000);
+    assert_int_equal(glow__half_from_float(-0.0f), 0x8000);
+    assert_int_equal(glow__half_from_float(1.0f + ldexpf(1.0f, -11)), 0x3C00);   /* tie -> even */
+    assert_int_equal(glow__half_from_float(1.0f + ldexpf(3.0f, -11)), 0x3C02);   /* tie -> even (up) */
+    assert_int_equal(glow__half_from_float(ldexpf(2047.0f, -25)), 0x0400);       /* rounds up into normals */
+    assert_true(isnan(glow__half_to_float(glow__half_from_float(NAN))));
+    /* round to nearest: no other half is closer (ties to even), on random floats of all ranges */
+    for (int t = 0; t < 200000; t++) {
+        float f = bits_to_float(rng());
+        if (isnan(f)) continue;
+        if (t & 1) f = ldexpf(rngf(), (int)(rng() % 50) - 30) * ((rng() & 1) ? 1.0f : -1.0f);
+        uint16_t h = glow__half_from_float(f);
+        double got = glow__half_to_float(h);
+        double af = fabs((double)f);
+        if (af >= 65520.0) {
+            assert_true(isinf(got));
+            continue;
+        }
+        double err = fabs(got - f);
+        /* neighbours in magnitude */
+        uint16_t mag = h & 0x7FFFu;
+        for (int dn = -1; dn <= 1; dn += 2) {
+            int nb = (int)mag + dn;
+            if (nb < 0 || nb > 0x7BFF) continue;
+            double alt = glow__half_to_float((uint16_t)nb);
+            double aerr = fabs(alt - af);
+            if (aerr < err) fail_msg("%a -> 0x%04x, but 0x%04x is closer", (double)f, h, nb);
+            if (aerr == err && (mag & 1u)) fail_msg("%a -> odd 0x%04x on a tie", (double)f, h);
+        }
+        if (f != 0.0f) assert_int_equal(h & 0x8000u, (float_to_bits(f) >> 16) & 0x8000u);
+    }
+}
+
+static double angle_deg(const float a[3], const double b[3]) {
+    double la = sqrt((double)a[0] * a[0] + (double)a[1] * a[1] + (double)a[2] * a[2]);
+    double lb = sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
+    double c[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+    double s = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+    double d = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    (void)la;
+    (void)lb;
+    return atan2(s, d) * (180.0 / 3.14159265358979323846);
+}
+
+static void test_oct(void **state) {
+    (void)state;
+    double max_err = 0.0;
+    for (int t = 0; t < 200000; t++) {
+        double v[3];
+        if (t < 26) { /* axes, edge and corner diagonals */
+            int a = t < 13 ? t : t + 1; /* skip (0,0,0) */
+            v[0] = a % 3 - 1;
+            v[1] = a / 3 % 3 - 1;
+            v[2] = a / 9 - 1;
+        } else { /* uniform on the sphere */
+            double z = 2.0 * rngf() - 1.0, phi = 2.0 * 3.14159265358979323846 * rngf(), r = sqrt(1.0 - z * z);
+            v[0] = r * cos(phi);
+            v[1] = r * sin(phi);
+            v[2] = z;
+        }
+        double l = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+        for (int k = 0; k < 3; k++) v[k] /= l;
+        float vf[3] = {(float)v[0], (float)v[1], (float)v[2]};
+        float out[3], out2[3];
+        uint32_t packed = glow__oct_encode(vf);
+        glow__oct_decode(packed, out);
+        int16_t u, w;
+        glow__oct_encode2(vf, &u, &w);
+        assert_int_equal((uint16_t)u, packed & 0xFFFFu);
+        assert_int_equal((uint16_t)w, packed >> 16);
+        glow__oct_decode2(u, w, out2);
+        assert_memory_equal(out, out2, sizeof out);
+        double len = sqrt((double)out[0] * out[0] + (double)out[1] * out[1] + (double)out[2] * out[2]);
+        assert_true(fabs(len - 1.0) < 1e-5);
+        double e = angle_deg(out, v);
+        if (e > max_err) max_err = e;
+    }
+    print_message("oct max angular error %.5f deg\n", max_err);
+    assert_true(max_err < 0.01);  /* the requirement */
+    assert_true(max_err < 0.003); /* the "precise" encoder: plain rounding gives ~0.004, floor ~0.007 */
+    /* x in the low 16 bits */
+    float px[3] = {1, 0, 0}, py[3] = {0, 1, 0}, nz[3] = {0, 0, -1}, zero[3] = {0, 0, 0}, bad[3] = {NAN, 0, 1};
+    assert_int_equal(glow__oct_encode(px), 0x00007FFFu);
+    assert_int_equal(glow__oct_encode(py), OCT_UP);
+    assert_int_equal(glow__oct_encode(zero), 0u);
+    assert_int_equal(glow__oct_encode(bad), 0u);
+    float out[3];
+    glow__oct_decode(glow__oct_encode(nz), out);
+    assert_true(out[2] < -0.99999f);
+    glow__oct_decode(0x80000000u, out); /* v = -32768 reads as -1 */
+    assert_true(out[0] == 0.0f && out[1] == -1.0f && out[2] == 0.0f);
+    glow__oct_decode(0x00008000u, out); /* u = -32768 */
+    assert_true(out[0] == -1.0f && out[1] == 0.0f && out[2] == 0.0f);
+    glow__oct_decode(0u, out);
+    assert_true(out[2] == 1.0f);
+}
+
+/* ------------------------------------------------------------------------------ writer */
+static void test_writer(void **state) {
+    (void)state;
+    test_bake tb;
+    build_golden(&tb);
+    size_t s1, s2;
+    unsigned char *a = write_bake(&tb, WITH_SHLK | EXTRA_UNKNOWN, &s1);
+    unsigned char *b = write_bake(&tb, WITH_SHLK | EXTRA_UNKNOWN, &s2);
+    assert_int_equal(s1, s2);
+    assert_memory_equal(a, b, s1); /* deterministic */
+
+    /* layout, checked independently of the reader */
+    assert_memory_equal(a, "GLOW", 4);
+    uint32_t n = u32_at(a + 12);
+    assert_int_equal(n, 12);
+    assert_int_equal(u64_at(a + 16), s1);
+    assert_int_equal(u32_at(a + 8), 64);
+    assert_int_equal(u32_at(a + 28), (uint32_t)crc32(0L, a + 64, 32 * n));
+    unsigned char h[64];
+    memcpy(h, a, 64);
+    put_u32(h + 32, 0);
+    assert_int_equal(u32_at(a + 32), (uint32_t)crc32(0L, h, 64));
+    for (int i = 0; i < 64; i++)
+        if (i >= 36) assert_int_equal(a[i], 0); /* reserved */
+    uint64_t prev_end = 64 + 32 * (uint64_t)n;
+    for (uint32_t i = 0; i < n; i++) {
+        const unsigned char *e = a + 64 + 32 * i;
+        uint64_t off = u64_at(e + 8), sz = u64_at(e + 16);
+        assert_int_equal(off % 64, 0);
+        assert_true(off >= prev_end && off - prev_end < 64); /* table order, tightly packed */
+        for (uint64_t k = prev_end; k < off; k++) assert_int_equal(a[k], 0);
+        assert_int_equal(u32_at(e + 24), (uint32_t)crc32(0L, a + off, (uInt)sz));
+        assert_int_equal(u32_at(e + 4), 1);
+        assert_int_equal(u32_at(e + 28), 0);
+        prev_end = off + sz;
+    }
+    assert_int_equal(prev_end, s1);
+    assert_int_equal(find_entry(a, GLOW_FOURCC('Z', 'Z', 'Z', 'Z')), 8);
+    assert_memory_equal(payload_ptr(a, GLOW_SECTION_SURF), tb.surf, sizeof tb.surf);
+    free(a);
+    free(b);
+
+    /* bad arguments */
+    glow__section_data s[70];
+    uint32_t cnt = sections_of(&tb, 0, s);
+    void *img = (void *)1;
+    uint64_t size = 1;
+    s[cnt] = s[1]; /* duplicate MATL */
+    assert_int_equal(glow__bake_write_memory(s, cnt + 1, &img, &size), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_null(img);
+    assert_int_equal(size, 0);
+    for (uint32_t i = 0; i < 70; i++) s[i] = (glow__section_data){GLOW_FOURCC('A', 'A', i / 10, i % 10), 1, NULL, 0};
+    assert_int_equal(glow__bake_write_memory(s, 65, &img, &size), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(glow__bake_write_memory(s, 64, &img, &size), GLOW_OK); /* 64 empty sections is fine */
+    assert_int_equal(size, 64 + 64 * 32);
+    free(img);
+    s[3].size = 10; /* NULL data with a size */
+    assert_int_equal(glow__bake_write_memory(s, 4, &img, &size), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(glow__bake_write_memory(s, 4, NULL, &size), GLOW_ERROR_INVALID_ARGUMENT);
+}
+
+/* ------------------------------------------------------------------------------ files */
+static char tmpdir[256];
+
+static int count_tmp_files(const char *dir) {
+    DIR *d = opendir(dir);
+    assert_non_null(d);
+    int n = 0;
+    struct dirent *e;
+    while ((e = readdir(d)))
+        if (strstr(e->d_name, ".tmp.")) n++;
+    closedir(d);
+    return n;
+}
+
+static long file_size_of(const char *path) {
+    struct stat st;
+    return stat(path, &st) == 0 ? (long)st.st_size : -1;
+}
+
+typedef struct pc_log_capture {
+    int count;
+    char last[1024];
+} pc_log_capture;
+static void pc_log(void *user, glow_log_level level, const char *message) {
+    pc_log_capture *c = user;
+    (void)level;
+    c->count++;
+    snprintf(c->last, sizeof c->last, "%s", message);
+}
+
+static void test_file_round_trip(void **state) {
+    (void)state;
+    test_bake tb;
+    build_golden(&tb);
+    glow__section_data s[16];
+    uint32_t n = sections_of(&tb, 0, s);
+    char path[512];
+    snprintf(path, sizeof path, "%s/scene.glow", tmpdir);
+    pc_log_capture cap = {0, ""};
+    glow__log log = {pc_log, &cap, "", 0};
+    uint64_t written = 0;
+    assert_int_equal(glow__bake_write_file(path, s, n, &log, &written), GLOW_OK);
+    assert_int_equal(cap.count, 0);
+    assert_int_equal(file_size_of(path), (long)written);
+    assert_int_equal(count_tmp_files(tmpdir), 0);
+
+    test_log tl;
+    glow_context *ctx = make_ctx(&tl);
+    glow_bake *bake = NULL;
+    assert_int_equal(glow_bake_load_file(ctx, path, &bake), GLOW_OK);
+    check_golden_contents(bake);
+    glow_bake_destroy(bake);
+
+    /* same bytes as the in-memory writer */
+    void *img;
+    uint64_t size;
+    assert_int_equal(glow__bake_write_memory(s, n, &img, &size), GLOW_OK);
+    FILE *f = fopen(path, "rb");
+    unsigned char *disk = malloc(size);
+    assert_int_equal(fread(disk, 1, size, f), size);
+    fclose(f);
+    assert_memory_equal(disk, img, size);
+    free(disk);
+
+    /* load_file failures carry the path */
+    char missing[512];
+    snprintf(missing, sizeof missing, "%s/missing.glow", tmpdir);
+    assert_int_equal(glow_bake_load_file(ctx, missing, &bake), GLOW_ERROR_IO);
+    assert_null(bake);
+    assert_int_equal(tl.last_code, GLOW_ERROR_IO);
+    assert_non_null(strstr(tl.last_message, missing));
+    assert_int_equal(glow_bake_load_file(ctx, tmpdir, &bake), GLOW_ERROR_IO); /* a directory */
+    assert_int_equal(tl.last_code, GLOW_ERROR_IO);
+    /* a truncated file: TRUNCATED, named */
+    char cut[512];
+    snprintf(cut, sizeof cut, "%s/cut.glow", tmpdir);
+    f = fopen(cut, "wb");
+    fwrite(img, 1, (size_t)size - 1, f);
+    fclose(f);
+    assert_int_equal(glow_bake_load_file(ctx, cut, &bake), GLOW_ERROR_TRUNCATED);
+    assert_int_equal(tl.last_code, GLOW_ERROR_TRUNCATED);
+    assert_non_null(strstr(tl.last_message, cut));
+    f = fopen(cut, "wb");
+    fwrite(img, 1, 20, f);
+    fclose(f);
+    assert_int_equal(glow_bake_load_file(ctx, cut, &bake), GLOW_ERROR_TRUNCATED);
+    assert_non_null(strstr(tl.last_message, cut));
+    /* a damaged file: BAD_CHECKSUM, named */
+    ((unsigned char *)img)[size - 3] ^= 0xFF;
+    f = fopen(cut, "wb");
+    fwrite(img, 1, (size_t)size, f);
+    fclose(f);
+    assert_int_equal(glow_bake_load_file(ctx, cut, &bake), GLOW_ERROR_BAD_CHECKSUM);
+    assert_int_equal(tl.last_code, GLOW_ERROR_BAD_CHECKSUM);
+    assert_non_null(strstr(tl.last_message, cut));
+    unlink(cut);
+    free(img);
+    glow_context_destroy(ctx);
+    unlink(path);
+}
+
+static void test_atomic_write_failures(void **state) {
+    (void)state;
+    test_bake tb;
+    build_golden(&tb);
+    glow__section_data s[16];
+    uint32_t n = sections_of(&tb, 0, s);
+    pc_log_capture cap = {0, ""};
+    glow__log log = {pc_log, &cap, "", 0};
+
+    /* nonexistent directory: IO error, nothing created */
+    char path[512];
+    snprintf(path, sizeof path, "%s/no/such/dir/out.glow", tmpdir);
+    assert_int_equal(glow__bake_write_file(path, s, n, &log, NULL), GLOW_ERROR_IO);
+    assert_int_equal(cap.count, 1);
+    assert_non_null(strstr(cap.last, path));
+    assert_non_null(strstr(log.last_error, path));
+    assert_int_equal(file_size_of(path), -1);
+
+    /* disk full after 100 bytes (test hook): the existing file survives, no temp is left */
+    snprintf(path, sizeof path, "%s/keep.glow", tmpdir);
+    FILE *f = fopen(path, "wb");
+    fputs("previous bake", f);
+    fclose(f);
+    assert_int_equal(setenv("GLOW_TEST_WRITE_FAIL_AFTER", "100", 1), 0);
+    cap.count = 0;
+    assert_int_equal(glow__bake_write_file(path, s, n, &log, NULL), GLOW_ERROR_IO);
+    unsetenv("GLOW_TEST_WRITE_FAIL_AFTER");
+    assert_int_equal(cap.count, 1);
+    char expect[700];
+    snprintf(expect, sizeof expect, "%s: write failed: %s", path, strerror(ENOSPC));
+    assert_string_equal(cap.last, expect);
+    assert_int_equal(file_size_of(path), 13);
+    assert_int_equal(count_tmp_files(tmpdir), 0);
+    /* fails at 0 bytes too */
+    assert_int_equal(setenv("GLOW_TEST_WRITE_FAIL_AFTER", "0", 1), 0);
+    assert_int_equal(glow__bake_write_file(path, s, n, &log, NULL), GLOW_ERROR_IO);
+    unsetenv("GLOW_TEST_WRITE_FAIL_AFTER");
+    assert_int_equal(file_size_of(path), 13);
+    assert_int_equal(count_tmp_files(tmpdir), 0);
+
+    /* a real ENOSPC: the temporary name is a symlink to /dev/full */
+    struct stat st;
+    if (stat("/dev/full", &st) == 0) {
+        char tmp[600];
+        snprintf(tmp, sizeof tmp, "%s.tmp.%ld", path, (long)getpid());
+        assert_int_equal(symlink("/dev/full", tmp), 0);
+        cap.count = 0;
+        assert_int_equal(glow__bake_write_file(path, s, n, &log, NULL), GLOW_ERROR_IO);
+        assert_string_equal(cap.last, expect);
+        assert_int_equal(file_size_of(path), 13);
+        assert_int_equal(count_tmp_files(tmpdir), 0); /* the link is gone, /dev/full is not */
+        assert_int_equal(stat("/dev/full", &st), 0);
+    }
+
+    /* the target is a directory: rename fails, the temp is removed */
+    snprintf(path, sizeof path, "%s/adir", tmpdir);
+    assert_int_equal(mkdir(path, 0700), 0);
+    char inner[600];
+    snprintf(inner, sizeof inner, "%s/x", path);
+    f = fopen(inner, "wb");
+    fclose(f);
+    assert_int_equal(glow__bake_write_file(path, s, n, &log, NULL), GLOW_ERROR_IO);
+    assert_non_null(strstr(cap.last, "rename failed"));
+    assert_int_equal(count_tmp_files(tmpdir), 0);
+    unlink(inner);
+    rmdir(path);
+
+    /* a successful write replaces the old file */
+    snprintf(path, sizeof path, "%s/keep.glow", tmpdir);
+    uint64_t written = 0;
+    assert_int_equal(glow__bake_write_file(path, s, n, &log, &written), GLOW_OK);
+    assert_int_equal(file_size_of(path), (long)written);
+    unlink(path);
+    /* builder errors pass through */
+    s[n] = s[0];
+    assert_int_equal(glow__bake_write_file(path, s, n + 1, &log, NULL), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(file_size_of(path), -1);
+}
+
+/* ------------------------------------------------------------------------------ golden v1 */
+static void test_golden_v1(void **state) {
+    (void)state;
+    test_bake tb;
+    build_golden(&tb);
+    glow__section_data s[16];
+    uint32_t n = sections_of(&tb, 0, s);
+    const char *regen = getenv("GLOW_REGENERATE_GOLDEN");
+    if (regen && strcmp(regen, "1") == 0) {
+        uint64_t written = 0;
+        assert_int_equal(glow__bake_write_file(GOLDEN_PATH, s, n, NULL, &written), GLOW_OK);
+        FILE *f = fopen(GOLDEN_PATH, "rb");
+        unsigned char *buf = malloc(written);
+        assert_int_equal(fread(buf, 1, written, f), written);
+        fclose(f);
+        print_message("regenerated %s: GOLDEN_SIZE %lluu, GOLDEN_CRC 0x%08xu\n", GOLDEN_PATH,
+                      (unsigned long long)written, (unsigned)crc32(0L, buf, (uInt)written));
+        free(buf);
+    }
+    FILE *f = fopen(GOLDEN_PATH, "rb");
+    if (!f) fail_msg("%s is missing (regenerate with GLOW_REGENERATE_GOLDEN=1)", GOLDEN_PATH);
+    unsigned char *buf = malloc(GOLDEN_SIZE + 1);
+    size_t got = fread(buf, 1, GOLDEN_SIZE + 1, f);
+    fclose(f);
+    assert_int_equal(got, GOLDEN_SIZE);
+    assert_int_equal((uint32_t)crc32(0L, buf, (uInt)got), GOLDEN_CRC);
+
+    test_log log;
+    glow_context *ctx = make_ctx(&log);
+    glow_bake *bake = NULL;
+    assert_int_equal(glow_bake_load_file(ctx, GOLDEN_PATH, &bake), GLOW_OK);
+    check_golden_contents(bake);
+    glow_bake_destroy(bake);
+    glow_context_destroy(ctx);
+
+    /* today's writer still produces the frozen bytes */
+    void *img;
+    uint64_t size;
+    assert_int_equal(glow__bake_write_memory(s, n, &img, &size), GLOW_OK);
+    assert_int_equal(size, GOLDEN_SIZE);
+    assert_memory_equal(img, buf, GOLDEN_SIZE);
+    free(img);
+    free(buf);
+}
+
+static int setup_tmpdir(void **state) {
+    (void)state;
+    snprintf(tmpdir, sizeof tmpdir, "/tmp/glow_format_XXXXXX");
+    return mkdtemp(tmpdir) ? 0 : -1;
+}
+static int teardown_tmpdir(void **state) {
+    (void)state;
+    return rmdir(tmpdir);
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_load_valid),
+        cmocka_unit_test(test_load_variants),
+        cmocka_unit_test(test_truncated),
+        cmocka_unit_test(test_magic_version),
+        cmocka_unit_test(test_checksums),
+        cmocka_unit_test(test_container_structure),
+        cmocka_unit_test(test_meta_counts),
+        cmocka_unit_test(test_out_of_range),
+        cmocka_unit_test(test_non_finite),
+        cmocka_unit_test(test_context_and_results),
+        cmocka_unit_test(test_crc32_vs_zlib),
+        cmocka_unit_test(test_half),
+        cmocka_unit_test(test_oct),
+        cmocka_unit_test(test_writer),
+        cmocka_unit_test(test_file_round_trip),
+        cmocka_unit_test(test_atomic_write_failures),
+        cmocka_unit_test(test_golden_v1),
+    };
+    return cmocka_run_group_tests(tests, setup_tmpdir, teardown_tmpdir);
+}

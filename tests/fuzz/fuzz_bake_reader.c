@@ -1,0 +1,107 @@
+/* fuzz_bake_reader.c — libFuzzer target for the bake reader (glow_bake_load).
+ *
+ * Each input is loaded twice with a silent context:
+ *   1. as is — exercises the container checks (sizes, magic, version, CRCs, table);
+ *   2. with every CRC recomputed (when the header and table are readable) — otherwise almost every
+ *      mutation dies at a checksum and the fuzzer never reaches the META / index / float checks.
+ * A successful load is walked through the public and internal accessors so ASan sees every byte
+ * the runtime may read. Seed corpus: tests/data/golden_v1.glow.
+ * Build: -DGLOW_FUZZ=ON with CC=clang (tests/fuzz/CMakeLists.txt), or tools/fuzz-smoke.sh. */
+#include <stddef.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bake/bake_format.h"
+#include "glow/glow.h"
+#include "runtime_internal.h"
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+
+static uint32_t rd32(const uint8_t *p) { uint32_t v; memcpy(&v, p, 4); return v; }
+static uint64_t rd64(const uint8_t *p) { uint64_t v; memcpy(&v, p, 8); return v; }
+static void wr32(uint8_t *p, uint32_t v) { memcpy(p, &v, 4); }
+
+/* Recomputes section, table and header CRCs in place; entries that do not fit are left alone. */
+static void fix_crcs(uint8_t *img, size_t size) {
+    if (size < 64) return;
+    uint32_t n = rd32(img + 12);
+    if (n > GLOW_BAKE_MAX_SECTIONS || 64u + 32u * (uint64_t)n > size) return;
+    for (uint32_t i = 0; i < n; i++) {
+        uint8_t *e = img + 64 + 32 * i;
+        uint64_t off = rd64(e + 8), sz = rd64(e + 16);
+        if (off <= size && sz <= size - off) wr32(e + 24, glow__crc32(0, img + off, (size_t)sz));
+    }
+    wr32(img + 28, glow__crc32(0, img + 64, 32u * (size_t)n));
+    wr32(img + 32, 0);
+    wr32(img + 32, glow__crc32(0, img, 64));
+}
+
+static volatile uint64_t sink;
+
+static void touch(const glow_bake *bake) {
+    glow_bake_info info;
+    if (glow_bake_get_info(bake, &info) != GLOW_OK) abort();
+    const glow_bake_meta *m = glow__bake_meta(bake);
+    uint64_t acc = 0;
+    const glow_bake_node *nodes = glow__bake_nodes(bake);
+    const glow_bake_surfel *surf = glow__bake_surfels(bake);
+    const uint32_t *ls = glow__bake_level_starts(bake);
+    for (uint32_t i = 0; i <= m->level_count; i++) acc += ls[i];
+    /* what a pull sweep reads: every internal node's children */
+    for (uint32_t k = 1; k < m->level_count; k++)
+        for (uint32_t i = ls[k]; i < ls[k + 1]; i++) acc += nodes[nodes[i].child[0]].parent + nodes[nodes[i].child[1]].parent;
+    for (uint32_t i = 0; i < m->surfel_count; i++) {
+        acc += glow__bake_materials(bake)[surf[i].material].flags;
+        acc += glow__bake_caches(bake)[surf[i].feedback].kind;
+        if (glow__bake_triangles(bake)) acc += glow__bake_triangles(bake)[surf[i].triangle].material;
+    }
+    const glow_bake_link_block *lb = glow__bake_link_blocks(bake);
+    uint64_t blocks = (uint64_t)m->cache_count * m->link_blocks_per_cache;
+    for (uint64_t b = 0; b < blocks; b++)
+        for (int j = 0; j < (int)GLOW_LINK_BLOCK; j++) acc += nodes[lb[b].node[j]].normal_oct;
+    const uint32_t *maps[2] = {glow__bake_grid_map(bake), glow__bake_lightmap_map(bake)};
+    uint64_t counts[2] = {(uint64_t)m->grid_dims[0] * m->grid_dims[1] * m->grid_dims[2],
+                          (uint64_t)m->lightmap_width * m->lightmap_height};
+    for (int k = 0; k < 2; k++)
+        if (maps[k])
+            for (uint64_t i = 0; i < counts[k]; i++)
+                if (maps[k][i] != GLOW_MAP_EMPTY) acc += glow__bake_caches(bake)[maps[k][i] & GLOW_MAP_INDEX_MASK].texel;
+    const uint8_t *sh = glow__bake_shlk_blocks(bake);
+    if (sh) {
+        size_t bs = glow_bake_shlk_block_size(m->sh_bands);
+        for (uint64_t b = 0; b < blocks; b++)
+            for (int j = 0; j < (int)GLOW_LINK_BLOCK; j++) acc += nodes[rd32(sh + b * bs + 4 * j)].parent;
+    }
+    sink = acc;
+}
+
+static void load_once(const uint8_t *data, size_t size) {
+    glow_context_desc desc;
+    memset(&desc, 0, sizeof desc);
+    desc.api_version = GLOW_VERSION;
+    glow_context *ctx = NULL;
+    if (glow_context_create(&desc, &ctx) != GLOW_OK) abort();
+    glow_bake *bake = NULL;
+    glow_result r = glow_bake_load(ctx, data, size, &bake);
+    if ((r == GLOW_OK) != (bake != NULL)) abort();
+    if (bake) touch(bake);
+    glow_bake_destroy(bake);
+    if (glow__ctx_live_allocations(ctx) != 0) abort();
+    glow_context_destroy(ctx);
+}
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
+    uint32_t major, minor;
+    (void)glow_bake_peek_version(data, size, &major, &minor);
+    load_once(data, size);
+    if (size >= 64 && size <= ((size_t)64 << 20)) {
+        uint8_t *copy = malloc(size);
+        if (!copy) return 0;
+        memcpy(copy, data, size);
+        fix_crcs(copy, size);
+        load_once(copy, size);
+        free(copy);
+    }
+    return 0;
+}

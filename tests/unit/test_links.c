@@ -1,0 +1,276 @@
+/* test_links.c — SH basis, cone factors (DESIGN §3) and link generation (PIC 4.5/4.6). */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bake/bake_format.h"
+#include "pc_internal.h"
+
+/* Gauss-Legendre-free midpoint quadrature over the sphere in (cos theta, phi): plenty for l <= 8. */
+static void test_sh_orthonormal(void **state) {
+    (void)state;
+    enum { NT = 400, NP = 800, B = 8, C = B * B };
+    static double gram[C][C];
+    memset(gram, 0, sizeof gram);
+    float y[C];
+    for (int i = 0; i < NT; ++i) {
+        double z = -1.0 + (i + 0.5) * 2.0 / NT, r = sqrt(1.0 - z * z);
+        for (int j = 0; j < NP; ++j) {
+            double phi = (j + 0.5) * 2.0 * GLOW__PI / NP;
+            float d[3] = {(float)(r * cos(phi)), (float)(r * sin(phi)), (float)z};
+            glow__sh_eval(B, d, y);
+            double w = (2.0 / NT) * (2.0 * GLOW__PI / NP);
+            for (int a = 0; a < C; ++a)
+                for (int b = a; b < C; ++b) gram[a][b] += w * y[a] * y[b];
+        }
+    }
+    for (int a = 0; a < C; ++a)
+        for (int b = a; b < C; ++b) {
+            double expect = a == b ? 1.0 : 0.0;
+            if (fabs(gram[a][b] - expect) > 2e-3) fail_msg("<y%d, y%d> = %g, expected %g", a, b, gram[a][b], expect);
+        }
+    /* band 1 is (y, z, x) * sqrt(3/4pi) */
+    float d[3] = {0.3f, -0.5f, 0.8124038f};
+    glow__sh_eval(2, d, y);
+    double c = sqrt(3.0 / (4.0 * GLOW__PI));
+    assert_true(fabs(y[0] - 0.5 / sqrt(GLOW__PI)) < 1e-6);
+    assert_true(fabs(y[1] - c * d[1]) < 1e-6);
+    assert_true(fabs(y[2] - c * d[2]) < 1e-6);
+    assert_true(fabs(y[3] - c * d[0]) < 1e-6);
+}
+
+/* k_l(x) y_lm(d) must equal the SH projection of the cone's indicator (axis d, cos half-angle x).
+ * Integrate numerically around the z axis: only m = 0 survives, so k_l(x) * y_l0(z) = ∫_cone y_l0. */
+static void test_cone_factors_quadrature(void **state) {
+    (void)state;
+    const double xs[] = {0.99, 0.9, 0.5, 0.0, -0.3, -0.9};
+    for (uint32_t l = 0; l <= 8; ++l) {
+        for (size_t k = 0; k < sizeof xs / sizeof xs[0]; ++k) {
+            double x = xs[k];
+            /* ∫_0^{2π} ∫_x^1 y_l0(t) dt dφ by midpoint rule on t */
+            enum { N = 20000 };
+            double sum = 0.0;
+            float y[81];
+            for (int i = 0; i < N; ++i) {
+                double t = x + (i + 0.5) * (1.0 - x) / N;
+                float d[3] = {(float)sqrt(fmax(0.0, 1.0 - t * t)), 0.0f, (float)t};
+                glow__sh_eval(l + 1, d, y);
+                sum += y[l * l + l] * (1.0 - x) / N;
+            }
+            sum *= 2.0 * GLOW__PI;
+            float up[3] = {0, 0, 1};
+            glow__sh_eval(l + 1, up, y);
+            double closed = glow__cone_factor(l, x) * y[l * l + l];
+            if (fabs(closed - sum) > 1e-4 * (1.0 + fabs(sum)))
+                fail_msg("k_%u(%g): closed form %g vs quadrature %g", l, x, closed, sum);
+        }
+    }
+    /* the full sphere: only l = 0 survives, k_0(-1) = 4π */
+    assert_true(fabs(glow__cone_factor(0, -1.0) - 4.0 * GLOW__PI) < 1e-12);
+    for (uint32_t l = 1; l <= 8; ++l) assert_true(fabs(glow__cone_factor(l, -1.0)) < 1e-12);
+}
+
+/* ------------------------------------------------------------------ link generation */
+typedef struct world {
+    glow__scene scene;
+    glow__rt *rt;
+    glow__surfels surfels;
+    glow__hierarchy h;
+    glow__pool *pool;
+    glow__log log;
+} world;
+
+static void world_make(world *w, const char *builtin, uint32_t surfels, uint32_t threads) {
+    memset(w, 0, sizeof *w);
+    assert_int_equal(glow__scene_builtin(builtin, &w->log, &w->scene), GLOW_OK);
+    assert_int_equal(glow__rt_create(&w->scene, &w->log, &w->rt), GLOW_OK);
+    w->pool = glow__pool_create(threads);
+    glow__surfel_settings ss = {.count = surfels, .seed = 1, .relax_iterations = 4};
+    assert_int_equal(glow__surfels_place(&w->scene, &ss, w->pool, &w->log, &w->surfels), GLOW_OK);
+    assert_int_equal(glow__hierarchy_build(&w->surfels, w->scene.bounds_min, w->scene.bounds_max, w->pool, &w->log, &w->h),
+                     GLOW_OK);
+}
+static void world_free(world *w) {
+    glow__hierarchy_free(&w->h);
+    glow__surfels_free(&w->surfels);
+    glow__rt_destroy(w->rt);
+    glow__scene_free(&w->scene);
+    glow__pool_destroy(w->pool);
+}
+
+static glow__caches two_caches(void) {
+    glow__caches c;
+    memset(&c, 0, sizeof c);
+    c.count = 2;
+    c.caches = calloc(2, sizeof *c.caches);
+    /* a grid cache in the middle of the furnace box, a lightmap cache just above the floor */
+    c.caches[0] = (glow__cache){.pos = {0.1f, 0.05f, -0.07f}, .kind = GLOW_CACHE_KIND_GRID};
+    c.caches[1] = (glow__cache){.pos = {0.2f, -0.999f, 0.3f}, .nrm = {0, 1, 0}, .kind = GLOW_CACHE_KIND_LIGHTMAP};
+    return c;
+}
+
+static double link_omega(const glow__link *l) { return l->one_minus_cos * 2.0 * GLOW__PI; }
+
+static void test_cut_covers_visible_scene(void **state) {
+    (void)state;
+    world w;
+    world_make(&w, "furnace", 4096, 2);
+    glow__caches c = two_caches();
+    const uint32_t nl = 64;
+    glow__link_settings ls = {.links_per_cache = nl, .sh_bands = 3, .rays_per_surfel = 1};
+    glow__links L;
+    assert_int_equal(glow__links_build(&w.scene, w.rt, &w.surfels, &w.h, &c, &ls, w.pool, &w.log, NULL, NULL, &L),
+                     GLOW_OK);
+    double expect[2] = {4.0 * GLOW__PI, 2.0 * GLOW__PI}; /* closed box: every direction sees a wall */
+    double leaf_total = 0.0;
+    for (uint32_t ci = 0; ci < 2; ++ci) {
+        double cut_total = 0.0;
+        uint32_t used = 0;
+        for (uint32_t j = 0; j < nl; ++j) {
+            const glow__link *l = &L.links[ci * nl + j];
+            if (l->factor == 0.0f) continue;
+            used++;
+            assert_true(l->node < w.h.node_count);
+            assert_true(l->one_minus_cos > 0.0f && l->one_minus_cos <= 2.0f);
+            assert_true(fabsf(glow__dot(l->dir, l->dir) - 1.0f) < 1e-4f);
+            /* factor = surfel area / node area */
+            assert_true(fabsf(l->factor - w.surfels.area / w.h.nodes[l->node].area) < 1e-5f * l->factor);
+            cut_total += link_omega(l);
+        }
+        assert_int_equal(used, nl); /* a closed box has far more visible nodes than n_L */
+        /* the cut preserves the visible solid angle, and the solid angles of equal-area surfels
+         * tile the sphere (hemisphere) seen from inside a closed box */
+        if (fabs(cut_total - expect[ci]) > 0.05 * expect[ci])
+            fail_msg("cache %u: cut solid angle %g, expected %g", ci, cut_total, expect[ci]);
+        leaf_total += cut_total;
+    }
+    /* Σ over the cuts equals Σ over visible leaves (no visible node dropped, nothing double counted) */
+    if (fabs(leaf_total - L.visible_solid_angle_total) > 1e-4 * L.visible_solid_angle_total)
+        fail_msg("cut total %g vs leaf total %g", leaf_total, L.visible_solid_angle_total);
+    glow__links_free(&L);
+    free(c.caches);
+    world_free(&w);
+}
+
+/* Nodes nearer the cache are refined further: with more links the cut gets finer, never coarser,
+ * and the first split order follows the visible solid angle. With n_L >= visible leaves, every
+ * link is a leaf. */
+static void test_cut_refines_to_leaves(void **state) {
+    (void)state;
+    world w;
+    world_make(&w, "furnace", 256, 1);
+    glow__caches c = two_caches();
+    const uint32_t nl = 1024; /* more than the 256 leaves */
+    glow__link_settings ls = {.links_per_cache = nl, .sh_bands = 2, .rays_per_surfel = 1};
+    glow__links L;
+    assert_int_equal(glow__links_build(&w.scene, w.rt, &w.surfels, &w.h, &c, &ls, w.pool, &w.log, NULL, NULL, &L),
+                     GLOW_OK);
+    uint32_t used = 0;
+    for (uint32_t j = 0; j < nl; ++j) {
+        const glow__link *l = &L.links[j];
+        if (l->factor == 0.0f) continue;
+        used++;
+        assert_true(l->node < w.h.leaf_count);
+        assert_true(fabsf(l->factor - 1.0f) < 1e-6f);
+    }
+    assert_true(used > 200 && used <= 256); /* every surfel in a closed box faces the centre */
+    glow__links_free(&L);
+    free(c.caches);
+    world_free(&w);
+}
+
+/* A wall between the cache and half of the scene: nothing behind it is linked at leaf level,
+ * and the visible solid angle still closes to 4π (the near side of the wall fills the view). */
+static void test_visibility_blocks_other_room(void **state) {
+    (void)state;
+    world w;
+    world_make(&w, "two-rooms", 8192, 2);
+    glow__caches c;
+    memset(&c, 0, sizeof c);
+    c.count = 1;
+    c.caches = calloc(1, sizeof *c.caches);
+    c.caches[0] = (glow__cache){.pos = {-2.0f, 1.25f, 0.1f}, .kind = GLOW_CACHE_KIND_GRID}; /* room A */
+    const uint32_t nl = 2048;
+    glow__link_settings ls = {.links_per_cache = nl, .sh_bands = 3, .rays_per_surfel = 1};
+    glow__links L;
+    assert_int_equal(glow__links_build(&w.scene, w.rt, &w.surfels, &w.h, &c, &ls, w.pool, &w.log, NULL, NULL, &L),
+                     GLOW_OK);
+    double total = 0.0;
+    for (uint32_t j = 0; j < nl; ++j) {
+        const glow__link *l = &L.links[j];
+        if (l->factor == 0.0f) continue;
+        total += link_omega(l);
+        if (l->node < w.h.leaf_count) assert_true(w.surfels.s[l->node].pos[0] < 0.0f); /* room A side only */
+    }
+    if (fabs(total - 4.0 * GLOW__PI) > 0.05 * 4.0 * GLOW__PI) fail_msg("visible solid angle %g, expected 4pi", total);
+    glow__links_free(&L);
+    free(c.caches);
+    world_free(&w);
+}
+
+/* Full-SH links (PIC Eq. 2): the DC coefficient equals the runtime projection's (ω * y00 * factor),
+ * and the first-order coefficients point along the link direction. */
+static void test_full_sh_matches_runtime_dc(void **state) {
+    (void)state;
+    world w;
+    world_make(&w, "furnace", 2048, 2);
+    glow__caches c = two_caches();
+    const uint32_t nl = 32;
+    glow__link_settings ls = {.links_per_cache = nl, .sh_bands = 3, .full_sh = true, .rays_per_surfel = 1};
+    glow__links L;
+    assert_int_equal(glow__links_build(&w.scene, w.rt, &w.surfels, &w.h, &c, &ls, w.pool, &w.log, NULL, NULL, &L),
+                     GLOW_OK);
+    assert_non_null(L.sh);
+    double y00 = 0.5 / sqrt(GLOW__PI);
+    for (uint32_t j = 0; j < 2 * nl; ++j) {
+        const glow__link *l = &L.links[j];
+        if (l->factor == 0.0f) continue;
+        const float *sh = L.sh + (size_t)j * 9;
+        double dc = link_omega(l) * y00 * l->factor;
+        assert_true(fabs(sh[0] - dc) < 1e-4 * dc);
+        /* band 1 vector (index 3 = x, 1 = y, 2 = z) is parallel to the mean direction */
+        float b1[3] = {sh[3], sh[1], sh[2]};
+        float len = sqrtf(glow__dot(b1, b1));
+        if (len > 1e-6f * (float)dc) assert_true(glow__dot(b1, l->dir) / len > 0.999f);
+    }
+    glow__links_free(&L);
+    free(c.caches);
+    world_free(&w);
+}
+
+static void test_links_deterministic_across_threads(void **state) {
+    (void)state;
+    glow__links out[2];
+    for (int t = 0; t < 2; ++t) {
+        world w;
+        world_make(&w, "cornell", 2048, t == 0 ? 1 : 3);
+        glow__caches c = two_caches();
+        glow__link_settings ls = {.links_per_cache = 48, .sh_bands = 3, .full_sh = true, .rays_per_surfel = 2};
+        assert_int_equal(glow__links_build(&w.scene, w.rt, &w.surfels, &w.h, &c, &ls, w.pool, &w.log, NULL, NULL, &out[t]),
+                         GLOW_OK);
+        free(c.caches);
+        world_free(&w);
+    }
+    assert_memory_equal(out[0].links, out[1].links, sizeof(glow__link) * 2 * 48);
+    assert_memory_equal(out[0].sh, out[1].sh, sizeof(float) * 2 * 48 * 9);
+    glow__links_free(&out[0]);
+    glow__links_free(&out[1]);
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_sh_orthonormal),
+        cmocka_unit_test(test_cone_factors_quadrature),
+        cmocka_unit_test(test_cut_covers_visible_scene),
+        cmocka_unit_test(test_cut_refines_to_leaves),
+        cmocka_unit_test(test_visibility_blocks_other_room),
+        cmocka_unit_test(test_full_sh_matches_runtime_dc),
+        cmocka_unit_test(test_links_deterministic_across_threads),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
