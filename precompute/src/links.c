@@ -128,7 +128,10 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
         float inv = 1.0f / sqrtf(d2);
         float cos_s = -glow__dot(s->nrm, d) * inv;
         if (cos_s <= 0.0f) continue;
-        if (hemi && glow__dot(cache->nrm, d) * inv <= 0.0f) continue;
+        /* Horizon of a lightmap cache: the plane of its surface, which lies `eps` below it (caches.c
+         * lifts texels by 1e-4 x diagonal, the same as eps). Half of that keeps its own surface out
+         * but lets in the surfels that relaxation pushed onto the edge where another wall meets it. */
+        if (hemi && glow__dot(cache->nrm, d) <= -0.5f * eps) continue;
         float w = disc_solid_angle(S->area, d2, cos_s);
         if (!(w > 0.0f)) continue;
         for (int k = 0; k < 3; ++k) dirsum[3 * i + k] = d[k] * inv;

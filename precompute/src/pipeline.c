@@ -273,6 +273,12 @@ static glow_result serialise(const glow_pc_settings *set, const glow__scene *sc,
     return GLOW_OK;
 }
 
+/* Caches keep this many surfel radii from the surfaces they face (see glow__cache_settings). */
+static float clearance_radii(void) {
+    const char *e = getenv("GLOW_CLEARANCE_RADII"); /* experiments only; documented in docs/linker.md */
+    return e ? (float)atof(e) : 2.0f;
+}
+
 /* ------------------------------------------------------------------ the bake */
 static void log_adapter(void *user, glow_log_level level, const char *msg) {
     const glow_pc_settings *s = user;
@@ -355,7 +361,8 @@ glow_result glow_pc_bake(const char *scene_path, const char *out_path, const glo
 
     STAGE_BEGIN(ST_CACHES);
     glow__cache_settings scache = {.grid_spacing = set.grid_spacing, .texel_density = set.texel_density,
-                                   .target_grid = p->grid, .target_lightmap = p->lightmap, .seed = set.seed};
+                                   .target_grid = p->grid, .target_lightmap = p->lightmap, .seed = set.seed,
+                                   .clearance = clearance_radii() * sqrtf(surfels.area / (float)GLOW__PI)};
     res = glow__caches_build(&scene, rt, &surfels, &scache, pool, &log, &caches);
     STAGE_END(ST_CACHES);
     if (res != GLOW_OK) goto done;
