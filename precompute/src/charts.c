@@ -508,10 +508,9 @@ glow_result glow__charts_segment(const glow__scene *scene, glow__log *log, glow_
     out->tri_count = n;
     out->chart_count = charts;
     chart_start_tmp[charts] = len;
-    out->chart_start = realloc(chart_start_tmp, ((size_t)charts + 1) * sizeof *out->chart_start);
-    if (!out->chart_start) {
-        out->chart_start = chart_start_tmp;
-    }
+    uint32_t *shrunk = realloc(chart_start_tmp, ((size_t)charts + 1) * sizeof *chart_start_tmp);
+    if (shrunk) chart_start_tmp = shrunk; /* a failed shrink keeps the larger block */
+    out->chart_start = chart_start_tmp;
     chart_start_tmp = NULL;
     out->extent = malloc(((size_t)charts + 1) * sizeof *out->extent);
     if (!out->extent) goto fail;
