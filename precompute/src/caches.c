@@ -160,55 +160,13 @@ static uint32_t neighbour_offsets(int dim, int (*out)[3]) {
     return n;
 }
 
-/* ------------------------------------------------------------------ clearance */
-/* Moves o away from the nearest surface it faces until every surface seen along `dirs` (those with
- * dot(dir, hemi) > 0.1 when hemi != NULL) is at least R away: each step pushes along the nearest hit
- * triangle's normal to distance R from its plane, never through geometry, at most CLEAR_STEPS
- * steps (a corner needs one per wall). A back-face hit means o is inside something: left alone.
- * Why: links.c sums per-surfel disc solid angles, which are only right for surfels farther than
- * about a surfel radius; a cache 0.1 mm from the floor beside it sees the floor at grazing angles
- * that no surfel represents, and the light from half its hemisphere goes missing. */
-#define CLEAR_STEPS 6
-static void keep_clear(const glow__scene *scene, const glow__rt *rt, const float (*dirs)[3], uint32_t nd,
-                       const float *hemi, float R, float o[3]) {
-    if (!(R > 0.0f)) return;
-    for (int it = 0; it < CLEAR_STEPS; ++it) {
-        glow__hit best = {.t = INFINITY};
-        uint32_t bi = 0;
-        for (uint32_t r = 0; r < nd; ++r) {
-            if (hemi && glow__dot(dirs[r], hemi) < 0.1f) continue;
-            glow__hit h = glow__rt_intersect(rt, o, dirs[r], 0.0f, 1.5f * R);
-            if (h.t < best.t) {
-                best = h;
-                bi = r;
-            }
-        }
-        if (best.t == INFINITY || best.back_face) return;
-        const float(*P)[3] = scene->pos + 3 * (size_t)best.tri;
-        float e1[3], e2[3], n[3];
-        glow__sub(P[1], P[0], e1);
-        glow__sub(P[2], P[0], e2);
-        glow__cross(e1, e2, n);
-        float l = sqrtf(glow__dot(n, n));
-        if (!(l > 0.0f)) return;
-        for (int k = 0; k < 3; ++k) n[k] /= l; /* front face: dot(dir, n) < 0, n points at o */
-        float dist = -best.t * glow__dot(dirs[bi], n);
-        float step = R - dist;
-        if (!(step > 1e-3f * R)) return;
-        if (glow__rt_occluded(rt, o, n, 0.0f, step)) return;
-        for (int k = 0; k < 3; ++k) o[k] += step * n[k];
-    }
-}
-
 /* ------------------------------------------------------------------ grid */
 typedef struct grid_job {
-    const glow__scene *scene;
     const glow__rt *rt;
-    float origin[3], spacing, clearance;
+    float origin[3], spacing;
     uint32_t dims[3];
     float dirs[GRID_RAYS][3];
     uint8_t *inside;
-    float (*pos)[3];
 } grid_job;
 
 static void grid_range(void *p, uint32_t begin, uint32_t end, uint32_t worker) {
@@ -226,8 +184,6 @@ static void grid_range(void *p, uint32_t begin, uint32_t end, uint32_t worker) {
             back += h.back_face;
         }
         j->inside[c] = back > GRID_INSIDE_FRACTION * hits && 4 * back >= GRID_RAYS;
-        if (!j->inside[c]) keep_clear(j->scene, j->rt, (const float(*)[3])j->dirs, GRID_RAYS, NULL, j->clearance, o);
-        memcpy(j->pos[c], o, sizeof o);
     }
 }
 
@@ -248,8 +204,7 @@ static double spacing_for_target(const double ext[3], double target) {
 }
 
 static glow_result build_grid(const glow__scene *scene, const glow__rt *rt, const glow__cache_settings *set,
-                              glow__pool *pool, glow__log *log, glow__caches *out, uint8_t **out_inside,
-                              float (**out_pos)[3]) {
+                              glow__pool *pool, glow__log *log, glow__caches *out, uint8_t **out_inside) {
     double ext[3], centre[3];
     for (int a = 0; a < 3; ++a) {
         ext[a] = fmax(0.0, (double)scene->bounds_max[a] - scene->bounds_min[a]);
@@ -283,16 +238,13 @@ static glow_result build_grid(const glow__scene *scene, const glow__rt *rt, cons
     }
     const uint32_t n = (uint32_t)cells;
     uint8_t *inside = malloc(n);
-    float(*pos)[3] = malloc(((size_t)n + 1) * sizeof *pos);
     out->grid_map = malloc((size_t)n * sizeof *out->grid_map);
-    if (!inside || !pos || !out->grid_map) {
+    if (!inside || !out->grid_map) {
         free(inside);
-        free(pos);
         glow__errorf(log, "%s: caches: out of memory for %u grid points", scene->source, n);
         return GLOW_ERROR_OUT_OF_MEMORY;
     }
-    grid_job j = {.scene = scene, .rt = rt, .spacing = out->grid_spacing, .clearance = set->clearance,
-                  .inside = inside, .pos = pos};
+    grid_job j = {.rt = rt, .spacing = out->grid_spacing, .inside = inside};
     memcpy(j.origin, out->grid_origin, sizeof j.origin);
     memcpy(j.dims, out->grid_dims, sizeof j.dims);
     fibonacci_sphere(GRID_RAYS, j.dirs);
@@ -305,7 +257,6 @@ static glow_result build_grid(const glow__scene *scene, const glow__rt *rt, cons
     out->grid_cache_count = count;
     out->grid_inside = n - count;
     *out_inside = inside;
-    *out_pos = pos;
     return GLOW_OK;
 }
 
@@ -421,9 +372,8 @@ typedef struct lm_job {
     uint32_t w, h;
     const uint32_t *texel;  /* candidate texels */
     const uint32_t *owner;
-    float offset, clearance;
+    float offset;
     double dirs[LM_RAYS][3];
-    float clear_dirs[GRID_RAYS][3];
     float (*pos)[3], (*nrm)[3];
     uint8_t *valid;
 } lm_job;
@@ -490,10 +440,6 @@ static void lm_range(void *p, uint32_t begin, uint32_t end, uint32_t worker) {
             back += hit.back_face;
         }
         j->valid[i] = !(back > LM_INVALID_FRACTION * hits && 4 * back >= LM_RAYS);
-        if (j->valid[i]) { /* clear of the surfaces it faces (its own lies below its horizon) */
-            keep_clear(j->scene, j->rt, (const float(*)[3])j->clear_dirs, GRID_RAYS, j->nrm[i], j->clearance, o);
-            memcpy(j->pos[i], o, sizeof o);
-        }
     }
 }
 
@@ -745,8 +691,7 @@ glow_result glow__caches_build(const glow__scene *scene, const glow__rt *rt, con
     uint8_t *eligible = NULL;
     lm_job lj = {0};
 
-    float(*grid_pos)[3] = NULL;
-    r = build_grid(scene, rt, settings, pool, log, out, &inside, &grid_pos);
+    r = build_grid(scene, rt, settings, pool, log, out, &inside);
     if (r != GLOW_OK) goto fail;
 
     uint32_t lm_candidates = 0;
@@ -775,9 +720,7 @@ glow_result glow__caches_build(const glow__scene *scene, const glow__rt *rt, con
         lj.texel = cand;
         lj.owner = st.owner;
         lj.offset = (float)(diag > 0.0 ? 1e-4 * diag : 1e-6);
-        lj.clearance = settings->clearance;
         fibonacci_hemisphere(LM_RAYS, lj.dirs);
-        fibonacci_sphere(GRID_RAYS, lj.clear_dirs);
         glow__parallel_for(pool, lm_candidates, 64, lm_range, &lj);
     }
 
@@ -794,7 +737,10 @@ glow_result glow__caches_build(const glow__scene *scene, const glow__rt *rt, con
         for (uint32_t c = 0, k = 0; c < d[0] * d[1] * d[2]; ++c) {
             if (inside[c]) continue;
             glow__cache *ca = &out->caches[k++];
-            memcpy(ca->pos, grid_pos[c], sizeof ca->pos); /* the cell centre, kept clear of surfaces */
+            uint32_t x = c % d[0], y = (c / d[0]) % d[1], z = c / (d[0] * d[1]);
+            ca->pos[0] = out->grid_origin[0] + out->grid_spacing * (float)x;
+            ca->pos[1] = out->grid_origin[1] + out->grid_spacing * (float)y;
+            ca->pos[2] = out->grid_origin[2] + out->grid_spacing * (float)z;
             ca->kind = GLOW_CACHE_KIND_GRID;
             ca->texel = c;
         }
@@ -849,7 +795,6 @@ glow_result glow__caches_build(const glow__scene *scene, const glow__rt *rt, con
                 out->grid_cache_count, out->grid_inside, out->lm_width, out->lm_height, (double)out->texel_density,
                 out->chart_count, out->lm_cache_count, out->lm_invalid);
     free(inside);
-    free(grid_pos);
     lm_state_free(&st);
     free(cand);
     free(eligible);
@@ -863,7 +808,6 @@ oom:
     r = GLOW_ERROR_OUT_OF_MEMORY;
 fail:
     free(inside);
-    free(grid_pos);
     lm_state_free(&st);
     free(cand);
     free(eligible);

@@ -1,9 +1,14 @@
 /* links.c — link generation (PIC 4.5, 4.6, App. A).
  *
  * For every cache, independently (so the result does not depend on the thread count):
- *  1. every leaf surfel's solid angle seen from the cache, with visibility from Embree occlusion
- *     rays (rays_per_surfel rays to points on the surfel's disc; the fraction that arrives);
- *     back-facing surfels and, for lightmap caches, surfels below the cache's horizon get zero;
+ *  1. every leaf surfel's solid angle seen from the cache. Far surfels (centre farther than
+ *     NEAR_RADII surfel radii): the solid angle of the surfel's disc, with visibility from Embree
+ *     occlusion rays (rays_per_surfel rays to points on the disc; the fraction that arrives).
+ *     Near surfels: the disc approximation is wrong there (a cache beside a wall sees the wall at
+ *     angles no disc represents), so their solid angle is measured by rays instead — NEAR_RAYS
+ *     directions over the sphere (hemisphere for lightmap caches), each hit closer than the near
+ *     radius credits its solid angle to the surfel nearest to the hit point. Back-facing surfels and,
+ *     for lightmap caches, surfels below the cache's horizon get zero;
  *  2. the visible solid angle ω and the ω-weighted direction summed up the hierarchy (one sweep over
  *     the nodes in index order: children always precede parents);
  *  3. the cut refined top-down: start at the root, always split the node with the largest visible
@@ -23,6 +28,9 @@
 #include "bake/bake_format.h"
 #include "pc_internal.h"
 
+#define NEAR_RADII 4.0f
+#define NEAR_RAYS 1024u /* over the sphere; a hemisphere gets half, so each ray is 4π/1024 sr */
+
 typedef struct link_job {
     const glow__scene *scene;
     const glow__rt *rt;
@@ -33,6 +41,10 @@ typedef struct link_job {
     glow__links *out;
     uint32_t *leaf_first, *leaf_end; /* per node: its leaves are [first, end) (DFS leaf order) */
     float ray_eps;                   /* scene-scale offset for ray starts and ends */
+    float near_radius;               /* NEAR_RADII surfel radii */
+    glow__kdtree *surfel_tree;       /* over surfel positions, for the near-field credit */
+    float sphere_dirs[NEAR_RAYS][3]; /* uniform in solid angle */
+    float hemi_dirs[NEAR_RAYS / 2][3]; /* uniform in solid angle, z up */
     /* per-worker scratch */
     uint32_t workers;
     float **omega;                   /* [workers][node_count] */
@@ -98,6 +110,53 @@ static void disc_point(const glow__surfel *s, float radius, uint32_t k, uint32_t
     for (int i = 0; i < 3; ++i) out[i] = s->pos[i] + c * t[i] + d * b[i];
 }
 
+/* Near field: rays from the cache, each hit within the near radius credits its solid angle (and its
+ * direction) to the nearest surfel that faces the cache on the hit surface. Only surfels whose
+ * centre lies within the near radius are credited, the same surfels the disc pass skipped. */
+static void near_field(const link_job *job, const glow__cache *cache, float *omega, float *dirsum) {
+    const bool hemi = cache->kind == GLOW_CACHE_KIND_LIGHTMAP;
+    const uint32_t count = hemi ? NEAR_RAYS / 2 : NEAR_RAYS;
+    const float dw = (float)(4.0 * GLOW__PI / NEAR_RAYS);
+    const float R = job->near_radius, eps = job->ray_eps;
+    const glow__surfels *S = job->surfels;
+    float t[3] = {0}, b[3] = {0};
+    if (hemi) {
+        const float *n = cache->nrm;
+        float a[3] = {fabsf(n[0]) < 0.9f ? 1.0f : 0.0f, fabsf(n[0]) < 0.9f ? 0.0f : 1.0f, 0.0f};
+        glow__cross(n, a, t);
+        float tl = sqrtf(glow__dot(t, t));
+        for (int k = 0; k < 3; ++k) t[k] /= tl;
+        glow__cross(n, t, b);
+    }
+    for (uint32_t r = 0; r < count; ++r) {
+        float dir[3];
+        if (hemi) {
+            const float *l = job->hemi_dirs[r];
+            for (int k = 0; k < 3; ++k) dir[k] = l[0] * t[k] + l[1] * b[k] + l[2] * cache->nrm[k];
+        } else {
+            memcpy(dir, job->sphere_dirs[r], sizeof dir);
+        }
+        glow__hit hit = glow__rt_intersect(job->rt, cache->pos, dir, eps, R);
+        if (hit.t == INFINITY || hit.back_face) continue;
+        float p[3];
+        for (int k = 0; k < 3; ++k) p[k] = cache->pos[k] + hit.t * dir[k];
+        uint32_t idx[8];
+        float dist2[8];
+        uint32_t found = glow__kdtree_knn(job->surfel_tree, p, 8, UINT32_MAX, idx, dist2);
+        for (uint32_t q = 0; q < found; ++q) {
+            const glow__surfel *s = &S->s[idx[q]];
+            float d[3];
+            glow__sub(s->pos, cache->pos, d);
+            if (glow__dot(d, d) >= R * R) continue;        /* a far surfel: the disc pass has it */
+            if (glow__dot(s->nrm, dir) >= 0.0f) continue;  /* faces away: another surface */
+            if (hemi && glow__dot(cache->nrm, d) <= -0.5f * eps) continue;
+            omega[idx[q]] += dw;
+            for (int k = 0; k < 3; ++k) dirsum[3 * idx[q] + k] += dw * dir[k];
+            break;
+        }
+    }
+}
+
 static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
     const glow__hierarchy *h = job->h;
     const glow__surfels *S = job->surfels;
@@ -111,6 +170,7 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
     const uint32_t rays = set->rays_per_surfel ? set->rays_per_surfel : 1u;
     const float eps = job->ray_eps;
     const float radius = sqrtf(S->area / (float)GLOW__PI);
+    const float near2 = job->near_radius * job->near_radius;
 
     /* 1. leaves: candidate solid angles, then visibility in packets of 16 rays from the cache. */
     uint32_t pending_idx[16];
@@ -132,6 +192,7 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
          * lifts texels by 1e-4 x diagonal, the same as eps). Half of that keeps its own surface out
          * but lets in the surfels that relaxation pushed onto the edge where another wall meets it. */
         if (hemi && glow__dot(cache->nrm, d) <= -0.5f * eps) continue;
+        if (d2 < near2) continue; /* measured by the near-field rays below */
         float w = disc_solid_angle(S->area, d2, cos_s);
         if (!(w > 0.0f)) continue;
         for (int k = 0; k < 3; ++k) dirsum[3 * i + k] = d[k] * inv;
@@ -165,11 +226,11 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
         for (uint32_t q = 0; q < pending; ++q)
             if (occ[q]) omega[pending_idx[q]] = 0.0f;
     }
-    double leaf_total = 0.0;
-    for (uint32_t i = 0; i < n; ++i) {
+    for (uint32_t i = 0; i < n; ++i)
         for (int k = 0; k < 3; ++k) dirsum[3 * i + k] *= omega[i];
-        leaf_total += omega[i];
-    }
+    near_field(job, cache, omega, dirsum);
+    double leaf_total = 0.0;
+    for (uint32_t i = 0; i < n; ++i) leaf_total += omega[i];
     job->visible_total[ci] = leaf_total;
 
     /* 2. sums up the tree: children precede parents in node order. */
@@ -329,9 +390,39 @@ glow_result glow__links_build(const glow__scene *scene, const glow__rt *rt, cons
         float diag = sqrtf(glow__dot(ext, ext));
         job.ray_eps = 1e-4f * (diag > 0.0f ? diag : 1.0f);
     }
+    job.near_radius = NEAR_RADII * sqrtf(surfels->area / (float)GLOW__PI);
+    {
+        const double golden = GLOW__PI * (3.0 - sqrt(5.0));
+        for (uint32_t i = 0; i < NEAR_RAYS; ++i) { /* spherical Fibonacci: equal solid angle each */
+            double z = 1.0 - (2.0 * i + 1.0) / NEAR_RAYS, r = sqrt(fmax(0.0, 1.0 - z * z)), phi = golden * i;
+            job.sphere_dirs[i][0] = (float)(r * cos(phi));
+            job.sphere_dirs[i][1] = (float)(r * sin(phi));
+            job.sphere_dirs[i][2] = (float)z;
+        }
+        for (uint32_t i = 0; i < NEAR_RAYS / 2; ++i) {
+            double z = 1.0 - (i + 0.5) / (NEAR_RAYS / 2), r = sqrt(fmax(0.0, 1.0 - z * z)), phi = golden * i;
+            job.hemi_dirs[i][0] = (float)(r * cos(phi));
+            job.hemi_dirs[i][1] = (float)(r * sin(phi));
+            job.hemi_dirs[i][2] = (float)z;
+        }
+    }
+    {
+        float(*pts)[3] = malloc(((size_t)surfels->count + 1) * sizeof *pts);
+        if (pts) {
+            for (uint32_t i = 0; i < surfels->count; ++i) memcpy(pts[i], surfels->s[i].pos, sizeof pts[i]);
+            job.surfel_tree = glow__kdtree_build((const float(*)[3])pts, surfels->count);
+            free(pts);
+        }
+        if (!job.surfel_tree) {
+            glow__errorf(log, "links: out of memory for the surfel search tree");
+            res = GLOW_ERROR_OUT_OF_MEMORY;
+            goto done;
+        }
+    }
     glow__parallel_for(pool, caches->count, 4, link_range, &job);
     for (uint32_t c = 0; c < caches->count; ++c) out->visible_solid_angle_total += job.visible_total[c];
 done:
+    glow__kdtree_free(job.surfel_tree);
     for (uint32_t w = 0; w < job.workers; ++w) {
         if (job.omega) free(job.omega[w]);
         if (job.dirsum) free(job.dirsum[w]);

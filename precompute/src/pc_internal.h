@@ -192,11 +192,6 @@ typedef struct glow__cache_settings {
     uint32_t target_grid;     /* used when grid_spacing == 0 */
     uint32_t target_lightmap; /* used when texel_density == 0 */
     uint32_t seed;
-    float clearance;          /* m: caches move (at most a few steps, never through geometry) until
-                                 the surfaces they face are at least this far; 0 = stay put. The
-                                 linker uses ~1.5 surfel radii: nearer surfels make the per-surfel
-                                 solid angles of links.c wrong (a texel in a room's corner would
-                                 miss the floor beside it) */
 } glow__cache_settings;
 
 typedef struct glow__caches {

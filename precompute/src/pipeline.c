@@ -123,6 +123,13 @@ static glow_result serialise(const glow_pc_settings *set, const glow__scene *sc,
                              sections *ss, glow__log *log) {
     const uint32_t nl = lk->per_cache;
     const uint32_t blocks = (nl + GLOW_LINK_BLOCK - 1) / GLOW_LINK_BLOCK;
+    /* LINK stores 24-bit node indices. --surfels <= 2^22 keeps node_count < 2^23; this guards the
+     * format's limit itself. */
+    if (h->node_count > GLOW_LINK_MAX_NODES) {
+        glow__errorf(log, "write: %u hierarchy nodes exceed the bake format's limit of %u (24-bit link node index)",
+                     h->node_count, GLOW_LINK_MAX_NODES);
+        return GLOW_ERROR_UNSUPPORTED;
+    }
     /* META */
     glow_bake_meta *m = calloc(1, sizeof *m);
     glow_bake_material *mat = calloc(sc->material_count ? sc->material_count : 1, sizeof *mat);
@@ -216,19 +223,22 @@ static glow_result serialise(const glow_pc_settings *set, const glow__scene *sc,
     }
     if (gm) memcpy(gm, ca->grid_map, grid_cells * sizeof *gm);
     if (lmm) memcpy(lmm, ca->lm_map, lm_texels * sizeof *lmm);
+    /* LINK: 8 bytes per link (bake_format.h). The linker's factor is surfel_area / node area, which
+     * the runtime derives from NODE.area, so only node, one_minus_cos and dir are stored. Padding
+     * lanes (j >= nl, left zero by calloc) and empty cut slots (factor 0) are node 0,
+     * one_minus_cos 0, dir 0. */
     for (uint32_t c = 0; c < ca->count; ++c)
-        for (uint32_t j = 0; j < blocks * GLOW_LINK_BLOCK; ++j) {
+        for (uint32_t j = 0; j < nl; ++j) {
             glow_bake_link_block *b = &lb[(size_t)c * blocks + j / GLOW_LINK_BLOCK];
             uint32_t lane = j % GLOW_LINK_BLOCK;
-            if (j >= nl) { /* padding lanes: factor 0 */
-                b->dir_v[lane] = 0;
-                continue;
-            }
             const glow__link *L = &lk->links[(size_t)c * nl + j];
-            b->node[lane] = L->node;
-            b->factor[lane] = glow__half_from_float(L->factor);
-            b->one_minus_cos[lane] = glow__half_from_float(L->one_minus_cos);
-            glow__oct_encode2(L->dir, &b->dir_u[lane], &b->dir_v[lane]);
+            if (L->factor == 0.0f) {
+                glow_bake_link_pack(b, lane, 0u, 0u, 0u, 0u);
+            } else {
+                uint32_t u, v;
+                glow__oct_encode12(L->dir, &u, &v);
+                glow_bake_link_pack(b, lane, L->node, glow__half_from_float(L->one_minus_cos), u, v);
+            }
             if (sh) {
                 uint8_t *blk = sh + ((size_t)c * blocks + j / GLOW_LINK_BLOCK) * shlk_block;
                 uint32_t *node = (uint32_t *)blk;
@@ -271,12 +281,6 @@ static glow_result serialise(const glow_pc_settings *set, const glow__scene *sc,
     if (sh) add_section(ss, GLOW_SECTION_SHLK, sh, (uint64_t)ca->count * blocks * shlk_block);
     add_section(ss, GLOW_SECTION_GEOM, tr, (uint64_t)sc->tri_count * sizeof *tr);
     return GLOW_OK;
-}
-
-/* Caches keep this many surfel radii from the surfaces they face (see glow__cache_settings). */
-static float clearance_radii(void) {
-    const char *e = getenv("GLOW_CLEARANCE_RADII"); /* experiments only; documented in docs/linker.md */
-    return e ? (float)atof(e) : 2.0f;
 }
 
 /* ------------------------------------------------------------------ the bake */
@@ -361,8 +365,7 @@ glow_result glow_pc_bake(const char *scene_path, const char *out_path, const glo
 
     STAGE_BEGIN(ST_CACHES);
     glow__cache_settings scache = {.grid_spacing = set.grid_spacing, .texel_density = set.texel_density,
-                                   .target_grid = p->grid, .target_lightmap = p->lightmap, .seed = set.seed,
-                                   .clearance = clearance_radii() * sqrtf(surfels.area / (float)GLOW__PI)};
+                                   .target_grid = p->grid, .target_lightmap = p->lightmap, .seed = set.seed};
     res = glow__caches_build(&scene, rt, &surfels, &scache, pool, &log, &caches);
     STAGE_END(ST_CACHES);
     if (res != GLOW_OK) goto done;

@@ -210,6 +210,9 @@ static glow_result check_meta(const vstate *v, const glow_bake_meta *m, section_
     if ((uint64_t)m->node_count != 2u * (uint64_t)m->surfel_count - 1u)
         FAIL(GLOW_ERROR_CORRUPT_DATA, "META: node_count %u, expected 2 * surfel_count - 1 = %llu", m->node_count,
              (unsigned long long)(2u * (uint64_t)m->surfel_count - 1u));
+    if (m->node_count > GLOW_LINK_MAX_NODES)
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "META: node_count %u exceeds %u (LINK node indices are 24 bits)", m->node_count,
+             GLOW_LINK_MAX_NODES);
     if (m->level_count == 0 || m->level_count > m->node_count)
         FAIL(GLOW_ERROR_CORRUPT_DATA, "META: level_count %u not in [1, node_count = %u]", m->level_count,
              m->node_count);
@@ -225,8 +228,9 @@ static glow_result check_meta(const vstate *v, const glow_bake_meta *m, section_
     /* floats */
     if (!finite3(m->bounds_min) || !finite3(m->bounds_max))
         FAIL(GLOW_ERROR_CORRUPT_DATA, "META: non-finite scene bounds");
-    if (!isfinite(m->surfel_area) || m->surfel_area < 0.0f || !isfinite(m->scene_area) || m->scene_area < 0.0)
-        FAIL(GLOW_ERROR_CORRUPT_DATA, "META: surfel_area %g / scene_area %g not finite and >= 0", (double)m->surfel_area,
+    /* > 0: links weigh a node's flux by 1 / (pi * node area), so a zero area would make radiance infinite */
+    if (!isfinite(m->surfel_area) || !(m->surfel_area > 0.0f) || !isfinite(m->scene_area) || !(m->scene_area > 0.0))
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "META: surfel_area %g / scene_area %g not finite and > 0", (double)m->surfel_area,
              m->scene_area);
     if (!isfinite(m->factor_scale)) FAIL(GLOW_ERROR_CORRUPT_DATA, "META: non-finite factor_scale");
     if (!finite3(m->grid_origin) || !isfinite(m->grid_spacing) || !isfinite(m->texel_density))
@@ -341,8 +345,8 @@ static glow_result check_tree(const vstate *v, const glow_bake_meta *m, const gl
                 FAIL(GLOW_ERROR_OUT_OF_RANGE, "node %u: child %u out of range (node_count %u)", i, n->child[c], nn);
         if (n->parent != GLOW_NODE_NONE && n->parent >= nn)
             FAIL(GLOW_ERROR_OUT_OF_RANGE, "node %u: parent %u out of range (node_count %u)", i, n->parent, nn);
-        if (!isfinite(n->area) || n->area < 0.0f || !finite3(n->position))
-            FAIL(GLOW_ERROR_CORRUPT_DATA, "node %u: non-finite or negative area / position", i);
+        if (!isfinite(n->area) || !(n->area > 0.0f) || !finite3(n->position))
+            FAIL(GLOW_ERROR_CORRUPT_DATA, "node %u: area must be finite and > 0, position finite", i);
     }
     /* leaves: no children */
     for (uint32_t i = 0; i < ns; i++)
@@ -412,8 +416,8 @@ static glow_result check_map(const vstate *v, const char *what, const uint32_t *
     return GLOW_OK;
 }
 
-static int half_nonneg_finite(uint16_t h) { return h < 0x7C00u || h == 0x8000u; }
-
+/* Every lane is read by the solver, so every lane's node must exist; the direction bits need no
+ * check (all 12-bit values decode to unit vectors). */
 static glow_result check_links(const vstate *v, const glow_bake_meta *m, const derived *d,
                                const glow_bake_link_block *b) {
     const uint32_t bpc = m->link_blocks_per_cache;
@@ -421,18 +425,17 @@ static glow_result check_links(const vstate *v, const glow_bake_meta *m, const d
         const glow_bake_link_block *blk = &b[i];
         uint64_t first = (i % bpc) * GLOW_LINK_BLOCK; /* link index of lane 0 within its cache */
         for (uint32_t j = 0; j < GLOW_LINK_BLOCK; j++) {
-            if (blk->node[j] >= m->node_count)
+            uint32_t node = glow_bake_link_node(blk, j);
+            if (node >= m->node_count)
                 FAIL(GLOW_ERROR_OUT_OF_RANGE, "LINK cache %llu link %llu: node %u out of range (node_count %u)",
-                     (unsigned long long)(i / bpc), (unsigned long long)(first + j), blk->node[j], m->node_count);
-            uint16_t f = blk->factor[j], omc = blk->one_minus_cos[j];
-            if (!half_nonneg_finite(f) || !(omc <= 0x4000u || omc == 0x8000u)) /* 0x4000 = 2.0 */
-                FAIL(GLOW_ERROR_CORRUPT_DATA,
-                     "LINK cache %llu link %llu: factor %g / one_minus_cos %g must be finite, >= 0 and (1 - cos) <= 2",
-                     (unsigned long long)(i / bpc), (unsigned long long)(first + j), (double)glow__half_to_float(f),
-                     (double)glow__half_to_float(omc));
-            if (first + j >= m->links_per_cache && (f & 0x7FFFu) != 0)
-                FAIL(GLOW_ERROR_CORRUPT_DATA, "LINK cache %llu: unused lane %llu has factor %g (must be 0)",
-                     (unsigned long long)(i / bpc), (unsigned long long)(first + j), (double)glow__half_to_float(f));
+                     (unsigned long long)(i / bpc), (unsigned long long)(first + j), node, m->node_count);
+            uint16_t omc = blk->one_minus_cos[j];
+            if (!(omc <= 0x4000u || omc == 0x8000u)) /* [+0, 2.0] or -0: excludes negatives, Inf, NaN */
+                FAIL(GLOW_ERROR_CORRUPT_DATA, "LINK cache %llu link %llu: one_minus_cos %g must be finite and in [0, 2]",
+                     (unsigned long long)(i / bpc), (unsigned long long)(first + j), (double)glow__half_to_float(omc));
+            if (first + j >= m->links_per_cache && (omc & 0x7FFFu) != 0)
+                FAIL(GLOW_ERROR_CORRUPT_DATA, "LINK cache %llu: unused lane %llu has one_minus_cos %g (must be 0)",
+                     (unsigned long long)(i / bpc), (unsigned long long)(first + j), (double)glow__half_to_float(omc));
         }
     }
     return GLOW_OK;

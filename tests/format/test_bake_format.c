@@ -28,8 +28,8 @@
 
 #define GOLDEN_PATH GLOW_TEST_DATA_DIR "/golden_v1.glow"
 /* Frozen properties of tests/data/golden_v1.glow (zlib crc32 of the whole file). */
-#define GOLDEN_SIZE 1792u
-#define GOLDEN_CRC 0x21b22897u
+#define GOLDEN_SIZE 1664u
+#define GOLDEN_CRC 0xc3bc1586u
 
 /* ------------------------------------------------------------------------------ helpers */
 typedef struct test_log {
@@ -252,32 +252,28 @@ static void build_golden(test_bake *b) {
     b->lmap[2] = GLOW_MAP_EMPTY;
     b->lmap[3] = 1u | GLOW_MAP_COPY_BIT;
 
-    /* cache 0 (grid, above the floor) sees the root and leaf 0; cache 1 sees leaf 1 and leaf 0 */
-    b->link[0].node[0] = 2;
-    b->link[0].factor[0] = 0x3800;        /* 0.5 */
-    b->link[0].one_minus_cos[0] = 0x34CD; /* ~0.3 */
-    b->link[0].dir_u[0] = 0;
-    b->link[0].dir_v[0] = -32767; /* (0, -1, 0) */
-    b->link[0].node[1] = 0;
-    b->link[0].factor[1] = 0x3C00;        /* 1.0 */
-    b->link[0].one_minus_cos[1] = 0x2E66; /* ~0.1 */
-    b->link[0].dir_u[1] = 8192;
-    b->link[0].dir_v[1] = -24575;
-    b->link[1].node[0] = 1;
-    b->link[1].factor[0] = 0x3C00;
-    b->link[1].one_minus_cos[0] = 0x3266; /* ~0.2 */
-    b->link[1].dir_u[0] = 0;
-    b->link[1].dir_v[0] = 32767;
-    b->link[1].node[1] = 0;
-    b->link[1].factor[1] = 0x3C00;
-    b->link[1].one_minus_cos[1] = 0x2A66; /* ~0.05 */
-    b->link[1].dir_u[1] = 16383;
-    b->link[1].dir_v[1] = 16384;
+    /* cache 0 (grid, above the floor) sees the root and leaf 0; cache 1 sees leaf 1 and leaf 0.
+     * Packed by hand (bake_format.h): node_dir = node | (dir_u >> 4) << 24,
+     * dir_lo = (dir_u & 15) | dir_v << 4, with dir_u, dir_v 12-bit octahedral (s = q * 2/4095 - 1).
+     * Lanes 2..15 stay zero: unused (node 0, one_minus_cos 0, dir 0). */
+    b->link[0].node_dir[0] = 0x80000002u;   /* node 2, dir_u 2048 */
+    b->link[0].dir_lo[0] = 0x0000;          /* dir_v 0: (u, v) = (2048, 0) ~ (0, -1, 0) */
+    b->link[0].one_minus_cos[0] = 0x34CD;   /* ~0.3 */
+    b->link[0].node_dir[1] = 0x9F000000u;   /* node 0, dir_u 2559 = 0x9FF */
+    b->link[0].dir_lo[1] = 0x200F;          /* dir_v 512: (2559, 512) ~ oct (0.25, -0.75) */
+    b->link[0].one_minus_cos[1] = 0x2E66;   /* ~0.1 */
+    b->link[1].node_dir[0] = 0x80000001u;   /* node 1, dir_u 2048 */
+    b->link[1].dir_lo[0] = 0xFFF0;          /* dir_v 4095: ~ (0, 1, 0) */
+    b->link[1].one_minus_cos[0] = 0x3266;   /* ~0.2 */
+    b->link[1].node_dir[1] = 0xBF000000u;   /* node 0, dir_u 3071 = 0xBFF */
+    b->link[1].dir_lo[1] = 0xC00F;          /* dir_v 3072: ~ oct (0.5, 0.5) = (0.71, 0.71, 0) */
+    b->link[1].one_minus_cos[1] = 0x2A66;   /* ~0.05 */
 
-    /* SHLK (only written when a test asks): same cut, coefficients 0.25 */
+    /* SHLK (only written when a test asks): same cut (plain u32 nodes), coefficients 0.25 */
+    static const uint32_t shlk_nodes[2][2] = {{2, 0}, {1, 0}};
     for (int blk = 0; blk < 2; blk++) {
         unsigned char *p = b->shlk + blk * SHLK_BLOCK;
-        memcpy(p, b->link[blk].node, 64);
+        for (int lane = 0; lane < 2; lane++) put_u32(p + 4 * lane, shlk_nodes[blk][lane]);
         for (uint32_t k = 0; k < SHLK_BANDS * SHLK_BANDS * 16u; k++) put_u16(p + 64 + 2 * k, 0x3400);
     }
 
@@ -387,9 +383,18 @@ static void check_golden_contents(const glow_bake *bake) {
     assert_int_equal(glow__bake_grid_map(bake)[0], GLOW_MAP_COPY_BIT);
     assert_int_equal(glow__bake_lightmap_map(bake)[2], GLOW_MAP_EMPTY);
     const glow_bake_link_block *lb = glow__bake_link_blocks(bake);
-    assert_int_equal(lb[0].node[0], 2);
-    assert_int_equal(lb[1].factor[0], 0x3C00);
-    assert_int_equal(lb[1].dir_v[1], 16384);
+    assert_int_equal(lb[0].node_dir[0], 0x80000002u);
+    assert_int_equal(glow_bake_link_node(&lb[0], 0), 2);
+    assert_int_equal(glow_bake_link_node(&lb[1], 0), 1);
+    assert_int_equal(lb[1].one_minus_cos[0], 0x3266);
+    uint32_t du, dv;
+    glow_bake_link_dir12(&lb[0], 1, &du, &dv);
+    assert_int_equal(du, 2559);
+    assert_int_equal(dv, 512);
+    glow_bake_link_dir12(&lb[1], 1, &du, &dv);
+    assert_int_equal(du, 3071);
+    assert_int_equal(dv, 3072);
+    assert_int_equal(lb[1].dir_lo[1], 0xC00F);
     assert_true(((uintptr_t)lb % GLOW_BAKE_ALIGN) == 0);
     assert_null(glow__bake_shlk_blocks(bake));
     const glow_bake_triangle *t = glow__bake_triangles(bake);
@@ -465,7 +470,8 @@ static void test_load_variants(void **state) {
         tb.meta.level_count = 1;
         tb.node[0].parent = GLOW_NODE_NONE;
         tb.levl[1] = 1;
-        for (int i = 0; i < 2; i++) tb.link[i].node[0] = tb.link[i].node[1] = 0;
+        for (int i = 0; i < 2; i++)
+            for (int k = 0; k < 2; k++) tb.link[i].node_dir[k] &= ~GLOW_LINK_NODE_MASK; /* node 0, dir kept */
         glow__section_data s[16];
         uint32_t n = sections_of(&tb, 0, s);
         for (uint32_t i = 0; i < n; i++) {
@@ -698,6 +704,11 @@ static void test_meta_counts(void **state) {
     EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "node_count", b->meta.surfel_count = 3);
     EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "surfel_count is 0", b->meta.surfel_count = 0);
     EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "node_count", b->meta.node_count = 5);
+    /* LINK node indices are 24 bits: node_count <= 2^24 (it is odd, so 2^24 - 1 at most in practice) */
+    EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "node_count 16777217 exceeds 16777216",
+                   b->meta.surfel_count = (1u << 23) + 1u; b->meta.node_count = (1u << 24) + 1u);
+    EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "'SURF'", /* within the limit: fails later, on sizes */
+                   b->meta.surfel_count = 1u << 23; b->meta.node_count = (1u << 24) - 1u);
     EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "level_count", b->meta.level_count = 0);
     EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "level_count", b->meta.level_count = 4);
     {   /* LEVL size disagreeing with META.level_count (patched in the image, CRCs refreshed) */
@@ -738,6 +749,7 @@ static void test_meta_counts(void **state) {
     EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "bounds", b->meta.bounds_max[2] = INFINITY);
     EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "surfel_area", b->meta.surfel_area = NAN);
     EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "scene_area", b->meta.scene_area = -1.0);
+    EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "surfel_area", b->meta.surfel_area = 0.0f);
     EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "factor_scale", b->meta.factor_scale = INFINITY);
     EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "grid origin", b->meta.grid_origin[0] = NAN);
 }
@@ -777,8 +789,14 @@ static void test_out_of_range(void **state) {
     EXPECT_PATCHED(0, R, "LMAP entry 2", b->lmap[2] = 0x7FFFFFFFu);
     EXPECT_PATCHED(0, R, "LMAP entry 0", b->lmap[0] = 0); /* a grid cache */
     /* links */
-    EXPECT_PATCHED(0, R, "node 3 out of range", b->link[1].node[1] = 3);
-    EXPECT_PATCHED(0, R, "link 15: node", b->link[0].node[15] = 0xFFFFFFFFu);
+    EXPECT_PATCHED(0, R, "LINK cache 1 link 1: node 3 out of range", b->link[1].node_dir[1] = 0xBF000003u);
+    EXPECT_PATCHED(0, R, "link 15: node 16777215 out of range", b->link[0].node_dir[15] = 0xFFFFFFFFu);
+    /* a bad index under direction bits: only the low 24 bits are the node */
+    EXPECT_PATCHED(0, R, "LINK cache 0 link 0: node 3 out of range", b->link[0].node_dir[0] = 0xFF000003u);
+    EXPECT_PATCHED(0, R, "LINK cache 1 link 0: node 65538 out of range", b->link[1].node_dir[0] = 0x80010002u);
+    /* ...and high bits alone are direction, not an index: valid (also in unused lanes) */
+    EXPECT_PATCHED(0, GLOW_OK, NULL, b->link[0].node_dir[0] = 0xFF000002u; b->link[0].node_dir[9] = 0xFF000000u;
+                   b->link[1].dir_lo[9] = 0xFFFF);
     EXPECT_PATCHED(WITH_SHLK, R, "SHLK block 1", b->meta.link_kind |= GLOW_LINK_KIND_FULL_SH;
                    put_u32(b->shlk + SHLK_BLOCK + 8, 3));
     /* geometry */
@@ -794,19 +812,25 @@ static void test_non_finite(void **state) {
     EXPECT_PATCHED(0, C, "surfel 1", b->surf[1].emission[2] = INFINITY);
     EXPECT_PATCHED(0, C, "node 2", b->node[2].area = NAN);
     EXPECT_PATCHED(0, C, "node 0", b->node[0].area = -1.0f);
+    EXPECT_PATCHED(0, C, "node 1", b->node[1].area = 0.0f); /* 1/(pi*area) must stay finite */
     EXPECT_PATCHED(0, C, "cache 1", b->cache[1].position[1] = NAN);
     EXPECT_PATCHED(0, C, "material 1", b->mat[1].emission[0] = INFINITY);
     EXPECT_PATCHED(0, C, "material 0: name", memset(b->mat[0].name, 'a', sizeof b->mat[0].name));
     EXPECT_PATCHED(0, C, "GEOM triangle 0", b->tri[0].position[7] = NAN);
-    /* link halves: factor finite and >= 0, one_minus_cos finite in [0, 2] */
-    EXPECT_PATCHED(0, C, "LINK cache 0 link 1", b->link[0].factor[1] = 0x7E00);  /* NaN */
-    EXPECT_PATCHED(0, C, "LINK cache 1 link 0", b->link[1].factor[0] = 0x7C00);  /* Inf */
-    EXPECT_PATCHED(0, C, "LINK cache 1 link 0", b->link[1].factor[0] = 0xBC00);  /* -1 */
-    EXPECT_PATCHED(0, C, "LINK cache 0 link 0", b->link[0].one_minus_cos[0] = 0x4001); /* > 2 */
+    /* link halves: one_minus_cos finite in [0, 2]; unused lanes (j >= links_per_cache) exactly 0 */
+    EXPECT_PATCHED(0, C, "LINK cache 0 link 0: one_minus_cos", b->link[0].one_minus_cos[0] = 0x4001); /* > 2 */
     EXPECT_PATCHED(0, C, "LINK cache 0 link 0", b->link[0].one_minus_cos[0] = 0xB800); /* -0.5 */
-    EXPECT_PATCHED(0, C, "LINK cache 0 link 0", b->link[0].one_minus_cos[0] = 0x7E00);
-    EXPECT_PATCHED(0, C, "unused lane", b->link[1].factor[5] = 0x3C00);
-    EXPECT_PATCHED(0, GLOW_OK, NULL, b->link[0].one_minus_cos[0] = 0x4000; b->link[0].factor[0] = 0x8000);
+    EXPECT_PATCHED(0, C, "LINK cache 0 link 0", b->link[0].one_minus_cos[0] = 0x8001); /* tiny negative */
+    EXPECT_PATCHED(0, C, "LINK cache 0 link 1", b->link[0].one_minus_cos[1] = 0x7E00); /* NaN */
+    EXPECT_PATCHED(0, C, "LINK cache 1 link 0", b->link[1].one_minus_cos[0] = 0x7C00); /* Inf */
+    EXPECT_PATCHED(0, C, "LINK cache 1 link 1", b->link[1].one_minus_cos[1] = 0xFC00); /* -Inf */
+    EXPECT_PATCHED(0, C, "LINK cache 1: unused lane 5 has one_minus_cos 1", b->link[1].one_minus_cos[5] = 0x3C00);
+    EXPECT_PATCHED(0, C, "LINK cache 0: unused lane 15", b->link[0].one_minus_cos[15] = 0x0001); /* subnormal */
+    /* links_per_cache 1: lane 1 becomes unused, and it carries a cone */
+    EXPECT_PATCHED(0, C, "LINK cache 0: unused lane 1", b->meta.links_per_cache = 1);
+    /* valid: the full sphere (2), a used lane that contributes nothing (0), -0 in an unused lane */
+    EXPECT_PATCHED(0, GLOW_OK, NULL, b->link[0].one_minus_cos[0] = 0x4000; b->link[0].one_minus_cos[1] = 0;
+                   b->link[1].one_minus_cos[3] = 0x8000);
     EXPECT_PATCHED(WITH_SHLK, C, "SHLK block 0: non-finite", b->meta.link_kind |= GLOW_LINK_KIND_FULL_SH;
                    put_u16(b->shlk + 64 + 2 * 37, 0xFC00));
 }
@@ -1070,6 +1094,161 @@ static void test_oct(void **state) {
     assert_true(out[0] == -1.0f && out[1] == 0.0f && out[2] == 0.0f);
     glow__oct_decode(0u, out);
     assert_true(out[2] == 1.0f);
+}
+
+/* Direction of 12-bit oct (u, v), computed here in double from the definition, independently of
+ * the codec: s = q * 2/4095 - 1, fold the lower hemisphere, normalise. */
+static void oct12_ref(uint32_t u, uint32_t v, double out[3]) {
+    double x = u * (2.0 / 4095.0) - 1.0, y = v * (2.0 / 4095.0) - 1.0, z = 1.0 - fabs(x) - fabs(y);
+    if (z < 0.0) {
+        double t = x;
+        x = (1.0 - fabs(y)) * (t >= 0.0 ? 1.0 : -1.0);
+        y = (1.0 - fabs(t)) * (y >= 0.0 ? 1.0 : -1.0);
+    }
+    double l = sqrt(x * x + y * y + z * z);
+    out[0] = x / l;
+    out[1] = y / l;
+    out[2] = z / l;
+}
+
+static double angle_dd(const double a[3], const double b[3]) {
+    double c[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+    double s = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+    return atan2(s, a[0] * b[0] + a[1] * b[1] + a[2] * b[2]) * (180.0 / 3.14159265358979323846);
+}
+
+static void test_oct12(void **state) {
+    (void)state;
+    double max_err = 0.0, max_round_err = 0.0;
+    for (int t = 0; t < 200000; t++) {
+        double v[3];
+        if (t < 26) { /* axes, edge and corner diagonals */
+            int a = t < 13 ? t : t + 1;
+            v[0] = a % 3 - 1;
+            v[1] = a / 3 % 3 - 1;
+            v[2] = a / 9 - 1;
+        } else {
+            double z = 2.0 * rngf() - 1.0, phi = 2.0 * 3.14159265358979323846 * rngf(), r = sqrt(1.0 - z * z);
+            v[0] = r * cos(phi);
+            v[1] = r * sin(phi);
+            v[2] = z;
+        }
+        /* The encoder's input is vf; errors are measured against vf itself (in double). vf is
+         * normalised in float arithmetic on purpose: GCC 12.2 -O2 (SLP vectorizer) was seen to
+         * read (double)vf[k] as the unrounded double when vf[k] = (float)(double expr). */
+        float vf[3] = {(float)v[0], (float)v[1], (float)v[2]};
+        float lf = sqrtf(vf[0] * vf[0] + vf[1] * vf[1] + vf[2] * vf[2]);
+        for (int k = 0; k < 3; k++) vf[k] /= lf;
+        double l = sqrt((double)vf[0] * vf[0] + (double)vf[1] * vf[1] + (double)vf[2] * vf[2]);
+        for (int k = 0; k < 3; k++) v[k] = vf[k] / l;
+        uint32_t u, w;
+        glow__oct_encode12(vf, &u, &w);
+        assert_true(u <= GLOW_LINK_DIR_MAX && w <= GLOW_LINK_DIR_MAX);
+        float out[3];
+        glow__oct_decode12(u, w, out);
+        double len = sqrt((double)out[0] * out[0] + (double)out[1] * out[1] + (double)out[2] * out[2]);
+        assert_true(fabs(len - 1.0) < 1e-5);
+        double ref[3];
+        oct12_ref(u, w, ref);
+        double outd[3] = {out[0], out[1], out[2]};
+        assert_true(angle_dd(outd, ref) < 1e-3); /* the float decoder agrees with the definition */
+        double e = angle_deg(out, v);
+        if (e > max_err) max_err = e;
+        /* never worse than rounding each coordinate to the nearest step */
+        double px = v[0], py = v[1], pz = v[2], l1 = fabs(px) + fabs(py) + fabs(pz);
+        px /= l1;
+        py /= l1;
+        if (pz < 0.0) {
+            double tx = (1.0 - fabs(py)) * (px >= 0.0 ? 1.0 : -1.0), ty = (1.0 - fabs(px)) * (py >= 0.0 ? 1.0 : -1.0);
+            px = tx;
+            py = ty;
+        }
+        double ru = floor((px + 1.0) * 2047.5 + 0.5), rv = floor((py + 1.0) * 2047.5 + 0.5);
+        if (ru > 4095.0) ru = 4095.0;
+        if (rv > 4095.0) rv = 4095.0;
+        double rd[3];
+        oct12_ref((uint32_t)ru, (uint32_t)rv, rd);
+        double er = angle_dd(rd, v);
+        if (er > max_round_err) max_round_err = er;
+        oct12_ref(u, w, ref);
+        if (!(angle_dd(ref, v) <= er + 1e-9))
+            fail_msg("oct12 of (%a, %a, %a): (%u, %u) is %.9g deg off, plain rounding (%g, %g) only %.9g deg",
+                     (double)vf[0], (double)vf[1], (double)vf[2], u, w, angle_dd(ref, v), ru, rv, er);
+    }
+    print_message("oct12 max angular error %.5f deg (plain rounding: %.5f deg)\n", max_err, max_round_err);
+    assert_true(max_err < 0.06);
+    assert_true(max_err < max_round_err);
+    /* hand-computed codes */
+    float px[3] = {1, 0, 0}, pz[3] = {0, 0, 1}, nz[3] = {0, 0, -1}, zero[3] = {0, 0, 0}, bad[3] = {NAN, 0, 1};
+    uint32_t u, w;
+    glow__oct_encode12(px, &u, &w);
+    assert_int_equal(u, 4095);
+    assert_true(w == 2047 || w == 2048); /* y = -+1/4095: both half a step from 0 */
+    glow__oct_encode12(pz, &u, &w);
+    assert_true((u == 2047 || u == 2048) && (w == 2047 || w == 2048));
+    uint32_t zu, zw;
+    glow__oct_encode12(zero, &zu, &zw); /* degenerate input: +z */
+    assert_int_equal(zu, u);
+    assert_int_equal(zw, w);
+    glow__oct_encode12(bad, &zu, &zw);
+    assert_int_equal(zu, u);
+    assert_int_equal(zw, w);
+    glow__oct_encode12(nz, &u, &w); /* the lower pole is any corner */
+    assert_true((u == 0 || u == 4095) && (w == 0 || w == 4095));
+    float out[3];
+    glow__oct_decode12(0, 0, out);
+    assert_true(out[0] == 0.0f && out[1] == 0.0f && out[2] == -1.0f);
+    glow__oct_decode12(4095, 4095, out);
+    assert_true(out[2] == -1.0f);
+    glow__oct_decode12(2048, 4095, out); /* (1/4095, 1): ~ +y */
+    assert_true(out[1] > 0.9999999f && fabsf(out[0]) < 1e-6f && fabsf(out[2]) < 2.5e-4f);
+    glow__oct_decode12(0x1000u | 2048u, 0xF000u | 4095u, out); /* bits above 12 are ignored */
+    assert_true(out[1] > 0.9999999f);
+    /* every code decodes to a unit vector (all u, every 5th v and both ends) */
+    for (uint32_t a = 0; a <= 4095; a++)
+        for (uint32_t c = 0; c <= 4095; c = c == 4095 ? 4096 : (c + 5 > 4095 ? 4095 : c + 5)) {
+            glow__oct_decode12(a, c, out);
+            float l2 = out[0] * out[0] + out[1] * out[1] + out[2] * out[2];
+            if (!(fabsf(l2 - 1.0f) < 1e-5f)) fail_msg("oct12 (%u, %u) decodes to length^2 %g", a, c, (double)l2);
+        }
+}
+
+/* The link packing helpers against hand-computed bit patterns. */
+static void test_link_pack(void **state) {
+    (void)state;
+    glow_bake_link_block b;
+    memset(&b, 0xAA, sizeof b);
+    glow_bake_link_pack(&b, 3, 0x123456u, 0x3C00, 0xABCu, 0xDEFu);
+    assert_int_equal(b.node_dir[3], 0xAB123456u);
+    assert_int_equal(b.dir_lo[3], 0xDEFCu);
+    assert_int_equal(b.one_minus_cos[3], 0x3C00);
+    assert_int_equal(b.node_dir[2], 0xAAAAAAAAu); /* neighbours untouched */
+    assert_int_equal(b.dir_lo[4], 0xAAAAu);
+    uint32_t u, v;
+    glow_bake_link_dir12(&b, 3, &u, &v);
+    assert_int_equal(u, 0xABC);
+    assert_int_equal(v, 0xDEF);
+    assert_int_equal(glow_bake_link_node(&b, 3), 0x123456u);
+    glow_bake_link_pack(&b, 15, GLOW_LINK_MAX_NODES - 1u, 0x4000, GLOW_LINK_DIR_MAX, 0);
+    assert_int_equal(b.node_dir[15], 0xFFFFFFFFu);
+    assert_int_equal(b.dir_lo[15], 0x000Fu);
+    glow_bake_link_pack(&b, 0, 0, 0, 0, GLOW_LINK_DIR_MAX);
+    assert_int_equal(b.node_dir[0], 0u);
+    assert_int_equal(b.dir_lo[0], 0xFFF0u);
+    /* random round trips */
+    for (int t = 0; t < 100000; t++) {
+        uint32_t lane = rng() % GLOW_LINK_BLOCK, node = rng() & GLOW_LINK_NODE_MASK;
+        uint32_t du = rng() & 0xFFFu, dv = rng() & 0xFFFu;
+        uint16_t omc = (uint16_t)(rng() & 0x7FFFu);
+        glow_bake_link_pack(&b, lane, node, omc, du, dv);
+        assert_int_equal(glow_bake_link_node(&b, lane), node);
+        glow_bake_link_dir12(&b, lane, &u, &v);
+        assert_int_equal(u, du);
+        assert_int_equal(v, dv);
+        assert_int_equal(b.one_minus_cos[lane], omc);
+    }
+    /* layout: 8 bytes per link */
+    assert_int_equal(sizeof(glow_bake_link_block), 8 * GLOW_LINK_BLOCK);
 }
 
 /* ------------------------------------------------------------------------------ writer */
@@ -1383,6 +1562,8 @@ int main(void) {
         cmocka_unit_test(test_crc32_vs_zlib),
         cmocka_unit_test(test_half),
         cmocka_unit_test(test_oct),
+        cmocka_unit_test(test_oct12),
+        cmocka_unit_test(test_link_pack),
         cmocka_unit_test(test_writer),
         cmocka_unit_test(test_file_round_trip),
         cmocka_unit_test(test_atomic_write_failures),

@@ -58,8 +58,22 @@ static void touch(const glow_bake *bake) {
     }
     const glow_bake_link_block *lb = glow__bake_link_blocks(bake);
     uint64_t blocks = (uint64_t)m->cache_count * m->link_blocks_per_cache;
+    /* what the solver reads per link: the node's radiance (from its area), cone and direction */
     for (uint64_t b = 0; b < blocks; b++)
-        for (int j = 0; j < (int)GLOW_LINK_BLOCK; j++) acc += nodes[lb[b].node[j]].normal_oct;
+        for (uint32_t j = 0; j < GLOW_LINK_BLOCK; j++) {
+            const glow_bake_node *n = &nodes[glow_bake_link_node(&lb[b], j)];
+            uint32_t u, v;
+            glow_bake_link_dir12(&lb[b], j, &u, &v);
+            if (u > GLOW_LINK_DIR_MAX || v > GLOW_LINK_DIR_MAX) abort();
+            float dir[3];
+            glow__oct_decode12(u, v, dir);
+            float omc = glow__half_to_float(lb[b].one_minus_cos[j]);
+            if (!(omc >= 0.0f && omc <= 2.0f)) abort(); /* the reader guarantees this */
+            float s = omc * dir[0] * n->area;
+            uint32_t bits;
+            memcpy(&bits, &s, sizeof bits);
+            acc += n->normal_oct + bits;
+        }
     const uint32_t *maps[2] = {glow__bake_grid_map(bake), glow__bake_lightmap_map(bake)};
     uint64_t counts[2] = {(uint64_t)m->grid_dims[0] * m->grid_dims[1] * m->grid_dims[2],
                           (uint64_t)m->lightmap_width * m->lightmap_height};

@@ -243,6 +243,37 @@ static void test_full_sh_matches_runtime_dc(void **state) {
     world_free(&w);
 }
 
+/* Caches right beside a wall or in a corner: the near field is measured with rays, so the visible
+ * solid angle still closes (with disc solid angles alone a corner texel missed half its hemisphere). */
+static void test_near_field_closes(void **state) {
+    (void)state;
+    world w;
+    world_make(&w, "furnace", 8192, 2);
+    glow__caches c;
+    memset(&c, 0, sizeof c);
+    c.count = 4;
+    c.caches = calloc(4, sizeof *c.caches);
+    float h = 2e-4f * sqrtf(12.0f); /* the lift caches.c gives texels: 1e-4 x diagonal, doubled */
+    c.caches[0] = (glow__cache){.pos = {-1.0f + 0.01f, 0.2f, 0.3f}, .kind = GLOW_CACHE_KIND_GRID}; /* 1 cm from a wall */
+    c.caches[1] = (glow__cache){.pos = {-1.0f + 0.01f, -1.0f + 0.01f, -1.0f + 0.01f}, .kind = GLOW_CACHE_KIND_GRID};
+    c.caches[2] = (glow__cache){.pos = {-1.0f + 0.002f, -1.0f + h, 0.4f}, .nrm = {0, 1, 0}, .kind = GLOW_CACHE_KIND_LIGHTMAP};
+    c.caches[3] = (glow__cache){.pos = {-1.0f + h, 0.5f, 1.0f - 0.002f}, .nrm = {1, 0, 0}, .kind = GLOW_CACHE_KIND_LIGHTMAP};
+    const uint32_t nl = 128;
+    glow__link_settings ls = {.links_per_cache = nl, .sh_bands = 3, .rays_per_surfel = 1};
+    glow__links L;
+    assert_int_equal(glow__links_build(&w.scene, w.rt, &w.surfels, &w.h, &c, &ls, w.pool, &w.log, NULL, NULL, &L),
+                     GLOW_OK);
+    for (uint32_t ci = 0; ci < 4; ++ci) {
+        double total = 0.0, expect = ci < 2 ? 4.0 * GLOW__PI : 2.0 * GLOW__PI;
+        for (uint32_t j = 0; j < nl; ++j)
+            if (L.links[ci * nl + j].factor != 0.0f) total += link_omega(&L.links[ci * nl + j]);
+        if (fabs(total / expect - 1.0) > 0.05) fail_msg("cache %u: solid angle %g, expected %g", ci, total, expect);
+    }
+    glow__links_free(&L);
+    free(c.caches);
+    world_free(&w);
+}
+
 static void test_links_deterministic_across_threads(void **state) {
     (void)state;
     glow__links out[2];
@@ -270,6 +301,7 @@ int main(void) {
         cmocka_unit_test(test_cut_refines_to_leaves),
         cmocka_unit_test(test_visibility_blocks_other_room),
         cmocka_unit_test(test_full_sh_matches_runtime_dc),
+        cmocka_unit_test(test_near_field_closes),
         cmocka_unit_test(test_links_deterministic_across_threads),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -95,7 +95,7 @@ typedef struct glow_bake_meta {
     /*  12 */ uint32_t cache_count;       /* grid caches first, then lightmap caches */
     /*  16 */ uint32_t grid_cache_count;
     /*  20 */ uint32_t lightmap_cache_count;
-    /*  24 */ uint32_t links_per_cache;   /* n_L (unused slots have factor 0) */
+    /*  24 */ uint32_t links_per_cache;   /* n_L (unused lanes have one_minus_cos 0) */
     /*  28 */ uint32_t link_blocks_per_cache; /* ceil(n_L / GLOW_LINK_BLOCK) */
     /*  32 */ uint32_t sh_bands;          /* l the linker aimed for (full-SH links carry l*l) */
     /*  36 */ uint32_t link_kind;         /* GLOW_LINK_KIND_* bits */
@@ -104,7 +104,7 @@ typedef struct glow_bake_meta {
     /*  48 */ float bounds_min[3];        /* scene AABB, m */
     /*  60 */ float surfel_area;          /* area of every leaf surfel, m² */
     /*  64 */ float bounds_max[3];
-    /*  76 */ float factor_scale;         /* 1/(pi * surfel_area): multiplies every stored factor */
+    /*  76 */ float factor_scale;         /* 1/(pi * surfel_area): scales SHLK coefficients (LINK needs none) */
     /*  80 */ float grid_origin[3];       /* centre of grid cell (0,0,0), m */
     /*  92 */ float grid_spacing;         /* m */
     /*  96 */ uint32_t grid_dims[3];      /* cells in x, y, z (x fastest in GRID) */
@@ -164,24 +164,59 @@ typedef struct glow_bake_cache {
 } glow_bake_cache; /* 32 */
 
 /* Runtime-projection links (PIC 4.6), SoA blocks of 16 so the solver vectorises across links.
- * Link j of cache c is block c*link_blocks_per_cache + j/16, lane j%16. Its contribution to the
- * cache's radiance SH (band l, order m) is
- *     flux[node] * meta.factor_scale * factor * k_l(1 - one_minus_cos) * y_lm(dir)
- * with k_l the cone factors of DESIGN §3 and dir = oct_decode(dir_u, dir_v).
- * factor = (surfel_area / node.area): flux -> radiosity / pi, folded with factor_scale.
- * one_minus_cos = 1 - cos(alpha), alpha the half-angle of the cone whose solid angle equals the
- * node's solid angle visible from the cache (occlusion included). Unused lanes: factor 0, node 0. */
+ * Link j of cache c is block c*link_blocks_per_cache + j/16, lane j%16. 8 bytes per link:
+ *   node     24 bits  hierarchy node (the sender), so node_count <= GLOW_LINK_MAX_NODES
+ *   dir_u    12 bits  octahedral direction, unsigned: q in [0, 4095] <-> s = q * (2/4095) - 1
+ *   dir_v    12 bits  (glow__oct_decode12; worst-case angular error ~0.04 degrees)
+ *   one_minus_cos     IEEE half, 1 - cos(alpha), alpha the half-angle of the cone whose solid
+ *                     angle equals the node's solid angle visible from the cache (occlusion
+ *                     included): omega = 2 pi (1 - cos alpha)
+ * Its contribution to the cache's radiance SH (band l, order m) is
+ *     L_lm += flux[node] / (pi * node.area) * k_l(1 - one_minus_cos) * y_lm(oct_decode12(dir_u, dir_v))
+ * with k_l the cone factors of DESIGN §3: flux / (pi * area) is the node's radiosity turned into
+ * radiance, which the solver computes once per node per frame (after the pull) rather than per link.
+ * No factor is stored: the linker's factor is always surfel_area / node.area (1 / the node's leaf
+ * count), so the former flux * meta.factor_scale * factor is flux / (pi * node.area), which NODE
+ * already holds. (meta.factor_scale stays: SHLK coefficients are scaled by it.)
+ * Unused lanes (j >= links_per_cache) must have one_minus_cos 0 (the writer also sets node 0 and
+ * dir 0 there, and in cut slots the linker left empty). Every lane's node must be < node_count, so
+ * the solver may read all 16; a lane with one_minus_cos 0 contributes nothing (k_l(1) = 0). */
+#define GLOW_LINK_MAX_NODES (1u << 24)     /* node indices are 24 bits */
+#define GLOW_LINK_NODE_MASK 0x00FFFFFFu
+#define GLOW_LINK_DIR_MAX 4095u            /* 12-bit octahedral coordinates */
+
 typedef struct glow_bake_link_block {
-    /*   0 */ uint32_t node[GLOW_LINK_BLOCK];
-    /*  64 */ uint16_t factor[GLOW_LINK_BLOCK];        /* IEEE half */
-    /*  96 */ uint16_t one_minus_cos[GLOW_LINK_BLOCK]; /* IEEE half, in [0, 2] */
-    /* 128 */ int16_t dir_u[GLOW_LINK_BLOCK];          /* octahedral direction, snorm16 */
-    /* 160 */ int16_t dir_v[GLOW_LINK_BLOCK];
-} glow_bake_link_block; /* 192 = 12 bytes per link */
+    /*   0 */ uint32_t node_dir[GLOW_LINK_BLOCK];      /* bits 0-23: node index; bits 24-31: bits 4-11 of dir_u */
+    /*  64 */ uint16_t one_minus_cos[GLOW_LINK_BLOCK]; /* IEEE half in [0, 2]; 0 for unused lanes (they contribute nothing) */
+    /*  96 */ uint16_t dir_lo[GLOW_LINK_BLOCK];        /* bits 0-3: bits 0-3 of dir_u; bits 4-15: dir_v */
+} glow_bake_link_block; /* 128 = 8 bytes per link */
+
+/* The node a lane links to (the low 24 bits of node_dir). */
+static inline uint32_t glow_bake_link_node(const glow_bake_link_block *b, uint32_t lane) {
+    return b->node_dir[lane] & GLOW_LINK_NODE_MASK;
+}
+
+/* The lane's 12-bit octahedral direction (decode with glow__oct_decode12). */
+static inline void glow_bake_link_dir12(const glow_bake_link_block *b, uint32_t lane, uint32_t *out_u,
+                                        uint32_t *out_v) {
+    *out_u = ((b->node_dir[lane] >> 24) << 4) | (b->dir_lo[lane] & 0xFu);
+    *out_v = (uint32_t)b->dir_lo[lane] >> 4;
+}
+
+/* Writer side: packs one lane. node < GLOW_LINK_MAX_NODES and u, v <= GLOW_LINK_DIR_MAX (higher bits
+ * are dropped); one_minus_cos is already an IEEE half. */
+static inline void glow_bake_link_pack(glow_bake_link_block *b, uint32_t lane, uint32_t node, uint16_t one_minus_cos,
+                                       uint32_t u, uint32_t v) {
+    b->node_dir[lane] = (node & GLOW_LINK_NODE_MASK) | (((u >> 4) & 0xFFu) << 24);
+    b->one_minus_cos[lane] = one_minus_cos;
+    b->dir_lo[lane] = (uint16_t)((u & 0xFu) | ((v & 0xFFFu) << 4));
+}
 
 /* Full-SH links (PIC Eq. 2, Monte-Carlo projection), SHLK: the same cut as LINK, per block of
  * 16 links: uint32_t node[16] followed by IEEE-half coeff[sh_bands*sh_bands][16] (coefficient-major),
- * each the SH projection of the visible sender divided by (pi * node.area) and by factor_scale.
+ * each the SH projection of the visible sender divided by (pi * node.area) and by factor_scale,
+ * i.e. times surfel_area / node.area: the runtime multiplies them by meta.factor_scale. SHLK node
+ * indices are full uint32_t (no packed direction); lanes match LINK's glow_bake_link_node.
  * Block size = 64 + 32 * sh_bands². */
 static inline size_t glow_bake_shlk_block_size(uint32_t sh_bands) {
     return (size_t)64u + (size_t)32u * sh_bands * sh_bands;
@@ -216,8 +251,9 @@ _Static_assert(sizeof(glow_bake_node) == 32, "node is 32 bytes");
 _Static_assert(offsetof(glow_bake_node, position) == 16, "node layout");
 _Static_assert(sizeof(glow_bake_cache) == 32, "cache is 32 bytes");
 _Static_assert(offsetof(glow_bake_cache, kind) == 16, "cache layout");
-_Static_assert(sizeof(glow_bake_link_block) == 192, "link block is 12 bytes per link");
-_Static_assert(offsetof(glow_bake_link_block, dir_u) == 128, "link block layout");
+_Static_assert(sizeof(glow_bake_link_block) == 128, "link block is 8 bytes per link");
+_Static_assert(offsetof(glow_bake_link_block, one_minus_cos) == 64, "link block layout");
+_Static_assert(offsetof(glow_bake_link_block, dir_lo) == 96, "link block layout");
 _Static_assert(sizeof(glow_bake_triangle) == 64, "triangle is 64 bytes");
 _Static_assert(offsetof(glow_bake_triangle, material) == 48, "triangle layout");
 
@@ -231,6 +267,11 @@ uint32_t glow__oct_encode(const float n[3]);
 void glow__oct_decode(uint32_t packed, float out_n[3]);
 void glow__oct_encode2(const float n[3], int16_t *out_u, int16_t *out_v);
 void glow__oct_decode2(int16_t u, int16_t v, float out_n[3]);
+/* The links' 12-bit unsigned variant: q in [0, 4095] <-> s = q * (2/4095) - 1. The encoder keeps
+ * the nearest of the 4 quantised candidates (worst case ~0.04 degrees); zero-length or non-finite
+ * input encodes as (approximately) +z. */
+void glow__oct_encode12(const float n[3], uint32_t *out_u, uint32_t *out_v);
+void glow__oct_decode12(uint32_t u, uint32_t v, float out_n[3]);
 
 /* IEEE half conversions (round to nearest even; no F16C dependency). */
 uint16_t glow__half_from_float(float f);

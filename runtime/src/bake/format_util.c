@@ -1,6 +1,7 @@
 /* format_util.c — small codecs the bake format shares between writer and reader:
- * CRC-32 (zlib polynomial, slicing-by-8 tables), octahedral unit vectors (snorm16 x2) and IEEE
- * binary16 <-> binary32 conversion. libc/libm only: no zlib, no F16C. */
+ * CRC-32 (zlib polynomial, slicing-by-8 tables), octahedral unit vectors (snorm16 x2, and the
+ * links' unsigned 12-bit x2) and IEEE binary16 <-> binary32 conversion. libc/libm only: no zlib,
+ * no F16C. */
 #include <math.h>
 #include <stdatomic.h>
 #include <string.h>
@@ -153,6 +154,85 @@ void glow__oct_decode(uint32_t packed, float out_n[3]) {
     int16_t u = (int16_t)(lo < 0x8000u ? (int32_t)lo : (int32_t)lo - 65536);
     int16_t v = (int16_t)(hi < 0x8000u ? (int32_t)hi : (int32_t)hi - 65536);
     glow__oct_decode2(u, v, out_n);
+}
+
+/* 12-bit unsigned variant for links: q in [0, 4095] <-> s = q * (2/4095) - 1, so both ends (-1 and
+ * +1) are exact and 0 is not (the axes +-z are off by half a step, ~0.01 degrees). Same "nearest of
+ * the 4 quantised candidates" search as above; worst case ~0.04 degrees. */
+#define OCT12_MAX 4095u
+
+static double oct12_coord(uint32_t q) { return (double)q * (2.0 / 4095.0) - 1.0; }
+
+static void oct_decode12_d(uint32_t u, uint32_t v, double out[3]) {
+    double x = oct12_coord(u), y = oct12_coord(v);
+    double z = 1.0 - fabs(x) - fabs(y);
+    if (z < 0.0) {
+        double t = x;
+        x = (1.0 - fabs(y)) * (t >= 0.0 ? 1.0 : -1.0);
+        y = (1.0 - fabs(t)) * (y >= 0.0 ? 1.0 : -1.0);
+    }
+    double len = sqrt(x * x + y * y + z * z);
+    out[0] = x / len;
+    out[1] = y / len;
+    out[2] = z / len;
+}
+
+void glow__oct_encode12(const float n[3], uint32_t *out_u, uint32_t *out_v) {
+    static const float up[3] = {0.0f, 0.0f, 1.0f};
+    float l1 = fabsf(n[0]) + fabsf(n[1]) + fabsf(n[2]);
+    if (!(l1 > 0.0f) || !isfinite(l1)) { /* zero-length or non-finite: +z */
+        n = up;
+        l1 = 1.0f;
+    }
+    float x = n[0], y = n[1], z = n[2];
+    float px = x / l1, py = y / l1;
+    if (z < 0.0f) {
+        float tx = (1.0f - fabsf(py)) * sign_nonneg(px);
+        float ty = (1.0f - fabsf(px)) * sign_nonneg(py);
+        px = tx;
+        py = ty;
+    }
+    double len = sqrt((double)x * x + (double)y * y + (double)z * z);
+    double nd[3] = {x / len, y / len, z / len};
+    const double scale = 4095.0 / 2.0;
+    double fx = floor(((double)px + 1.0) * scale), fy = floor(((double)py + 1.0) * scale);
+    double best = -2.0;
+    uint32_t bu = 0, bv = 0;
+    for (int dy = 0; dy < 2; dy++) {
+        for (int dx = 0; dx < 2; dx++) {
+            double cu = fx + dx, cv = fy + dy;
+            if (cu < 0.0) cu = 0.0;
+            if (cu > (double)OCT12_MAX) cu = (double)OCT12_MAX;
+            if (cv < 0.0) cv = 0.0;
+            if (cv > (double)OCT12_MAX) cv = (double)OCT12_MAX;
+            double d[3];
+            oct_decode12_d((uint32_t)cu, (uint32_t)cv, d);
+            double dot = d[0] * nd[0] + d[1] * nd[1] + d[2] * nd[2];
+            if (dot > best) {
+                best = dot;
+                bu = (uint32_t)cu;
+                bv = (uint32_t)cv;
+            }
+        }
+    }
+    *out_u = bu;
+    *out_v = bv;
+}
+
+void glow__oct_decode12(uint32_t u, uint32_t v, float out_n[3]) {
+    /* bits above the 12 are ignored, so any packed value decodes to a unit vector */
+    float x = (float)(u & OCT12_MAX) * (2.0f / 4095.0f) - 1.0f;
+    float y = (float)(v & OCT12_MAX) * (2.0f / 4095.0f) - 1.0f;
+    float z = 1.0f - fabsf(x) - fabsf(y);
+    if (z < 0.0f) {
+        float t = x;
+        x = (1.0f - fabsf(y)) * sign_nonneg(t);
+        y = (1.0f - fabsf(t)) * sign_nonneg(y);
+    }
+    float inv = 1.0f / sqrtf(x * x + y * y + z * z); /* >= 1/sqrt(3): never 0 */
+    out_n[0] = x * inv;
+    out_n[1] = y * inv;
+    out_n[2] = z * inv;
 }
 
 /* ------------------------------------------------------------------------------ half */

@@ -1,0 +1,4 @@
+// Public headers compile alone as C++ (STYLE §2.11 habit 4): one TU per header, included first.
+#include "glow/glow.h"
+static_assert(GLOW_OK == 0, "GLOW_OK is zero");
+int glow_compile_test_glow_h_cc() { return (int)GLOW_ERROR_TRUNCATED; }
