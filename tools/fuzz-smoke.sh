@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer target for the bake reader (clang, -fsanitize=fuzzer,address,undefined) in its
-# own build directory and fuzzes it for SECONDS (default 60), seeded from tests/data/golden_v1.glow.
+# own build directory and fuzzes it for SECONDS (default 60), seeded from tests/data/*.glow (the
+# hand-built golden bake and a tiny real bake of builtin:cornell written by glow-bake).
 # Exits non-zero when the fuzzer finds a crash, leak, sanitizer report or timeout (the reproducer is
 # written to BUILD/fuzz-artifacts/).
 #
@@ -23,7 +24,7 @@ corpus=$build/fuzz-corpus/bake_reader # grows across runs
 seeds=$build/fuzz-seeds/bake_reader
 artifacts=$build/fuzz-artifacts
 mkdir -p "$corpus" "$seeds" "$artifacts"
-cp "$root/tests/data/golden_v1.glow" "$seeds/"
+cp "$root"/tests/data/*.glow "$seeds/"
 
 echo "fuzz-smoke: fuzzing glow_bake_load for ${secs}s (corpus $corpus)"
 args=(-max_total_time="$secs" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1

@@ -94,16 +94,20 @@ static float disc_solid_angle(float area, float d2, float cos_s) {
     return (float)(2.0 * GLOW__PI) * (1.0f - d / sqrtf(d2 + r2)) * cos_s;
 }
 
+/* Unit tangents t, b with (t, b, n) right-handed, for a unit n. */
+static void tangent_frame(const float n[3], float t[3], float b[3]) {
+    float a[3] = {fabsf(n[0]) < 0.9f ? 1.0f : 0.0f, fabsf(n[0]) < 0.9f ? 0.0f : 1.0f, 0.0f};
+    glow__cross(n, a, t);
+    float tl = sqrtf(glow__dot(t, t));
+    for (int k = 0; k < 3; ++k) t[k] /= tl;
+    glow__cross(n, t, b);
+}
+
 /* Deterministic per-(cache, surfel, ray) point on the surfel disc (for rays_per_surfel > 1). */
 static void disc_point(const glow__surfel *s, float radius, uint32_t k, uint32_t count, float out[3]) {
     /* Fibonacci spiral on the disc: area-uniform, no randomness needed. */
     float t[3], b[3];
-    const float *n = s->nrm;
-    float a[3] = {fabsf(n[0]) < 0.9f ? 1.0f : 0.0f, fabsf(n[0]) < 0.9f ? 0.0f : 1.0f, 0.0f};
-    glow__cross(n, a, t);
-    float tl = sqrtf(glow__dot(t, t));
-    for (int i = 0; i < 3; ++i) t[i] /= tl;
-    glow__cross(n, t, b);
+    tangent_frame(s->nrm, t, b);
     float rr = radius * sqrtf(((float)k + 0.5f) / (float)count);
     float phi = (float)k * 2.39996323f;
     float c = cosf(phi) * rr, d = sinf(phi) * rr;
@@ -120,14 +124,7 @@ static void near_field(const link_job *job, const glow__cache *cache, float *ome
     const float R = job->near_radius, eps = job->ray_eps;
     const glow__surfels *S = job->surfels;
     float t[3] = {0}, b[3] = {0};
-    if (hemi) {
-        const float *n = cache->nrm;
-        float a[3] = {fabsf(n[0]) < 0.9f ? 1.0f : 0.0f, fabsf(n[0]) < 0.9f ? 0.0f : 1.0f, 0.0f};
-        glow__cross(n, a, t);
-        float tl = sqrtf(glow__dot(t, t));
-        for (int k = 0; k < 3; ++k) t[k] /= tl;
-        glow__cross(n, t, b);
-    }
+    if (hemi) tangent_frame(cache->nrm, t, b);
     for (uint32_t r = 0; r < count; ++r) {
         float dir[3];
         if (hemi) {

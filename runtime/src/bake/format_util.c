@@ -3,6 +3,7 @@
  * links' unsigned 12-bit x2) and IEEE binary16 <-> binary32 conversion. libc/libm only: no zlib,
  * no F16C. */
 #include <math.h>
+#include <stdbool.h>
 #include <stdatomic.h>
 #include <string.h>
 
@@ -71,9 +72,30 @@ uint32_t glow__crc32(uint32_t crc, const void *data, size_t size) {
  * non-finite input encodes as +z (0, 0). */
 static float sign_nonneg(float v) { return v >= 0.0f ? 1.0f : -1.0f; }
 
-static void oct_decode_d(int32_t u, int32_t v, double out[3]) {
-    double x = u < -32767 ? -1.0 : (double)u / 32767.0;
-    double y = v < -32767 ? -1.0 : (double)v / 32767.0;
+/* Octahedron coordinates (px, py) in [-1, 1]² of n, and n normalised in double. False for a
+ * zero-length or non-finite n. */
+static bool oct_project(const float n[3], double *px, double *py, double nd[3]) {
+    float x = n[0], y = n[1], z = n[2];
+    float l1 = fabsf(x) + fabsf(y) + fabsf(z);
+    if (!(l1 > 0.0f) || !isfinite(l1)) return false;
+    float fx = x / l1, fy = y / l1;
+    if (z < 0.0f) { /* fold the lower hemisphere over the diagonals */
+        float tx = (1.0f - fabsf(fy)) * sign_nonneg(fx);
+        float ty = (1.0f - fabsf(fx)) * sign_nonneg(fy);
+        fx = tx;
+        fy = ty;
+    }
+    double len = sqrt((double)x * x + (double)y * y + (double)z * z);
+    nd[0] = x / len;
+    nd[1] = y / len;
+    nd[2] = z / len;
+    *px = fx;
+    *py = fy;
+    return true;
+}
+
+/* The inverse: octahedron coordinates to a unit vector. */
+static void oct_unfold_d(double x, double y, double out[3]) {
     double z = 1.0 - fabs(x) - fabs(y);
     if (z < 0.0) {
         double t = x;
@@ -85,36 +107,32 @@ static void oct_decode_d(int32_t u, int32_t v, double out[3]) {
     out[1] = y / len;
     out[2] = z / len;
 }
-
-void glow__oct_encode2(const float n[3], int16_t *out_u, int16_t *out_v) {
-    float x = n[0], y = n[1], z = n[2];
-    float l1 = fabsf(x) + fabsf(y) + fabsf(z);
-    if (!(l1 > 0.0f) || !isfinite(l1)) {
-        *out_u = 0;
-        *out_v = 0;
-        return;
-    }
-    float px = x / l1, py = y / l1;
+static void oct_unfold_f(float x, float y, float out[3]) {
+    float z = 1.0f - fabsf(x) - fabsf(y);
     if (z < 0.0f) {
-        float tx = (1.0f - fabsf(py)) * sign_nonneg(px);
-        float ty = (1.0f - fabsf(px)) * sign_nonneg(py);
-        px = tx;
-        py = ty;
+        float t = x;
+        x = (1.0f - fabsf(y)) * sign_nonneg(t);
+        y = (1.0f - fabsf(t)) * sign_nonneg(y);
     }
-    double len = sqrt((double)x * x + (double)y * y + (double)z * z);
-    double nd[3] = {x / len, y / len, z / len};
-    double fx = floor((double)px * 32767.0), fy = floor((double)py * 32767.0);
+    float inv = 1.0f / sqrtf(x * x + y * y + z * z); /* >= 1/sqrt(3): never 0 */
+    out[0] = x * inv;
+    out[1] = y * inv;
+    out[2] = z * inv;
+}
+
+/* Quantisation grid coordinate = q * step + offset, q in [lo, hi]: of the four grid points around
+ * (px, py), the one that decodes closest to nd ("precise" encoding). */
+static void oct_nearest(double px, double py, const double nd[3], double step, double offset, int32_t lo, int32_t hi,
+                        int32_t *out_u, int32_t *out_v) {
+    double fx = floor((px - offset) / step), fy = floor((py - offset) / step);
     double best = -2.0;
-    int32_t bu = 0, bv = 0;
+    int32_t bu = lo, bv = lo;
     for (int dy = 0; dy < 2; dy++) {
         for (int dx = 0; dx < 2; dx++) {
-            double cu = fx + dx, cv = fy + dy;
-            if (cu < -32767.0) cu = -32767.0;
-            if (cu > 32767.0) cu = 32767.0;
-            if (cv < -32767.0) cv = -32767.0;
-            if (cv > 32767.0) cv = 32767.0;
+            double cu = fmin(fmax(fx + dx, (double)lo), (double)hi);
+            double cv = fmin(fmax(fy + dy, (double)lo), (double)hi);
             double d[3];
-            oct_decode_d((int32_t)cu, (int32_t)cv, d);
+            oct_unfold_d(cu * step + offset, cv * step + offset, d);
             double dot = d[0] * nd[0] + d[1] * nd[1] + d[2] * nd[2];
             if (dot > best) {
                 best = dot;
@@ -123,23 +141,23 @@ void glow__oct_encode2(const float n[3], int16_t *out_u, int16_t *out_v) {
             }
         }
     }
-    *out_u = (int16_t)bu;
-    *out_v = (int16_t)bv;
+    *out_u = bu;
+    *out_v = bv;
+}
+
+/* snorm16: coordinate = q / 32767, q in [-32767, 32767] (-32768 reads as -1). */
+void glow__oct_encode2(const float n[3], int16_t *out_u, int16_t *out_v) {
+    double px, py, nd[3];
+    int32_t u = 0, v = 0;
+    if (oct_project(n, &px, &py, nd)) oct_nearest(px, py, nd, 1.0 / 32767.0, 0.0, -32767, 32767, &u, &v);
+    *out_u = (int16_t)u;
+    *out_v = (int16_t)v;
 }
 
 void glow__oct_decode2(int16_t u, int16_t v, float out_n[3]) {
     float x = u < -32767 ? -1.0f : (float)u / 32767.0f;
     float y = v < -32767 ? -1.0f : (float)v / 32767.0f;
-    float z = 1.0f - fabsf(x) - fabsf(y);
-    if (z < 0.0f) {
-        float t = x;
-        x = (1.0f - fabsf(y)) * sign_nonneg(t);
-        y = (1.0f - fabsf(t)) * sign_nonneg(y);
-    }
-    float inv = 1.0f / sqrtf(x * x + y * y + z * z); /* >= 1/sqrt(3): never 0 */
-    out_n[0] = x * inv;
-    out_n[1] = y * inv;
-    out_n[2] = z * inv;
+    oct_unfold_f(x, y, out_n);
 }
 
 uint32_t glow__oct_encode(const float n[3]) {
@@ -157,82 +175,24 @@ void glow__oct_decode(uint32_t packed, float out_n[3]) {
 }
 
 /* 12-bit unsigned variant for links: q in [0, 4095] <-> s = q * (2/4095) - 1, so both ends (-1 and
- * +1) are exact and 0 is not (the axes +-z are off by half a step, ~0.01 degrees). Same "nearest of
- * the 4 quantised candidates" search as above; worst case ~0.04 degrees. */
+ * +1) are exact and 0 is not (the axes +-z are off by half a step, ~0.01 degrees). Worst case
+ * ~0.04 degrees. Zero-length or non-finite input encodes as (nearly) +z. */
 #define OCT12_MAX 4095u
-
-static double oct12_coord(uint32_t q) { return (double)q * (2.0 / 4095.0) - 1.0; }
-
-static void oct_decode12_d(uint32_t u, uint32_t v, double out[3]) {
-    double x = oct12_coord(u), y = oct12_coord(v);
-    double z = 1.0 - fabs(x) - fabs(y);
-    if (z < 0.0) {
-        double t = x;
-        x = (1.0 - fabs(y)) * (t >= 0.0 ? 1.0 : -1.0);
-        y = (1.0 - fabs(t)) * (y >= 0.0 ? 1.0 : -1.0);
-    }
-    double len = sqrt(x * x + y * y + z * z);
-    out[0] = x / len;
-    out[1] = y / len;
-    out[2] = z / len;
-}
 
 void glow__oct_encode12(const float n[3], uint32_t *out_u, uint32_t *out_v) {
     static const float up[3] = {0.0f, 0.0f, 1.0f};
-    float l1 = fabsf(n[0]) + fabsf(n[1]) + fabsf(n[2]);
-    if (!(l1 > 0.0f) || !isfinite(l1)) { /* zero-length or non-finite: +z */
-        n = up;
-        l1 = 1.0f;
-    }
-    float x = n[0], y = n[1], z = n[2];
-    float px = x / l1, py = y / l1;
-    if (z < 0.0f) {
-        float tx = (1.0f - fabsf(py)) * sign_nonneg(px);
-        float ty = (1.0f - fabsf(px)) * sign_nonneg(py);
-        px = tx;
-        py = ty;
-    }
-    double len = sqrt((double)x * x + (double)y * y + (double)z * z);
-    double nd[3] = {x / len, y / len, z / len};
-    const double scale = 4095.0 / 2.0;
-    double fx = floor(((double)px + 1.0) * scale), fy = floor(((double)py + 1.0) * scale);
-    double best = -2.0;
-    uint32_t bu = 0, bv = 0;
-    for (int dy = 0; dy < 2; dy++) {
-        for (int dx = 0; dx < 2; dx++) {
-            double cu = fx + dx, cv = fy + dy;
-            if (cu < 0.0) cu = 0.0;
-            if (cu > (double)OCT12_MAX) cu = (double)OCT12_MAX;
-            if (cv < 0.0) cv = 0.0;
-            if (cv > (double)OCT12_MAX) cv = (double)OCT12_MAX;
-            double d[3];
-            oct_decode12_d((uint32_t)cu, (uint32_t)cv, d);
-            double dot = d[0] * nd[0] + d[1] * nd[1] + d[2] * nd[2];
-            if (dot > best) {
-                best = dot;
-                bu = (uint32_t)cu;
-                bv = (uint32_t)cv;
-            }
-        }
-    }
-    *out_u = bu;
-    *out_v = bv;
+    double px, py, nd[3];
+    if (!oct_project(n, &px, &py, nd)) oct_project(up, &px, &py, nd);
+    int32_t u, v;
+    oct_nearest(px, py, nd, 2.0 / 4095.0, -1.0, 0, (int32_t)OCT12_MAX, &u, &v);
+    *out_u = (uint32_t)u;
+    *out_v = (uint32_t)v;
 }
 
 void glow__oct_decode12(uint32_t u, uint32_t v, float out_n[3]) {
     /* bits above the 12 are ignored, so any packed value decodes to a unit vector */
-    float x = (float)(u & OCT12_MAX) * (2.0f / 4095.0f) - 1.0f;
-    float y = (float)(v & OCT12_MAX) * (2.0f / 4095.0f) - 1.0f;
-    float z = 1.0f - fabsf(x) - fabsf(y);
-    if (z < 0.0f) {
-        float t = x;
-        x = (1.0f - fabsf(y)) * sign_nonneg(t);
-        y = (1.0f - fabsf(t)) * sign_nonneg(y);
-    }
-    float inv = 1.0f / sqrtf(x * x + y * y + z * z); /* >= 1/sqrt(3): never 0 */
-    out_n[0] = x * inv;
-    out_n[1] = y * inv;
-    out_n[2] = z * inv;
+    oct_unfold_f((float)(u & OCT12_MAX) * (2.0f / 4095.0f) - 1.0f, (float)(v & OCT12_MAX) * (2.0f / 4095.0f) - 1.0f,
+                 out_n);
 }
 
 /* ------------------------------------------------------------------------------ half */
