@@ -103,11 +103,17 @@ static void world_free(world *w) {
     glow__pool_destroy(w->pool);
 }
 
-static glow__caches two_caches(void) {
+static glow__caches caches_alloc(uint32_t n) {
     glow__caches c;
     memset(&c, 0, sizeof c);
-    c.count = 2;
-    c.caches = calloc(2, sizeof *c.caches);
+    c.count = n;
+    c.caches = calloc(n, sizeof *c.caches);
+    assert_non_null(c.caches);
+    return c;
+}
+
+static glow__caches two_caches(void) {
+    glow__caches c = caches_alloc(2);
     /* a grid cache in the middle of the furnace box, a lightmap cache just above the floor */
     c.caches[0] = (glow__cache){.pos = {0.1f, 0.05f, -0.07f}, .kind = GLOW_CACHE_KIND_GRID};
     c.caches[1] = (glow__cache){.pos = {0.2f, -0.999f, 0.3f}, .nrm = {0, 1, 0}, .kind = GLOW_CACHE_KIND_LIGHTMAP};
@@ -190,10 +196,7 @@ static void test_visibility_blocks_other_room(void **state) {
     (void)state;
     world w;
     world_make(&w, "two-rooms", 8192, 2);
-    glow__caches c;
-    memset(&c, 0, sizeof c);
-    c.count = 1;
-    c.caches = calloc(1, sizeof *c.caches);
+    glow__caches c = caches_alloc(1);
     c.caches[0] = (glow__cache){.pos = {-2.0f, 1.25f, 0.1f}, .kind = GLOW_CACHE_KIND_GRID}; /* room A */
     const uint32_t nl = 2048;
     glow__link_settings ls = {.links_per_cache = nl, .sh_bands = 3, .rays_per_surfel = 1};
@@ -249,10 +252,7 @@ static void test_near_field_closes(void **state) {
     (void)state;
     world w;
     world_make(&w, "furnace", 8192, 2);
-    glow__caches c;
-    memset(&c, 0, sizeof c);
-    c.count = 4;
-    c.caches = calloc(4, sizeof *c.caches);
+    glow__caches c = caches_alloc(4);
     float h = 2e-4f * sqrtf(12.0f); /* the lift caches.c gives texels: 1e-4 x diagonal, doubled */
     c.caches[0] = (glow__cache){.pos = {-1.0f + 0.01f, 0.2f, 0.3f}, .kind = GLOW_CACHE_KIND_GRID}; /* 1 cm from a wall */
     c.caches[1] = (glow__cache){.pos = {-1.0f + 0.01f, -1.0f + 0.01f, -1.0f + 0.01f}, .kind = GLOW_CACHE_KIND_GRID};
