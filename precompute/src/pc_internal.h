@@ -239,6 +239,7 @@ typedef struct glow__link_settings {
     bool full_sh;             /* also project full-SH links (PIC Eq. 2) */
     uint32_t rays_per_surfel; /* visibility rays per (cache, surfel) */
     uint32_t seed;
+    bool no_normalize;        /* false (default): normalise each cache's leaf solid angles (links.c) */
 } glow__link_settings;
 
 typedef struct glow__link {

@@ -44,6 +44,8 @@ static const char *usage_text =
     "  --seed S               sampling seed (default 0); same input and seed give the same bytes\n"
     "  --sh-links             also store full-SH links (PIC Eq. 2) next to runtime-projection links\n"
     "  --rays N               visibility rays per (cache, surfel) pair (default 1)\n"
+    "  --no-link-normalize    keep each cache's link solid angles as estimated (default: scaled to\n"
+    "                         the ray-measured visible geometry, so no energy is lost per bounce)\n"
     "  --json                 print the summary (or --info) as JSON on stdout\n"
     "  -q, --quiet            no progress output\n"
     "  --info FILE            validate and describe an existing bake\n"
@@ -358,6 +360,8 @@ int main(int argc, char **argv) {
         } else if (!strcmp(a, "--rays")) {
             NEED_VALUE();
             if (!parse_u32(v, 1, 256, &s.rays_per_surfel)) return usage_error("--rays '%s': expected an integer in 1..256", v);
+        } else if (!strcmp(a, "--no-link-normalize")) {
+            s.no_link_normalize = true;
         } else if (!strcmp(a, "--sh-links")) {
             s.sh_links = true;
         } else if (!strcmp(a, "--json")) {

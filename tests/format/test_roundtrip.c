@@ -81,17 +81,23 @@ static void test_cornell_roundtrip(void **state) {
         for (uint32_t v = lv[L]; v < lv[L + 1]; ++v) leaves[v] = leaves[nodes[v].child[0]] + leaves[nodes[v].child[1]];
 
     /* Every grid cache in the closed box sees walls in every direction: the decoded links' solid
-     * angles sum to 4π. Lightmap caches see their hemisphere: 2π. Measured at 16k surfels: grid
-     * median 0.7 % / p95 2.7 %, lightmap median 1.1 % / p95 3.7 %; the worst lightmap caches (8-16 %)
-     * are ceiling texels beside the light, which see the back of the one-sided light quad, where no
-     * surfel is. Before links.c measured near surfels with rays (disc solid angles only) the
-     * lightmap p95 was 53 %. The bounds guard those figures with room for other seeds. */
+     * angles sum to 4π. Lightmap caches see their hemisphere: 2π. links.c normalises each cache's
+     * leaf solid angles to the fraction of its rays that hit front faces, so in this watertight box
+     * what is left is the half-float rounding of 1 - cos α and, for lightmap caches, the texels that
+     * do not see geometry everywhere. Measured at 16k surfels (seeds 0-9 alike): grid mean error
+     * +0.00 %, median 0.00 %, p95 0.01 %, max 0.01 %; lightmap mean -0.23 %, median 0.00 %, p95
+     * 0.39 %, p99 6.4 %, max 16 %. The lightmap tail is correct: ceiling texels beside the light see
+     * the back of the one-sided light quad, where there is no surfel and no ray counts. Before
+     * (disc far field, ray near field, edge surfels dropped at the horizon): grid mean -0.86 %,
+     * median 0.70 %, p95 2.7 %; lightmap mean -1.41 %, median 1.12 %, p95 3.7 % (-0.30 %, 0.18 %,
+     * 1.75 % with the edge surfels kept but no normalisation). The bounds below fail on all of those. */
     /* LINK stores no factor: the runtime uses 1 / (pi * node.area) for the decoded node, i.e. the
      * linker's factor surfel_area / node.area times factor_scale. That must be 1 / (the node's leaf
      * count) — what links.c computed — for every linked node, and factor_scale must agree. */
     assert_true(fabs(m->factor_scale * M_PI * m->surfel_area - 1.0) < 1e-6);
     double *err_g = calloc(m->cache_count, sizeof *err_g), *err_l = calloc(m->cache_count, sizeof *err_l);
     uint32_t ng = 0, nlm = 0, used = 0;
+    double mean_g = 0.0, mean_l = 0.0; /* signed: < 0 is energy the runtime does not gather */
     for (uint32_t c = 0; c < m->cache_count; ++c) {
         double total = 0.0;
         for (uint32_t j = 0; j < m->links_per_cache; ++j) {
@@ -107,22 +113,33 @@ static void test_cornell_roundtrip(void **state) {
             total += 2.0 * M_PI * omc;
             used++;
         }
-        if (caches[c].kind == GLOW_CACHE_KIND_GRID) err_g[ng++] = fabs(total / (4.0 * M_PI) - 1.0);
-        else err_l[nlm++] = fabs(total / (2.0 * M_PI) - 1.0);
+        if (caches[c].kind == GLOW_CACHE_KIND_GRID) {
+            mean_g += total / (4.0 * M_PI) - 1.0;
+            err_g[ng++] = fabs(total / (4.0 * M_PI) - 1.0);
+        } else {
+            mean_l += total / (2.0 * M_PI) - 1.0;
+            err_l[nlm++] = fabs(total / (2.0 * M_PI) - 1.0);
+        }
     }
     assert_true(ng > 50 && nlm > 100);
     assert_true(used > m->cache_count * m->links_per_cache / 2);
     free(leaves);
     qsort(err_g, ng, sizeof *err_g, cmp_double);
     qsort(err_l, nlm, sizeof *err_l, cmp_double);
-    print_message("solid angle coverage error: grid median %.4f p95 %.4f max %.4f (%u caches); "
-                  "lightmap median %.4f p95 %.4f max %.4f (%u caches)\n",
-                  err_g[ng / 2], err_g[ng * 95 / 100], err_g[ng - 1], ng, err_l[nlm / 2], err_l[nlm * 95 / 100],
-                  err_l[nlm - 1], nlm);
-    assert_true(err_g[ng / 2] < 0.02);
-    assert_true(err_g[ng * 95 / 100] < 0.05);
-    assert_true(err_l[nlm / 2] < 0.025);
-    assert_true(err_l[nlm * 95 / 100] < 0.08);
+    mean_g /= ng;
+    mean_l /= nlm;
+    print_message("solid angle coverage error: grid mean %+.5f median %.5f p95 %.5f max %.5f (%u caches); "
+                  "lightmap mean %+.5f median %.5f p95 %.5f p99 %.5f max %.5f (%u caches)\n",
+                  mean_g, err_g[ng / 2], err_g[ng * 95 / 100], err_g[ng - 1], ng, mean_l, err_l[nlm / 2],
+                  err_l[nlm * 95 / 100], err_l[nlm * 99 / 100], err_l[nlm - 1], nlm);
+    assert_true(fabs(mean_g) < 0.002);
+    assert_true(err_g[ng / 2] < 0.002);
+    assert_true(err_g[ng * 95 / 100] < 0.005);
+    assert_true(err_g[ng - 1] < 0.02);
+    assert_true(mean_l > -0.006 && mean_l < 0.002);
+    assert_true(err_l[nlm / 2] < 0.002);
+    assert_true(err_l[nlm * 95 / 100] < 0.01);
+    assert_true(err_l[nlm - 1] < 0.25);
     free(err_g);
     free(err_l);
 
@@ -187,7 +204,7 @@ static void test_sh_links_roundtrip(void **state) {
             /* Band 1 of SHLK is c * Σ ω_i dir_i (y_1^-1, y_1^0, y_1^1 = c y, c z, c x): the same
              * ω-weighted mean direction LINK stores, so the decoded 12-bit direction must match it to
              * the codec's precision (< 0.04 deg) plus half rounding of the coefficients (< 2^-11 rad
-             * = 0.028 deg). Measured 0.051; one LSB off in dir_v gives 0.12. */
+             * = 0.028 deg). Measured 0.054; one LSB off in dir_v gives 0.12. */
             double d1[3] = {glow__half_to_float(coef[3 * GLOW_LINK_BLOCK + lane]),
                             glow__half_to_float(coef[1 * GLOW_LINK_BLOCK + lane]),
                             glow__half_to_float(coef[2 * GLOW_LINK_BLOCK + lane])};

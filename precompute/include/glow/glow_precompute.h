@@ -55,6 +55,9 @@ typedef struct glow_pc_settings {
     void *log_user;
     glow_pc_progress_fn progress; /* NULL = none */
     void *progress_user;
+    bool no_link_normalize;   /* false (default): scale each cache's link solid angles to the
+                                 ray-measured visible geometry (energy-conserving); true: leave the
+                                 disc/near-field estimates as they are (--no-link-normalize) */
 } glow_pc_settings;
 
 typedef struct glow_pc_stats {
