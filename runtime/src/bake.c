@@ -22,6 +22,7 @@
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
+#include <stdatomic.h>
 #include <string.h>
 
 #include "runtime_internal.h"
@@ -51,6 +52,7 @@ struct glow_bake {
     section_ref known[S_KNOWN_COUNT];
     glow_bake_meta meta; /* copy (also readable in place through glow__bake_meta) */
     uint16_t major, minor;
+    atomic_uint systems; /* live glow_systems using this bake */
 };
 
 /* Offset of the file image inside the allocation. */
@@ -554,6 +556,7 @@ static struct glow_bake *bake_alloc(glow_context *ctx, const char *name, uint64_
         return NULL;
     }
     memset(b, 0, sizeof *b);
+    atomic_init(&b->systems, 0u);
     b->ctx = ctx;
     return b;
 }
@@ -688,8 +691,44 @@ glow_result glow_bake_get_info(const glow_bake *bake, glow_bake_info *out_info) 
     return GLOW_OK;
 }
 
+void glow__bake_retain(const glow_bake *bake) { atomic_fetch_add(&((glow_bake *)bake)->systems, 1u); }
+void glow__bake_release(const glow_bake *bake) { atomic_fetch_sub(&((glow_bake *)bake)->systems, 1u); }
+
+glow_result glow_bake_get_geometry(const glow_bake *bake, glow_bake_geometry *out) {
+    if (out) memset(out, 0, sizeof *out);
+    if (!bake || !out) return GLOW_ERROR_INVALID_ARGUMENT;
+    const glow_bake_triangle *t = glow__bake_triangles(bake);
+    out->stride = (uint32_t)sizeof(glow_bake_triangle);
+    if (!t) return GLOW_OK;
+    out->triangle_count = bake->meta.triangle_count;
+    out->positions = t[0].position;
+    out->lightmap_uv = t[0].lm_uv;
+    out->materials = &t[0].material;
+    return GLOW_OK;
+}
+
+glow_result glow_bake_get_material(const glow_bake *bake, uint32_t index, glow_material_info *out) {
+    if (out) memset(out, 0, sizeof *out);
+    if (!bake || !out || index >= bake->meta.material_count) return GLOW_ERROR_INVALID_ARGUMENT;
+    const glow_bake_material *m = glow__bake_materials(bake) + index;
+    memcpy(out->name, m->name, sizeof out->name);
+    out->name[sizeof out->name - 1] = 0;
+    memcpy(out->albedo, m->albedo, sizeof out->albedo);
+    memcpy(out->emission, m->emission, sizeof out->emission);
+    out->has_albedo_texture = m->flags & 1u;
+    return GLOW_OK;
+}
+
 void glow_bake_destroy(glow_bake *bake) {
     if (!bake) return;
+    unsigned live = atomic_load(&bake->systems);
+    if (live) {
+        GLOW__LOG_ERROR(bake->ctx, GLOW_ERROR_INVALID_OPERATION,
+                        "glow_bake_destroy: %u system(s) still use this bake; destroy them first (the bake was not "
+                        "destroyed)",
+                        live);
+        return;
+    }
     glow__ctx_free(bake->ctx, bake);
 }
 

@@ -1,5 +1,8 @@
-/* context.c — glow_context: the host's allocator and logger hooks, shared by everything the
- * runtime creates. A context is immutable after creation, so any thread may use it. */
+/* context.c — glow_context: the host's allocator, logger and task hooks, shared by everything the
+ * runtime creates. A context is immutable after creation (except its lazily started worker pool,
+ * guarded by a mutex), so any thread may use it. */
+#define _POSIX_C_SOURCE 200809L
+#include <pthread.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -10,6 +13,12 @@
 struct glow_context {
     glow_allocator allocator; /* both hooks set, or both NULL (aligned malloc) */
     glow_logger logger;       /* log NULL = silent */
+    glow_task_hooks tasks;    /* parallel_for NULL = the built-in pool below */
+    glow__taskpool *pool;     /* built-in pool, started by the first parallel run (NULL with host tasks,
+                                 with one worker, or before first use) */
+    pthread_mutex_t pool_mutex;
+    atomic_bool pool_failed;  /* could not start: run serially */
+    uint32_t workers;         /* worker indices handed to task functions are < workers */
     atomic_ullong live;       /* allocations not yet freed */
 };
 
@@ -23,6 +32,12 @@ static void *default_alloc(size_t size, size_t align) {
 }
 
 void *glow__ctx_alloc(glow_context *ctx, size_t size, size_t align) {
+    void *p = glow__ctx_alloc_uncounted(ctx, size, align);
+    if (p) atomic_fetch_add_explicit(&ctx->live, 1u, memory_order_relaxed);
+    return p;
+}
+
+void *glow__ctx_alloc_uncounted(glow_context *ctx, size_t size, size_t align) {
     if (align == 0) align = 16;
     if (!is_pow2(align)) return NULL;
     if (align < sizeof(void *)) align = sizeof(void *);
@@ -36,13 +51,17 @@ void *glow__ctx_alloc(glow_context *ctx, size_t size, size_t align) {
         if (ctx->allocator.free) ctx->allocator.free(ctx->allocator.user, p);
         return NULL;
     }
-    if (p) atomic_fetch_add_explicit(&ctx->live, 1u, memory_order_relaxed);
     return p;
 }
 
 void glow__ctx_free(glow_context *ctx, void *ptr) {
     if (!ptr) return;
     atomic_fetch_sub_explicit(&ctx->live, 1u, memory_order_relaxed);
+    glow__ctx_free_uncounted(ctx, ptr);
+}
+
+void glow__ctx_free_uncounted(glow_context *ctx, void *ptr) {
+    if (!ptr) return;
     if (ctx->allocator.free)
         ctx->allocator.free(ctx->allocator.user, ptr);
     else
@@ -92,6 +111,16 @@ glow_result glow_context_create(const glow_context_desc *desc, glow_context **ou
                         "glow_context_create: allocator.alloc and allocator.free must both be set or both be NULL");
         return GLOW_ERROR_INVALID_ARGUMENT;
     }
+    if (desc->tasks.parallel_for && desc->tasks.worker_count == 0) {
+        GLOW__LOG_ERROR(&tmp, GLOW_ERROR_INVALID_ARGUMENT,
+                        "glow_context_create: tasks.parallel_for is set but tasks.worker_count is 0 (must be >= 1)");
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    if (desc->tasks.worker_count > 1024) {
+        GLOW__LOG_ERROR(&tmp, GLOW_ERROR_INVALID_ARGUMENT, "glow_context_create: tasks.worker_count %u > 1024",
+                        desc->tasks.worker_count);
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
     tmp.allocator = desc->allocator;
     atomic_init(&tmp.live, 0u);
 
@@ -103,13 +132,48 @@ glow_result glow_context_create(const glow_context_desc *desc, glow_context **ou
     }
     ctx->allocator = desc->allocator;
     ctx->logger = desc->logger;
+    ctx->tasks = desc->tasks;
+    ctx->pool = NULL;
     atomic_init(&ctx->live, 0u); /* the context's own block is not counted */
+    atomic_init(&ctx->pool_failed, false);
+    pthread_mutex_init(&ctx->pool_mutex, NULL);
+    /* The built-in pool starts with the first parallel run (a context that only loads bakes never
+     * starts threads); its blocks are not counted as live allocations: they are the context's. */
+    ctx->workers = desc->tasks.parallel_for ? desc->tasks.worker_count
+                                            : (desc->tasks.worker_count ? desc->tasks.worker_count : glow__online_cpus());
     *out_context = ctx;
     return GLOW_OK;
 }
 
+uint32_t glow__ctx_workers(const glow_context *ctx) { return ctx->workers; }
+
+void glow__ctx_run(glow_context *ctx, glow_task_fn fn, void *data, uint32_t count) {
+    if (count == 0) return;
+    if (ctx->tasks.parallel_for) {
+        ctx->tasks.parallel_for(ctx->tasks.user, fn, data, count);
+        return;
+    }
+    glow__taskpool *pool = count > 1 ? glow__ctx_start_pool(ctx) : NULL;
+    glow__taskpool_run(pool, fn, data, count); /* NULL pool: serial, on this thread */
+}
+
+glow__taskpool *glow__ctx_start_pool(glow_context *ctx) {
+    if (ctx->tasks.parallel_for || ctx->workers <= 1 || atomic_load(&ctx->pool_failed)) return NULL;
+    pthread_mutex_lock(&ctx->pool_mutex);
+    if (!ctx->pool && glow__taskpool_create(ctx, ctx->workers, &ctx->pool) != GLOW_OK) {
+        atomic_store(&ctx->pool_failed, true);
+        GLOW__LOG_WARNING(ctx, GLOW_ERROR_OUT_OF_MEMORY, "could not start the worker pool; running serially");
+    }
+    glow__taskpool *pool = ctx->pool;
+    pthread_mutex_unlock(&ctx->pool_mutex);
+    return pool;
+}
+
 void glow_context_destroy(glow_context *context) {
     if (!context) return;
+    glow__taskpool_destroy(context->pool);
+    context->pool = NULL;
+    pthread_mutex_destroy(&context->pool_mutex);
     uint64_t live = glow__ctx_live_allocations(context);
     if (live != 0)
         GLOW__LOG_WARNING(context, GLOW_ERROR_INVALID_OPERATION,

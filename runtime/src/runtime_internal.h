@@ -31,6 +31,9 @@
 void *glow__ctx_alloc(glow_context *ctx, size_t size, size_t align);
 /* Frees what glow__ctx_alloc returned (NULL is a no-op). */
 void glow__ctx_free(glow_context *ctx, void *ptr);
+/* The same without the live-allocation count (the context's own worker pool). */
+void *glow__ctx_alloc_uncounted(glow_context *ctx, size_t size, size_t align);
+void glow__ctx_free_uncounted(glow_context *ctx, void *ptr);
 
 /* Formats one message and hands it to the context's logger with `level` and `code`; `file` and
  * `line` name the runtime source location (use the GLOW__LOG* macros). ctx may be NULL (silent).
@@ -43,6 +46,23 @@ void glow__ctx_logv(glow_context *ctx, glow_log_level level, glow_result code, c
 #define GLOW__LOG_ERROR(ctx, code, ...) glow__ctx_log((ctx), GLOW_LOG_ERROR, (code), __FILE__, __LINE__, __VA_ARGS__)
 #define GLOW__LOG_WARNING(ctx, code, ...) \
     glow__ctx_log((ctx), GLOW_LOG_WARNING, (code), __FILE__, __LINE__, __VA_ARGS__)
+
+/* Workers task functions may see (worker index < this), >= 1. */
+uint32_t glow__ctx_workers(const glow_context *ctx);
+/* Runs fn(data, i, worker) for i in [0, count) on the host's parallel_for or the built-in pool and
+ * returns when all are done. Not reentrant (a task must not call it). */
+void glow__ctx_run(glow_context *ctx, glow_task_fn fn, void *data, uint32_t count);
+/* Starts the built-in pool now if the context uses one (systems call it at create, so no update
+ * ever allocates); returns it, or NULL when work runs on the host's tasks or serially. */
+struct glow__taskpool *glow__ctx_start_pool(glow_context *ctx);
+
+/* ---------------------------------------------------------------- built-in pool (pool.c) */
+typedef struct glow__taskpool glow__taskpool;
+glow_result glow__taskpool_create(glow_context *ctx, uint32_t threads, glow__taskpool **out); /* 0 = online CPUs */
+void glow__taskpool_destroy(glow__taskpool *pool);
+uint32_t glow__taskpool_threads(const glow__taskpool *pool);
+void glow__taskpool_run(glow__taskpool *pool, glow_task_fn fn, void *data, uint32_t count);
+uint32_t glow__online_cpus(void);
 
 /* Live allocations made through glow__ctx_alloc and not yet freed (leak checks in tests). */
 uint64_t glow__ctx_live_allocations(const glow_context *ctx);
@@ -73,6 +93,9 @@ const glow_bake_triangle *glow__bake_triangles(const glow_bake *bake);
 const void *glow__bake_section(const glow_bake *bake, uint32_t fourcc, uint64_t *out_size);
 /* The whole file image (header first) and its size. */
 const void *glow__bake_data(const glow_bake *bake, uint64_t *out_size);
+/* Systems using the bake (glow_bake_destroy refuses while any is live). */
+void glow__bake_retain(const glow_bake *bake);
+void glow__bake_release(const glow_bake *bake);
 /* The context the bake was loaded with. */
 glow_context *glow__bake_context(const glow_bake *bake);
 

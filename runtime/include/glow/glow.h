@@ -9,11 +9,24 @@
  * WHAT IT DOES NOT DO: it never includes GL or Embree, never reads files other than the bake, and
  * keeps no global state.
  *
- * USAGE (this version: bake loading and inspection)
+ * USAGE
  *   glow_context *ctx; glow_context_create(&(glow_context_desc){ .api_version = GLOW_VERSION }, &ctx);
  *   glow_bake *bake;   if (glow_bake_load_file(ctx, "scene.glow", &bake) != GLOW_OK) ...
- *   glow_bake_info info; glow_bake_get_info(bake, &info);
- *   glow_bake_destroy(bake); glow_context_destroy(ctx);
+ *   glow_system *sys;  glow_system_create(ctx, &(glow_system_desc){ .bake = bake,
+ *                          .lighting = { my_light_surfels, my_engine } }, &sys);
+ *   every frame:       glow_system_update(sys, NULL);          (calls my_light_surfels, in batches)
+ *                      const glow_cache_outputs *o = glow_system_outputs(sys);   upload o->lightmap_sh...
+ *   shading (C reference of the GLSL): glow_sample_grid / glow_sample_lightmap, then glow_shade_sh.
+ *   glow_system_destroy(sys); glow_bake_destroy(bake); glow_context_destroy(ctx);
+ *
+ * THE FRAME (PIC Fig. 2): (1) surfel lighting — the host's hook returns the direct irradiance at each
+ * surfel; Glow adds emission and the previous update's indirect light, multiplies by albedo and area:
+ * flux per surfel. (2) pull — flux summed up the surfel hierarchy. (3) cache lighting — every cache
+ * sums its links into spherical harmonics of incident radiance (runtime projection, PIC 4.6), luma
+ * and chroma (YCoCg) with their own band counts. (4) outputs — grid and lightmap textures.
+ *
+ * UNITS: linear RGB radiometry. Irradiance in W/m², radiance in W/(m²·sr), flux in W, lengths in
+ * the scene's unit ("m"). Cache SH hold *incident radiance* L(ω) = Σ c_lm y_lm(ω) in YCoCg.
  *
  * ON MEMORY: every byte goes through the context allocator (zero = malloc/free), at create/load
  * time only. Objects are destroyed with their *_destroy function; destroy(NULL) is a no-op.
@@ -88,10 +101,22 @@ typedef struct glow_logger {
     void *user;
 } glow_logger;
 
+/* Work the runtime hands to the host's job system: call fn(task_data, i, worker) for every i in
+ * [0, count) and return when all calls are done. `worker` must be < worker_count and no two calls
+ * running at the same time may share a worker number (the runtime keeps per-worker scratch). */
+typedef void (*glow_task_fn)(void *task_data, uint32_t index, uint32_t worker);
+typedef struct glow_task_hooks {
+    void (*parallel_for)(void *user, glow_task_fn fn, void *task_data, uint32_t count);
+    uint32_t worker_count; /* with parallel_for: the host's worker count (>= 1);
+                              without: threads of the built-in pool, 0 = one per online CPU, 1 = serial */
+    void *user;
+} glow_task_hooks;
+
 typedef struct glow_context_desc {
     uint32_t api_version;     /* must be GLOW_VERSION (major checked) */
     glow_allocator allocator; /* zero = malloc/free */
     glow_logger logger;       /* zero = silent */
+    glow_task_hooks tasks;    /* zero = built-in pool, one thread per online CPU */
 } glow_context_desc;
 
 typedef struct glow_context glow_context;
@@ -133,8 +158,218 @@ GLOW_API glow_result glow_bake_load(glow_context *context, const void *data, siz
 GLOW_API glow_result glow_bake_load_file(glow_context *context, const char *path, glow_bake **out_bake);
 /** Fills `out_info`. \since 0.1 */
 GLOW_API glow_result glow_bake_get_info(const glow_bake *bake, glow_bake_info *out_info);
-/** Destroys a bake (NULL is a no-op). \since 0.1 */
+/** Destroys a bake (NULL is a no-op). A bake still used by a system is not destroyed: the call logs
+ * GLOW_ERROR_INVALID_OPERATION and returns (destroy the systems first). \since 0.1 */
 GLOW_API void glow_bake_destroy(glow_bake *bake);
+
+/* The static geometry the bake was made from (the triangles the linker kept), for hosts that need
+ * it: shadow maps, ray-traced reference lighting, lightmap UVs. Views into the bake, valid until
+ * it is destroyed. */
+typedef struct glow_bake_geometry {
+    uint32_t triangle_count;
+    uint32_t stride;            /* bytes between consecutive triangles in every array below */
+    const float *positions;     /* per triangle: 9 floats, corners p0 p1 p2 (front face counter-clockwise) */
+    const uint16_t *lightmap_uv;/* per triangle: 6 unorm16 (u0 v0 u1 v1 u2 v2) of [0,1] */
+    const uint32_t *materials;  /* per triangle: material index */
+} glow_bake_geometry;
+/** Fills `out_geometry` (triangle_count 0 when the bake carries no geometry). \since 0.1 */
+GLOW_API glow_result glow_bake_get_geometry(const glow_bake *bake, glow_bake_geometry *out_geometry);
+
+typedef struct glow_material_info {
+    char name[32];
+    float albedo[3];   /* linear RGB (a texture, when flagged, is folded into the surfels) */
+    float emission[3]; /* emitted radiance W/(m²·sr), front face only */
+    uint32_t has_albedo_texture;
+} glow_material_info;
+/** Material `index` of the bake. \returns GLOW_ERROR_INVALID_ARGUMENT for NULL or a bad index. \since 0.1 */
+GLOW_API glow_result glow_bake_get_material(const glow_bake *bake, uint32_t index, glow_material_info *out_material);
+
+
+/* =============================================================================== system
+ * A glow_system is the per-bake solver state: surfel flux, node radiance, cache SH, outputs.
+ * Everything it needs is allocated in glow_system_create; glow_system_update allocates nothing. */
+typedef struct glow_system glow_system;
+
+#define GLOW_MAX_SH_BANDS 8u /* l = 1..8 bands, l*l coefficients */
+
+/* What the host's CPU hook sees: a contiguous range of the bake's surfels. */
+typedef struct glow_surfel_batch {
+    uint32_t first, count;  /* surfels [first, first + count) */
+    const float *positions; /* count x {x, y, z, area}: centre in m, area in m² (stride 16 bytes) */
+    const float *normals;   /* count x {x, y, z, 0}: unit front-face normal (stride 16 bytes) */
+    const uint32_t *materials; /* count: the bake's material index of each surfel */
+} glow_surfel_batch;
+
+/* The host's CPU lighting hook (PIC step 2).
+ * light_surfels writes, for each surfel of the batch, the DIRECT IRRADIANCE E (W/m², RGB, 3 floats
+ * per surfel, out_irradiance_rgb[3*i + c]) arriving at the surfel's front face from the host's lights,
+ * shadowed the way the host shadows (shadow maps, rays...): E = Σ_lights L_i cos θ_i dω_i. Not radiance,
+ * not multiplied by albedo, without emission and without indirect light: Glow adds those.
+ * Return GLOW_OK, or any other code to abort the update (glow_system_update then returns
+ * GLOW_ERROR_HOST_CALLBACK and keeps the previous outputs). NaN or Inf values abort the update the
+ * same way; negative values are clamped to 0 with a warning.
+ * \threadsafety Called from the runtime's workers (or the host's parallel_for), several batches at
+ * once; `worker` is the calling worker's index (< worker_count), for per-worker scratch. */
+typedef struct glow_lighting_hooks {
+    glow_result (*light_surfels)(void *user, const glow_surfel_batch *batch, float *out_irradiance_rgb,
+                                 uint32_t worker);
+    void *user; /* borrowed: must outlive the system */
+} glow_lighting_hooks;
+
+typedef struct glow_system_desc {
+    const glow_bake *bake;        /* required; borrowed: must outlive the system */
+    glow_lighting_hooks lighting; /* NULL light_surfels = the host pushes irradiance with
+                                     glow_system_set_surfel_irradiance (zero until it does) */
+    uint32_t sh_bands_luma;       /* 1..GLOW_MAX_SH_BANDS; 0 = the bake's sh_bands */
+    uint32_t sh_bands_chroma;     /* 1..sh_bands_luma; 0 = same as luma */
+    uint32_t surfel_batch_size;   /* surfels per hook call; 0 = 1024 */
+    const char *label;            /* copied; names the system in log messages; NULL = "system" */
+} glow_system_desc;
+
+/** Creates a solver for `desc->bake`: allocates every buffer, decodes nothing per frame.
+ * Outputs start at zero (no light) until the first update.
+ * \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT (NULL, band counts out of range, a bake without
+ * runtime-projection links); GLOW_ERROR_OUT_OF_MEMORY. *out_system is NULL on failure.
+ * \threadsafety Any thread; several systems may share one bake. \since 0.1 */
+GLOW_API glow_result glow_system_create(glow_context *context, const glow_system_desc *desc,
+                                        glow_system **out_system);
+/** Destroys a system (NULL is a no-op). \since 0.1 */
+GLOW_API void glow_system_destroy(glow_system *system);
+
+/** Pushes direct irradiance (W/m², RGB, as the hook would return it) for surfels
+ * [first, first + count); kept until pushed again. For hosts that compute surfel lighting elsewhere
+ * (for example on the GPU, read back). Used by updates when the system has no light_surfels hook.
+ * \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT (NULL, range outside the bake's surfels);
+ * GLOW_ERROR_HOST_CALLBACK when a value is NaN or Inf (nothing is stored); negative values are
+ * clamped to 0 with a warning. \threadsafety Not concurrently with other calls on the system. \since 0.1 */
+GLOW_API glow_result glow_system_set_surfel_irradiance(glow_system *system, uint32_t first, uint32_t count,
+                                                       const float *irradiance_rgb);
+
+/** Overrides the emitted radiance (W/(m²·sr), RGB, before the emission scales) of surfels
+ * [first, first + count), e.g. from an animated emissive texture the host samples at the surfels
+ * (glow_system_get_surfels gives their positions and triangles). NULL restores the bake's emission for
+ * the range. \returns as glow_system_set_surfel_irradiance. \since 0.1 */
+GLOW_API glow_result glow_system_set_surfel_emission(glow_system *system, uint32_t first, uint32_t count,
+                                                     const float *radiance_rgb);
+
+/** Read-only view of the bake's surfels in the layout the hook receives (for hosts that push). */
+typedef struct glow_surfel_view {
+    uint32_t count;
+    const float *positions;    /* count x {x, y, z, area} */
+    const float *normals;      /* count x {x, y, z, 0} */
+    const uint32_t *materials; /* count */
+    const uint32_t *triangles; /* count: the bake triangle (GEOM) each surfel lies on */
+} glow_surfel_view;
+/** Fills `out_view`; valid until the system is destroyed. \since 0.1 */
+GLOW_API glow_result glow_system_get_surfels(const glow_system *system, glow_surfel_view *out_view);
+
+/* Lighting-artist controls. All take effect at the next update and persist. */
+typedef struct glow_system_params {
+    float bounce_intensity;  /* indirect light fed back into surfel lighting: 0 = single bounce,
+                                1 = physical (default); clamped to [0, 1] */
+    float emission_scale;    /* multiplies all emission (default 1); >= 0 */
+    uint32_t bounce_iterations; /* feedback iterations per update (default 1): each one lights the
+                                   surfels again with the previous iteration's caches */
+} glow_system_params;
+/** Sets the artist controls. \returns GLOW_ERROR_INVALID_ARGUMENT for NaN, negative values or
+ * bounce_iterations 0 or > 64. \since 0.1 */
+GLOW_API glow_result glow_system_set_params(glow_system *system, const glow_system_params *params);
+GLOW_API glow_result glow_system_get_params(const glow_system *system, glow_system_params *out_params);
+
+/** Per-material scales (index into the bake's materials): emission_scale multiplies the material's
+ * emission (runtime-switchable area lights), albedo_scale its albedo (RGB). The effective albedo is
+ * clamped to [0, 0.999] so multi-bounce stays convergent. Defaults 1.
+ * \returns GLOW_ERROR_INVALID_ARGUMENT for a bad index, NaN or negative values. \since 0.1 */
+GLOW_API glow_result glow_system_set_material(glow_system *system, uint32_t material, const float emission_scale[3],
+                                              const float albedo_scale[3]);
+
+#define GLOW_UPDATE_FLAG_RESET_BOUNCE 1u /* forget the indirect light of previous updates first */
+#define GLOW_UPDATE_FLAG_KEEP_LIGHTING 2u /* reuse the last direct irradiance (do not call the hook) */
+
+typedef struct glow_update_desc {
+    uint32_t flags; /* GLOW_UPDATE_FLAG_* */
+} glow_update_desc;
+
+/* Wall-clock milliseconds of the last successful update, per stage (summed over bounce iterations). */
+typedef struct glow_update_stats {
+    double surfel_lighting_ms; /* host hook (or pushed values) + emission + feedback -> flux */
+    double host_ms;            /* the part of surfel_lighting_ms spent in the host's hook */
+    double pull_ms;
+    double cache_lighting_ms;
+    double output_ms;          /* grid and lightmap textures, seam/gutter copies */
+    double total_ms;
+    uint64_t links;            /* links gathered (cache_count * links_per_cache * iterations) */
+    uint64_t updates;          /* successful updates since create */
+} glow_update_stats;
+
+/** One frame: surfel lighting -> pull -> cache lighting -> outputs (x bounce_iterations).
+ * `desc` may be NULL. Allocates nothing.
+ * \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT (NULL system, unknown flags);
+ * GLOW_ERROR_HOST_CALLBACK when the hook failed or returned NaN/Inf: the outputs and the bounce
+ * state stay those of the last good update, and the system remains usable.
+ * \threadsafety One thread at a time per system (different systems may update concurrently).
+ * \since 0.1 */
+GLOW_API glow_result glow_system_update(glow_system *system, const glow_update_desc *desc);
+GLOW_API glow_result glow_system_get_stats(const glow_system *system, glow_update_stats *out_stats);
+
+/* Outputs: incident-radiance SH, YCoCg, in planar layout (one plane per coefficient) so each plane
+ * uploads as one layer of a float texture array (lightmap) or one 3D float texture (grid).
+ * Coefficient planes: k in [0, luma²) are Y's SH; then chroma² planes of Co, then chroma² of Cg.
+ * Y = R/4 + G/2 + B/4, Co = R/2 - B/2, Cg = -R/4 + G/2 - B/4 (PIC Eq. 7); glow_ycocg_to_rgb inverts.
+ * Empty grid cells and lightmap texels hold 0; lightmap gutter/seam texels hold a copy of their
+ * source texel's SH, so bilinear filtering never reads an empty texel inside a chart's footprint. */
+typedef struct glow_cache_outputs {
+    uint32_t sh_bands_luma, sh_bands_chroma;
+    uint32_t coeff_count;        /* luma² + 2 chroma²: planes per texel/cell, and floats per cache */
+    uint32_t cache_count, grid_cache_count, lightmap_cache_count;
+    const float *cache_sh;       /* [cache_count][coeff_count], the bake's cache order */
+    uint32_t grid_dims[3];       /* 0 when the bake has no grid */
+    float grid_origin[3];        /* centre of cell (0,0,0), m */
+    float grid_spacing;          /* m */
+    const float *grid_sh;        /* [coeff_count][dz][dy][dx], x fastest; NULL without a grid */
+    uint32_t lightmap_width, lightmap_height; /* 0 without a lightmap */
+    const float *lightmap_sh;    /* [coeff_count][height][width], row-major; NULL without a lightmap */
+    const uint32_t *grid_map;    /* [dz][dy][dx]: cache index of each cell, 0xFFFFFFFF = empty */
+    const uint32_t *lightmap_map;/* [height][width]: cache index of each texel (gutter and seam texels
+                                    name the cache they copy), 0xFFFFFFFF = empty */
+    uint64_t update_index;       /* successful updates so far */
+} glow_cache_outputs;
+/** The outputs, owned by the system, valid (and unchanged) until the next update or destroy.
+ * NULL for a NULL system. \threadsafety Read concurrently, but not during an update. \since 0.1 */
+GLOW_API const glow_cache_outputs *glow_system_outputs(const glow_system *system);
+
+/* ============================================================================ shading
+ * The C reference of the GLSL shading includes (PIC 3.2, App. B). Pure functions, any thread. */
+
+/** Real orthonormal SH basis (DESIGN §3): l bands -> l² values, index k² + k + m,
+ * y_1 = sqrt(3/4π) (y, z, x). `dir` must be unit length. bands 1..GLOW_MAX_SH_BANDS. \since 0.1 */
+GLOW_API void glow_sh_eval(uint32_t bands, const float dir[3], float *out);
+/** Cone projection factor k_l(x), x = cos of the cone half-angle (DESIGN §3):
+ * k_0 = 2π(1 - x), k_l = 2π/(2l+1) (P_{l-1}(x) - P_{l+1}(x)). \since 0.1 */
+GLOW_API float glow_sh_cone_factor(uint32_t l, float cos_half_angle);
+/** Lobe factor s_l of the normalised Phong lobe (n+1)/(2π) cos^n (PIC App. B): s_0 = 1,
+ * s_1 = (n+1)/(n+2), s_l = s_{l-2} (n+2-l)/(n+1+l). n = 1 is the diffuse cosine lobe. \since 0.1 */
+GLOW_API float glow_sh_lobe_factor(uint32_t l, float exponent);
+GLOW_API void glow_rgb_to_ycocg(const float rgb[3], float out_ycocg[3]);
+GLOW_API void glow_ycocg_to_rgb(const float ycocg[3], float out_rgb[3]);
+
+/** Convolves one cache's SH (`coeffs` in the output layout: luma² Y, chroma² Co, chroma² Cg) with
+ * the normalised Phong lobe of `exponent` around unit `axis`: the lobe-weighted mean incident
+ * radiance, RGB, W/(m²·sr). With exponent 1 and axis = the surface normal this is E/π, so a
+ * Lambertian surface of albedo ρ reflects radiance ρ·result; for a specular lobe pass the
+ * reflection vector. \since 0.1 */
+GLOW_API void glow_shade_sh(const float *coeffs, uint32_t sh_bands_luma, uint32_t sh_bands_chroma,
+                            const float axis[3], float exponent, float out_rgb[3]);
+
+/** Trilinear sample of the grid at `position` (m) into out_coeffs[coeff_count]. Cells without a
+ * cache get weight 0 and the rest are renormalised; outside the grid the position is clamped to it.
+ * \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT (NULL, no grid); GLOW_ERROR_OUT_OF_RANGE when no
+ * cache is among the 8 neighbours (out_coeffs zeroed). \since 0.1 */
+GLOW_API glow_result glow_sample_grid(const glow_cache_outputs *outputs, const float position[3], float *out_coeffs);
+/** Bilinear sample of the lightmap at (u, v) in [0,1]² (texel centres at (i + 0.5)/width; v = 0 is
+ * row 0), clamped to the edge, empty texels weighted 0 and the rest renormalised.
+ * \returns as glow_sample_grid. \since 0.1 */
+GLOW_API glow_result glow_sample_lightmap(const glow_cache_outputs *outputs, float u, float v, float *out_coeffs);
 
 #ifdef __cplusplus
 }

@@ -1,0 +1,182 @@
+/* cache_lighting.c — PIC step 4, the hot loop: every cache sums its links into SH of incident
+ * radiance with runtime projection (PIC 4.6):
+ *     L_lm += R[node] · k_l(1 - omc) · y_lm(dir)           for l < luma (Y), l < chroma (Co, Cg)
+ * where R is the node's radiance in YCoCg (flux / (π area), converted once per node, never per link).
+ *
+ * Layout (DESIGN §5): the bake's links come in SoA blocks of 16 (bake_format.h), so the kernel works
+ * on 8 lanes at a time *across links*, with no per-link branch: decode node, 12-bit octahedral
+ * direction and half-float cone, gather the three node radiances, evaluate P_l and y_lm on vectors,
+ * and accumulate luma² + 2·chroma² coefficients per lane; each cache reduces its lanes once, in a
+ * fixed order, so the result does not depend on which worker ran it.
+ *
+ * Two builds of the same source (cache_kernel.inc): AVX2+FMA+F16C (hardware gathers and half
+ * conversion) and a portable one; chosen once at run time with __builtin_cpu_supports. The band
+ * count is a compile-time constant in each (switch over 1..8) so the SH recurrences unroll. This
+ * file is compiled with -ffp-contract=fast (CMake) so a*b+c becomes FMA where the target has it. */
+#include <math.h>
+#include <string.h>
+
+#include "cache_lighting.h"
+
+/* The helpers below pass 32-byte vectors by value; they are static and always inlined, so no ABI
+ * boundary exists and GCC's note about the AVX calling convention does not apply. */
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wpsabi"
+#endif
+
+/* ------------------------------------------------------------------------------ portable */
+static inline glow__v8u load_u32_generic(const uint32_t *p) {
+    glow__v8u v;
+    memcpy(&v, p, sizeof v);
+    return v;
+}
+static inline glow__v8u load_u16_generic(const uint16_t *p) {
+    glow__v8u v;
+    for (int i = 0; i < 8; ++i) v[i] = p[i];
+    return v;
+}
+/* IEEE half -> float for finite non-negative-or-negative values including subnormals: move
+ * exponent+mantissa into float position and rebias by multiplying with 2^112. */
+static inline glow__v8f half8_generic(const uint16_t *p) {
+    glow__v8u h = load_u16_generic(p);
+    glow__v8u bits = ((h & 0x7FFFu) << 13) | ((h & 0x8000u) << 16);
+    return (glow__v8f)bits * 5.192296858534828e+33f; /* 2^112 */
+}
+static inline glow__v8f gather_generic(const float *base, glow__v8u idx) {
+    glow__v8f v;
+    for (int i = 0; i < 8; ++i) v[i] = base[idx[i]];
+    return v;
+}
+static inline glow__v8f sqrt8_generic(glow__v8f x) {
+    for (int i = 0; i < 8; ++i) x[i] = sqrtf(x[i]);
+    return x;
+}
+
+#define VF glow__v8f
+#define VU glow__v8u
+#define VI glow__v8i
+#define LANES 8
+#define SH_EVAL glow__sh_eval_v8
+#define KFN(name) name##_generic
+#define KATTR
+#define LOAD_U32(p) load_u32_generic(p)
+#define LOAD_U16(p) load_u16_generic(p)
+#define HALF8(p) half8_generic(p)
+#define GATHER(base, idx) gather_generic((base), (idx))
+#define SQRT8(x) sqrt8_generic(x)
+#include "cache_kernel.inc"
+#undef KFN
+#undef KATTR
+#undef LOAD_U32
+#undef LOAD_U16
+#undef HALF8
+#undef GATHER
+#undef SQRT8
+#undef VF
+#undef VU
+#undef VI
+#undef LANES
+#undef SH_EVAL
+
+/* ------------------------------------------------------------------------------ AVX2 */
+#if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
+#include <immintrin.h>
+#define GLOW__HAVE_AVX2_KERNEL 1
+#define VF glow__v8f
+#define VU glow__v8u
+#define VI glow__v8i
+#define LANES 8
+#define SH_EVAL glow__sh_eval_v8
+#define KFN(name) name##_avx2
+#define KATTR __attribute__((target("avx2,fma,f16c")))
+#define LOAD_U32(p) ((glow__v8u)_mm256_loadu_si256((const __m256i *)(const void *)(p)))
+#define LOAD_U16(p) ((glow__v8u)_mm256_cvtepu16_epi32(_mm_loadu_si128((const __m128i *)(const void *)(p))))
+#define HALF8(p) ((glow__v8f)_mm256_cvtph_ps(_mm_loadu_si128((const __m128i *)(const void *)(p))))
+#define GATHER(base, idx) ((glow__v8f)_mm256_i32gather_ps((base), (__m256i)(idx), 4))
+#define SQRT8(x) ((glow__v8f)_mm256_sqrt_ps((__m256)(x)))
+/* the inline helpers of the .inc must also carry the target to be inlined into KATTR code */
+#pragma GCC push_options
+#pragma GCC target("avx2,fma,f16c")
+#include "cache_kernel.inc"
+#pragma GCC pop_options
+#undef KFN
+#undef KATTR
+#undef LOAD_U32
+#undef LOAD_U16
+#undef HALF8
+#undef GATHER
+#undef SQRT8
+#undef VF
+#undef VU
+#undef VI
+#undef LANES
+#undef SH_EVAL
+
+/* AVX-512: a whole 16-link block per step, and 32 vector registers, so the luma² + 2 chroma²
+ * accumulators of l = 3 stay in registers instead of spilling (the AVX2 build's main cost). */
+#pragma GCC push_options
+#pragma GCC target("avx512f,fma,f16c")
+GLOW__SH_EVAL_DEFINE(glow__sh_eval_v16, glow__v16f)
+#define VF glow__v16f
+#define VU glow__v16u
+#define VI glow__v16i
+#define LANES 16
+#define SH_EVAL glow__sh_eval_v16
+#define KFN(name) name##_avx512
+#define KATTR __attribute__((target("avx512f,fma,f16c")))
+#define LOAD_U32(p) ((glow__v16u)_mm512_loadu_si512((const void *)(p)))
+#define LOAD_U16(p) ((glow__v16u)_mm512_cvtepu16_epi32(_mm256_loadu_si256((const __m256i *)(const void *)(p))))
+#define HALF8(p) ((glow__v16f)_mm512_cvtph_ps(_mm256_loadu_si256((const __m256i *)(const void *)(p))))
+#define GATHER(base, idx) ((glow__v16f)_mm512_i32gather_ps((__m512i)(idx), (base), 4))
+#define SQRT8(x) ((glow__v16f)_mm512_sqrt_ps((__m512)(x)))
+#include "cache_kernel.inc"
+#pragma GCC pop_options
+#define GLOW__HAVE_AVX512_KERNEL 1
+#endif
+
+static int has_avx2(void) {
+#ifdef GLOW__HAVE_AVX2_KERNEL
+    __builtin_cpu_init();
+    return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") && __builtin_cpu_supports("f16c");
+#else
+    return 0;
+#endif
+}
+
+static int has_avx512(void) {
+#ifdef GLOW__HAVE_AVX512_KERNEL
+    __builtin_cpu_init();
+    return __builtin_cpu_supports("avx512f") && has_avx2();
+#else
+    return 0;
+#endif
+}
+
+glow__cl_isa glow__cl_best_isa(void) {
+    if (has_avx512()) return GLOW__CL_AVX512;
+    return has_avx2() ? GLOW__CL_AVX2 : GLOW__CL_GENERIC;
+}
+
+int glow__cl_isa_supported(glow__cl_isa isa) {
+    return isa == GLOW__CL_GENERIC || (isa == GLOW__CL_AVX2 && has_avx2()) || (isa == GLOW__CL_AVX512 && has_avx512());
+}
+
+const char *glow__cl_isa_name(glow__cl_isa isa) {
+    return isa == GLOW__CL_AVX512 ? "avx512f" : isa == GLOW__CL_AVX2 ? "avx2+fma+f16c" : "generic";
+}
+
+void glow__cl_light_caches(const glow__cl_args *a, uint32_t first, uint32_t count) {
+#ifdef GLOW__HAVE_AVX512_KERNEL
+    if (a->isa == GLOW__CL_AVX512) {
+        light_range_avx512(a, first, count);
+        return;
+    }
+#endif
+#ifdef GLOW__HAVE_AVX2_KERNEL
+    if (a->isa == GLOW__CL_AVX2) {
+        light_range_avx2(a, first, count);
+        return;
+    }
+#endif
+    light_range_generic(a, first, count);
+}

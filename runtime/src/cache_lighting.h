@@ -1,0 +1,26 @@
+/* cache_lighting.h — the cache-lighting kernel (cache_lighting.c), shared by system.c and tests. */
+#ifndef GLOW_CACHE_LIGHTING_H
+#define GLOW_CACHE_LIGHTING_H
+
+#include "runtime_internal.h"
+#include "sh_kernel.h"
+
+typedef enum glow__cl_isa { GLOW__CL_GENERIC = 0, GLOW__CL_AVX2 = 1, GLOW__CL_AVX512 = 2 } glow__cl_isa;
+
+typedef struct glow__cl_args {
+    const glow_bake_link_block *blocks; /* [cache_count * blocks_per_cache] */
+    uint32_t blocks_per_cache;
+    const float *rad_y, *rad_co, *rad_cg; /* node radiance, YCoCg, [node_count] each */
+    uint32_t luma, chroma;                /* bands: 1 <= chroma <= luma <= 8 */
+    uint32_t coeffs;                      /* floats per cache in cache_sh (>= luma² + 2 chroma²) */
+    float *cache_sh;                      /* out: [cache][coeffs]: Y luma², Co chroma², Cg chroma² */
+    glow__cl_isa isa;
+} glow__cl_args;
+
+/* Lights caches [first, first + count). Reads only `a`'s inputs, writes only those caches' rows. */
+void glow__cl_light_caches(const glow__cl_args *a, uint32_t first, uint32_t count);
+glow__cl_isa glow__cl_best_isa(void);
+int glow__cl_isa_supported(glow__cl_isa isa); /* this CPU runs it */
+const char *glow__cl_isa_name(glow__cl_isa isa);
+
+#endif /* GLOW_CACHE_LIGHTING_H */

@@ -1,0 +1,138 @@
+/* sh.c — the shading maths in C (PIC 3.2, App. B), the reference for the GLSL includes: SH basis,
+ * cone and lobe factors, YCoCg, lobe convolution, grid and lightmap sampling. */
+#include <math.h>
+#include <string.h>
+
+#include "runtime_internal.h"
+#include "sh_kernel.h"
+
+#define PI_D 3.14159265358979323846
+
+void glow_sh_eval(uint32_t bands, const float dir[3], float *out) {
+    if (!dir || !out || bands == 0) return;
+    if (bands > GLOW__MAX_BANDS) bands = GLOW__MAX_BANDS;
+    glow__v8f x = {dir[0]}, y = {dir[1]}, z = {dir[2]}; /* lane 0 used */
+    glow__v8f v[GLOW__MAX_BANDS * GLOW__MAX_BANDS];
+    glow__sh_eval_v8(bands, &x, &y, &z, v);
+    for (uint32_t k = 0; k < bands * bands; ++k) out[k] = v[k][0];
+}
+
+static double legendre(uint32_t l, double x) {
+    if (l == 0) return 1.0;
+    double p0 = 1.0, p1 = x;
+    for (uint32_t k = 2; k <= l; ++k) {
+        double p2 = ((2.0 * k - 1.0) * x * p1 - (k - 1.0) * p0) / (double)k;
+        p0 = p1;
+        p1 = p2;
+    }
+    return p1;
+}
+
+float glow_sh_cone_factor(uint32_t l, float x) {
+    if (l == 0) return (float)(2.0 * PI_D * (1.0 - (double)x));
+    return (float)(2.0 * PI_D / (2.0 * l + 1.0) * (legendre(l - 1, x) - legendre(l + 1, x)));
+}
+
+float glow_sh_lobe_factor(uint32_t l, float n) {
+    /* s_0 = 1, s_1 = (n+1)/(n+2), s_l = s_{l-2} (n+2-l)/(n+1+l) */
+    double s = (l & 1u) ? ((double)n + 1.0) / ((double)n + 2.0) : 1.0;
+    for (uint32_t k = (l & 1u) ? 3u : 2u; k <= l; k += 2u) s *= ((double)n + 2.0 - k) / ((double)n + 1.0 + k);
+    return (float)s;
+}
+
+void glow_rgb_to_ycocg(const float rgb[3], float out[3]) {
+    const float r = rgb[0], g = rgb[1], b = rgb[2];
+    out[0] = 0.25f * r + 0.5f * g + 0.25f * b;
+    out[1] = 0.5f * r - 0.5f * b;
+    out[2] = -0.25f * r + 0.5f * g - 0.25f * b;
+}
+
+void glow_ycocg_to_rgb(const float ycocg[3], float out[3]) {
+    const float y = ycocg[0], co = ycocg[1], cg = ycocg[2];
+    out[0] = y + co - cg;
+    out[1] = y + cg;
+    out[2] = y - co - cg;
+}
+
+void glow_shade_sh(const float *coeffs, uint32_t luma, uint32_t chroma, const float axis[3], float exponent,
+                   float out_rgb[3]) {
+    if (!out_rgb) return;
+    out_rgb[0] = out_rgb[1] = out_rgb[2] = 0.0f;
+    if (!coeffs || !axis || luma == 0 || luma > GLOW__MAX_BANDS || chroma > luma) return;
+    float y[GLOW__MAX_BANDS * GLOW__MAX_BANDS];
+    glow_sh_eval(luma, axis, y);
+    const float *co = coeffs + luma * luma, *cg = co + chroma * chroma;
+    float ycc[3] = {0, 0, 0};
+    for (uint32_t l = 0; l < luma; ++l) {
+        float s = glow_sh_lobe_factor(l, exponent);
+        float sy = 0.0f, sco = 0.0f, scg = 0.0f;
+        for (uint32_t k = l * l; k < (l + 1) * (l + 1); ++k) {
+            sy += coeffs[k] * y[k];
+            if (l < chroma) {
+                sco += co[k] * y[k];
+                scg += cg[k] * y[k];
+            }
+        }
+        ycc[0] += s * sy;
+        ycc[1] += s * sco;
+        ycc[2] += s * scg;
+    }
+    glow_ycocg_to_rgb(ycc, out_rgb);
+}
+
+/* Weighted sum of cache rows; empty entries get weight 0 and the rest are renormalised. */
+static glow_result blend(const glow_cache_outputs *o, const uint32_t *idx, const float *w, int n, float *out) {
+    const uint32_t nc = o->coeff_count;
+    memset(out, 0, nc * sizeof *out);
+    float wsum = 0.0f;
+    for (int i = 0; i < n; ++i)
+        if (idx[i] != GLOW_MAP_EMPTY && w[i] > 0.0f) wsum += w[i];
+    if (!(wsum > 0.0f)) return GLOW_ERROR_OUT_OF_RANGE;
+    for (int i = 0; i < n; ++i) {
+        if (idx[i] == GLOW_MAP_EMPTY || !(w[i] > 0.0f)) continue;
+        const float *row = o->cache_sh + (size_t)idx[i] * nc;
+        float wi = w[i] / wsum;
+        for (uint32_t k = 0; k < nc; ++k) out[k] += wi * row[k];
+    }
+    return GLOW_OK;
+}
+
+static void axis_coord(float f, uint32_t dim, uint32_t *i0, uint32_t *i1, float *t) {
+    float maxf = (float)(dim - 1u);
+    if (!(f > 0.0f)) f = 0.0f; /* also NaN */
+    if (f > maxf) f = maxf;
+    float fl = floorf(f);
+    *i0 = (uint32_t)fl;
+    *i1 = *i0 + 1u < dim ? *i0 + 1u : *i0;
+    *t = f - fl;
+}
+
+glow_result glow_sample_grid(const glow_cache_outputs *o, const float p[3], float *out) {
+    if (!o || !p || !out || !o->grid_map || o->grid_dims[0] == 0 || !(o->grid_spacing > 0.0f))
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    uint32_t i0[3], i1[3];
+    float t[3];
+    for (int a = 0; a < 3; ++a) axis_coord((p[a] - o->grid_origin[a]) / o->grid_spacing, o->grid_dims[a], &i0[a], &i1[a], &t[a]);
+    uint32_t idx[8];
+    float w[8];
+    const uint32_t dx = o->grid_dims[0], dxy = dx * o->grid_dims[1];
+    for (int c = 0; c < 8; ++c) {
+        uint32_t x = (c & 1) ? i1[0] : i0[0], y = (c & 2) ? i1[1] : i0[1], z = (c & 4) ? i1[2] : i0[2];
+        w[c] = ((c & 1) ? t[0] : 1.0f - t[0]) * ((c & 2) ? t[1] : 1.0f - t[1]) * ((c & 4) ? t[2] : 1.0f - t[2]);
+        idx[c] = o->grid_map[(size_t)z * dxy + (size_t)y * dx + x];
+    }
+    return blend(o, idx, w, 8, out);
+}
+
+glow_result glow_sample_lightmap(const glow_cache_outputs *o, float u, float v, float *out) {
+    if (!out || !o || !o->lightmap_map || o->lightmap_width == 0) return GLOW_ERROR_INVALID_ARGUMENT;
+    uint32_t x0, x1, y0, y1;
+    float tx, ty;
+    axis_coord(u * (float)o->lightmap_width - 0.5f, o->lightmap_width, &x0, &x1, &tx);
+    axis_coord(v * (float)o->lightmap_height - 0.5f, o->lightmap_height, &y0, &y1, &ty);
+    const uint32_t W = o->lightmap_width;
+    uint32_t idx[4] = {o->lightmap_map[(size_t)y0 * W + x0], o->lightmap_map[(size_t)y0 * W + x1],
+                       o->lightmap_map[(size_t)y1 * W + x0], o->lightmap_map[(size_t)y1 * W + x1]};
+    float w[4] = {(1 - tx) * (1 - ty), tx * (1 - ty), (1 - tx) * ty, tx * ty};
+    return blend(o, idx, w, 4, out);
+}

@@ -1,0 +1,652 @@
+/* system.c — glow_system: the per-frame CPU solver (PIC Fig. 2, steps 2-4), DESIGN §1.
+ *
+ * Buffers (all allocated in glow_system_create; an update allocates nothing):
+ *   surfels  pos4/nrm4 (what the hook sees), albedo, emission, direct irradiance (two buffers: the
+ *            hook writes the spare one, which becomes current only when every batch was valid),
+ *            feedback weights π s_l y_lm(n) and the indirect-albedo cap (see below)
+ *   nodes    flux and radiance, planar Y | Co | Cg (the pull and the gather read one plane at a time)
+ *   caches   cache_sh [cache][coeffs] (the bounce state), then the planar grid and lightmap outputs
+ *
+ * One update, per bounce iteration:
+ *   surfel flux   B = ρ E_direct + ρ_ind · bounce · max(0, E_indirect) + π L_e · scales;  Φ = B · area
+ *                 E_indirect = the surfel's feedback cache convolved with the cosine lobe (the
+ *                 previous iteration's caches: progressive multi-bounce, PIC 4.1)
+ *   pull          Φ summed up the hierarchy, level by level; node radiance R = Φ / (π area)
+ *   cache light   cache_lighting.c
+ * then the outputs (planar textures with lightmap gutter/seam copies).
+ *
+ * Why it cannot diverge: with node radiances bounded by R_max, the indirect irradiance a surfel
+ * gathers through its cache's links is at most G_s · R_max, where G_s = Σ_links |w_j(n_s)| is
+ * computed once at create from the decoded links (w_j: the link's weight in the cosine-lobe
+ * convolution, by the SH addition theorem w_j = π Σ_l s_l k_l(x_j) (2l+1)/(4π) P_l(d_j·n_s)).
+ * Capping the albedo used for indirect light at ρ_ind ≤ 0.999 π / G_s makes one bounce a
+ * contraction with factor ≤ 0.999 · bounce_intensity in the max norm, whatever the links'
+ * discretisation error or SH ringing. In a well-linked closed scene G_s ≈ π, so the cap
+ * (≈ 0.999) only bites for albedos the API clamps anyway.
+ */
+#define _POSIX_C_SOURCE 200809L
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "cache_lighting.h"
+#include "runtime_internal.h"
+
+#define PI_F 3.14159265358979323846f
+#define SURFEL_CHUNK 2048u
+#define NODE_CHUNK 8192u
+#define CACHE_CHUNK 16u
+#define MAX_ITERATIONS 64u
+#define ALBEDO_MAX 0.999f
+
+enum { ST_OK = 0, ST_HOOK_FAILED = 1, ST_NONFINITE = 2 };
+
+struct glow_system {
+    glow_context *ctx;
+    const glow_bake *bake;
+    const glow_bake_meta *meta;
+    const glow_bake_node *nodes;
+    const uint32_t *level_starts;
+    char label[64];
+    glow_lighting_hooks hooks;
+    uint32_t S, N, C, M, levels, bpc, batch, nbatches;
+    uint32_t luma, chroma, coeffs, fbk; /* fbk = luma² feedback weights per surfel */
+    glow__cl_isa isa;
+    /* surfels */
+    float *pos4, *nrm4;
+    uint32_t *mat, *tri, *feedback;
+    float *albedo, *emis_base, *emis;
+    float *direct, *direct_spare;
+    float *fb_w;       /* [S][luma²] π s_l(1) y_lm(n_s) */
+    float *rho_ind_max;/* [S] 0.999 π / G_s (cap of the albedo applied to indirect light) */
+    /* nodes */
+    float *flux; /* 3 planes of N */
+    float *rad;  /* 3 planes of N */
+    float *inv_pi_area;
+    /* caches and outputs */
+    float *cache_sh;
+    float *grid_sh, *lm_sh;
+    uint32_t *grid_map, *lm_map;
+    size_t grid_cells, lm_texels;
+    glow_cache_outputs out;
+    /* controls */
+    glow_system_params params;
+    float *mat_emis_scale, *mat_albedo_scale; /* [M][3] */
+    /* per-update bookkeeping */
+    uint8_t *batch_status;
+    uint32_t *batch_negative;
+    glow_update_stats stats;
+    /* per-stage task arguments */
+    uint32_t pull_first, pull_count;
+};
+
+/* ------------------------------------------------------------------------------------------ */
+static double now_ms(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
+}
+
+static uint32_t div_up(uint32_t a, uint32_t b) { return (a + b - 1u) / b; }
+
+static void to_ycocg(const float rgb[3], float *y, float *co, float *cg) {
+    *y = 0.25f * rgb[0] + 0.5f * rgb[1] + 0.25f * rgb[2];
+    *co = 0.5f * rgb[0] - 0.5f * rgb[2];
+    *cg = -0.25f * rgb[0] + 0.5f * rgb[1] - 0.25f * rgb[2];
+}
+
+/* ------------------------------------------------------------------------------ stage tasks */
+/* surfel lighting: one hook call per batch, into the spare buffer, checked */
+static void task_hook(void *data, uint32_t b, uint32_t worker) {
+    glow_system *s = data;
+    uint32_t first = b * s->batch, count = s->S - first < s->batch ? s->S - first : s->batch;
+    glow_surfel_batch batch = {.first = first,
+                               .count = count,
+                               .positions = s->pos4 + 4 * (size_t)first,
+                               .normals = s->nrm4 + 4 * (size_t)first,
+                               .materials = s->mat + first};
+    float *out = s->direct_spare + 3 * (size_t)first;
+    glow_result r = s->hooks.light_surfels(s->hooks.user, &batch, out, worker);
+    if (r != GLOW_OK) {
+        s->batch_status[b] = ST_HOOK_FAILED;
+        return;
+    }
+    uint32_t neg = 0;
+    uint8_t st = ST_OK;
+    for (size_t i = 0; i < 3 * (size_t)count; ++i) {
+        float v = out[i];
+        if (!isfinite(v)) {
+            st = ST_NONFINITE;
+            break;
+        }
+        if (v < 0.0f) {
+            out[i] = 0.0f;
+            neg++;
+        }
+    }
+    s->batch_status[b] = st;
+    s->batch_negative[b] = neg;
+}
+
+/* surfel flux for surfels [k*SURFEL_CHUNK, ...): leaves of the node arrays */
+static void task_flux(void *data, uint32_t k, uint32_t worker) {
+    (void)worker;
+    glow_system *s = data;
+    const uint32_t first = k * SURFEL_CHUNK, end = first + SURFEL_CHUNK < s->S ? first + SURFEL_CHUNK : s->S;
+    const uint32_t L2 = s->luma * s->luma, C2 = s->chroma * s->chroma, nc = s->coeffs;
+    const float bounce = s->params.bounce_intensity, es = s->params.emission_scale;
+    const float area = s->meta->surfel_area;
+    const size_t N = s->N;
+    for (uint32_t i = first; i < end; ++i) {
+        const uint32_t m = s->mat[i];
+        const float *ms = s->mat_albedo_scale + 3 * (size_t)m, *me = s->mat_emis_scale + 3 * (size_t)m;
+        float ind[3] = {0, 0, 0};
+        if (bounce > 0.0f) {
+            const float *sh = s->cache_sh + (size_t)s->feedback[i] * nc, *w = s->fb_w + (size_t)i * s->fbk;
+            float ycc[3] = {0, 0, 0};
+            for (uint32_t q = 0; q < L2; ++q) ycc[0] += w[q] * sh[q];
+            for (uint32_t q = 0; q < C2; ++q) {
+                ycc[1] += w[q] * sh[L2 + q];
+                ycc[2] += w[q] * sh[L2 + C2 + q];
+            }
+            glow_ycocg_to_rgb(ycc, ind);
+        }
+        float B[3];
+        for (int c = 0; c < 3; ++c) {
+            float rho = s->albedo[3 * (size_t)i + c] * ms[c];
+            rho = rho < 0.0f ? 0.0f : (rho > ALBEDO_MAX ? ALBEDO_MAX : rho);
+            float rho_ind = rho < s->rho_ind_max[i] ? rho : s->rho_ind_max[i];
+            float e_ind = ind[c] > 0.0f ? ind[c] * bounce : 0.0f;
+            B[c] = rho * s->direct[3 * (size_t)i + c] + rho_ind * e_ind + PI_F * s->emis[3 * (size_t)i + c] * es * me[c];
+        }
+        float fy, fco, fcg;
+        to_ycocg(B, &fy, &fco, &fcg);
+        s->flux[i] = fy * area;
+        s->flux[N + i] = fco * area;
+        s->flux[2 * N + i] = fcg * area;
+        const float ipa = s->inv_pi_area[i];
+        s->rad[i] = s->flux[i] * ipa;
+        s->rad[N + i] = s->flux[N + i] * ipa;
+        s->rad[2 * N + i] = s->flux[2 * N + i] * ipa;
+    }
+}
+
+static void pull_range(glow_system *s, uint32_t first, uint32_t end) {
+    const size_t N = s->N;
+    float *f = s->flux, *r = s->rad;
+    for (uint32_t n = first; n < end; ++n) {
+        const uint32_t a = s->nodes[n].child[0], b = s->nodes[n].child[1];
+        const float ipa = s->inv_pi_area[n];
+        for (size_t p = 0; p < 3 * N; p += N) {
+            f[p + n] = f[p + a] + f[p + b];
+            r[p + n] = f[p + n] * ipa;
+        }
+    }
+}
+
+static void task_pull(void *data, uint32_t k, uint32_t worker) {
+    (void)worker;
+    glow_system *s = data;
+    uint32_t first = s->pull_first + k * NODE_CHUNK, end = s->pull_first + s->pull_count;
+    if (first + NODE_CHUNK < end) end = first + NODE_CHUNK;
+    pull_range(s, first, end);
+}
+
+static void task_caches(void *data, uint32_t k, uint32_t worker) {
+    (void)worker;
+    glow_system *s = data;
+    const size_t N = s->N;
+    glow__cl_args a = {.blocks = glow__bake_link_blocks(s->bake),
+                       .blocks_per_cache = s->bpc,
+                       .rad_y = s->rad,
+                       .rad_co = s->rad + N,
+                       .rad_cg = s->rad + 2 * N,
+                       .luma = s->luma,
+                       .chroma = s->chroma,
+                       .coeffs = s->coeffs,
+                       .cache_sh = s->cache_sh,
+                       .isa = s->isa};
+    uint32_t first = k * CACHE_CHUNK, count = s->C - first < CACHE_CHUNK ? s->C - first : CACHE_CHUNK;
+    glow__cl_light_caches(&a, first, count);
+}
+
+/* outputs: tasks [0, g) fill the grid planes (g = coeffs with a grid, else 0), the rest the lightmap's */
+static void task_output(void *data, uint32_t q, uint32_t worker) {
+    (void)worker;
+    glow_system *s = data;
+    const uint32_t nc = s->coeffs, g = s->grid_cells ? nc : 0u;
+    const bool grid = q < g;
+    const uint32_t k = grid ? q : q - g;
+    const uint32_t *map = grid ? s->grid_map : s->lm_map;
+    const size_t n = grid ? s->grid_cells : s->lm_texels;
+    float *plane = (grid ? s->grid_sh : s->lm_sh) + (size_t)k * n;
+    for (size_t i = 0; i < n; ++i) plane[i] = map[i] == GLOW_MAP_EMPTY ? 0.0f : s->cache_sh[(size_t)map[i] * nc + k];
+}
+
+/* create-time: feedback weights and the indirect-albedo cap, per surfel */
+static void task_feedback_setup(void *data, uint32_t k, uint32_t worker) {
+    (void)worker;
+    glow_system *s = data;
+    const uint32_t first = k * SURFEL_CHUNK, end = first + SURFEL_CHUNK < s->S ? first + SURFEL_CHUNK : s->S;
+    const uint32_t L = s->luma;
+    float sl[GLOW__MAX_BANDS];
+    for (uint32_t l = 0; l < L; ++l) sl[l] = glow_sh_lobe_factor(l, 1.0f);
+    const glow_bake_link_block *blocks = glow__bake_link_blocks(s->bake);
+    const uint32_t nl = s->meta->links_per_cache;
+    for (uint32_t i = first; i < end; ++i) {
+        const float *n = s->nrm4 + 4 * (size_t)i;
+        float y[GLOW__MAX_BANDS * GLOW__MAX_BANDS];
+        glow_sh_eval(L, n, y);
+        for (uint32_t l = 0; l < L; ++l)
+            for (uint32_t q = l * l; q < (l + 1) * (l + 1); ++q) s->fb_w[(size_t)i * s->fbk + q] = PI_F * sl[l] * y[q];
+        /* G_s */
+        double G = 0.0;
+        const glow_bake_link_block *b = blocks + (size_t)s->feedback[i] * s->bpc;
+        for (uint32_t j = 0; j < nl; ++j) {
+            const glow_bake_link_block *bb = b + j / GLOW_LINK_BLOCK;
+            uint32_t lane = j % GLOW_LINK_BLOCK;
+            float omc = glow__half_to_float(bb->one_minus_cos[lane]);
+            if (!(omc > 0.0f)) continue;
+            uint32_t du, dv;
+            glow_bake_link_dir12(bb, lane, &du, &dv);
+            float d[3];
+            glow__oct_decode12(du, dv, d);
+            double x = 1.0 - omc, t = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
+            /* Legendre in x (cone) up to L, and in t (angle to the normal) up to L-1 */
+            double Px[GLOW__MAX_BANDS + 2], Pt[GLOW__MAX_BANDS + 1];
+            Px[0] = 1.0; Px[1] = x; Pt[0] = 1.0; Pt[1] = t;
+            for (uint32_t l = 1; l <= L; ++l) Px[l + 1] = ((2.0 * l + 1.0) * x * Px[l] - l * Px[l - 1]) / (l + 1.0);
+            for (uint32_t l = 1; l + 1 < L; ++l) Pt[l + 1] = ((2.0 * l + 1.0) * t * Pt[l] - l * Pt[l - 1]) / (l + 1.0);
+            double w = 0.0;
+            for (uint32_t l = 0; l < L; ++l) {
+                double kl = l == 0 ? 2.0 * 3.14159265358979323846 * omc
+                                   : 2.0 * 3.14159265358979323846 / (2.0 * l + 1.0) * (Px[l - 1] - Px[l + 1]);
+                w += sl[l] * kl * (2.0 * l + 1.0) / (4.0 * 3.14159265358979323846) * Pt[l];
+            }
+            G += fabs(w) * 3.14159265358979323846;
+        }
+        s->rho_ind_max[i] = G > 0.0 ? (float)(ALBEDO_MAX * 3.14159265358979323846 / G) : ALBEDO_MAX;
+    }
+}
+
+/* ------------------------------------------------------------------------------ create */
+static void *alloc_array(glow_system *s, size_t count, size_t elem, bool *ok) {
+    if (!*ok) return NULL;
+    if (count != 0 && elem > SIZE_MAX / count) {
+        *ok = false;
+        return NULL;
+    }
+    void *p = glow__ctx_alloc(s->ctx, count * elem, 64);
+    if (!p) *ok = false;
+    return p;
+}
+
+static void free_system(glow_system *s) {
+    glow_context *ctx = s->ctx;
+    void *bufs[] = {s->pos4, s->nrm4, s->mat, s->tri, s->feedback, s->albedo, s->emis_base, s->emis,
+                    s->direct, s->direct_spare, s->fb_w, s->rho_ind_max, s->flux, s->rad, s->inv_pi_area,
+                    s->cache_sh, s->grid_sh, s->lm_sh, s->grid_map, s->lm_map, s->mat_emis_scale,
+                    s->mat_albedo_scale, s->batch_status, s->batch_negative};
+    for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; ++i) glow__ctx_free(ctx, bufs[i]);
+    glow__ctx_free(ctx, s);
+}
+
+glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, glow_system **out) {
+    if (out) *out = NULL;
+    if (!ctx || !desc || !out) {
+        GLOW__LOG_ERROR(ctx, GLOW_ERROR_INVALID_ARGUMENT, "glow_system_create: context, desc and out_system must not be NULL");
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    const char *label = desc->label ? desc->label : "system";
+    if (!desc->bake) {
+        GLOW__LOG_ERROR(ctx, GLOW_ERROR_INVALID_ARGUMENT, "glow_system_create(%s): desc->bake is NULL", label);
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    if (glow__bake_context(desc->bake) != ctx) {
+        GLOW__LOG_ERROR(ctx, GLOW_ERROR_INVALID_ARGUMENT,
+                        "glow_system_create(%s): the bake was loaded with another context", label);
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    const glow_bake_meta *m = glow__bake_meta(desc->bake);
+    if (!(m->link_kind & GLOW_LINK_KIND_RUNTIME_PROJECTION) || m->cache_count == 0 || m->links_per_cache == 0) {
+        GLOW__LOG_ERROR(ctx, GLOW_ERROR_INVALID_ARGUMENT,
+                        "glow_system_create(%s): the bake has no runtime-projection links (%u caches, %u links each)",
+                        label, m->cache_count, m->links_per_cache);
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    uint32_t luma = desc->sh_bands_luma ? desc->sh_bands_luma : m->sh_bands;
+    if (luma == 0) luma = 3;
+    uint32_t chroma = desc->sh_bands_chroma ? desc->sh_bands_chroma : luma;
+    if (luma > GLOW_MAX_SH_BANDS || chroma > luma) {
+        GLOW__LOG_ERROR(ctx, GLOW_ERROR_INVALID_ARGUMENT,
+                        "glow_system_create(%s): sh_bands_luma %u / sh_bands_chroma %u out of range "
+                        "(need 1 <= chroma <= luma <= %u)",
+                        label, luma, chroma, GLOW_MAX_SH_BANDS);
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    uint32_t batch = desc->surfel_batch_size ? desc->surfel_batch_size : 1024u;
+
+    glow_system *s = glow__ctx_alloc(ctx, sizeof *s, 64);
+    if (!s) {
+        GLOW__LOG_ERROR(ctx, GLOW_ERROR_OUT_OF_MEMORY, "glow_system_create(%s): out of memory", label);
+        return GLOW_ERROR_OUT_OF_MEMORY;
+    }
+    memset(s, 0, sizeof *s);
+    s->ctx = ctx;
+    s->bake = desc->bake;
+    s->meta = m;
+    s->nodes = glow__bake_nodes(desc->bake);
+    s->level_starts = glow__bake_level_starts(desc->bake);
+    snprintf(s->label, sizeof s->label, "%s", label);
+    s->hooks = desc->lighting;
+    s->S = m->surfel_count;
+    s->N = m->node_count;
+    s->C = m->cache_count;
+    s->M = m->material_count;
+    s->levels = m->level_count;
+    s->bpc = m->link_blocks_per_cache;
+    s->batch = batch;
+    s->nbatches = div_up(s->S, batch);
+    s->luma = luma;
+    s->chroma = chroma;
+    s->coeffs = luma * luma + 2 * chroma * chroma;
+    s->fbk = luma * luma;
+    s->isa = glow__cl_best_isa();
+    { /* benchmarking knob (documented in docs/runtime.md): GLOW_CACHE_KERNEL=generic|avx2|avx512 */
+        const char *k = getenv("GLOW_CACHE_KERNEL");
+        glow__cl_isa want = s->isa;
+        if (k && !strcmp(k, "generic")) want = GLOW__CL_GENERIC;
+        else if (k && !strcmp(k, "avx2")) want = GLOW__CL_AVX2;
+        else if (k && !strcmp(k, "avx512")) want = GLOW__CL_AVX512;
+        if (glow__cl_isa_supported(want)) s->isa = want;
+    }
+    s->params = (glow_system_params){.bounce_intensity = 1.0f, .emission_scale = 1.0f, .bounce_iterations = 1};
+    const uint32_t *gmap = glow__bake_grid_map(desc->bake), *lmap = glow__bake_lightmap_map(desc->bake);
+    s->grid_cells = gmap ? (size_t)m->grid_dims[0] * m->grid_dims[1] * m->grid_dims[2] : 0;
+    s->lm_texels = lmap && m->lightmap_count ? (size_t)m->lightmap_width * m->lightmap_height : 0;
+
+    bool ok = true;
+    const size_t S = s->S, N = s->N;
+    s->pos4 = alloc_array(s, S, 4 * sizeof(float), &ok);
+    s->nrm4 = alloc_array(s, S, 4 * sizeof(float), &ok);
+    s->mat = alloc_array(s, S, sizeof(uint32_t), &ok);
+    s->tri = alloc_array(s, S, sizeof(uint32_t), &ok);
+    s->feedback = alloc_array(s, S, sizeof(uint32_t), &ok);
+    s->albedo = alloc_array(s, S, 3 * sizeof(float), &ok);
+    s->emis_base = alloc_array(s, S, 3 * sizeof(float), &ok);
+    s->emis = alloc_array(s, S, 3 * sizeof(float), &ok);
+    s->direct = alloc_array(s, S, 3 * sizeof(float), &ok);
+    s->direct_spare = alloc_array(s, S, 3 * sizeof(float), &ok);
+    s->fb_w = alloc_array(s, S, (size_t)s->fbk * sizeof(float), &ok);
+    s->rho_ind_max = alloc_array(s, S, sizeof(float), &ok);
+    s->flux = alloc_array(s, N, 3 * sizeof(float), &ok);
+    s->rad = alloc_array(s, N, 3 * sizeof(float), &ok);
+    s->inv_pi_area = alloc_array(s, N, sizeof(float), &ok);
+    s->cache_sh = alloc_array(s, s->C, (size_t)s->coeffs * sizeof(float), &ok);
+    s->grid_sh = alloc_array(s, s->grid_cells, (size_t)s->coeffs * sizeof(float), &ok);
+    s->lm_sh = alloc_array(s, s->lm_texels, (size_t)s->coeffs * sizeof(float), &ok);
+    s->grid_map = alloc_array(s, s->grid_cells, sizeof(uint32_t), &ok);
+    s->lm_map = alloc_array(s, s->lm_texels, sizeof(uint32_t), &ok);
+    s->mat_emis_scale = alloc_array(s, s->M ? s->M : 1u, 3 * sizeof(float), &ok);
+    s->mat_albedo_scale = alloc_array(s, s->M ? s->M : 1u, 3 * sizeof(float), &ok);
+    s->batch_status = alloc_array(s, s->nbatches, 1, &ok);
+    s->batch_negative = alloc_array(s, s->nbatches, sizeof(uint32_t), &ok);
+    if (!ok) {
+        GLOW__LOG_ERROR(ctx, GLOW_ERROR_OUT_OF_MEMORY, "glow_system_create(%s): out of memory (%u surfels, %u caches)",
+                        label, s->S, s->C);
+        free_system(s);
+        return GLOW_ERROR_OUT_OF_MEMORY;
+    }
+
+    const glow_bake_surfel *sf = glow__bake_surfels(desc->bake);
+    for (size_t i = 0; i < S; ++i) {
+        memcpy(s->pos4 + 4 * i, sf[i].position, 3 * sizeof(float));
+        s->pos4[4 * i + 3] = m->surfel_area;
+        memcpy(s->nrm4 + 4 * i, sf[i].normal, 3 * sizeof(float));
+        s->nrm4[4 * i + 3] = 0.0f;
+        s->mat[i] = sf[i].material;
+        s->tri[i] = sf[i].triangle;
+        s->feedback[i] = sf[i].feedback;
+        memcpy(s->albedo + 3 * i, sf[i].albedo, 3 * sizeof(float));
+        memcpy(s->emis_base + 3 * i, sf[i].emission, 3 * sizeof(float));
+    }
+    memcpy(s->emis, s->emis_base, S * 3 * sizeof(float));
+    memset(s->direct, 0, S * 3 * sizeof(float));
+    memset(s->direct_spare, 0, S * 3 * sizeof(float));
+    memset(s->flux, 0, N * 3 * sizeof(float));
+    memset(s->rad, 0, N * 3 * sizeof(float));
+    for (size_t n = 0; n < N; ++n) s->inv_pi_area[n] = 1.0f / (PI_F * s->nodes[n].area);
+    memset(s->cache_sh, 0, (size_t)s->C * s->coeffs * sizeof(float));
+    for (size_t i = 0; i < 3 * (size_t)(s->M ? s->M : 1u); ++i) s->mat_emis_scale[i] = s->mat_albedo_scale[i] = 1.0f;
+    for (size_t i = 0; i < s->grid_cells; ++i) s->grid_map[i] = gmap[i] == GLOW_MAP_EMPTY ? GLOW_MAP_EMPTY : (gmap[i] & GLOW_MAP_INDEX_MASK);
+    for (size_t i = 0; i < s->lm_texels; ++i) s->lm_map[i] = lmap[i] == GLOW_MAP_EMPTY ? GLOW_MAP_EMPTY : (lmap[i] & GLOW_MAP_INDEX_MASK);
+    if (s->grid_cells) memset(s->grid_sh, 0, s->grid_cells * s->coeffs * sizeof(float));
+    if (s->lm_texels) memset(s->lm_sh, 0, s->lm_texels * s->coeffs * sizeof(float));
+    glow__ctx_start_pool(ctx); /* threads start here, never in an update */
+    glow__ctx_run(ctx, task_feedback_setup, s, div_up(s->S, SURFEL_CHUNK));
+
+    s->out = (glow_cache_outputs){.sh_bands_luma = luma,
+                                  .sh_bands_chroma = chroma,
+                                  .coeff_count = s->coeffs,
+                                  .cache_count = s->C,
+                                  .grid_cache_count = m->grid_cache_count,
+                                  .lightmap_cache_count = m->lightmap_cache_count,
+                                  .cache_sh = s->cache_sh,
+                                  .grid_spacing = m->grid_spacing,
+                                  .grid_sh = s->grid_cells ? s->grid_sh : NULL,
+                                  .lightmap_sh = s->lm_texels ? s->lm_sh : NULL,
+                                  .grid_map = s->grid_cells ? s->grid_map : NULL,
+                                  .lightmap_map = s->lm_texels ? s->lm_map : NULL};
+    if (s->grid_cells) {
+        memcpy(s->out.grid_dims, m->grid_dims, sizeof s->out.grid_dims);
+        memcpy(s->out.grid_origin, m->grid_origin, sizeof s->out.grid_origin);
+    }
+    if (s->lm_texels) {
+        s->out.lightmap_width = m->lightmap_width;
+        s->out.lightmap_height = m->lightmap_height;
+    }
+    glow__bake_retain(desc->bake);
+    *out = s;
+    return GLOW_OK;
+}
+
+void glow_system_destroy(glow_system *s) {
+    if (!s) return;
+    glow__bake_release(s->bake);
+    free_system(s);
+}
+
+/* ------------------------------------------------------------------------------ inputs */
+static glow_result check_range(glow_system *s, const char *fn, uint32_t first, uint32_t count, const void *p,
+                               bool p_required) {
+    if (!s) return GLOW_ERROR_INVALID_ARGUMENT;
+    if ((p_required && !p) || first > s->S || count > s->S - first) {
+        GLOW__LOG_ERROR(s->ctx, GLOW_ERROR_INVALID_ARGUMENT, "%s(%s): surfels [%u, %u + %u) outside [0, %u) or NULL data",
+                        fn, s->label, first, first, count, s->S);
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    return GLOW_OK;
+}
+
+/* Checks 3*count values; NaN/Inf -> GLOW_ERROR_HOST_CALLBACK (nothing stored), else copies with
+ * negatives clamped to 0. */
+static glow_result store_checked(glow_system *s, const char *fn, float *dst, const float *src, uint32_t first,
+                                 uint32_t count) {
+    for (size_t i = 0; i < 3 * (size_t)count; ++i)
+        if (!isfinite(src[i])) {
+            GLOW__LOG_ERROR(s->ctx, GLOW_ERROR_HOST_CALLBACK, "%s(%s): surfel %u has a non-finite value (%g); nothing stored",
+                            fn, s->label, first + (uint32_t)(i / 3), (double)src[i]);
+            return GLOW_ERROR_HOST_CALLBACK;
+        }
+    uint32_t neg = 0;
+    for (size_t i = 0; i < 3 * (size_t)count; ++i) {
+        float v = src[i];
+        if (v < 0.0f) {
+            v = 0.0f;
+            neg++;
+        }
+        dst[3 * (size_t)first + i] = v;
+    }
+    if (neg)
+        GLOW__LOG_WARNING(s->ctx, GLOW_ERROR_HOST_CALLBACK, "%s(%s): %u negative value(s) clamped to 0", fn, s->label, neg);
+    return GLOW_OK;
+}
+
+glow_result glow_system_set_surfel_irradiance(glow_system *s, uint32_t first, uint32_t count, const float *rgb) {
+    glow_result r = check_range(s, "glow_system_set_surfel_irradiance", first, count, rgb, true);
+    if (r != GLOW_OK) return r;
+    return store_checked(s, "glow_system_set_surfel_irradiance", s->direct, rgb, first, count);
+}
+
+glow_result glow_system_set_surfel_emission(glow_system *s, uint32_t first, uint32_t count, const float *rgb) {
+    glow_result r = check_range(s, "glow_system_set_surfel_emission", first, count, rgb, false);
+    if (r != GLOW_OK) return r;
+    if (!rgb) {
+        memcpy(s->emis + 3 * (size_t)first, s->emis_base + 3 * (size_t)first, 3 * (size_t)count * sizeof(float));
+        return GLOW_OK;
+    }
+    return store_checked(s, "glow_system_set_surfel_emission", s->emis, rgb, first, count);
+}
+
+static glow_result null_arg(const glow_system *s, const char *fn) {
+    if (s) GLOW__LOG_ERROR(s->ctx, GLOW_ERROR_INVALID_ARGUMENT, "%s(%s): NULL argument", fn, s->label);
+    return GLOW_ERROR_INVALID_ARGUMENT;
+}
+
+glow_result glow_system_get_surfels(const glow_system *s, glow_surfel_view *v) {
+    if (!s || !v) return null_arg(s, "glow_system_get_surfels");
+    *v = (glow_surfel_view){.count = s->S, .positions = s->pos4, .normals = s->nrm4, .materials = s->mat, .triangles = s->tri};
+    return GLOW_OK;
+}
+
+glow_result glow_system_set_params(glow_system *s, const glow_system_params *p) {
+    if (!s || !p) return null_arg(s, "glow_system_set_params");
+    if (!(p->bounce_intensity >= 0.0f) || !isfinite(p->bounce_intensity) || !(p->emission_scale >= 0.0f) ||
+        !isfinite(p->emission_scale) || p->bounce_iterations == 0 || p->bounce_iterations > MAX_ITERATIONS) {
+        GLOW__LOG_ERROR(s->ctx, GLOW_ERROR_INVALID_ARGUMENT,
+                        "glow_system_set_params(%s): bounce_intensity %g and emission_scale %g must be finite and >= 0, "
+                        "bounce_iterations %u in [1, %u]",
+                        s->label, (double)p->bounce_intensity, (double)p->emission_scale, p->bounce_iterations,
+                        MAX_ITERATIONS);
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    s->params = *p;
+    if (s->params.bounce_intensity > 1.0f) s->params.bounce_intensity = 1.0f;
+    return GLOW_OK;
+}
+
+glow_result glow_system_get_params(const glow_system *s, glow_system_params *p) {
+    if (!s || !p) return null_arg(s, "glow_system_get_params");
+    *p = s->params;
+    return GLOW_OK;
+}
+
+glow_result glow_system_set_material(glow_system *s, uint32_t material, const float emission_scale[3],
+                                     const float albedo_scale[3]) {
+    if (!s) return GLOW_ERROR_INVALID_ARGUMENT;
+    if (material >= s->M) {
+        GLOW__LOG_ERROR(s->ctx, GLOW_ERROR_INVALID_ARGUMENT, "glow_system_set_material(%s): material %u >= material_count %u",
+                        s->label, material, s->M);
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    for (int c = 0; c < 3; ++c)
+        if ((emission_scale && (!isfinite(emission_scale[c]) || emission_scale[c] < 0.0f)) ||
+            (albedo_scale && (!isfinite(albedo_scale[c]) || albedo_scale[c] < 0.0f))) {
+            GLOW__LOG_ERROR(s->ctx, GLOW_ERROR_INVALID_ARGUMENT,
+                            "glow_system_set_material(%s): material %u: scales must be finite and >= 0", s->label, material);
+            return GLOW_ERROR_INVALID_ARGUMENT;
+        }
+    if (emission_scale) memcpy(s->mat_emis_scale + 3 * (size_t)material, emission_scale, 3 * sizeof(float));
+    if (albedo_scale) memcpy(s->mat_albedo_scale + 3 * (size_t)material, albedo_scale, 3 * sizeof(float));
+    return GLOW_OK;
+}
+
+/* ------------------------------------------------------------------------------ update */
+static void pull(glow_system *s) {
+    for (uint32_t lv = 1; lv < s->levels; ++lv) {
+        uint32_t first = s->level_starts[lv], end = s->level_starts[lv + 1];
+        if (end - first >= 2u * NODE_CHUNK) { /* wide levels in parallel; the narrow top serially */
+            s->pull_first = first;
+            s->pull_count = end - first;
+            glow__ctx_run(s->ctx, task_pull, s, div_up(end - first, NODE_CHUNK));
+        } else {
+            pull_range(s, first, end);
+        }
+    }
+}
+
+glow_result glow_system_update(glow_system *s, const glow_update_desc *desc) {
+    if (!s) return GLOW_ERROR_INVALID_ARGUMENT;
+    const uint32_t flags = desc ? desc->flags : 0u;
+    if (flags & ~(GLOW_UPDATE_FLAG_RESET_BOUNCE | GLOW_UPDATE_FLAG_KEEP_LIGHTING)) {
+        GLOW__LOG_ERROR(s->ctx, GLOW_ERROR_INVALID_ARGUMENT, "glow_system_update(%s): unknown flags 0x%x", s->label,
+                        flags);
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    glow_update_stats st = s->stats;
+    st.surfel_lighting_ms = st.host_ms = st.pull_ms = st.cache_lighting_ms = st.output_ms = 0.0;
+    st.links = 0;
+    const double t_begin = now_ms();
+
+    /* 1. direct light from the host, into the spare buffer, checked before it is used */
+    if (s->hooks.light_surfels && !(flags & GLOW_UPDATE_FLAG_KEEP_LIGHTING)) {
+        glow__ctx_run(s->ctx, task_hook, s, s->nbatches);
+        uint32_t neg = 0;
+        for (uint32_t b = 0; b < s->nbatches; ++b) {
+            if (s->batch_status[b] != ST_OK) {
+                uint32_t first = b * s->batch;
+                GLOW__LOG_ERROR(s->ctx, GLOW_ERROR_HOST_CALLBACK,
+                                "glow_system_update(%s): light_surfels %s for surfels [%u, %u); the update was "
+                                "abandoned and the previous outputs kept",
+                                s->label, s->batch_status[b] == ST_HOOK_FAILED ? "failed" : "returned NaN/Inf",
+                                first, first + (s->S - first < s->batch ? s->S - first : s->batch));
+                return GLOW_ERROR_HOST_CALLBACK;
+            }
+            neg += s->batch_negative[b];
+        }
+        if (neg)
+            GLOW__LOG_WARNING(s->ctx, GLOW_ERROR_HOST_CALLBACK,
+                              "glow_system_update(%s): light_surfels returned %u negative value(s); clamped to 0",
+                              s->label, neg);
+        float *t = s->direct;
+        s->direct = s->direct_spare;
+        s->direct_spare = t;
+    }
+    if (flags & GLOW_UPDATE_FLAG_RESET_BOUNCE) memset(s->cache_sh, 0, (size_t)s->C * s->coeffs * sizeof(float));
+    double t = now_ms();
+    st.surfel_lighting_ms += t - t_begin;
+    st.host_ms = t - t_begin;
+
+    for (uint32_t it = 0; it < s->params.bounce_iterations; ++it) {
+        double t0 = now_ms();
+        glow__ctx_run(s->ctx, task_flux, s, div_up(s->S, SURFEL_CHUNK));
+        double t1 = now_ms();
+        pull(s);
+        double t2 = now_ms();
+        glow__ctx_run(s->ctx, task_caches, s, div_up(s->C, CACHE_CHUNK));
+        double t3 = now_ms();
+        st.surfel_lighting_ms += t1 - t0;
+        st.pull_ms += t2 - t1;
+        st.cache_lighting_ms += t3 - t2;
+        st.links += (uint64_t)s->C * s->meta->links_per_cache;
+    }
+    double t4 = now_ms();
+    glow__ctx_run(s->ctx, task_output, s, (s->grid_cells ? s->coeffs : 0u) + (s->lm_texels ? s->coeffs : 0u));
+    double t5 = now_ms();
+    st.output_ms = t5 - t4;
+    st.total_ms = t5 - t_begin;
+    st.updates++;
+    s->stats = st;
+    s->out.update_index = st.updates;
+    return GLOW_OK;
+}
+
+glow_result glow_system_get_stats(const glow_system *s, glow_update_stats *out) {
+    if (!s || !out) return null_arg(s, "glow_system_get_stats");
+    *out = s->stats;
+    return GLOW_OK;
+}
+
+const glow_cache_outputs *glow_system_outputs(const glow_system *s) { return s ? &s->out : NULL; }
