@@ -9,6 +9,7 @@ PKGS=(
   libstb-dev           # stb_image: decodes albedo textures (JPEG/PNG) that assimp only names
   zlib1g-dev           # crc32 reference in the format tests
   libcmocka-dev        # unit tests
+  libcjson-dev         # scene description files (integration/: glow_scene.h)
   clang                # libFuzzer target for the bake reader
   libglfw3-dev libosmesa6-dev libegl-dev libgl-dev libcglm-dev   # integration (later issues)
   libopenexr-dev glslang-tools gnuplot-nox                       # evaluation, shaders, charts

@@ -1,0 +1,728 @@
+/* host.c — glow_host (glow_host.h): CPU implementations of the runtime's lighting hook.
+ *
+ * Both kinds share the light models (point, spot with smoothstep falloff, sun) and the sky term;
+ * they differ only in the visibility V of a light: one Embree occlusion ray (exact) or a PCF lookup
+ * in a software depth map (shadow_map.c). Embree is used as precompute/src/rt.c uses it: one
+ * triangle geometry of unwelded corners, robust build, rtcOccluded1 with a per-call context
+ * (thread-safe). */
+#include <embree3/rtcore.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "glow/glow_host.h"
+#include "shadow_map.h"
+
+#define HOST_PI 3.14159265358979323846
+#define SKY_UNSET 0xFFFFFFFFu
+#define SPOT_MAX_SINGLE_MAP_DEG 60.0f
+
+typedef struct host_light {
+    glow_scene_light l;       /* direction normalised */
+    float cos_outer, cos_inner;
+    glow__depth_map *maps;    /* shadow-map kind: 1 (ortho / persp) or 6 (cube); NULL otherwise */
+    uint32_t map_count;
+} host_light;
+
+struct glow_host {
+    glow_host_kind kind;
+    glow_logger logger;
+    const glow_bake *bake;
+    uint32_t surfel_count, tri_count;
+    float *tris; /* tri_count x 9 floats, corners packed */
+    float bmin[3], bmax[3], eps, diag;
+    RTCDevice device;
+    RTCScene scene;
+    host_light *lights;
+    uint32_t light_count;
+    float env[3];
+    glow_host_sky sky;
+    uint32_t sky_rays;
+    float *sky_dirs;             /* sky_rays x 3: cosine-distributed directions around +z */
+    _Atomic uint32_t *sky_cache; /* surfel_count: bits of S, SKY_UNSET = not traced yet */
+    _Atomic uint32_t *origin_cache; /* 3 x surfel_count: bits of each surfel's ray origin, [0] SKY_UNSET = not yet */
+    uint32_t sm_size, cube_size;
+    glow__shadow_params sp;
+    double shadow_map_ms;
+};
+
+/* ------------------------------------------------------------------------------ helpers */
+
+#if defined(__GNUC__)
+__attribute__((format(printf, 4, 5)))
+#endif
+static glow_result logf_(const glow_logger *lg, glow_log_level level, glow_result code, const char *fmt, ...) {
+    if (lg && lg->log) {
+        char text[768];
+        int n = snprintf(text, sizeof text, "glow_host: ");
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(text + n, sizeof text - (size_t)n, fmt, ap);
+        va_end(ap);
+        lg->log(lg->user, level, code, text, __FILE__, __LINE__);
+    }
+    return code;
+}
+#define HOST_FAIL(lg, code, ...) logf_((lg), GLOW_LOG_ERROR, (code), __VA_ARGS__)
+
+static float dot3(const float a[3], const float b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+static bool normalize3(const float in[3], float out[3]) {
+    double len = sqrt((double)in[0] * in[0] + (double)in[1] * in[1] + (double)in[2] * in[2]);
+    if (!(len > 1e-12) || !isfinite(len)) return false;
+    for (int i = 0; i < 3; ++i) out[i] = (float)(in[i] / len);
+    return true;
+}
+
+static void onb(const float z[3], float x[3], float y[3]) {
+    float sign = copysignf(1.0f, z[2]);
+    float a = -1.0f / (sign + z[2]);
+    float b = z[0] * z[1] * a;
+    x[0] = 1.0f + sign * z[0] * z[0] * a;
+    x[1] = sign * b;
+    x[2] = -sign * z[0];
+    y[0] = b;
+    y[1] = sign + z[1] * z[1] * a;
+    y[2] = -z[1];
+}
+
+static double now_ms(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
+}
+
+static const float *power_of(const glow_scene_light *l) {
+    return l->type == GLOW_SCENE_LIGHT_SUN ? l->irradiance : l->intensity;
+}
+
+/* ------------------------------------------------------------------------------ Embree */
+
+static void embree_error(void *user, enum RTCError code, const char *str) {
+    logf_(user, GLOW_LOG_ERROR, GLOW_ERROR_UNSUPPORTED, "embree: error %d: %s", (int)code, str ? str : "");
+}
+
+static glow_result build_embree(glow_host *h) {
+    h->device = rtcNewDevice(NULL);
+    if (!h->device)
+        return HOST_FAIL(&h->logger, GLOW_ERROR_UNSUPPORTED, "embree: cannot create a device (error %d)",
+                         (int)rtcGetDeviceError(NULL));
+    rtcSetDeviceErrorFunction(h->device, embree_error, &h->logger);
+    h->scene = rtcNewScene(h->device);
+    rtcSetSceneBuildQuality(h->scene, RTC_BUILD_QUALITY_HIGH);
+    rtcSetSceneFlags(h->scene, RTC_SCENE_FLAG_ROBUST);
+    RTCGeometry g = rtcNewGeometry(h->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    uint32_t n = h->tri_count;
+    float *v = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), (size_t)3 * n);
+    uint32_t *idx = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), n);
+    if (!v || !idx) {
+        rtcReleaseGeometry(g);
+        return HOST_FAIL(&h->logger, GLOW_ERROR_OUT_OF_MEMORY, "embree: out of memory for %u triangles", n);
+    }
+    memcpy(v, h->tris, (size_t)n * 9 * sizeof(float));
+    for (uint32_t i = 0; i < 3 * n; ++i) idx[i] = i;
+    rtcCommitGeometry(g);
+    rtcAttachGeometry(h->scene, g);
+    rtcReleaseGeometry(g);
+    rtcCommitScene(h->scene);
+    if (rtcGetDeviceError(h->device) != RTC_ERROR_NONE) return GLOW_ERROR_UNSUPPORTED;
+    return GLOW_OK;
+}
+
+static bool occluded(const glow_host *h, const float org[3], const float dir[3], float tfar) {
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    struct RTCRay ray;
+    memset(&ray, 0, sizeof ray);
+    ray.org_x = org[0];
+    ray.org_y = org[1];
+    ray.org_z = org[2];
+    ray.dir_x = dir[0];
+    ray.dir_y = dir[1];
+    ray.dir_z = dir[2];
+    ray.tnear = 0.0f;
+    ray.tfar = tfar;
+    ray.mask = 0xFFFFFFFFu;
+    rtcOccluded1(h->scene, &ctx, &ray);
+    return ray.tfar < 0.0f; /* Embree sets tfar = -inf on a hit */
+}
+
+/* ------------------------------------------------------------------------- light models */
+
+/* Closest point to p on triangle abc (Ericson, Real-Time Collision Detection, 5.1.5). */
+static void closest_on_tri(const float p[3], const float a[3], const float b[3], const float c[3], float out[3]) {
+    float ab[3], ac[3], ap[3];
+    for (int i = 0; i < 3; ++i) {
+        ab[i] = b[i] - a[i];
+        ac[i] = c[i] - a[i];
+        ap[i] = p[i] - a[i];
+    }
+    float d1 = dot3(ab, ap), d2 = dot3(ac, ap);
+    if (d1 <= 0.0f && d2 <= 0.0f) {
+        memcpy(out, a, 12);
+        return;
+    }
+    float bp[3] = {p[0] - b[0], p[1] - b[1], p[2] - b[2]};
+    float d3 = dot3(ab, bp), d4 = dot3(ac, bp);
+    if (d3 >= 0.0f && d4 <= d3) {
+        memcpy(out, b, 12);
+        return;
+    }
+    float vc = d1 * d4 - d3 * d2;
+    if (vc <= 0.0f && d1 >= 0.0f && d3 <= 0.0f) {
+        float v = d1 / (d1 - d3);
+        for (int i = 0; i < 3; ++i) out[i] = a[i] + v * ab[i];
+        return;
+    }
+    float cp[3] = {p[0] - c[0], p[1] - c[1], p[2] - c[2]};
+    float d5 = dot3(ab, cp), d6 = dot3(ac, cp);
+    if (d6 >= 0.0f && d5 <= d6) {
+        memcpy(out, c, 12);
+        return;
+    }
+    float vb = d5 * d2 - d1 * d6;
+    if (vb <= 0.0f && d2 >= 0.0f && d6 <= 0.0f) {
+        float w = d2 / (d2 - d6);
+        for (int i = 0; i < 3; ++i) out[i] = a[i] + w * ac[i];
+        return;
+    }
+    float va = d3 * d6 - d5 * d4;
+    if (va <= 0.0f && (d4 - d3) >= 0.0f && (d5 - d6) >= 0.0f) {
+        float w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        for (int i = 0; i < 3; ++i) out[i] = b[i] + w * (c[i] - b[i]);
+        return;
+    }
+    float denom = 1.0f / (va + vb + vc), v = vb * denom, w = vc * denom;
+    for (int i = 0; i < 3; ++i) out[i] = a[i] + ab[i] * v + ac[i] * w;
+}
+
+typedef struct own_query {
+    const glow_host *h;
+    const float *p, *n;
+    uint32_t best;
+    float best_d2;
+} own_query;
+
+/* Point-query callback: the nearest triangle that faces the way the surfel does. */
+static bool own_cb(struct RTCPointQueryFunctionArguments *args) {
+    own_query *q = args->userPtr;
+    if (args->primID >= q->h->tri_count) return false;
+    const float *t = q->h->tris + 9 * (size_t)args->primID;
+    float e1[3] = {t[3] - t[0], t[4] - t[1], t[5] - t[2]}, e2[3] = {t[6] - t[0], t[7] - t[1], t[8] - t[2]};
+    float ng[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+    float len = sqrtf(dot3(ng, ng));
+    if (!(len > 0.0f) || dot3(ng, q->n) < 0.9f * len) return false;
+    float c[3];
+    closest_on_tri(q->p, t, t + 3, t + 6, c);
+    float d[3] = {c[0] - q->p[0], c[1] - q->p[1], c[2] - q->p[2]}, d2 = dot3(d, d);
+    if (d2 >= q->best_d2) return false;
+    q->best = args->primID;
+    q->best_d2 = d2;
+    return false;
+}
+
+/* The origin of every ray that leaves surface point p (front normal n): eps along n, against
+ * self-hits, then up to eps along the surface towards the centre of the triangle p lies on (the
+ * nearest triangle facing along n, found with an Embree point query). The second step matters for
+ * surfels that lie exactly on an edge where another surface meets theirs (relaxation puts surfels
+ * there: a floor surfel against a wall, a wall surfel at the ceiling's height, a room's corner): from
+ * an origin inside the other surface's plane, a ray into that surface hits at t = 0 (not counted:
+ * light leaks into a closed room) and a ray away from it may hit at t = +0 (false shadow). */
+static void safe_origin(const glow_host *h, const float p[3], const float n[3], float o[3]) {
+    for (int i = 0; i < 3; ++i) o[i] = p[i] + h->eps * n[i];
+    if (!h->scene) return;
+    struct RTCPointQuery pq;
+    memset(&pq, 0, sizeof pq);
+    pq.x = p[0];
+    pq.y = p[1];
+    pq.z = p[2];
+    pq.radius = 4.0f * h->eps;
+    struct RTCPointQueryContext pc;
+    rtcInitPointQueryContext(&pc);
+    own_query q = {h, p, n, UINT32_MAX, INFINITY};
+    rtcPointQuery(h->scene, &pq, &pc, own_cb, &q);
+    if (q.best == UINT32_MAX) return;
+    const float *t = h->tris + 9 * (size_t)q.best;
+    float v[3];
+    for (int i = 0; i < 3; ++i) v[i] = (t[i] + t[3 + i] + t[6 + i]) * (1.0f / 3.0f) - p[i];
+    float vn = dot3(v, n);
+    for (int i = 0; i < 3; ++i) v[i] -= vn * n[i];
+    float len = sqrtf(dot3(v, v));
+    if (!(len > 1e-12f)) return;
+    float step = fminf(h->eps, 0.5f * len) / len;
+    for (int i = 0; i < 3; ++i) o[i] += step * v[i];
+}
+
+/* safe_origin, cached per surfel (UINT32_MAX = none). Racing workers store identical values. */
+static void surfel_origin(const glow_host *h, const float p[3], const float n[3], uint32_t surfel, float o[3]) {
+    if (surfel == UINT32_MAX || !h->origin_cache) {
+        safe_origin(h, p, n, o);
+        return;
+    }
+    _Atomic uint32_t *c = h->origin_cache + 3 * (size_t)surfel;
+    uint32_t b0 = atomic_load_explicit(&c[0], memory_order_acquire);
+    if (b0 != SKY_UNSET) {
+        uint32_t b[3] = {b0, atomic_load_explicit(&c[1], memory_order_relaxed),
+                         atomic_load_explicit(&c[2], memory_order_relaxed)};
+        memcpy(o, b, sizeof b);
+        return;
+    }
+    safe_origin(h, p, n, o);
+    uint32_t b[3];
+    memcpy(b, o, sizeof b);
+    atomic_store_explicit(&c[1], b[1], memory_order_relaxed);
+    atomic_store_explicit(&c[2], b[2], memory_order_relaxed);
+    atomic_store_explicit(&c[0], b[0], memory_order_release);
+}
+
+/* Unshadowed geometry term f of the light at p (normal n): E = V * power * f. Also the unit
+ * direction to the light and its distance (INFINITY for the sun). Returns 0 when the light cannot
+ * reach the front face. */
+static float light_term(const host_light *hl, const float p[3], const float n[3], float l[3], float *dist) {
+    const glow_scene_light *L = &hl->l;
+    if (L->type == GLOW_SCENE_LIGHT_SUN) {
+        for (int i = 0; i < 3; ++i) l[i] = -L->direction[i];
+        *dist = INFINITY;
+        return fmaxf(dot3(n, l), 0.0f);
+    }
+    float d[3] = {L->position[0] - p[0], L->position[1] - p[1], L->position[2] - p[2]};
+    float d2 = dot3(d, d);
+    if (!(d2 > 1e-20f)) return 0.0f;
+    float dl = sqrtf(d2);
+    for (int i = 0; i < 3; ++i) l[i] = d[i] / dl;
+    *dist = dl;
+    float c = dot3(n, l);
+    if (!(c > 0.0f)) return 0.0f;
+    float f = c / d2;
+    if (L->type == GLOW_SCENE_LIGHT_SPOT) {
+        float cos_theta = -dot3(l, L->direction); /* angle between the axis and p - x_light */
+        float t;
+        if (hl->cos_inner > hl->cos_outer) {
+            t = (cos_theta - hl->cos_outer) / (hl->cos_inner - hl->cos_outer);
+            t = fminf(fmaxf(t, 0.0f), 1.0f);
+        } else {
+            t = cos_theta >= hl->cos_outer ? 1.0f : 0.0f;
+        }
+        f *= t * t * (3.0f - 2.0f * t);
+    }
+    return f;
+}
+
+/* V of one light at p (unit normal n, unit direction to the light l); `o` is the ray origin
+ * (safe_origin), read by the exact kind only. */
+static float visibility(const glow_host *h, const host_light *hl, const float p[3], const float n[3],
+                        const float l[3], const float o[3]) {
+    if (h->kind == GLOW_HOST_KIND_EXACT) {
+        if (hl->l.type == GLOW_SCENE_LIGHT_SUN) return occluded(h, o, l, INFINITY) ? 0.0f : 1.0f;
+        float v[3] = {hl->l.position[0] - o[0], hl->l.position[1] - o[1], hl->l.position[2] - o[2]};
+        float dl = sqrtf(dot3(v, v)), tfar = dl - h->eps; /* stop short of geometry at the light itself */
+        if (!(tfar > 0.0f)) return 1.0f;
+        for (int i = 0; i < 3; ++i) v[i] /= dl;
+        return occluded(h, o, v, tfar) ? 0.0f : 1.0f;
+    }
+    if (!hl->maps) return 1.0f;
+    const glow__depth_map *m = hl->maps;
+    if (hl->map_count == 6) {
+        float d[3] = {p[0] - hl->l.position[0], p[1] - hl->l.position[1], p[2] - hl->l.position[2]};
+        m = &hl->maps[glow__dm_cube_face(d)];
+    }
+    return glow__dm_visibility(m, p, n, l, &h->sp);
+}
+
+/* Cosine-weighted visible fraction of the sky over n, traced. */
+static float trace_sky(const glow_host *h, const float o[3], const float n[3]) {
+    float tx[3], ty[3];
+    onb(n, tx, ty);
+    uint32_t open = 0;
+    for (uint32_t k = 0; k < h->sky_rays; ++k) {
+        const float *s = h->sky_dirs + 3 * (size_t)k;
+        float d[3];
+        for (int i = 0; i < 3; ++i) d[i] = s[0] * tx[i] + s[1] * ty[i] + s[2] * n[i];
+        if (!occluded(h, o, d, INFINITY)) ++open;
+    }
+    return (float)open / (float)h->sky_rays;
+}
+
+static bool sky_on(const glow_host *h) { return h->env[0] > 0.0f || h->env[1] > 0.0f || h->env[2] > 0.0f; }
+
+/* E at p, n. `surfel` indexes the sky cache, UINT32_MAX = none (trace afresh). */
+static void irradiance_at(const glow_host *h, const float p[3], const float n[3], uint32_t surfel, float out[3]) {
+    out[0] = out[1] = out[2] = 0.0f;
+    float o[3];
+    bool have_o = false;
+    for (uint32_t i = 0; i < h->light_count; ++i) {
+        const host_light *hl = &h->lights[i];
+        const float *pw = power_of(&hl->l);
+        if (pw[0] == 0.0f && pw[1] == 0.0f && pw[2] == 0.0f) continue;
+        float l[3], dist;
+        float f = light_term(hl, p, n, l, &dist);
+        if (!(f > 0.0f)) continue;
+        if (h->kind == GLOW_HOST_KIND_EXACT && !have_o) {
+            surfel_origin(h, p, n, surfel, o);
+            have_o = true;
+        }
+        f *= visibility(h, hl, p, n, l, o);
+        for (int c = 0; c < 3; ++c) out[c] += f * pw[c];
+    }
+    if (!sky_on(h)) return;
+    /* S: the cached value (supplied, or traced by an earlier call) wins; else trace it (TRACED) and
+     * cache it when this is a surfel; else 1 (UNSHADOWED). Two workers racing on one surfel would
+     * both store the same deterministic value; the relaxed atomics keep that well-defined. */
+    float S = 1.0f;
+    uint32_t bits = SKY_UNSET;
+    if (surfel != UINT32_MAX) bits = atomic_load_explicit(&h->sky_cache[surfel], memory_order_relaxed);
+    if (bits != SKY_UNSET) {
+        memcpy(&S, &bits, sizeof S);
+    } else if (h->sky == GLOW_HOST_SKY_TRACED && h->scene) {
+        if (!have_o) surfel_origin(h, p, n, surfel, o);
+        S = trace_sky(h, o, n);
+        if (surfel != UINT32_MAX) {
+            memcpy(&bits, &S, sizeof bits);
+            atomic_store_explicit(&h->sky_cache[surfel], bits, memory_order_relaxed);
+        }
+    }
+    for (int c = 0; c < 3; ++c) out[c] += h->env[c] * (float)HOST_PI * S;
+}
+
+static glow_result light_surfels(void *user, const glow_surfel_batch *batch, float *out, uint32_t worker) {
+    (void)worker;
+    const glow_host *h = user;
+    if (!h || !batch || !out || (batch->count && (!batch->positions || !batch->normals))) return GLOW_ERROR_INVALID_ARGUMENT;
+    if ((uint64_t)batch->first + batch->count > h->surfel_count)
+        return HOST_FAIL(&h->logger, GLOW_ERROR_INVALID_ARGUMENT,
+                         "surfel batch [%u, %u) is outside the bake's %u surfels (a host made for another bake?)",
+                         batch->first, batch->first + batch->count, h->surfel_count);
+    for (uint32_t i = 0; i < batch->count; ++i) {
+        const float *p = batch->positions + 4 * (size_t)i, *n = batch->normals + 4 * (size_t)i;
+        irradiance_at(h, p, n, batch->first + i, out + 3 * (size_t)i);
+    }
+    return GLOW_OK;
+}
+
+/* ---------------------------------------------------------------------------- lights */
+
+static void free_maps(host_light *hl) {
+    if (!hl->maps) return;
+    for (uint32_t m = 0; m < hl->map_count; ++m) glow__dm_free(&hl->maps[m]);
+    free(hl->maps);
+    hl->maps = NULL;
+    hl->map_count = 0;
+}
+
+static glow_result render_maps(glow_host *h, host_light *hl) {
+    free_maps(hl);
+    if (h->kind != GLOW_HOST_KIND_SHADOW_MAP) return GLOW_OK;
+    const glow_scene_light *L = &hl->l;
+    bool cube = L->type == GLOW_SCENE_LIGHT_POINT ||
+                (L->type == GLOW_SCENE_LIGHT_SPOT && L->outer_deg > SPOT_MAX_SINGLE_MAP_DEG);
+    uint32_t count = cube ? 6 : 1;
+    hl->maps = calloc(count, sizeof *hl->maps);
+    if (!hl->maps) return HOST_FAIL(&h->logger, GLOW_ERROR_OUT_OF_MEMORY, "out of memory for shadow maps");
+    hl->map_count = count;
+    uint32_t margin = (uint32_t)h->sp.pcf_radius + 2;
+    float near_z = 1e-3f * h->diag;
+    if (L->type == GLOW_SCENE_LIGHT_SUN)
+        glow__dm_setup_ortho(&hl->maps[0], L->direction, h->bmin, h->bmax, h->sm_size, margin);
+    else if (cube)
+        glow__dm_setup_cube(hl->maps, L->position, h->cube_size, margin, near_z);
+    else
+        glow__dm_setup_persp(&hl->maps[0], L->position, L->direction,
+                             tanf(L->outer_deg * (float)(HOST_PI / 180.0)), h->sm_size, margin, near_z);
+    for (uint32_t m = 0; m < count; ++m) {
+        if (!glow__dm_render(&hl->maps[m], h->tris, h->tri_count)) {
+            free_maps(hl);
+            return HOST_FAIL(&h->logger, GLOW_ERROR_OUT_OF_MEMORY, "out of memory for a %u² shadow map",
+                             cube ? h->cube_size : h->sm_size);
+        }
+    }
+    return GLOW_OK;
+}
+
+/* Validates and normalises a light into *out (no maps). */
+static glow_result prepare_light(const glow_host *h, const glow_scene_light *in, uint32_t index, host_light *out) {
+    char what[48], msg[512];
+    snprintf(what, sizeof what, "lights[%u]", index);
+    glow_result r = glow_scene_light_validate(in, what, msg, sizeof msg);
+    if (r != GLOW_OK) return HOST_FAIL(&h->logger, r, "%s", msg);
+    memset(out, 0, sizeof *out);
+    out->l = *in;
+    if (in->type != GLOW_SCENE_LIGHT_POINT) normalize3(in->direction, out->l.direction);
+    if (in->type == GLOW_SCENE_LIGHT_SPOT) {
+        out->cos_outer = cosf(in->outer_deg * (float)(HOST_PI / 180.0));
+        out->cos_inner = cosf(in->inner_deg * (float)(HOST_PI / 180.0));
+    }
+    return GLOW_OK;
+}
+
+glow_result glow_host_set_light(glow_host *host, uint32_t index, const glow_scene_light *light) {
+    if (!host || !light) return GLOW_ERROR_INVALID_ARGUMENT;
+    if (index >= host->light_count)
+        return HOST_FAIL(&host->logger, GLOW_ERROR_INVALID_ARGUMENT, "light index %u out of range (%u lights)", index,
+                         host->light_count);
+    host_light nl;
+    glow_result r = prepare_light(host, light, index, &nl);
+    if (r != GLOW_OK) return r;
+    double t0 = now_ms();
+    if ((r = render_maps(host, &nl)) != GLOW_OK) return r;
+    if (host->kind == GLOW_HOST_KIND_SHADOW_MAP) host->shadow_map_ms = now_ms() - t0;
+    free_maps(&host->lights[index]);
+    host->lights[index] = nl;
+    return GLOW_OK;
+}
+
+glow_result glow_host_set_lights(glow_host *host, const glow_scene_light *lights, uint32_t count) {
+    if (!host || (count && !lights)) return GLOW_ERROR_INVALID_ARGUMENT;
+    host_light *nl = count ? calloc(count, sizeof *nl) : NULL;
+    if (count && !nl) return HOST_FAIL(&host->logger, GLOW_ERROR_OUT_OF_MEMORY, "out of memory for %u lights", count);
+    glow_result r = GLOW_OK;
+    for (uint32_t i = 0; i < count && r == GLOW_OK; ++i) r = prepare_light(host, &lights[i], i, &nl[i]);
+    double t0 = now_ms();
+    for (uint32_t i = 0; i < count && r == GLOW_OK; ++i) r = render_maps(host, &nl[i]);
+    if (r != GLOW_OK) {
+        for (uint32_t i = 0; i < count; ++i) free_maps(&nl[i]);
+        free(nl);
+        return r;
+    }
+    if (host->kind == GLOW_HOST_KIND_SHADOW_MAP) host->shadow_map_ms = now_ms() - t0;
+    for (uint32_t i = 0; i < host->light_count; ++i) free_maps(&host->lights[i]);
+    free(host->lights);
+    host->lights = nl;
+    host->light_count = count;
+    return GLOW_OK;
+}
+
+uint32_t glow_host_light_count(const glow_host *host) { return host ? host->light_count : 0; }
+
+glow_result glow_host_get_light(const glow_host *host, uint32_t index, glow_scene_light *out_light) {
+    if (!host || !out_light || index >= host->light_count) return GLOW_ERROR_INVALID_ARGUMENT;
+    *out_light = host->lights[index].l;
+    return GLOW_OK;
+}
+
+glow_result glow_host_set_environment(glow_host *host, const float radiance_rgb[3]) {
+    if (!host || !radiance_rgb) return GLOW_ERROR_INVALID_ARGUMENT;
+    for (int c = 0; c < 3; ++c)
+        if (!isfinite(radiance_rgb[c]) || radiance_rgb[c] < 0.0f)
+            return HOST_FAIL(&host->logger, GLOW_ERROR_INVALID_ARGUMENT, "environment[%d] (%g) is negative or not finite",
+                             c, (double)radiance_rgb[c]);
+    memcpy(host->env, radiance_rgb, sizeof host->env);
+    return GLOW_OK;
+}
+
+/* -------------------------------------------------------------------------- lifetime */
+
+glow_host_desc glow_host_desc_from_scene(const glow_scene_desc *scene, const glow_bake *bake, glow_host_kind kind) {
+    glow_host_desc d;
+    memset(&d, 0, sizeof d);
+    d.kind = kind;
+    d.bake = bake;
+    if (scene) {
+        d.lights = scene->lights;
+        d.light_count = scene->light_count;
+        memcpy(d.environment, scene->environment, sizeof d.environment);
+    }
+    return d;
+}
+
+glow_lighting_hooks glow_host_hooks(glow_host *host) {
+    glow_lighting_hooks hk = {NULL, NULL};
+    if (host) {
+        hk.light_surfels = light_surfels;
+        hk.user = host;
+    }
+    return hk;
+}
+
+void glow_host_destroy(glow_host *host) {
+    if (!host) return;
+    for (uint32_t i = 0; i < host->light_count; ++i) free_maps(&host->lights[i]);
+    free(host->lights);
+    if (host->scene) rtcReleaseScene(host->scene);
+    if (host->device) rtcReleaseDevice(host->device);
+    free(host->tris);
+    free(host->sky_dirs);
+    free((void *)host->sky_cache);
+    free((void *)host->origin_cache);
+    free(host);
+}
+
+/* Deterministic cosine-distributed directions around +z: a Hammersley set (i + 1/2)/N and the
+ * base-2 radical inverse, lifted from the unit disk onto the hemisphere (Malley's method). The
+ * estimate of S is the fraction of them that escape. */
+static void make_sky_dirs(float *dirs, uint32_t n) {
+    for (uint32_t i = 0; i < n; ++i) {
+        uint32_t b = i;
+        b = (b << 16) | (b >> 16);
+        b = ((b & 0x55555555u) << 1) | ((b & 0xAAAAAAAAu) >> 1);
+        b = ((b & 0x33333333u) << 2) | ((b & 0xCCCCCCCCu) >> 2);
+        b = ((b & 0x0F0F0F0Fu) << 4) | ((b & 0xF0F0F0F0u) >> 4);
+        b = ((b & 0x00FF00FFu) << 8) | ((b & 0xFF00FF00u) >> 8);
+        double u1 = ((double)i + 0.5) / n, u2 = (double)b * (1.0 / 4294967296.0);
+        /* turned by an irrational-looking angle so that no direction lies exactly in the tangent frame's
+         * axis planes: in axis-aligned scenes such a ray would run inside a neighbouring face's plane */
+        double r = sqrt(u1), phi = 2.0 * HOST_PI * (u2 + 0.1234567);
+        dirs[3 * i + 0] = (float)(r * cos(phi));
+        dirs[3 * i + 1] = (float)(r * sin(phi));
+        dirs[3 * i + 2] = (float)sqrt(fmax(0.0, 1.0 - u1));
+    }
+}
+
+static glow_result check_settings(const glow_host_desc *d, const glow_logger *lg) {
+    if (d->kind != GLOW_HOST_KIND_DEFAULT && d->kind != GLOW_HOST_KIND_EXACT && d->kind != GLOW_HOST_KIND_SHADOW_MAP)
+        return HOST_FAIL(lg, GLOW_ERROR_UNSUPPORTED, "unknown host kind %d", (int)d->kind);
+    if (d->sky != GLOW_HOST_SKY_DEFAULT && d->sky != GLOW_HOST_SKY_TRACED && d->sky != GLOW_HOST_SKY_UNSHADOWED)
+        return HOST_FAIL(lg, GLOW_ERROR_INVALID_ARGUMENT, "unknown sky mode %d", (int)d->sky);
+    if (d->sky_rays > 65536) return HOST_FAIL(lg, GLOW_ERROR_INVALID_ARGUMENT, "sky_rays %u > 65536", d->sky_rays);
+    if (d->shadow_map_size && (d->shadow_map_size < 16 || d->shadow_map_size > 8192))
+        return HOST_FAIL(lg, GLOW_ERROR_INVALID_ARGUMENT, "shadow_map_size %u outside 16..8192", d->shadow_map_size);
+    if (d->cube_map_size && (d->cube_map_size < 16 || d->cube_map_size > 8192))
+        return HOST_FAIL(lg, GLOW_ERROR_INVALID_ARGUMENT, "cube_map_size %u outside 16..8192", d->cube_map_size);
+    if (d->pcf_size && (d->pcf_size > 9 || (d->pcf_size & 1) == 0))
+        return HOST_FAIL(lg, GLOW_ERROR_INVALID_ARGUMENT, "pcf_size %u is not odd in 1..9", d->pcf_size);
+    const float b[3] = {d->depth_bias, d->slope_bias, d->normal_offset};
+    static const char *const names[3] = {"depth_bias", "slope_bias", "normal_offset"};
+    for (int i = 0; i < 3; ++i)
+        if (!isfinite(b[i]) || b[i] < 0.0f || b[i] > 1000.0f)
+            return HOST_FAIL(lg, GLOW_ERROR_INVALID_ARGUMENT, "%s (%g) outside [0, 1000]", names[i], (double)b[i]);
+    for (int c = 0; c < 3; ++c)
+        if (!isfinite(d->environment[c]) || d->environment[c] < 0.0f)
+            return HOST_FAIL(lg, GLOW_ERROR_INVALID_ARGUMENT, "environment[%d] (%g) is negative or not finite", c,
+                             (double)d->environment[c]);
+    if (d->light_count && !d->lights)
+        return HOST_FAIL(lg, GLOW_ERROR_INVALID_ARGUMENT, "lights is NULL with light_count %u", d->light_count);
+    return GLOW_OK;
+}
+
+glow_result glow_host_create(const glow_host_desc *desc, glow_host **out_host) {
+    if (out_host) *out_host = NULL;
+    if (!desc || !out_host) return GLOW_ERROR_INVALID_ARGUMENT;
+    const glow_logger *lg = &desc->logger;
+    if (!desc->bake) return HOST_FAIL(lg, GLOW_ERROR_INVALID_ARGUMENT, "desc.bake is NULL");
+    glow_result r = check_settings(desc, lg);
+    if (r != GLOW_OK) return r;
+    glow_bake_info info;
+    glow_bake_geometry geo;
+    if ((r = glow_bake_get_info(desc->bake, &info)) != GLOW_OK) return HOST_FAIL(lg, r, "cannot read the bake's info");
+    if ((r = glow_bake_get_geometry(desc->bake, &geo)) != GLOW_OK)
+        return HOST_FAIL(lg, r, "cannot read the bake's geometry");
+    if (geo.triangle_count == 0 || !geo.positions)
+        return HOST_FAIL(lg, GLOW_ERROR_EMPTY_SCENE, "the bake carries no triangles to cast shadows");
+    if (desc->sky_visibility && desc->sky_visibility_count != info.surfel_count)
+        return HOST_FAIL(lg, GLOW_ERROR_INVALID_ARGUMENT, "sky_visibility has %u values, the bake has %u surfels",
+                         desc->sky_visibility_count, info.surfel_count);
+
+    glow_host *h = calloc(1, sizeof *h);
+    if (!h) return GLOW_ERROR_OUT_OF_MEMORY;
+    h->kind = desc->kind == GLOW_HOST_KIND_SHADOW_MAP ? GLOW_HOST_KIND_SHADOW_MAP : GLOW_HOST_KIND_EXACT;
+    h->logger = desc->logger;
+    h->bake = desc->bake;
+    h->surfel_count = info.surfel_count;
+    h->tri_count = geo.triangle_count;
+    h->sky = desc->sky == GLOW_HOST_SKY_UNSHADOWED ? GLOW_HOST_SKY_UNSHADOWED : GLOW_HOST_SKY_TRACED;
+    h->sky_rays = desc->sky_rays ? desc->sky_rays : 128;
+    h->sm_size = desc->shadow_map_size ? desc->shadow_map_size : 1024;
+    h->cube_size = desc->cube_map_size ? desc->cube_map_size : 512;
+    h->sp.depth_bias = desc->depth_bias > 0.0f ? desc->depth_bias : 1.0f;
+    h->sp.slope_bias = desc->slope_bias > 0.0f ? desc->slope_bias : 2.0f;
+    h->sp.normal_offset = desc->normal_offset > 0.0f ? desc->normal_offset : 1.0f;
+    h->sp.pcf_radius = desc->pcf_size ? (int)desc->pcf_size / 2 : 1;
+    memcpy(h->env, desc->environment, sizeof h->env);
+
+    h->tris = malloc((size_t)h->tri_count * 9 * sizeof(float));
+    h->sky_dirs = malloc((size_t)h->sky_rays * 3 * sizeof(float));
+    h->sky_cache = h->surfel_count ? malloc((size_t)h->surfel_count * sizeof *h->sky_cache) : NULL;
+    if (!h->tris || !h->sky_dirs || (h->surfel_count && !h->sky_cache)) {
+        glow_host_destroy(h);
+        return HOST_FAIL(lg, GLOW_ERROR_OUT_OF_MEMORY, "out of memory for %u triangles", geo.triangle_count);
+    }
+    for (int i = 0; i < 3; ++i) {
+        h->bmin[i] = INFINITY;
+        h->bmax[i] = -INFINITY;
+    }
+    for (uint32_t t = 0; t < h->tri_count; ++t) {
+        const float *src = (const float *)((const char *)geo.positions + (size_t)t * geo.stride);
+        for (int k = 0; k < 9; ++k) {
+            float v = src[k];
+            if (!isfinite(v)) {
+                glow_host_destroy(h);
+                return HOST_FAIL(lg, GLOW_ERROR_CORRUPT_DATA, "bake triangle %u has a non-finite corner", t);
+            }
+            h->tris[9 * (size_t)t + k] = v;
+            h->bmin[k % 3] = fminf(h->bmin[k % 3], v);
+            h->bmax[k % 3] = fmaxf(h->bmax[k % 3], v);
+        }
+    }
+    float ext[3] = {h->bmax[0] - h->bmin[0], h->bmax[1] - h->bmin[1], h->bmax[2] - h->bmin[2]};
+    h->diag = sqrtf(dot3(ext, ext));
+    if (!(h->diag > 0.0f)) h->diag = 1.0f;
+    h->eps = 1e-4f * h->diag;
+    make_sky_dirs(h->sky_dirs, h->sky_rays);
+    for (uint32_t i = 0; i < h->surfel_count; ++i) {
+        uint32_t bits = SKY_UNSET;
+        if (desc->sky_visibility) {
+            float s = desc->sky_visibility[i];
+            if (!(s >= 0.0f && s <= 1.0f)) {
+                glow_host_destroy(h);
+                return HOST_FAIL(lg, GLOW_ERROR_INVALID_ARGUMENT, "sky_visibility[%u] (%g) is outside [0, 1]", i,
+                                 (double)s);
+            }
+            memcpy(&bits, &s, sizeof bits);
+        }
+        atomic_init(&h->sky_cache[i], bits);
+    }
+
+    bool need_rays = h->kind == GLOW_HOST_KIND_EXACT || h->sky == GLOW_HOST_SKY_TRACED;
+    if (need_rays && (r = build_embree(h)) != GLOW_OK) {
+        glow_host_destroy(h);
+        return r;
+    }
+    if (need_rays && h->surfel_count) {
+        h->origin_cache = malloc((size_t)h->surfel_count * 3 * sizeof *h->origin_cache);
+        if (!h->origin_cache) {
+            glow_host_destroy(h);
+            return HOST_FAIL(lg, GLOW_ERROR_OUT_OF_MEMORY, "out of memory for %u surfels", h->surfel_count);
+        }
+        for (size_t i = 0; i < (size_t)h->surfel_count * 3; ++i) atomic_init(&h->origin_cache[i], SKY_UNSET);
+    }
+    if ((r = glow_host_set_lights(h, desc->lights, desc->light_count)) != GLOW_OK) {
+        glow_host_destroy(h);
+        return r;
+    }
+    *out_host = h;
+    return GLOW_OK;
+}
+
+glow_result glow_host_irradiance(const glow_host *host, const float position[3], const float normal[3],
+                                 float out_rgb[3]) {
+    if (out_rgb) out_rgb[0] = out_rgb[1] = out_rgb[2] = 0.0f;
+    if (!host || !position || !normal || !out_rgb) return GLOW_ERROR_INVALID_ARGUMENT;
+    float n[3];
+    if (!isfinite(position[0]) || !isfinite(position[1]) || !isfinite(position[2]) || !normalize3(normal, n))
+        return HOST_FAIL(&host->logger, GLOW_ERROR_INVALID_ARGUMENT, "irradiance: non-finite position or bad normal");
+    irradiance_at(host, position, n, UINT32_MAX, out_rgb);
+    return GLOW_OK;
+}
+
+glow_result glow_host_get_stats(const glow_host *host, glow_host_stats *out_stats) {
+    if (!host || !out_stats) return GLOW_ERROR_INVALID_ARGUMENT;
+    memset(out_stats, 0, sizeof *out_stats);
+    out_stats->kind = host->kind;
+    out_stats->triangle_count = host->tri_count;
+    out_stats->epsilon = host->eps;
+    for (uint32_t i = 0; i < host->light_count; ++i) {
+        const host_light *hl = &host->lights[i];
+        for (uint32_t m = 0; m < hl->map_count; ++m) {
+            if (!hl->maps[m].depth) continue;
+            out_stats->shadow_map_count++;
+            out_stats->shadow_map_bytes += (uint64_t)hl->maps[m].res * hl->maps[m].res * sizeof(float);
+        }
+    }
+    out_stats->shadow_map_ms = host->shadow_map_ms;
+    for (uint32_t i = 0; i < host->surfel_count; ++i)
+        out_stats->sky_cached += atomic_load_explicit(&host->sky_cache[i], memory_order_relaxed) != SKY_UNSET;
+    return GLOW_OK;
+}
