@@ -1,0 +1,326 @@
+/* glow-bench — the runtime's speed on a real bake, the way an engine drives it.
+ *
+ *   glow-bench BAKE SCENE [options]       (SCENE: a scene description JSON, docs/scene-format.md)
+ *
+ * Runs --frames updates while the scene's first light moves along a path (a point/spot light circles
+ * its position; a sun turns about the vertical; a scene without lights has its emission pulse), the
+ * host lighting the surfels every frame (exact Embree rays or software shadow maps), and prints the
+ * median milliseconds per stage, the cache-lighting kernel's achieved memory bandwidth and FLOP rate,
+ * and — measured in the same run, with the same thread count — this machine's STREAM-triad bandwidth
+ * and fp32 FMA peak, so the fractions mean something. --probe X,Y,Z (repeatable) prints the indirect
+ * light at points (grid caches, diffuse, normal +Y), as does the default probe set.
+ *
+ * Exit: 0 ok, 1 runtime/IO failure, 2 usage. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "glow/glow.h"
+#include "glow/glow_host.h"
+#include "glow/glow_scene.h"
+#include "machine_probe.h"
+
+#define MAX_PROBES 16
+
+typedef struct options {
+    const char *bake, *scene;
+    uint32_t frames, warmup, threads, luma, chroma, iterations;
+    glow_host_kind host;
+    int json, quiet, no_probe_machine;
+    uint32_t probe_count;
+    float probes[MAX_PROBES][3];
+} options;
+
+static void usage(FILE *f) {
+    fprintf(f,
+            "usage: glow-bench BAKE SCENE [--frames N] [--warmup N] [--threads N] [--luma L] [--chroma C]\n"
+            "                  [--iterations K] [--host exact|shadow-map] [--probe X,Y,Z]... [--no-machine]\n"
+            "                  [--json] [-q]\n"
+            "  BAKE   a bake written by glow-bake;  SCENE  its scene description JSON (docs/scene-format.md)\n"
+            "  --frames N      timed updates (default 60); --warmup N untimed first (default 5)\n"
+            "  --threads N     runtime workers (default: one per online CPU); the machine probes use the same\n"
+            "  --luma/--chroma SH bands (default: the bake's; chroma = luma)\n"
+            "  --iterations K  bounce iterations per update (default 1)\n"
+            "  --host          surfel lighting: exact Embree rays (default) or software shadow maps\n"
+            "  --probe X,Y,Z   print the indirect light at this point (repeatable; default: 3 points)\n"
+            "  --no-machine    skip the STREAM-triad and FMA-peak probes\n");
+}
+
+static int parse_u32(const char *s, uint32_t *out) {
+    char *end;
+    unsigned long v = strtoul(s, &end, 10);
+    if (!*s || *end || v > 1000000000ul) return 0;
+    *out = (uint32_t)v;
+    return 1;
+}
+
+static int parse_args(int argc, char **argv, options *o) {
+    memset(o, 0, sizeof *o);
+    o->frames = 60;
+    o->warmup = 5;
+    o->iterations = 1;
+    o->host = GLOW_HOST_KIND_EXACT;
+    int pos = 0;
+    for (int i = 1; i < argc; ++i) {
+        const char *a = argv[i];
+        const char *v = i + 1 < argc ? argv[i + 1] : NULL;
+#define NEED_U32(field) \
+    do { if (!v || !parse_u32(v, &o->field)) { fprintf(stderr, "glow-bench: %s needs a number\n", a); return 0; } ++i; } while (0)
+        if (!strcmp(a, "--frames")) NEED_U32(frames);
+        else if (!strcmp(a, "--warmup")) NEED_U32(warmup);
+        else if (!strcmp(a, "--threads")) NEED_U32(threads);
+        else if (!strcmp(a, "--luma")) NEED_U32(luma);
+        else if (!strcmp(a, "--chroma")) NEED_U32(chroma);
+        else if (!strcmp(a, "--iterations")) NEED_U32(iterations);
+        else if (!strcmp(a, "--host")) {
+            if (!v || (strcmp(v, "exact") && strcmp(v, "shadow-map"))) {
+                fprintf(stderr, "glow-bench: --host must be exact or shadow-map\n");
+                return 0;
+            }
+            o->host = strcmp(v, "exact") ? GLOW_HOST_KIND_SHADOW_MAP : GLOW_HOST_KIND_EXACT;
+            ++i;
+        } else if (!strcmp(a, "--probe")) {
+            float p[3];
+            if (!v || sscanf(v, "%f,%f,%f", &p[0], &p[1], &p[2]) != 3 || !isfinite(p[0]) || !isfinite(p[1]) ||
+                !isfinite(p[2]) || o->probe_count == MAX_PROBES) {
+                fprintf(stderr, "glow-bench: --probe needs X,Y,Z (at most %d probes)\n", MAX_PROBES);
+                return 0;
+            }
+            memcpy(o->probes[o->probe_count++], p, sizeof p);
+            ++i;
+        } else if (!strcmp(a, "--no-machine")) o->no_probe_machine = 1;
+        else if (!strcmp(a, "--json")) o->json = 1;
+        else if (!strcmp(a, "-q")) o->quiet = 1;
+        else if (!strcmp(a, "-h") || !strcmp(a, "--help")) { usage(stdout); exit(0); }
+        else if (a[0] == '-') { fprintf(stderr, "glow-bench: unknown option %s\n", a); return 0; }
+        else if (pos == 0) { o->bake = a; pos++; }
+        else if (pos == 1) { o->scene = a; pos++; }
+        else { fprintf(stderr, "glow-bench: unexpected argument %s\n", a); return 0; }
+#undef NEED_U32
+    }
+    if (pos != 2) {
+        fprintf(stderr, "glow-bench: need BAKE and SCENE\n");
+        return 0;
+    }
+    if (o->frames == 0) {
+        fprintf(stderr, "glow-bench: --frames must be >= 1\n");
+        return 0;
+    }
+    return 1;
+}
+
+static void stderr_logger(void *user, glow_log_level level, glow_result code, const char *msg, const char *file, int line) {
+    (void)file; (void)line;
+    const options *o = user;
+    if (level == GLOW_LOG_ERROR || (level == GLOW_LOG_WARNING && !o->quiet))
+        fprintf(stderr, "glow-bench: %s: %s (%s)\n", level == GLOW_LOG_ERROR ? "error" : "warning", msg,
+                glow_result_string(code));
+}
+
+static int cmp_double(const void *a, const void *b) {
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+static double median(double *v, uint32_t n) {
+    qsort(v, n, sizeof *v, cmp_double);
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+static double now_ms(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
+}
+
+/* FLOPs the cache-lighting kernel spends per link (cache_kernel.inc), counted per operation:
+ * decode + normalise 21, Legendre 4 per band, cone factors 2 per band, SH basis ~4 per coefficient,
+ * band weights luma + 2 chroma, accumulation 2 per coefficient (an FMA = 2). */
+static double flops_per_link(uint32_t L, uint32_t C) {
+    return 21.0 + 7.0 * L + 4.0 * L * L + 2.0 * C + 2.0 * (L * L + 2.0 * C * C);
+}
+
+/* the light path: frame f of n */
+static void animate(const glow_scene_light *base, glow_scene_light *out, uint32_t f, uint32_t n, float radius) {
+    *out = *base;
+    double phi = 2.0 * 3.14159265358979323846 * (double)f / (double)n;
+    if (base->type == GLOW_SCENE_LIGHT_SUN) {
+        double c = cos(phi), s = sin(phi);
+        out->direction[0] = (float)(c * base->direction[0] - s * base->direction[2]);
+        out->direction[2] = (float)(s * base->direction[0] + c * base->direction[2]);
+    } else {
+        out->position[0] = base->position[0] + radius * (float)cos(phi);
+        out->position[2] = base->position[2] + radius * (float)sin(phi);
+    }
+}
+
+int main(int argc, char **argv) {
+    options o;
+    if (!parse_args(argc, argv, &o)) {
+        usage(stderr);
+        return 2;
+    }
+    glow_logger logger = {stderr_logger, &o};
+    char msg[1024];
+    glow_scene_desc scene;
+    if (glow_scene_load(o.scene, &logger, &scene, msg, sizeof msg) != GLOW_OK) {
+        fprintf(stderr, "glow-bench: %s\n", msg);
+        return 1;
+    }
+    glow_context *ctx = NULL;
+    glow_bake *bake = NULL;
+    glow_host *host = NULL;
+    glow_system *sys = NULL;
+    double *v_host = NULL, *v_light = NULL, *v_pull = NULL, *v_cache = NULL, *v_out = NULL, *v_total = NULL, *v_move = NULL;
+    int rc = 1;
+    glow_result r = glow_context_create(
+        &(glow_context_desc){.api_version = GLOW_VERSION, .logger = logger, .tasks = {.worker_count = o.threads}}, &ctx);
+    if (r != GLOW_OK) goto done;
+    if ((r = glow_bake_load_file(ctx, o.bake, &bake)) != GLOW_OK) goto done;
+    glow_bake_info info;
+    glow_bake_get_info(bake, &info);
+    glow_host_desc hd = glow_host_desc_from_scene(&scene, bake, o.host);
+    hd.logger = logger;
+    if ((r = glow_host_create(&hd, &host)) != GLOW_OK) goto done;
+    glow_system_desc sd = {.bake = bake, .lighting = glow_host_hooks(host), .sh_bands_luma = o.luma,
+                           .sh_bands_chroma = o.chroma, .label = o.bake};
+    if ((r = glow_system_create(ctx, &sd, &sys)) != GLOW_OK) goto done;
+    if ((r = glow_system_set_params(sys, &(glow_system_params){.bounce_intensity = 1.0f,
+                                                                .emission_scale = scene.emission_scale,
+                                                                .bounce_iterations = o.iterations})) != GLOW_OK)
+        goto done;
+    const glow_cache_outputs *out = glow_system_outputs(sys);
+    uint32_t threads = o.threads;
+    if (threads == 0) {
+        long n = sysconf(_SC_NPROCESSORS_ONLN);
+        threads = n > 0 ? (uint32_t)n : 1u;
+    }
+
+    float diag = 0.0f;
+    for (int k = 0; k < 3; ++k) diag += (info.bounds_max[k] - info.bounds_min[k]) * (info.bounds_max[k] - info.bounds_min[k]);
+    diag = sqrtf(diag);
+    const uint32_t n = o.frames, total = o.warmup + o.frames;
+    v_host = calloc(n, sizeof(double)); v_light = calloc(n, sizeof(double)); v_pull = calloc(n, sizeof(double));
+    v_cache = calloc(n, sizeof(double)); v_out = calloc(n, sizeof(double)); v_total = calloc(n, sizeof(double));
+    v_move = calloc(n, sizeof(double));
+    if (!v_host || !v_light || !v_pull || !v_cache || !v_out || !v_total || !v_move) goto done;
+    glow_update_stats st = {0};
+    for (uint32_t f = 0; f < total; ++f) {
+        double t0 = now_ms();
+        if (scene.light_count > 0) {
+            glow_scene_light l;
+            animate(&scene.lights[0], &l, f, total, 0.05f * diag);
+            if ((r = glow_host_set_light(host, 0, &l)) != GLOW_OK) goto done;
+        } else {
+            float pulse = scene.emission_scale * (0.75f + 0.25f * (float)cos(6.283185307 * f / total));
+            glow_system_set_params(sys, &(glow_system_params){1.0f, pulse, o.iterations});
+        }
+        double t1 = now_ms();
+        if ((r = glow_system_update(sys, NULL)) != GLOW_OK) goto done;
+        glow_system_get_stats(sys, &st);
+        if (f >= o.warmup) {
+            uint32_t i = f - o.warmup;
+            v_move[i] = t1 - t0;
+            v_host[i] = st.host_ms;
+            v_light[i] = st.surfel_lighting_ms;
+            v_pull[i] = st.pull_ms;
+            v_cache[i] = st.cache_lighting_ms;
+            v_out[i] = st.output_ms;
+            v_total[i] = st.total_ms;
+        }
+    }
+    const double m_move = median(v_move, n), m_host = median(v_host, n), m_light = median(v_light, n),
+                 m_pull = median(v_pull, n), m_cache = median(v_cache, n), m_out = median(v_out, n),
+                 m_total = median(v_total, n);
+    const uint64_t links = (uint64_t)info.cache_count * info.links_per_cache * o.iterations;
+    const double link_bytes = (double)links * 8.0;
+    const double gbs = link_bytes / (m_cache * 1e-3) * 1e-9;
+    const double fpl = flops_per_link(out->sh_bands_luma, out->sh_bands_chroma);
+    const double gflops = (double)links * fpl / (m_cache * 1e-3) * 1e-9;
+    double triad = -1.0, peak = -1.0;
+    const char *fma_isa = "-";
+    if (!o.no_probe_machine) {
+        triad = glow_probe_stream_triad(threads, (size_t)1 << 23, 8); /* 3 x 64 MiB */
+        peak = glow_probe_fma_peak(threads, 300.0, &fma_isa);
+    }
+    /* probes: indirect light (diffuse, normal +Y) from the grid */
+    if (o.probe_count == 0 && out->grid_sh) {
+        for (int k = 0; k < 3; ++k) {
+            float t = (float)(k + 1) / 4.0f;
+            for (int a = 0; a < 3; ++a)
+                o.probes[k][a] = info.bounds_min[a] + t * (info.bounds_max[a] - info.bounds_min[a]);
+        }
+        o.probe_count = 3;
+    }
+    float probe_rgb[MAX_PROBES][3];
+    int probe_ok[MAX_PROBES];
+    float *coeffs = calloc(out->coeff_count, sizeof(float));
+    if (!coeffs) goto done;
+    for (uint32_t k = 0; k < o.probe_count; ++k) {
+        probe_ok[k] = out->grid_sh && glow_sample_grid(out, o.probes[k], coeffs) == GLOW_OK;
+        const float up[3] = {0, 1, 0};
+        if (probe_ok[k]) glow_shade_sh(coeffs, out->sh_bands_luma, out->sh_bands_chroma, up, 1.0f, probe_rgb[k]);
+        else probe_rgb[k][0] = probe_rgb[k][1] = probe_rgb[k][2] = 0.0f;
+    }
+    free(coeffs);
+    const char *bound = "-";
+    double frac_bw = triad > 0 ? gbs / triad : -1.0, frac_fma = peak > 0 ? gflops / peak : -1.0;
+    if (triad > 0 && peak > 0) {
+        /* the floor each resource sets: link bytes / triad vs FLOPs / peak; the larger one bounds */
+        double t_bw = link_bytes / (triad * 1e9), t_fl = (double)links * fpl / (peak * 1e9);
+        bound = t_bw > t_fl ? "memory bandwidth" : "FMA throughput";
+    }
+    if (o.json) {
+        printf("{\"bake\": \"%s\", \"scene\": \"%s\", \"host\": \"%s\", \"threads\": %u, \"frames\": %u,\n", o.bake,
+               o.scene, o.host == GLOW_HOST_KIND_EXACT ? "exact" : "shadow-map", threads, n);
+        printf(" \"surfels\": %u, \"caches\": %u, \"links_per_cache\": %u, \"luma\": %u, \"chroma\": %u, \"iterations\": %u,\n",
+               info.surfel_count, info.cache_count, info.links_per_cache, out->sh_bands_luma, out->sh_bands_chroma,
+               o.iterations);
+        printf(" \"median_ms\": {\"light_move\": %.4f, \"host_hook\": %.4f, \"surfel_lighting\": %.4f, \"pull\": %.4f, "
+               "\"cache_lighting\": %.4f, \"output\": %.4f, \"total\": %.4f},\n",
+               m_move, m_host, m_light, m_pull, m_cache, m_out, m_total);
+        printf(" \"cache_lighting\": {\"links\": %llu, \"link_bytes\": %.0f, \"gb_per_s\": %.3f, \"flops_per_link\": %.1f, "
+               "\"gflop_per_s\": %.3f, \"ns_per_link\": %.4f},\n",
+               (unsigned long long)links, link_bytes, gbs, fpl, gflops, m_cache * 1e6 / (double)links);
+        printf(" \"machine\": {\"stream_triad_gb_per_s\": %.3f, \"fma_peak_gflop_per_s\": %.3f, \"fma_isa\": \"%s\", "
+               "\"fraction_of_triad\": %.4f, \"fraction_of_fma_peak\": %.4f, \"bound\": \"%s\"},\n",
+               triad, peak, fma_isa, frac_bw, frac_fma, bound);
+        printf(" \"probes\": [");
+        for (uint32_t k = 0; k < o.probe_count; ++k)
+            printf("%s{\"position\": [%g, %g, %g], \"ok\": %s, \"diffuse_up_rgb\": [%.6g, %.6g, %.6g]}", k ? ", " : "",
+                   o.probes[k][0], o.probes[k][1], o.probes[k][2], probe_ok[k] ? "true" : "false", probe_rgb[k][0],
+                   probe_rgb[k][1], probe_rgb[k][2]);
+        printf("]}\n");
+    } else {
+        printf("glow-bench %s + %s: %u surfels, %u caches x %u links, SH luma %u chroma %u, %u thread(s), %s host\n",
+               o.bake, o.scene, info.surfel_count, info.cache_count, info.links_per_cache, out->sh_bands_luma,
+               out->sh_bands_chroma, threads, o.host == GLOW_HOST_KIND_EXACT ? "exact" : "shadow-map");
+        printf("median of %u updates (ms):\n", n);
+        printf("  light move (host, outside update) %8.3f\n", m_move);
+        printf("  surfel lighting                   %8.3f  (host hook %.3f)\n", m_light, m_host);
+        printf("  pull                              %8.3f\n", m_pull);
+        printf("  cache lighting                    %8.3f  (%.2f ns/link)\n", m_cache, m_cache * 1e6 / (double)links);
+        printf("  outputs                           %8.3f\n", m_out);
+        printf("  total update                      %8.3f  (without host hook %.3f)\n", m_total, m_total - m_host);
+        printf("cache lighting: %.2f GB/s of links (8 B each), %.1f GFLOP/s (%.0f FLOPs per link)\n", gbs, gflops, fpl);
+        if (triad > 0)
+            printf("machine (%u threads): STREAM triad %.2f GB/s, fp32 FMA peak %.1f GFLOP/s [%s]\n"
+                   "  cache lighting reaches %.1f %% of triad and %.1f %% of FMA peak; %s sets the floor\n",
+                   threads, triad, peak, fma_isa, 100.0 * frac_bw, 100.0 * frac_fma, bound);
+        for (uint32_t k = 0; k < o.probe_count; ++k)
+            printf("indirect light at (%.3g, %.3g, %.3g), diffuse facing +Y: %s%.4g %.4g %.4g W/(m^2 sr)\n",
+                   o.probes[k][0], o.probes[k][1], o.probes[k][2], probe_ok[k] ? "" : "(no grid cache near) ",
+                   probe_rgb[k][0], probe_rgb[k][1], probe_rgb[k][2]);
+    }
+    rc = 0;
+done:
+    if (rc != 0 && r != GLOW_OK) fprintf(stderr, "glow-bench: failed: %s\n", glow_result_string(r));
+    free(v_host); free(v_light); free(v_pull); free(v_cache); free(v_out); free(v_total); free(v_move);
+    glow_system_destroy(sys);
+    glow_host_destroy(host);
+    glow_bake_destroy(bake);
+    glow_context_destroy(ctx);
+    glow_scene_free(&scene);
+    return rc;
+}
