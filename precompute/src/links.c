@@ -30,6 +30,7 @@
 #include <string.h>
 
 #include "bake/bake_format.h"
+#include "cone_fit.h"
 #include "pc_internal.h"
 
 #define NEAR_RADII 4.0f
@@ -61,6 +62,7 @@ typedef struct link_job {
     uint32_t workers;
     float **omega;                   /* [workers][node_count] */
     float **dirsum;                  /* [workers][node_count*3] */
+    float **kappa;                   /* [workers][node_count]: Σ ω_i K_L(d_i·n), lightmap caches */
     uint32_t **heap;                 /* [workers][node_count] */
     double *visible_total;           /* per cache, summed in cache order afterwards */
     float *norm_scale;               /* per cache: the normalisation factor applied (0 = none) */
@@ -134,7 +136,8 @@ static void disc_point(const glow__surfel *s, float radius, uint32_t k, uint32_t
  * The rays go on to unlimited length (the first hit within R is the same either way): the return
  * value counts the rays whose first hit is a front face anywhere, the visible geometry for the
  * normalisation in link_cache. Back faces (no surfels there) and rays into the sky count nothing. */
-static uint32_t near_field(const link_job *job, const glow__cache *cache, float *omega, float *dirsum) {
+static uint32_t near_field(const link_job *job, const glow__cache *cache, float *omega, float *dirsum,
+                           double *out_kappa_geom) {
     const bool hemi = cache->kind == GLOW_CACHE_KIND_LIGHTMAP;
     const uint32_t count = hemi ? NEAR_RAYS / 2 : NEAR_RAYS;
     const float dw = (float)(4.0 * GLOW__PI / NEAR_RAYS);
@@ -154,6 +157,7 @@ static uint32_t near_field(const link_job *job, const glow__cache *cache, float 
         glow__hit hit = glow__rt_intersect(job->rt, cache->pos, dir, eps, INFINITY);
         if (hit.t == INFINITY || hit.back_face) continue;
         front_hits++;
+        if (hemi) *out_kappa_geom += dw * glow__irr_kernel(job->out->sh_bands, glow__dot(dir, cache->nrm));
         if (!(hit.t < R)) continue; /* beyond the near field: counted, not credited */
         float p[3];
         for (int k = 0; k < 3; ++k) p[k] = cache->pos[k] + hit.t * dir[k];
@@ -254,7 +258,8 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
     }
     for (uint32_t i = 0; i < n; ++i)
         for (int k = 0; k < 3; ++k) dirsum[3 * i + k] *= omega[i];
-    const uint32_t front_hits = near_field(job, cache, omega, dirsum);
+    double kappa_geom = 0.0; /* lightmap caches: the rays' estimate of the diffuse response of all visible geometry */
+    const uint32_t front_hits = near_field(job, cache, omega, dirsum, &kappa_geom);
     double leaf_total = 0.0;
     for (uint32_t i = 0; i < n; ++i) leaf_total += omega[i];
     /* Normalisation (before the sums up the tree): scale every leaf's ω, and its ω-weighted
@@ -281,12 +286,38 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
     }
     job->visible_total[ci] = leaf_total;
 
-    /* 2. sums up the tree: children precede parents in node order. */
+    /* 2. sums up the tree: children precede parents in node order. Lightmap caches also sum each
+     * leaf's diffuse response ω K_L(d·n) for the cone fit in step 4 (cone_fit.c). */
+    float *kappa = job->kappa[worker];
+    const uint32_t fit_bands = job->out->sh_bands;
+    if (hemi)
+        for (uint32_t i = 0; i < n; ++i) {
+            kappa[i] = 0.0f;
+            if (!(omega[i] > 0.0f)) continue;
+            const float *ds = &dirsum[3 * i];
+            float len = sqrtf(glow__dot(ds, ds));
+            if (!(len > 0.0f)) continue;
+            kappa[i] = (float)((double)omega[i] * glow__irr_kernel(fit_bands, glow__dot(ds, cache->nrm) / len));
+        }
+    if (hemi && !set->no_normalize) {
+        /* The leaves' directions are not spread like the geometry they stand for (what the disc and
+         * near-field passes lose is mostly grazing, and the solid-angle normalisation above spreads
+         * that loss over every direction), so their total response is normalised too, to the rays'
+         * Σ dw K_L(t) over the same first hits. */
+        double ksum = 0.0;
+        for (uint32_t i = 0; i < n; ++i) ksum += kappa[i];
+        if (kappa_geom > 0.0 && ksum > 0.0) {
+            double r = kappa_geom / ksum;
+            r = r < NORM_MIN ? NORM_MIN : (r > NORM_MAX ? NORM_MAX : r);
+            for (uint32_t i = 0; i < n; ++i) kappa[i] = (float)(kappa[i] * r);
+        }
+    }
     for (uint32_t v = n; v < h->node_count; ++v) {
         const glow__node *nd = &h->nodes[v];
         uint32_t a = nd->child[0], b = nd->child[1];
         omega[v] = omega[a] + omega[b];
         for (int k = 0; k < 3; ++k) dirsum[3 * v + k] = dirsum[3 * a + k] + dirsum[3 * b + k];
+        if (hemi) kappa[v] = kappa[a] + kappa[b];
     }
 
     /* 3. cut refinement. The heap holds the current cut; split the most important internal node. */
@@ -352,6 +383,9 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
             if (dl > 0.0f) for (int k = 0; k < 3; ++k) lk->dir[k] = d[k] / dl;
             else { lk->dir[0] = lk->dir[1] = 0.0f; lk->dir[2] = 1.0f; }
         }
+        /* Lightmap caches: the cone's size is fitted so its diffuse response at the cache normal
+         * equals the cluster's (cone_fit.c); grid caches keep the solid angle. */
+        if (hemi && !set->no_cone_fit) lk->one_minus_cos = glow__cone_fit_omc(fit_bands, lk->one_minus_cos, glow__dot(lk->dir, cache->nrm), kappa[v]);
         if (shout) {
             /* PIC Eq. 2 over this node's visible leaves: Σ ω_i y(dir_i), in units of the runtime
              * projection (multiplied by factor; factor_scale applied at runtime). */
@@ -402,20 +436,22 @@ glow_result glow__links_build(const glow__scene *scene, const glow__rt *rt, cons
     job.workers = glow__pool_threads(pool);
     job.omega = calloc(job.workers, sizeof *job.omega);
     job.dirsum = calloc(job.workers, sizeof *job.dirsum);
+    job.kappa = calloc(job.workers, sizeof *job.kappa);
     job.heap = calloc(job.workers, sizeof *job.heap);
     job.visible_total = calloc((size_t)caches->count + 1, sizeof(double));
     job.norm_scale = calloc((size_t)caches->count + 1, sizeof(float));
     job.norm_clamped = calloc((size_t)caches->count + 1, 1);
     job.leaf_first = malloc((size_t)h->node_count * sizeof(uint32_t));
     job.leaf_end = malloc((size_t)h->node_count * sizeof(uint32_t));
-    bool ok = out->links && (!settings->full_sh || out->sh) && job.omega && job.dirsum && job.heap &&
+    bool ok = out->links && (!settings->full_sh || out->sh) && job.omega && job.dirsum && job.kappa && job.heap &&
               job.visible_total && job.norm_scale && job.norm_clamped && job.leaf_first && job.leaf_end;
     for (uint32_t w = 0; ok && w < job.workers; ++w) {
         job.omega[w] = malloc((size_t)h->node_count * sizeof(float));
         job.dirsum[w] = malloc((size_t)h->node_count * 3 * sizeof(float));
+        job.kappa[w] = malloc((size_t)h->node_count * sizeof(float));
         /* heap (nl + 2) + leaf cut (nl) + sorted cut (<= nl + 2) */
         job.heap[w] = malloc(((size_t)3u * nl + 8u) * sizeof(uint32_t));
-        ok = job.omega[w] && job.dirsum[w] && job.heap[w];
+        ok = job.omega[w] && job.dirsum[w] && job.kappa[w] && job.heap[w];
     }
     glow_result res = GLOW_OK;
     if (!ok) {
@@ -493,10 +529,12 @@ done:
     for (uint32_t w = 0; w < job.workers; ++w) {
         if (job.omega) free(job.omega[w]);
         if (job.dirsum) free(job.dirsum[w]);
+        if (job.kappa) free(job.kappa[w]);
         if (job.heap) free(job.heap[w]);
     }
     free(job.omega);
     free(job.dirsum);
+    free(job.kappa);
     free(job.heap);
     free(job.visible_total);
     free(job.norm_scale);

@@ -240,6 +240,7 @@ typedef struct glow__link_settings {
     uint32_t rays_per_surfel; /* visibility rays per (cache, surfel) */
     uint32_t seed;
     bool no_normalize;        /* false (default): normalise each cache's leaf solid angles (links.c) */
+    bool no_cone_fit;          /* keep lightmap links' solid angles (tests of the raw cut); default: fit */
 } glow__link_settings;
 
 typedef struct glow__link {

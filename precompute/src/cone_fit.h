@@ -1,0 +1,17 @@
+/* cone_fit.h — irradiance-preserving cone fit for lightmap-cache links (see cone_fit.c). */
+#ifndef GLOW_CONE_FIT_H
+#define GLOW_CONE_FIT_H
+#include <stdint.h>
+
+/* The truncated diffuse kernel: K_L(t) = Σ_{l<L} s_l (2l+1)/(4π) P_l(t), s_l the cosine-lobe factors
+ * (1, 2/3, 1/4, 0, -1/24, ...). A leaf of solid angle ω in a direction at cos t to the cache normal
+ * adds ω K_L(t) to the cache's diffuse response (E/π per unit radiance) with L SH bands. */
+double glow__irr_kernel(uint32_t bands, double t);
+/* The same response for a cone of 1 - cos α = omc around an axis at cos t to the normal, projected
+ * with the cone factors k_l: Σ_{l<L} s_l k_l(1 - omc) (2l+1)/(4π) P_l(t). */
+double glow__cone_irr(uint32_t bands, double omc, double t);
+/* The omc in [omc/4, min(2, 4 omc)] whose cone response equals `target` (bisection), or `omc`
+ * unchanged when target is not positive or not bracketed by that range's ends (then the nearer
+ * end is not used either: an implausible target means the cluster is not cone-like). */
+float glow__cone_fit_omc(uint32_t bands, float omc, double t, double target);
+#endif
