@@ -47,6 +47,19 @@ static inline glow__v8f gather_generic(const float *base, glow__v8u idx) {
     for (int i = 0; i < 8; ++i) v[i] = base[idx[i]];
     return v;
 }
+/* Lane sums in a fixed pairwise order (halves added as vectors): the same bytes whichever worker
+ * runs the cache, and far fewer instructions than a scalar loop. */
+static inline __attribute__((always_inline)) float reduce8(glow__v8f v) {
+    typedef float v4f __attribute__((vector_size(16)));
+    v4f a = __builtin_shufflevector(v, v, 0, 1, 2, 3) + __builtin_shufflevector(v, v, 4, 5, 6, 7);
+    return (a[0] + a[2]) + (a[1] + a[3]);
+}
+static inline __attribute__((always_inline)) float reduce16(glow__v16f v) {
+    glow__v8f a = __builtin_shufflevector(v, v, 0, 1, 2, 3, 4, 5, 6, 7) +
+                  __builtin_shufflevector(v, v, 8, 9, 10, 11, 12, 13, 14, 15);
+    return reduce8(a);
+}
+
 static inline glow__v8f sqrt8_generic(glow__v8f x) {
     for (int i = 0; i < 8; ++i) x[i] = sqrtf(x[i]);
     return x;
@@ -57,13 +70,14 @@ static inline glow__v8f sqrt8_generic(glow__v8f x) {
 #define VI glow__v8i
 #define LANES 8
 #define SH_EVAL glow__sh_eval_v8
+#define REDUCE(v) reduce8(v)
 #define KFN(name) name##_generic
 #define KATTR
 #define LOAD_U32(p) load_u32_generic(p)
 #define LOAD_U16(p) load_u16_generic(p)
 #define HALF8(p) half8_generic(p)
 #define GATHER(base, idx) gather_generic((base), (idx))
-#define SQRT8(x) sqrt8_generic(x)
+#define RSQRT(x) (1.0f / sqrt8_generic(x))
 #include "cache_kernel.inc"
 #undef KFN
 #undef KATTR
@@ -71,7 +85,8 @@ static inline glow__v8f sqrt8_generic(glow__v8f x) {
 #undef LOAD_U16
 #undef HALF8
 #undef GATHER
-#undef SQRT8
+#undef RSQRT
+#undef REDUCE
 #undef VF
 #undef VU
 #undef VI
@@ -87,16 +102,22 @@ static inline glow__v8f sqrt8_generic(glow__v8f x) {
 #define VI glow__v8i
 #define LANES 8
 #define SH_EVAL glow__sh_eval_v8
+#define REDUCE(v) reduce8(v)
 #define KFN(name) name##_avx2
 #define KATTR __attribute__((target("avx2,fma,f16c")))
 #define LOAD_U32(p) ((glow__v8u)_mm256_loadu_si256((const __m256i *)(const void *)(p)))
 #define LOAD_U16(p) ((glow__v8u)_mm256_cvtepu16_epi32(_mm_loadu_si128((const __m128i *)(const void *)(p))))
 #define HALF8(p) ((glow__v8f)_mm256_cvtph_ps(_mm_loadu_si128((const __m128i *)(const void *)(p))))
 #define GATHER(base, idx) ((glow__v8f)_mm256_i32gather_ps((base), (__m256i)(idx), 4))
-#define SQRT8(x) ((glow__v8f)_mm256_sqrt_ps((__m256)(x)))
+/* rsqrt estimate (12 bits) + one Newton step: ~1e-7 relative, a fraction of the sqrt+div cost */
+#define RSQRT(x) rsqrt_avx2(x)
 /* the inline helpers of the .inc must also carry the target to be inlined into KATTR code */
 #pragma GCC push_options
 #pragma GCC target("avx2,fma,f16c")
+static inline glow__v8f rsqrt_avx2(glow__v8f x) {
+    glow__v8f y = (glow__v8f)_mm256_rsqrt_ps((__m256)x);
+    return y * (1.5f - 0.5f * x * y * y);
+}
 #include "cache_kernel.inc"
 #pragma GCC pop_options
 #undef KFN
@@ -105,7 +126,8 @@ static inline glow__v8f sqrt8_generic(glow__v8f x) {
 #undef LOAD_U16
 #undef HALF8
 #undef GATHER
-#undef SQRT8
+#undef RSQRT
+#undef REDUCE
 #undef VF
 #undef VU
 #undef VI
@@ -117,18 +139,24 @@ static inline glow__v8f sqrt8_generic(glow__v8f x) {
 #pragma GCC push_options
 #pragma GCC target("avx512f,fma,f16c")
 GLOW__SH_EVAL_DEFINE(glow__sh_eval_v16, glow__v16f)
+static inline glow__v16f rsqrt_avx512(glow__v16f x) {
+    glow__v16f y = (glow__v16f)_mm512_rsqrt14_ps((__m512)x);
+    return y * (1.5f - 0.5f * x * y * y);
+}
 #define VF glow__v16f
 #define VU glow__v16u
 #define VI glow__v16i
 #define LANES 16
 #define SH_EVAL glow__sh_eval_v16
+#define REDUCE(v) reduce16(v)
 #define KFN(name) name##_avx512
 #define KATTR __attribute__((target("avx512f,fma,f16c")))
 #define LOAD_U32(p) ((glow__v16u)_mm512_loadu_si512((const void *)(p)))
 #define LOAD_U16(p) ((glow__v16u)_mm512_cvtepu16_epi32(_mm256_loadu_si256((const __m256i *)(const void *)(p))))
 #define HALF8(p) ((glow__v16f)_mm512_cvtph_ps(_mm256_loadu_si256((const __m256i *)(const void *)(p))))
 #define GATHER(base, idx) ((glow__v16f)_mm512_i32gather_ps((__m512i)(idx), (base), 4))
-#define SQRT8(x) ((glow__v16f)_mm512_sqrt_ps((__m512)(x)))
+/* rsqrt14 (exactly specified by the ISA, so bit-identical across vendors) + one Newton step */
+#define RSQRT(x) rsqrt_avx512(x)
 #include "cache_kernel.inc"
 #pragma GCC pop_options
 #define GLOW__HAVE_AVX512_KERNEL 1

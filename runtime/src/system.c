@@ -70,6 +70,10 @@ struct glow_system {
     float *grid_sh, *lm_sh;
     uint32_t *grid_map, *lm_map;
     size_t grid_cells, lm_texels;
+    /* the non-empty cells/texels as (index, cache) pairs: empty ones stay 0 forever, so the output
+     * stage only touches these (Sponza moderate: 15 % of the lightmap) */
+    uint32_t *out_index, *out_cache;
+    size_t grid_used, lm_used;
     glow_cache_outputs out;
     /* controls */
     glow_system_params params;
@@ -212,17 +216,21 @@ static void task_caches(void *data, uint32_t k, uint32_t worker) {
     glow__cl_light_caches(&a, first, count);
 }
 
-/* outputs: tasks [0, g) fill the grid planes (g = coeffs with a grid, else 0), the rest the lightmap's */
+/* outputs: tasks [0, g) fill the grid planes (g = coeffs with a grid, else 0), the rest the lightmap's;
+ * only non-empty cells and texels are written (the rest were zeroed at create). Plane by plane
+ * measured faster than entry by entry (27 write streams) on Sponza. */
 static void task_output(void *data, uint32_t q, uint32_t worker) {
     (void)worker;
     glow_system *s = data;
     const uint32_t nc = s->coeffs, g = s->grid_cells ? nc : 0u;
     const bool grid = q < g;
     const uint32_t k = grid ? q : q - g;
-    const uint32_t *map = grid ? s->grid_map : s->lm_map;
     const size_t n = grid ? s->grid_cells : s->lm_texels;
     float *plane = (grid ? s->grid_sh : s->lm_sh) + (size_t)k * n;
-    for (size_t i = 0; i < n; ++i) plane[i] = map[i] == GLOW_MAP_EMPTY ? 0.0f : s->cache_sh[(size_t)map[i] * nc + k];
+    const size_t first = grid ? 0 : s->grid_used, end = grid ? s->grid_used : s->grid_used + s->lm_used;
+    const uint32_t *idx = s->out_index, *cache = s->out_cache;
+    const float *sh = s->cache_sh + k;
+    for (size_t i = first; i < end; ++i) plane[idx[i]] = sh[(size_t)cache[i] * nc];
 }
 
 /* create-time: feedback weights and the indirect-albedo cap, per surfel */
@@ -288,7 +296,7 @@ static void free_system(glow_system *s) {
     void *bufs[] = {s->pos4, s->nrm4, s->mat, s->tri, s->feedback, s->albedo, s->emis_base, s->emis,
                     s->direct, s->direct_spare, s->fb_w, s->rho_ind_max, s->flux, s->rad, s->inv_pi_area,
                     s->cache_sh, s->grid_sh, s->lm_sh, s->grid_map, s->lm_map, s->mat_emis_scale,
-                    s->mat_albedo_scale, s->batch_status, s->batch_negative};
+                    s->mat_albedo_scale, s->batch_status, s->batch_negative, s->out_index, s->out_cache};
     for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; ++i) glow__ctx_free(ctx, bufs[i]);
     glow__ctx_free(ctx, s);
 }
@@ -393,6 +401,11 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     s->mat_albedo_scale = alloc_array(s, s->M ? s->M : 1u, 3 * sizeof(float), &ok);
     s->batch_status = alloc_array(s, s->nbatches, 1, &ok);
     s->batch_negative = alloc_array(s, s->nbatches, sizeof(uint32_t), &ok);
+    size_t used = 0;
+    for (size_t i = 0; i < s->grid_cells; ++i) used += gmap[i] != GLOW_MAP_EMPTY;
+    for (size_t i = 0; i < s->lm_texels; ++i) used += lmap[i] != GLOW_MAP_EMPTY;
+    s->out_index = alloc_array(s, used, sizeof(uint32_t), &ok);
+    s->out_cache = alloc_array(s, used, sizeof(uint32_t), &ok);
     if (!ok) {
         GLOW__LOG_ERROR(ctx, GLOW_ERROR_OUT_OF_MEMORY, "glow_system_create(%s): out of memory (%u surfels, %u caches)",
                         label, s->S, s->C);
@@ -422,6 +435,16 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     for (size_t i = 0; i < 3 * (size_t)(s->M ? s->M : 1u); ++i) s->mat_emis_scale[i] = s->mat_albedo_scale[i] = 1.0f;
     for (size_t i = 0; i < s->grid_cells; ++i) s->grid_map[i] = gmap[i] == GLOW_MAP_EMPTY ? GLOW_MAP_EMPTY : (gmap[i] & GLOW_MAP_INDEX_MASK);
     for (size_t i = 0; i < s->lm_texels; ++i) s->lm_map[i] = lmap[i] == GLOW_MAP_EMPTY ? GLOW_MAP_EMPTY : (lmap[i] & GLOW_MAP_INDEX_MASK);
+    for (size_t i = 0; i < s->grid_cells; ++i)
+        if (s->grid_map[i] != GLOW_MAP_EMPTY) {
+            s->out_index[s->grid_used] = (uint32_t)i;
+            s->out_cache[s->grid_used++] = s->grid_map[i];
+        }
+    for (size_t i = 0; i < s->lm_texels; ++i)
+        if (s->lm_map[i] != GLOW_MAP_EMPTY) {
+            s->out_index[s->grid_used + s->lm_used] = (uint32_t)i;
+            s->out_cache[s->grid_used + s->lm_used++] = s->lm_map[i];
+        }
     if (s->grid_cells) memset(s->grid_sh, 0, s->grid_cells * s->coeffs * sizeof(float));
     if (s->lm_texels) memset(s->lm_sh, 0, s->lm_texels * s->coeffs * sizeof(float));
     glow__ctx_start_pool(ctx); /* threads start here, never in an update */
