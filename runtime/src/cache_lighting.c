@@ -20,7 +20,11 @@
 
 /* The helpers below pass 32-byte vectors by value; they are static and always inlined, so no ABI
  * boundary exists and GCC's note about the AVX calling convention does not apply. */
-#if defined(__GNUC__) && !defined(__clang__)
+#if defined(__clang__)
+#pragma clang diagnostic ignored "-Wpsabi"
+/* the unroll pragmas are hints; in the run-time band-count instantiation they cannot apply */
+#pragma clang diagnostic ignored "-Wpass-failed"
+#elif defined(__GNUC__)
 #pragma GCC diagnostic ignored "-Wpsabi"
 #endif
 
@@ -54,7 +58,7 @@ static inline __attribute__((always_inline)) float reduce8(glow__v8f v) {
     v4f a = __builtin_shufflevector(v, v, 0, 1, 2, 3) + __builtin_shufflevector(v, v, 4, 5, 6, 7);
     return (a[0] + a[2]) + (a[1] + a[3]);
 }
-static inline __attribute__((always_inline)) float reduce16(glow__v16f v) {
+static inline __attribute__((always_inline, unused)) float reduce16(glow__v16f v) {
     glow__v8f a = __builtin_shufflevector(v, v, 0, 1, 2, 3, 4, 5, 6, 7) +
                   __builtin_shufflevector(v, v, 8, 9, 10, 11, 12, 13, 14, 15);
     return reduce8(a);
@@ -94,7 +98,9 @@ static inline glow__v8f sqrt8_generic(glow__v8f x) {
 #undef SH_EVAL
 
 /* ------------------------------------------------------------------------------ AVX2 */
-#if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
+/* GCC only: the ISA-specific builds rely on GCC's target pragmas and cpu-feature names (clang gets the
+ * portable kernel; a clang port would use #pragma clang attribute) */
+#if (defined(__x86_64__) || defined(__i386__)) && defined(__GNUC__) && !defined(__clang__)
 #include <immintrin.h>
 #define GLOW__HAVE_AVX2_KERNEL 1
 #define VF glow__v8f
