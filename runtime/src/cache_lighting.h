@@ -10,12 +10,25 @@ typedef enum glow__cl_isa { GLOW__CL_GENERIC = 0, GLOW__CL_AVX2 = 1, GLOW__CL_AV
 typedef struct glow__cl_args {
     const glow_bake_link_block *blocks; /* [cache_count * blocks_per_cache] */
     uint32_t blocks_per_cache;
-    const float *rad_y, *rad_co, *rad_cg; /* node radiance, YCoCg, [node_count] each */
+    const float *rad_y, *rad_co, *rad_cg; /* node radiance, YCoCg: node n's at rad_x[n * rad_stride] */
+    uint32_t rad_stride;                  /* floats between nodes; 0 = 1 (planar). The system interleaves
+                                             (stride 4: Y Co Cg pad), so the three gathers of a lane hit
+                                             one cache line */
     uint32_t luma, chroma;                /* bands: 1 <= chroma <= luma <= 8 */
     uint32_t coeffs;                      /* floats per cache in cache_sh (>= luma² + 2 chroma²) */
     float *cache_sh;                      /* out: [cache][coeffs]: Y luma², Co chroma², Cg chroma² */
     glow__cl_isa isa;
+    /* expanded links (GLOW_LINK_MODE_EXPANDED), when not NULL: per block of 16 links, uint32_t
+     * node[16] then IEEE-half weight[luma²][16] (k_l(cos α) y_lm(dir), coefficient-major);
+     * glow__cl_xblock_size(luma) bytes each, blocks_per_cache per cache */
+    const unsigned char *xblocks;
 } glow__cl_args;
+
+static inline size_t glow__cl_xblock_size(uint32_t luma) { return (size_t)64u + (size_t)32u * luma * luma; }
+
+/* Fills the expanded blocks of caches [first, first + count) from the bake's links. */
+void glow__cl_expand(const glow_bake_link_block *blocks, uint32_t blocks_per_cache, uint32_t luma,
+                     unsigned char *xblocks, uint32_t first, uint32_t count);
 
 /* Lights caches [first, first + count). Reads only `a`'s inputs, writes only those caches' rows. */
 void glow__cl_light_caches(const glow__cl_args *a, uint32_t first, uint32_t count);

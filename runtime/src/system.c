@@ -54,6 +54,9 @@ struct glow_system {
     uint32_t S, N, C, M, levels, bpc, batch, nbatches;
     uint32_t luma, chroma, coeffs, fbk; /* fbk = luma² feedback weights per surfel */
     glow__cl_isa isa;
+    glow_link_mode link_mode;
+    unsigned char *xblocks; /* expanded links (GLOW_LINK_MODE_EXPANDED), else NULL */
+    uint64_t memory_bytes;
     /* surfels */
     float *pos4, *nrm4;
     uint32_t *mat, *tri, *feedback;
@@ -63,7 +66,7 @@ struct glow_system {
     float *rho_ind_max;/* [S] 0.999 π / G_s (cap of the albedo applied to indirect light) */
     /* nodes */
     float *flux; /* 3 planes of N */
-    float *rad;  /* 3 planes of N */
+    float *rad;  /* [N][4]: Y Co Cg 0, interleaved for the gathers */
     float *inv_pi_area;
     /* caches and outputs */
     float *cache_sh;
@@ -171,9 +174,11 @@ static void task_flux(void *data, uint32_t k, uint32_t worker) {
         s->flux[N + i] = fco * area;
         s->flux[2 * N + i] = fcg * area;
         const float ipa = s->inv_pi_area[i];
-        s->rad[i] = s->flux[i] * ipa;
-        s->rad[N + i] = s->flux[N + i] * ipa;
-        s->rad[2 * N + i] = s->flux[2 * N + i] * ipa;
+        float *r = s->rad + 4 * (size_t)i;
+        r[0] = s->flux[i] * ipa;
+        r[1] = s->flux[N + i] * ipa;
+        r[2] = s->flux[2 * N + i] * ipa;
+        r[3] = 0.0f;
     }
 }
 
@@ -183,10 +188,12 @@ static void pull_range(glow_system *s, uint32_t first, uint32_t end) {
     for (uint32_t n = first; n < end; ++n) {
         const uint32_t a = s->nodes[n].child[0], b = s->nodes[n].child[1];
         const float ipa = s->inv_pi_area[n];
-        for (size_t p = 0; p < 3 * N; p += N) {
+        for (size_t c = 0; c < 3; ++c) {
+            const size_t p = c * N;
             f[p + n] = f[p + a] + f[p + b];
-            r[p + n] = f[p + n] * ipa;
+            r[4 * (size_t)n + c] = f[p + n] * ipa;
         }
+        r[4 * (size_t)n + 3] = 0.0f;
     }
 }
 
@@ -201,17 +208,18 @@ static void task_pull(void *data, uint32_t k, uint32_t worker) {
 static void task_caches(void *data, uint32_t k, uint32_t worker) {
     (void)worker;
     glow_system *s = data;
-    const size_t N = s->N;
     glow__cl_args a = {.blocks = glow__bake_link_blocks(s->bake),
                        .blocks_per_cache = s->bpc,
                        .rad_y = s->rad,
-                       .rad_co = s->rad + N,
-                       .rad_cg = s->rad + 2 * N,
+                       .rad_co = s->rad + 1,
+                       .rad_cg = s->rad + 2,
+                       .rad_stride = 4,
                        .luma = s->luma,
                        .chroma = s->chroma,
                        .coeffs = s->coeffs,
                        .cache_sh = s->cache_sh,
-                       .isa = s->isa};
+                       .isa = s->isa,
+                       .xblocks = s->xblocks};
     uint32_t first = k * CACHE_CHUNK, count = s->C - first < CACHE_CHUNK ? s->C - first : CACHE_CHUNK;
     glow__cl_light_caches(&a, first, count);
 }
@@ -231,6 +239,15 @@ static void task_output(void *data, uint32_t q, uint32_t worker) {
     const uint32_t *idx = s->out_index, *cache = s->out_cache;
     const float *sh = s->cache_sh + k;
     for (size_t i = first; i < end; ++i) plane[idx[i]] = sh[(size_t)cache[i] * nc];
+}
+
+/* create-time: expanded links for caches [k*EXPAND_CHUNK, ...) */
+#define EXPAND_CHUNK 64u
+static void task_expand(void *data, uint32_t k, uint32_t worker) {
+    (void)worker;
+    glow_system *s = data;
+    uint32_t first = k * EXPAND_CHUNK, count = s->C - first < EXPAND_CHUNK ? s->C - first : EXPAND_CHUNK;
+    glow__cl_expand(glow__bake_link_blocks(s->bake), s->bpc, s->luma, s->xblocks, first, count);
 }
 
 /* create-time: feedback weights and the indirect-albedo cap, per surfel */
@@ -288,6 +305,7 @@ static void *alloc_array(glow_system *s, size_t count, size_t elem, bool *ok) {
     }
     void *p = glow__ctx_alloc(s->ctx, count * elem, 64);
     if (!p) *ok = false;
+    else s->memory_bytes += count * elem;
     return p;
 }
 
@@ -296,7 +314,8 @@ static void free_system(glow_system *s) {
     void *bufs[] = {s->pos4, s->nrm4, s->mat, s->tri, s->feedback, s->albedo, s->emis_base, s->emis,
                     s->direct, s->direct_spare, s->fb_w, s->rho_ind_max, s->flux, s->rad, s->inv_pi_area,
                     s->cache_sh, s->grid_sh, s->lm_sh, s->grid_map, s->lm_map, s->mat_emis_scale,
-                    s->mat_albedo_scale, s->batch_status, s->batch_negative, s->out_index, s->out_cache};
+                    s->mat_albedo_scale, s->batch_status, s->batch_negative, s->out_index, s->out_cache,
+                    s->xblocks};
     for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; ++i) glow__ctx_free(ctx, bufs[i]);
     glow__ctx_free(ctx, s);
 }
@@ -335,6 +354,12 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
         return GLOW_ERROR_INVALID_ARGUMENT;
     }
     uint32_t batch = desc->surfel_batch_size ? desc->surfel_batch_size : 1024u;
+    glow_link_mode link_mode = desc->link_mode == GLOW_LINK_MODE_DEFAULT ? GLOW_LINK_MODE_COMPACT : desc->link_mode;
+    if (link_mode != GLOW_LINK_MODE_EXPANDED && link_mode != GLOW_LINK_MODE_COMPACT) {
+        GLOW__LOG_ERROR(ctx, GLOW_ERROR_INVALID_ARGUMENT, "glow_system_create(%s): unknown link_mode %u", label,
+                        (unsigned)desc->link_mode);
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
 
     glow_system *s = glow__ctx_alloc(ctx, sizeof *s, 64);
     if (!s) {
@@ -362,6 +387,7 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     s->coeffs = luma * luma + 2 * chroma * chroma;
     s->fbk = luma * luma;
     s->isa = glow__cl_best_isa();
+    s->link_mode = link_mode;
     { /* benchmarking knob (documented in docs/runtime.md): GLOW_CACHE_KERNEL=generic|avx2|avx512 */
         const char *k = getenv("GLOW_CACHE_KERNEL");
         glow__cl_isa want = s->isa;
@@ -390,7 +416,7 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     s->fb_w = alloc_array(s, S, (size_t)s->fbk * sizeof(float), &ok);
     s->rho_ind_max = alloc_array(s, S, sizeof(float), &ok);
     s->flux = alloc_array(s, N, 3 * sizeof(float), &ok);
-    s->rad = alloc_array(s, N, 3 * sizeof(float), &ok);
+    s->rad = alloc_array(s, N, 4 * sizeof(float), &ok); /* interleaved Y Co Cg pad */
     s->inv_pi_area = alloc_array(s, N, sizeof(float), &ok);
     s->cache_sh = alloc_array(s, s->C, (size_t)s->coeffs * sizeof(float), &ok);
     s->grid_sh = alloc_array(s, s->grid_cells, (size_t)s->coeffs * sizeof(float), &ok);
@@ -406,6 +432,8 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     for (size_t i = 0; i < s->lm_texels; ++i) used += lmap[i] != GLOW_MAP_EMPTY;
     s->out_index = alloc_array(s, used, sizeof(uint32_t), &ok);
     s->out_cache = alloc_array(s, used, sizeof(uint32_t), &ok);
+    if (link_mode == GLOW_LINK_MODE_EXPANDED)
+        s->xblocks = alloc_array(s, (size_t)s->C * s->bpc, glow__cl_xblock_size(luma), &ok);
     if (!ok) {
         GLOW__LOG_ERROR(ctx, GLOW_ERROR_OUT_OF_MEMORY, "glow_system_create(%s): out of memory (%u surfels, %u caches)",
                         label, s->S, s->C);
@@ -429,7 +457,7 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     memset(s->direct, 0, S * 3 * sizeof(float));
     memset(s->direct_spare, 0, S * 3 * sizeof(float));
     memset(s->flux, 0, N * 3 * sizeof(float));
-    memset(s->rad, 0, N * 3 * sizeof(float));
+    memset(s->rad, 0, N * 4 * sizeof(float));
     for (size_t n = 0; n < N; ++n) s->inv_pi_area[n] = 1.0f / (PI_F * s->nodes[n].area);
     memset(s->cache_sh, 0, (size_t)s->C * s->coeffs * sizeof(float));
     for (size_t i = 0; i < 3 * (size_t)(s->M ? s->M : 1u); ++i) s->mat_emis_scale[i] = s->mat_albedo_scale[i] = 1.0f;
@@ -449,6 +477,7 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     if (s->lm_texels) memset(s->lm_sh, 0, s->lm_texels * s->coeffs * sizeof(float));
     glow__ctx_start_pool(ctx); /* threads start here, never in an update */
     glow__ctx_run(ctx, task_feedback_setup, s, div_up(s->S, SURFEL_CHUNK));
+    if (s->xblocks) glow__ctx_run(ctx, task_expand, s, div_up(s->C, EXPAND_CHUNK));
 
     s->out = (glow_cache_outputs){.sh_bands_luma = luma,
                                   .sh_bands_chroma = chroma,
@@ -669,6 +698,9 @@ glow_result glow_system_update(glow_system *s, const glow_update_desc *desc) {
 glow_result glow_system_get_stats(const glow_system *s, glow_update_stats *out) {
     if (!s || !out) return null_arg(s, "glow_system_get_stats");
     *out = s->stats;
+    out->memory_bytes = s->memory_bytes + sizeof *s;
+    out->link_mode = (uint32_t)s->link_mode;
+    out->kernel = glow__cl_isa_name(s->isa);
     return GLOW_OK;
 }
 

@@ -51,9 +51,12 @@ static int teardown(void **state) {
     return 0;
 }
 
-static void furnace(fixture *f, float rho) {
+static void furnace(fixture *f, float rho, glow_link_mode mode) {
     glow_system *sys;
-    assert_int_equal(glow_system_create(f->ctx, &(glow_system_desc){.bake = f->bake}, &sys), GLOW_OK);
+    assert_int_equal(glow_system_create(f->ctx, &(glow_system_desc){.bake = f->bake, .link_mode = mode}, &sys), GLOW_OK);
+    glow_update_stats us;
+    assert_int_equal(glow_system_get_stats(sys, &us), GLOW_OK);
+    assert_int_equal(us.link_mode, mode == GLOW_LINK_MODE_DEFAULT ? GLOW_LINK_MODE_COMPACT : mode);
     glow_material_info mi;
     assert_int_equal(glow_bake_get_material(f->bake, 0, &mi), GLOW_OK);
     assert_true(mi.emission[0] > 0.0f);
@@ -88,9 +91,9 @@ static void furnace(fixture *f, float rho) {
         }
     }
     const double lm_mean = lm_sum / o->lightmap_cache_count, grid_mean = grid_sum / o->grid_cache_count;
-    printf("furnace rho %.2f: expected %.4f; lightmap caches mean %.4f (%+.2f %%, worst %.2f %%), grid caches mean %.4f "
+    printf("furnace (%s links) rho %.2f: expected %.4f; lightmap caches mean %.4f (%+.2f %%, worst %.2f %%), grid caches mean %.4f "
            "(%+.2f %%, worst %.2f %%)\n",
-           rho, expect, lm_mean, 100.0 * (lm_mean / expect - 1.0), 100.0 * lm_worst, grid_mean,
+           us.link_mode == GLOW_LINK_MODE_COMPACT ? "compact" : "expanded", rho, expect, lm_mean, 100.0 * (lm_mean / expect - 1.0), 100.0 * lm_worst, grid_mean,
            100.0 * (grid_mean / expect - 1.0), 100.0 * grid_worst);
     assert_true(fabs(lm_mean / expect - 1.0) < 0.02);
     assert_true(fabs(grid_mean / expect - 1.0) < 0.02);
@@ -100,10 +103,13 @@ static void furnace(fixture *f, float rho) {
     glow_system_destroy(sys);
 }
 
-static void test_furnace_half(void **state) { furnace(*state, 0.5f); }
-static void test_furnace_090(void **state) { furnace(*state, 0.9f); }
+static void test_furnace_half(void **state) { furnace(*state, 0.5f, GLOW_LINK_MODE_DEFAULT); }
+static void test_furnace_090(void **state) { furnace(*state, 0.9f, GLOW_LINK_MODE_DEFAULT); }
+/* the expanded links (half-float k_l y_lm per link, computed at create) must agree as well */
+static void test_furnace_090_expanded(void **state) { furnace(*state, 0.9f, GLOW_LINK_MODE_EXPANDED); }
 
 int main(void) {
-    const struct CMUnitTest tests[] = {cmocka_unit_test(test_furnace_half), cmocka_unit_test(test_furnace_090)};
+    const struct CMUnitTest tests[] = {cmocka_unit_test(test_furnace_half), cmocka_unit_test(test_furnace_090),
+                                       cmocka_unit_test(test_furnace_090_expanded)};
     return cmocka_run_group_tests(tests, setup, teardown);
 }

@@ -29,6 +29,7 @@ typedef struct options {
     const char *bake, *scene;
     uint32_t frames, warmup, threads, luma, chroma, iterations;
     glow_host_kind host;
+    glow_link_mode link_mode;
     int json, quiet, no_probe_machine;
     uint32_t probe_count;
     float probes[MAX_PROBES][3];
@@ -37,7 +38,8 @@ typedef struct options {
 static void usage(FILE *f) {
     fprintf(f,
             "usage: glow-bench BAKE SCENE [--frames N] [--warmup N] [--threads N] [--luma L] [--chroma C]\n"
-            "                  [--iterations K] [--host exact|shadow-map] [--probe X,Y,Z]... [--no-machine]\n"
+            "                  [--iterations K] [--host exact|shadow-map] [--link-mode expanded|compact]\n"
+            "                  [--probe X,Y,Z]... [--no-machine]\n"
             "                  [--json] [-q]\n"
             "  BAKE   a bake written by glow-bake;  SCENE  its scene description JSON (docs/scene-format.md)\n"
             "  --frames N      timed updates (default 60); --warmup N untimed first (default 5)\n"
@@ -45,6 +47,7 @@ static void usage(FILE *f) {
             "  --luma/--chroma SH bands (default: the bake's; chroma = luma)\n"
             "  --iterations K  bounce iterations per update (default 1)\n"
             "  --host          surfel lighting: exact Embree rays (default) or software shadow maps\n"
+            "  --link-mode     links projected every update (compact, default) or expanded at create (more memory)\n"
             "  --probe X,Y,Z   print the indirect light at this point (repeatable; default: 3 points)\n"
             "  --no-machine    skip the STREAM-triad and FMA-peak probes\n");
 }
@@ -81,6 +84,13 @@ static int parse_args(int argc, char **argv, options *o) {
                 return 0;
             }
             o->host = strcmp(v, "exact") ? GLOW_HOST_KIND_SHADOW_MAP : GLOW_HOST_KIND_EXACT;
+            ++i;
+        } else if (!strcmp(a, "--link-mode")) {
+            if (!v || (strcmp(v, "expanded") && strcmp(v, "compact"))) {
+                fprintf(stderr, "glow-bench: --link-mode must be expanded or compact\n");
+                return 0;
+            }
+            o->link_mode = strcmp(v, "expanded") ? GLOW_LINK_MODE_COMPACT : GLOW_LINK_MODE_EXPANDED;
             ++i;
         } else if (!strcmp(a, "--probe")) {
             float p[3];
@@ -184,7 +194,7 @@ int main(int argc, char **argv) {
     hd.logger = logger;
     if ((r = glow_host_create(&hd, &host)) != GLOW_OK) goto done;
     glow_system_desc sd = {.bake = bake, .lighting = glow_host_hooks(host), .sh_bands_luma = o.luma,
-                           .sh_bands_chroma = o.chroma, .label = o.bake};
+                           .sh_bands_chroma = o.chroma, .label = o.bake, .link_mode = o.link_mode};
     if ((r = glow_system_create(ctx, &sd, &sys)) != GLOW_OK) goto done;
     if ((r = glow_system_set_params(sys, &(glow_system_params){.bounce_intensity = 1.0f,
                                                                 .emission_scale = scene.emission_scale,
@@ -274,6 +284,9 @@ int main(int argc, char **argv) {
     if (o.json) {
         printf("{\"bake\": \"%s\", \"scene\": \"%s\", \"host\": \"%s\", \"threads\": %u, \"frames\": %u,\n", o.bake,
                o.scene, o.host == GLOW_HOST_KIND_EXACT ? "exact" : "shadow-map", threads, n);
+        printf(" \"link_mode\": \"%s\", \"kernel\": \"%s\", \"system_memory_bytes\": %llu,\n",
+               st.link_mode == GLOW_LINK_MODE_COMPACT ? "compact" : "expanded", st.kernel ? st.kernel : "-",
+               (unsigned long long)st.memory_bytes);
         printf(" \"surfels\": %u, \"caches\": %u, \"links_per_cache\": %u, \"luma\": %u, \"chroma\": %u, \"iterations\": %u,\n",
                info.surfel_count, info.cache_count, info.links_per_cache, out->sh_bands_luma, out->sh_bands_chroma,
                o.iterations);
@@ -296,6 +309,8 @@ int main(int argc, char **argv) {
         printf("glow-bench %s + %s: %u surfels, %u caches x %u links, SH luma %u chroma %u, %u thread(s), %s host\n",
                o.bake, o.scene, info.surfel_count, info.cache_count, info.links_per_cache, out->sh_bands_luma,
                out->sh_bands_chroma, threads, o.host == GLOW_HOST_KIND_EXACT ? "exact" : "shadow-map");
+        printf("links %s, kernel %s, system memory %.1f MiB\n", st.link_mode == GLOW_LINK_MODE_COMPACT ? "compact" : "expanded",
+               st.kernel ? st.kernel : "-", (double)st.memory_bytes / (1024.0 * 1024.0));
         printf("median of %u updates (ms):\n", n);
         printf("  light move (host, outside update) %8.3f\n", m_move);
         printf("  surfel lighting                   %8.3f  (host hook %.3f)\n", m_light, m_host);

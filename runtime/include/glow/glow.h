@@ -216,6 +216,21 @@ typedef struct glow_lighting_hooks {
     void *user; /* borrowed: must outlive the system */
 } glow_lighting_hooks;
 
+/* How the solver holds the bake's links (a speed / memory trade; both give the same results within
+ * the half-float precision of the expanded weights, about 1e-3 relative per link). */
+typedef enum glow_link_mode {
+    GLOW_LINK_MODE_DEFAULT = 0,  /* = COMPACT */
+    GLOW_LINK_MODE_COMPACT,      /* read the bake's 8-byte links and project them every update (runtime
+                                    projection, PIC 4.6): no extra memory */
+    GLOW_LINK_MODE_EXPANDED,     /* at create, each link's cone factors x SH basis (k_l(cos a) y_lm(dir),
+                                    luma² IEEE halves) are computed once, so an update does luma² + 2
+                                    chroma² multiply-adds per link and no decoding. Memory: (4 + 2 luma²)
+                                    bytes per link (22 at l = 3: +29 MB for 1.37 M links). Measured no
+                                    faster on an AVX-512 Zen 4 (the node-radiance gathers bound both);
+                                    for CPUs with slow FMA and fast gathers */
+    GLOW_LINK_MODE_FORCE_U32 = 0x7FFFFFFF
+} glow_link_mode;
+
 typedef struct glow_system_desc {
     const glow_bake *bake;        /* required; borrowed: must outlive the system */
     glow_lighting_hooks lighting; /* NULL light_surfels = the host pushes irradiance with
@@ -224,6 +239,7 @@ typedef struct glow_system_desc {
     uint32_t sh_bands_chroma;     /* 1..sh_bands_luma; 0 = same as luma */
     uint32_t surfel_batch_size;   /* surfels per hook call; 0 = 1024 */
     const char *label;            /* copied; names the system in log messages; NULL = "system" */
+    glow_link_mode link_mode;     /* 0 = GLOW_LINK_MODE_COMPACT */
 } glow_system_desc;
 
 /** Creates a solver for `desc->bake`: allocates every buffer, decodes nothing per frame.
@@ -300,6 +316,9 @@ typedef struct glow_update_stats {
     double total_ms;
     uint64_t links;            /* links gathered (cache_count * links_per_cache * iterations) */
     uint64_t updates;          /* successful updates since create */
+    uint64_t memory_bytes;     /* everything the system allocated (the bake not included) */
+    uint32_t link_mode;        /* the glow_link_mode in use (resolved, never DEFAULT) */
+    const char *kernel;        /* the cache-lighting kernel's instruction set: "avx512f", "avx2+fma+f16c", "generic" */
 } glow_update_stats;
 
 /** One frame: surfel lighting -> pull -> cache lighting -> outputs (x bounce_iterations).
