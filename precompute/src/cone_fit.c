@@ -12,25 +12,16 @@
 #include <math.h>
 
 #include "cone_fit.h"
+#include "runtime_internal.h"
 
 #define PI_D 3.14159265358979323846
 
-static double lobe(uint32_t l) { /* s_l for n = 1 */
-    double s = (l & 1u) ? 2.0 / 3.0 : 1.0;
-    for (uint32_t k = (l & 1u) ? 3u : 2u; k <= l; k += 2u) s *= (3.0 - k) / (2.0 + k);
-    return s;
-}
-
-static void legendre_all(uint32_t n, double x, double *p) { /* p[0..n] */
-    p[0] = 1.0;
-    if (n >= 1) p[1] = x;
-    for (uint32_t l = 1; l < n; ++l) p[l + 1] = ((2.0 * l + 1.0) * x * p[l] - l * p[l - 1]) / (l + 1.0);
-}
+static double lobe(uint32_t l) { return glow_sh_lobe_factor(l, 1.0f); } /* s_l of the cosine lobe */
 
 double glow__irr_kernel(uint32_t L, double t) {
     double p[10];
     if (L > 8) L = 8;
-    legendre_all(L, t, p);
+    glow__legendre_all(L, t, p);
     double k = 0.0;
     for (uint32_t l = 0; l < L; ++l) k += lobe(l) * (2.0 * l + 1.0) / (4.0 * PI_D) * p[l];
     return k;
@@ -39,8 +30,8 @@ double glow__irr_kernel(uint32_t L, double t) {
 double glow__cone_irr(uint32_t L, double omc, double t) {
     double px[11], pt[10];
     if (L > 8) L = 8;
-    legendre_all(L + 1, 1.0 - omc, px);
-    legendre_all(L, t, pt);
+    glow__legendre_all(L + 1, 1.0 - omc, px);
+    glow__legendre_all(L, t, pt);
     double r = 0.0;
     for (uint32_t l = 0; l < L; ++l) {
         double kl = l == 0 ? 2.0 * PI_D * omc : 2.0 * PI_D / (2.0 * l + 1.0) * (px[l - 1] - px[l + 1]);

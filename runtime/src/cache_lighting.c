@@ -216,17 +216,6 @@ void glow__cl_light_caches(const glow__cl_args *a, uint32_t first, uint32_t coun
 }
 
 /* ------------------------------------------------------------------------------ expansion */
-/* k_l from 1 - cos α directly, in double (no rounding of cos α to float first) */
-static double cone_factor_omc(uint32_t l, float omc) {
-    const double x = 1.0 - (double)omc;
-    if (l == 0) return 2.0 * 3.14159265358979323846 * (double)omc;
-    double p[GLOW__MAX_BANDS + 2];
-    p[0] = 1.0;
-    p[1] = x;
-    for (uint32_t k = 1; k <= l; ++k) p[k + 1] = ((2.0 * k + 1.0) * x * p[k] - k * p[k - 1]) / (k + 1.0);
-    return 2.0 * 3.14159265358979323846 / (2.0 * l + 1.0) * (p[l - 1] - p[l + 1]);
-}
-
 void glow__cl_expand(const glow_bake_link_block *blocks, uint32_t bpc, uint32_t L, unsigned char *xblocks,
                      uint32_t first, uint32_t count) {
     const size_t bs = glow__cl_xblock_size(L);
@@ -245,7 +234,7 @@ void glow__cl_expand(const glow_bake_link_block *blocks, uint32_t bpc, uint32_t 
             glow_sh_eval(L, d, y);
             for (uint32_t l = 0; l < L; ++l) {
                 /* the same cone factors as the compact kernel, in double: k_0 = 2π omc */
-                const float k = (float)cone_factor_omc(l, omc);
+                const float k = (float)glow__cone_factor_omc(l, omc);
                 for (uint32_t q = l * l; q < (l + 1) * (l + 1); ++q)
                     w[(size_t)q * GLOW_LINK_BLOCK + lane] = glow__half_from_float(omc > 0.0f ? k * y[q] : 0.0f);
             }

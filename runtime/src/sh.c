@@ -17,21 +17,20 @@ void glow_sh_eval(uint32_t bands, const float dir[3], float *out) {
     for (uint32_t k = 0; k < bands * bands; ++k) out[k] = v[k][0];
 }
 
-static double legendre(uint32_t l, double x) {
-    if (l == 0) return 1.0;
-    double p0 = 1.0, p1 = x;
-    for (uint32_t k = 2; k <= l; ++k) {
-        double p2 = ((2.0 * k - 1.0) * x * p1 - (k - 1.0) * p0) / (double)k;
-        p0 = p1;
-        p1 = p2;
-    }
-    return p1;
+void glow__legendre_all(uint32_t n, double x, double *p) {
+    p[0] = 1.0;
+    if (n >= 1) p[1] = x;
+    for (uint32_t l = 1; l < n; ++l) p[l + 1] = ((2.0 * l + 1.0) * x * p[l] - l * p[l - 1]) / (l + 1.0);
 }
 
-float glow_sh_cone_factor(uint32_t l, float x) {
-    if (l == 0) return (float)(2.0 * PI_D * (1.0 - (double)x));
-    return (float)(2.0 * PI_D / (2.0 * l + 1.0) * (legendre(l - 1, x) - legendre(l + 1, x)));
+double glow__cone_factor_omc(uint32_t l, double omc) {
+    if (l == 0) return 2.0 * PI_D * omc;
+    double p[GLOW__MAX_BANDS + 2];
+    glow__legendre_all(l + 1, 1.0 - omc, p);
+    return 2.0 * PI_D / (2.0 * l + 1.0) * (p[l - 1] - p[l + 1]);
 }
+
+float glow_sh_cone_factor(uint32_t l, float x) { return (float)glow__cone_factor_omc(l, 1.0 - (double)x); }
 
 float glow_sh_lobe_factor(uint32_t l, float n) {
     /* s_0 = 1, s_1 = (n+1)/(n+2), s_l = s_{l-2} (n+2-l)/(n+1+l) */

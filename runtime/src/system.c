@@ -280,10 +280,9 @@ static void task_feedback_setup(void *data, uint32_t k, uint32_t worker) {
             glow__oct_decode12(du, dv, d);
             double x = 1.0 - omc, t = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
             /* Legendre in x (cone) up to L, and in t (angle to the normal) up to L-1 */
-            double Px[GLOW__MAX_BANDS + 2], Pt[GLOW__MAX_BANDS + 1];
-            Px[0] = 1.0; Px[1] = x; Pt[0] = 1.0; Pt[1] = t;
-            for (uint32_t l = 1; l <= L; ++l) Px[l + 1] = ((2.0 * l + 1.0) * x * Px[l] - l * Px[l - 1]) / (l + 1.0);
-            for (uint32_t l = 1; l + 1 < L; ++l) Pt[l + 1] = ((2.0 * l + 1.0) * t * Pt[l] - l * Pt[l - 1]) / (l + 1.0);
+            double Px[GLOW__MAX_BANDS + 2], Pt[GLOW__MAX_BANDS + 2];
+            glow__legendre_all(L + 1, x, Px);
+            glow__legendre_all(L, t, Pt);
             double w = 0.0;
             for (uint32_t l = 0; l < L; ++l) {
                 double kl = l == 0 ? 2.0 * 3.14159265358979323846 * omc
