@@ -25,9 +25,16 @@ void glow__legendre_all(uint32_t n, double x, double *p) {
 
 double glow__cone_factor_omc(uint32_t l, double omc) {
     if (l == 0) return 2.0 * PI_D * omc;
-    double p[GLOW__MAX_BANDS + 2];
-    glow__legendre_all(l + 1, 1.0 - omc, p);
-    return 2.0 * PI_D / (2.0 * l + 1.0) * (p[l - 1] - p[l + 1]);
+    /* the recurrence of glow__legendre_all with a sliding window (any l): (a, b) = (P_k, P_{k+1}) */
+    const double x = 1.0 - omc;
+    double a = 1.0, b = x, pl_minus_1 = 1.0;
+    for (uint32_t k = 1; k <= l; ++k) {
+        const double c = ((2.0 * k + 1.0) * x * b - k * a) / (k + 1.0);
+        pl_minus_1 = a; /* P_{k-1} */
+        a = b;
+        b = c;
+    }
+    return 2.0 * PI_D / (2.0 * l + 1.0) * (pl_minus_1 - b);
 }
 
 float glow_sh_cone_factor(uint32_t l, float x) { return (float)glow__cone_factor_omc(l, 1.0 - (double)x); }
