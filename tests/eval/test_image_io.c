@@ -1,0 +1,407 @@
+/* test_image_io.c — glow_eval's EXR and PNG files: bit-exact float round trip, reading layouts
+ * written here directly with OpenEXR's C core (half, RGBA, Y-only, tiled, offset data window),
+ * error paths (missing, garbage, truncated, unwritable) and the PATH.tmp + rename discipline. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <OpenEXR/openexr.h>
+#include <stb/stb_image.h>
+
+#include "glow_eval.h"
+
+static char g_path[256];
+
+static const char *tmp_name(const char *stem) {
+    snprintf(g_path, sizeof g_path, "/tmp/glow_test_image_io_%ld_%s", (long)getpid(), stem);
+    return g_path;
+}
+
+static int file_exists(const char *path) {
+    struct stat st;
+    return stat(path, &st) == 0;
+}
+
+static long file_size(const char *path) {
+    struct stat st;
+    return stat(path, &st) == 0 ? (long)st.st_size : -1;
+}
+
+static void assert_no_tmp(const char *path) {
+    char tmp[300];
+    snprintf(tmp, sizeof tmp, "%s.tmp", path);
+    assert_false(file_exists(tmp));
+}
+
+static unsigned char *slurp(const char *path, long *size) {
+    FILE *f = fopen(path, "rb");
+    assert_non_null(f);
+    *size = file_size(path);
+    assert_true(*size > 0);
+    unsigned char *buf = malloc((size_t)*size);
+    assert_non_null(buf);
+    assert_int_equal(fread(buf, 1, (size_t)*size, f), (size_t)*size);
+    fclose(f);
+    return buf;
+}
+
+static void spit(const char *path, const void *data, size_t size) {
+    FILE *f = fopen(path, "wb");
+    assert_non_null(f);
+    if (size) assert_int_equal(fwrite(data, 1, size, f), size);
+    fclose(f);
+}
+
+static uint32_t lcg_state;
+static uint32_t lcg(void) {
+    lcg_state = lcg_state * 1664525u + 1013904223u;
+    return lcg_state;
+}
+
+/* ---- a small independent EXR writer (OpenEXR core, straight calls) for reader tests ---- */
+
+typedef struct custom_exr {
+    int w, h, x0, y0;          /* data window size and origin */
+    int nch;                   /* channels, names sorted as EXR stores them */
+    const char *names[4];
+    exr_pixel_type_t types[4];
+    int tile;                  /* 0 = scanlines, else square tile size */
+    const float *planes[4];    /* w*h floats per channel, top row first */
+} custom_exr;
+
+static void quiet_handler(exr_const_context_t c, exr_result_t code, const char *msg) {
+    (void)c;
+    (void)code;
+    (void)msg;
+}
+
+static void encode_block(exr_context_t ctx, const custom_exr *d, exr_chunk_info_t *cinfo, int px, int py) {
+    exr_encode_pipeline_t enc;
+    memset(&enc, 0, sizeof enc);
+    assert_int_equal(exr_encoding_initialize(ctx, 0, cinfo, &enc), EXR_ERR_SUCCESS);
+    assert_int_equal(enc.channel_count, d->nch);
+    for (int c = 0; c < d->nch; c++) {
+        assert_string_equal(enc.channels[c].channel_name, d->names[c]);
+        enc.channels[c].user_pixel_stride = 4;
+        enc.channels[c].user_line_stride = 4 * d->w;
+        enc.channels[c].user_data_type = EXR_PIXEL_FLOAT;
+        enc.channels[c].user_bytes_per_element = 4;
+        enc.channels[c].encode_from_ptr = (const uint8_t *)(d->planes[c] + (size_t)py * d->w + px);
+    }
+    assert_int_equal(exr_encoding_choose_default_routines(ctx, 0, &enc), EXR_ERR_SUCCESS);
+    assert_int_equal(exr_encoding_run(ctx, 0, &enc), EXR_ERR_SUCCESS);
+    exr_encoding_destroy(ctx, &enc);
+}
+
+static void write_custom_exr(const char *path, const custom_exr *d) {
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    init.error_handler_fn = quiet_handler;
+    exr_context_t ctx = NULL;
+    assert_int_equal(exr_start_write(&ctx, path, EXR_WRITE_FILE_DIRECTLY, &init), EXR_ERR_SUCCESS);
+    assert_int_equal(exr_add_part(ctx, NULL, d->tile ? EXR_STORAGE_TILED : EXR_STORAGE_SCANLINE, NULL),
+                     EXR_ERR_SUCCESS);
+    exr_attr_box2i_t dw;
+    dw.min.x = d->x0;
+    dw.min.y = d->y0;
+    dw.max.x = d->x0 + d->w - 1;
+    dw.max.y = d->y0 + d->h - 1;
+    exr_attr_v2f_t swc;
+    swc.x = swc.y = 0.0f;
+    assert_int_equal(exr_initialize_required_attr(ctx, 0, &dw, &dw, 1.0f, &swc, 1.0f, EXR_LINEORDER_INCREASING_Y,
+                                                  EXR_COMPRESSION_ZIP),
+                     EXR_ERR_SUCCESS);
+    if (d->tile)
+        assert_int_equal(exr_set_tile_descriptor(ctx, 0, (uint32_t)d->tile, (uint32_t)d->tile, EXR_TILE_ONE_LEVEL,
+                                                 EXR_TILE_ROUND_DOWN),
+                         EXR_ERR_SUCCESS);
+    for (int c = 0; c < d->nch; c++)
+        assert_int_equal(exr_add_channel(ctx, 0, d->names[c], d->types[c], EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1),
+                         EXR_ERR_SUCCESS);
+    assert_int_equal(exr_write_header(ctx), EXR_ERR_SUCCESS);
+    exr_chunk_info_t cinfo;
+    if (d->tile) {
+        for (int ty = 0; ty * d->tile < d->h; ty++)
+            for (int tx = 0; tx * d->tile < d->w; tx++) {
+                assert_int_equal(exr_write_tile_chunk_info(ctx, 0, tx, ty, 0, 0, &cinfo), EXR_ERR_SUCCESS);
+                encode_block(ctx, d, &cinfo, tx * d->tile, ty * d->tile);
+            }
+    } else {
+        int32_t lines = 0;
+        assert_int_equal(exr_get_scanlines_per_chunk(ctx, 0, &lines), EXR_ERR_SUCCESS);
+        for (int y = 0; y < d->h; y += lines) {
+            assert_int_equal(exr_write_scanline_chunk_info(ctx, 0, d->y0 + y, &cinfo), EXR_ERR_SUCCESS);
+            encode_block(ctx, d, &cinfo, 0, y);
+        }
+    }
+    assert_int_equal(exr_finish(&ctx), EXR_ERR_SUCCESS);
+}
+
+/* Values exactly representable in half: k / 8 for k in [-64, 64). */
+static float half_exact(void) { return (float)((int)(lcg() >> 25) - 64) / 8.0f; }
+
+/* ---- EXR ---- */
+
+static void test_exr_roundtrip_bit_exact(void **state) {
+    (void)state;
+    const char *path = tmp_name("rt.exr");
+    char keep[256];
+    snprintf(keep, sizeof keep, "%s", path);
+    glow_eval_image img, back;
+    assert_int_equal(glow_eval_image_alloc(&img, 37, 23), GLOW_OK); /* 23 rows: a partial 16-line ZIP chunk */
+    lcg_state = 42;
+    for (size_t i = 0; i < (size_t)37 * 23 * 3; i++) {
+        uint32_t bits = lcg();
+        bits = (bits & 0x807fffffu) | ((uint32_t)(1 + (lcg() % 253)) << 23); /* any finite normal float */
+        memcpy(&img.rgb[i], &bits, 4);
+    }
+    img.rgb[0] = -0.0f;
+    img.rgb[1] = 1e-40f; /* denormal */
+    img.rgb[2] = 3.4e38f;
+    img.rgb[3] = 0.0f;
+    char msg[512] = "";
+    assert_int_equal(glow_eval_write_exr(&img, keep, msg, sizeof msg), GLOW_OK);
+    assert_no_tmp(keep);
+    assert_int_equal(glow_eval_read_exr(keep, &back, msg, sizeof msg), GLOW_OK);
+    assert_int_equal(back.width, 37);
+    assert_int_equal(back.height, 23);
+    assert_memory_equal(back.rgb, img.rgb, sizeof(float) * 37 * 23 * 3);
+    glow_eval_image_free(&back);
+
+    /* Overwriting an existing file with a different image works. */
+    glow_eval_image small;
+    assert_int_equal(glow_eval_image_alloc(&small, 2, 1), GLOW_OK);
+    for (int i = 0; i < 6; i++) small.rgb[i] = (float)i * 0.5f;
+    assert_int_equal(glow_eval_write_exr(&small, keep, msg, sizeof msg), GLOW_OK);
+    assert_int_equal(glow_eval_read_exr(keep, &back, msg, sizeof msg), GLOW_OK);
+    assert_int_equal(back.width, 2);
+    assert_int_equal(back.height, 1);
+    assert_memory_equal(back.rgb, small.rgb, sizeof(float) * 6);
+    glow_eval_image_free(&back);
+    glow_eval_image_free(&small);
+    assert_no_tmp(keep);
+
+    /* A 1x1 image. */
+    assert_int_equal(glow_eval_image_alloc(&small, 1, 1), GLOW_OK);
+    small.rgb[0] = 1.5f, small.rgb[1] = -2.0f, small.rgb[2] = 1e6f;
+    assert_int_equal(glow_eval_write_exr(&small, keep, msg, sizeof msg), GLOW_OK);
+    assert_int_equal(glow_eval_read_exr(keep, &back, msg, sizeof msg), GLOW_OK);
+    assert_memory_equal(back.rgb, small.rgb, sizeof(float) * 3);
+    glow_eval_image_free(&back);
+    glow_eval_image_free(&small);
+    remove(keep);
+    glow_eval_image_free(&img);
+}
+
+static void check_planes(const glow_eval_image *img, int w, int h, const float *r, const float *g, const float *b) {
+    assert_int_equal(img->width, (uint32_t)w);
+    assert_int_equal(img->height, (uint32_t)h);
+    for (int i = 0; i < w * h; i++) {
+        assert_true(img->rgb[3 * i + 0] == r[i]);
+        assert_true(img->rgb[3 * i + 1] == g[i]);
+        assert_true(img->rgb[3 * i + 2] == b[i]);
+    }
+}
+
+static void test_exr_read_layouts(void **state) {
+    (void)state;
+    enum { W = 29, H = 19, N = W * H };
+    float r[N], g[N], b[N], a[N];
+    lcg_state = 7;
+    for (int i = 0; i < N; i++) r[i] = half_exact(), g[i] = half_exact(), b[i] = half_exact(), a[i] = 0.5f;
+    char path[256];
+    snprintf(path, sizeof path, "%s", tmp_name("layout.exr"));
+    glow_eval_image img;
+    char msg[512] = "";
+
+    /* Half RGBA scanlines, data window not at the origin: A ignored, half converted exactly. */
+    custom_exr d = {W, H, 5, -3, 4, {"A", "B", "G", "R"},
+                    {EXR_PIXEL_HALF, EXR_PIXEL_HALF, EXR_PIXEL_HALF, EXR_PIXEL_HALF}, 0, {a, b, g, r}};
+    write_custom_exr(path, &d);
+    assert_int_equal(glow_eval_read_exr(path, &img, msg, sizeof msg), GLOW_OK);
+    check_planes(&img, W, H, r, g, b);
+    glow_eval_image_free(&img);
+
+    /* Mixed half / float RGB. */
+    custom_exr m = {W, H, 0, 0, 3, {"B", "G", "R"}, {EXR_PIXEL_FLOAT, EXR_PIXEL_HALF, EXR_PIXEL_FLOAT}, 0, {b, g, r}};
+    write_custom_exr(path, &m);
+    assert_int_equal(glow_eval_read_exr(path, &img, msg, sizeof msg), GLOW_OK);
+    check_planes(&img, W, H, r, g, b);
+    glow_eval_image_free(&img);
+
+    /* Y only: grey. */
+    custom_exr y = {W, H, 0, 0, 1, {"Y"}, {EXR_PIXEL_FLOAT}, 0, {g}};
+    write_custom_exr(path, &y);
+    assert_int_equal(glow_eval_read_exr(path, &img, msg, sizeof msg), GLOW_OK);
+    check_planes(&img, W, H, g, g, g);
+    glow_eval_image_free(&img);
+
+    /* Tiled (8 x 8 tiles, partial ones at the right and bottom), float and half, with an offset. */
+    custom_exr t = {W, H, -2, 4, 3, {"B", "G", "R"}, {EXR_PIXEL_FLOAT, EXR_PIXEL_FLOAT, EXR_PIXEL_FLOAT}, 8, {b, g, r}};
+    write_custom_exr(path, &t);
+    assert_int_equal(glow_eval_read_exr(path, &img, msg, sizeof msg), GLOW_OK);
+    check_planes(&img, W, H, r, g, b);
+    glow_eval_image_free(&img);
+    custom_exr th = {W, H, 0, 0, 4, {"A", "B", "G", "R"},
+                     {EXR_PIXEL_HALF, EXR_PIXEL_HALF, EXR_PIXEL_HALF, EXR_PIXEL_HALF}, 16, {a, b, g, r}};
+    write_custom_exr(path, &th);
+    assert_int_equal(glow_eval_read_exr(path, &img, msg, sizeof msg), GLOW_OK);
+    check_planes(&img, W, H, r, g, b);
+    glow_eval_image_free(&img);
+
+    /* No colour channels at all: refused, naming the file. */
+    custom_exr z = {W, H, 0, 0, 1, {"Z"}, {EXR_PIXEL_FLOAT}, 0, {g}};
+    write_custom_exr(path, &z);
+    img.rgb = (float *)1; /* must be reset */
+    assert_int_equal(glow_eval_read_exr(path, &img, msg, sizeof msg), GLOW_ERROR_CORRUPT_DATA);
+    assert_null(img.rgb);
+    assert_non_null(strstr(msg, path));
+    assert_non_null(strstr(msg, "no R, G, B"));
+    remove(path);
+}
+
+static void test_exr_missing_file(void **state) {
+    (void)state;
+    const char *path = tmp_name("does_not_exist.exr");
+    glow_eval_image img;
+    char msg[512] = "";
+    assert_int_equal(glow_eval_read_exr(path, &img, msg, sizeof msg), GLOW_ERROR_IO);
+    assert_null(img.rgb);
+    assert_non_null(strstr(msg, path));
+    assert_non_null(strstr(msg, "cannot open"));
+    assert_non_null(strstr(msg, "No such file"));
+    assert_int_equal(glow_eval_read_exr(path, &img, NULL, 0), GLOW_ERROR_IO); /* NULL message is fine */
+    assert_int_equal(glow_eval_read_exr(NULL, &img, msg, sizeof msg), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(glow_eval_read_exr(path, NULL, msg, sizeof msg), GLOW_ERROR_INVALID_ARGUMENT);
+}
+
+static void test_exr_garbage_and_truncated(void **state) {
+    (void)state;
+    char path[256], bad[256];
+    snprintf(path, sizeof path, "%s", tmp_name("good.exr"));
+    snprintf(bad, sizeof bad, "%s", tmp_name("bad.exr"));
+    glow_eval_image img;
+    char msg[512] = "";
+
+    spit(bad, "this is not an image, just some text\n", 37);
+    assert_int_equal(glow_eval_read_exr(bad, &img, msg, sizeof msg), GLOW_ERROR_CORRUPT_DATA);
+    assert_non_null(strstr(msg, bad));
+    assert_non_null(strstr(msg, "not an OpenEXR file"));
+    spit(bad, "", 0);
+    assert_int_equal(glow_eval_read_exr(bad, &img, msg, sizeof msg), GLOW_ERROR_CORRUPT_DATA);
+    assert_null(img.rgb);
+
+    /* A real file cut short at many lengths, and with bytes flipped: never a crash or leak;
+     * truncation is CORRUPT_DATA. */
+    assert_int_equal(glow_eval_image_alloc(&img, 40, 40), GLOW_OK);
+    lcg_state = 3;
+    for (size_t i = 0; i < (size_t)40 * 40 * 3; i++) img.rgb[i] = (float)(lcg() % 1000) / 100.0f;
+    assert_int_equal(glow_eval_write_exr(&img, path, msg, sizeof msg), GLOW_OK);
+    glow_eval_image_free(&img);
+    long size = 0;
+    unsigned char *data = slurp(path, &size);
+    const long cuts[] = {4, 5, 8, 20, 60, 150, 300, size / 3, size / 2, size - 100, size - 1};
+    for (size_t k = 0; k < sizeof cuts / sizeof cuts[0]; k++) {
+        if (cuts[k] <= 0 || cuts[k] >= size) continue;
+        spit(bad, data, (size_t)cuts[k]);
+        glow_result r = glow_eval_read_exr(bad, &img, msg, sizeof msg);
+        if (r != GLOW_ERROR_CORRUPT_DATA) print_error("cut at %ld: %d %s\n", cuts[k], (int)r, msg);
+        assert_int_equal(r, GLOW_ERROR_CORRUPT_DATA);
+        assert_null(img.rgb);
+        assert_non_null(strstr(msg, bad));
+    }
+    for (int k = 0; k < 40; k++) {
+        unsigned char *copy = malloc((size_t)size);
+        assert_non_null(copy);
+        memcpy(copy, data, (size_t)size);
+        for (int j = 0; j < 4; j++) copy[lcg() % (uint32_t)size] ^= (unsigned char)(1 + lcg() % 255);
+        spit(bad, copy, (size_t)size);
+        free(copy);
+        glow_result r = glow_eval_read_exr(bad, &img, msg, sizeof msg);
+        assert_true(r == GLOW_OK || r == GLOW_ERROR_CORRUPT_DATA);
+        if (r == GLOW_OK) {
+            assert_non_null(img.rgb);
+            glow_eval_image_free(&img);
+        } else {
+            assert_null(img.rgb);
+        }
+    }
+    free(data);
+    remove(bad);
+    remove(path);
+}
+
+static void test_exr_write_errors(void **state) {
+    (void)state;
+    glow_eval_image img;
+    assert_int_equal(glow_eval_image_alloc(&img, 3, 2), GLOW_OK);
+    char dir_path[300], msg[512] = "";
+    snprintf(dir_path, sizeof dir_path, "%s/out.exr", tmp_name("no_such_dir"));
+    assert_int_equal(glow_eval_write_exr(&img, dir_path, msg, sizeof msg), GLOW_ERROR_IO);
+    assert_non_null(strstr(msg, dir_path));
+    assert_false(file_exists(dir_path));
+    assert_int_equal(glow_eval_write_png(&img, 1.0f, dir_path, msg, sizeof msg), GLOW_ERROR_IO);
+    assert_non_null(strstr(msg, dir_path));
+    assert_int_equal(glow_eval_write_exr(NULL, "/tmp/x.exr", msg, sizeof msg), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(glow_eval_write_exr(&img, NULL, msg, sizeof msg), GLOW_ERROR_INVALID_ARGUMENT);
+    glow_eval_image empty = {0, 0, NULL};
+    assert_int_equal(glow_eval_write_exr(&empty, "/tmp/x.exr", msg, sizeof msg), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(glow_eval_write_png(&empty, 1.0f, "/tmp/x.png", msg, sizeof msg), GLOW_ERROR_INVALID_ARGUMENT);
+    const char *png = tmp_name("nan_exposure.png");
+    assert_int_equal(glow_eval_write_png(&img, NAN, png, msg, sizeof msg), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_false(file_exists(png));
+    glow_eval_image_free(&img);
+}
+
+/* ---- PNG ---- */
+
+static void test_png_values(void **state) {
+    (void)state;
+    char path[256];
+    snprintf(path, sizeof path, "%s", tmp_name("out.png"));
+    glow_eval_image img;
+    assert_int_equal(glow_eval_image_alloc(&img, 4, 3), GLOW_OK);
+    /* exposure 2: linear x -> display encode(2x) -> round(255 v). */
+    const float in[12] = {0.0f, 0.5f, 0.1f, -1.0f, NAN, 1e9f, 0.0009f, 0.25f, 0.09f, 0.02f, 0.3f, 0.45f};
+    /* Expected bytes, computed independently: encode(0.2) = 0.484529 -> 123.56 -> 124;
+     * encode(0.0018) = 12.92 * 0.0018 = 0.023256 -> 5.93 -> 6; encode(0.5) = 0.735357 -> 187.52 -> 188;
+     * encode(0.18) = 0.461356 -> 117.65 -> 118; encode(0.04) = 0.220769 -> 56.30 -> 56;
+     * encode(0.6) = 0.797738 -> 203.42 -> 203; encode(0.9) = 0.954687 -> 243.45 -> 243. */
+    const unsigned char want[12] = {0, 255, 124, 0, 0, 255, 6, 188, 118, 56, 203, 243};
+    for (int p = 0; p < 12; p++)
+        for (int c = 0; c < 3; c++) img.rgb[3 * p + c] = c == 1 ? in[p] : in[(p + 1) % 12];
+    char msg[512] = "";
+    assert_int_equal(glow_eval_write_png(&img, 2.0f, path, msg, sizeof msg), GLOW_OK);
+    assert_no_tmp(path);
+    int w = 0, h = 0, comp = 0;
+    unsigned char *px = stbi_load(path, &w, &h, &comp, 3);
+    assert_non_null(px);
+    assert_int_equal(w, 4);
+    assert_int_equal(h, 3);
+    assert_int_equal(comp, 3);
+    for (int p = 0; p < 12; p++) {
+        assert_int_equal(px[3 * p + 1], want[p]);
+        assert_int_equal(px[3 * p + 0], want[(p + 1) % 12]);
+        assert_int_equal(px[3 * p + 2], want[(p + 1) % 12]);
+    }
+    stbi_image_free(px);
+    remove(path);
+    glow_eval_image_free(&img);
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_exr_roundtrip_bit_exact), cmocka_unit_test(test_exr_read_layouts),
+        cmocka_unit_test(test_exr_missing_file),        cmocka_unit_test(test_exr_garbage_and_truncated),
+        cmocka_unit_test(test_exr_write_errors),        cmocka_unit_test(test_png_values),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

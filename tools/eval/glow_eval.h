@@ -1,0 +1,102 @@
+/*
+ * glow_eval.h — the evaluation library shared by glow-render, glow-eval and their tests: linear HDR
+ * images, their files (OpenEXR through OpenEXR's C core library, PNG through stb_image_write) and
+ * the error metrics Glow is judged by. Tool code (tools/eval/, target glow_eval), not part of the
+ * runtime: it allocates with malloc and does no threading of its own.
+ *
+ * IMAGES: glow_eval_image is linear RGB float, row-major, top row first (as image files store it),
+ * 3 floats per pixel. Radiance in W/(m²·sr) when it comes from glow-render.
+ *
+ * METRICS (definitions also in docs/results.md):
+ *   rel_rmse(test, ref)  = sqrt( Σ (t - r)² / Σ r² ) over every pixel and channel of the HDR images
+ *                          (the RMS error relative to the reference's RMS; 0 = identical). Pixels with
+ *                          a zero mask value are left out of both sums.
+ *   display(x)           = srgb_encode( clamp(x · exposure, 0, 1) ) per channel (IEC 61966-2-1 curve),
+ *                          the "fixed exposure and sRGB encoding" of the final image.
+ *   rmse_display         = sqrt( mean over pixels and channels of (display(t) - display(r))² ), in [0,1].
+ *   psnr                 = 20 · log10(1 / rmse_display) dB (+INFINITY when identical).
+ *   ssim                 = mean SSIM (Wang et al. 2004) of the display images' luma
+ *                          Y' = 0.2126 R' + 0.7152 G' + 0.0722 B' (on the encoded values), 11 x 11 Gaussian
+ *                          window σ = 1.5, K1 = 0.01, K2 = 0.03, L = 1; windows are clipped at the image
+ *                          border (weights renormalised), every pixel is a window centre.
+ *
+ *   Edge cases: sums are in double and display() is evaluated in double (x · exposure clamped, then
+ *   the curve), glow_eval_srgb_encode returns that rounded to float. rel_rmse of a reference that
+ *   is 0 everywhere (in the mask) is 0 when the test is too, else +INFINITY.
+ *
+ * NON-FINITE PIXELS (NaN, ±Inf) anywhere in either image — masked or not, since SSIM windows read
+ * masked pixels — are an error: glow_eval_compare returns GLOW_ERROR_INVALID_ARGUMENT with e.g.
+ * "compare: reference image pixel (12, 7) channel G is NaN" (the first one, test image checked
+ * first); the individual metric functions return NAN. A mask that leaves no pixel is also
+ * INVALID_ARGUMENT for glow_eval_compare and NAN for the individual functions. The PNG writer maps
+ * NaN to 0 and +Inf to 255 (the clamp).
+ *
+ * ON ERRORS: functions return a glow_result and write one line naming the file and the problem into
+ * `message` (may be NULL): GLOW_ERROR_INVALID_ARGUMENT (NULL, size mismatch, zero size, non-finite
+ * exposure), GLOW_ERROR_IO (cannot open/read/write: a writer never leaves a half-written file under
+ * the final name — it writes PATH.tmp and renames), GLOW_ERROR_CORRUPT_DATA (not an EXR, or a layout
+ * the reader does not handle), GLOW_ERROR_OUT_OF_MEMORY. Examples: "out.exr: cannot open (No such
+ * file or directory)", "x.exr: not an OpenEXR file", "x.exr: truncated OpenEXR header (...)".
+ * OpenEXR's own diagnostics are captured into `message`, never printed.
+ */
+#ifndef GLOW_EVAL_H
+#define GLOW_EVAL_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "glow/glow.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct glow_eval_image {
+    uint32_t width, height;
+    float *rgb; /* width * height * 3 floats, owned (malloc) */
+} glow_eval_image;
+
+/* Allocates a zeroed width x height image. */
+glow_result glow_eval_image_alloc(glow_eval_image *img, uint32_t width, uint32_t height);
+/* Frees and zeroes (NULL and zeroed images are no-ops). */
+void glow_eval_image_free(glow_eval_image *img);
+
+/* Writes RGB as 32-bit float channels "R", "G", "B", ZIP-compressed scanlines (zlib level 4; data
+ * window = display window = the image), bit-exact on re-read. */
+glow_result glow_eval_write_exr(const glow_eval_image *img, const char *path, char *message, size_t message_size);
+/* Reads an RGB (or RGBA: A ignored; Y-only: grey) scanline or tiled EXR of half or float channels.
+ * Part 0 only; channels named exactly "R", "G", "B" (or "Y"), no layer prefixes; tiled files: level 0
+ * of mip/rip maps; any data window origin (the image is the data window). CORRUPT_DATA for deep
+ * parts, subsampled or uint colour channels, and more than 2^26 pixels. *out is zeroed on failure. */
+glow_result glow_eval_read_exr(const char *path, glow_eval_image *out, char *message, size_t message_size);
+/* Writes an 8-bit sRGB PNG of display(x) with the given exposure (see METRICS), round(255 · v). */
+glow_result glow_eval_write_png(const glow_eval_image *img, float exposure, const char *path, char *message,
+                                size_t message_size);
+
+/* The sRGB transfer curve of a linear value clamped to [0,1]. */
+float glow_eval_srgb_encode(float linear);
+
+typedef struct glow_eval_metrics {
+    double rel_rmse;     /* HDR, see METRICS */
+    double rmse_display; /* after exposure + sRGB */
+    double psnr_db;
+    double ssim;
+    double mean_ref[3];  /* mean reference radiance per channel (masked) */
+    double mean_test[3]; /* mean test radiance per channel (masked) */
+    uint64_t pixels;     /* pixels compared (mask != 0) */
+} glow_eval_metrics;
+
+/* Compares `test` with `ref` (same size). mask: optional width*height bytes, 0 = leave the pixel out
+ * (of every metric; SSIM windows still read masked pixels, only their centres are skipped). */
+glow_result glow_eval_compare(const glow_eval_image *test, const glow_eval_image *ref, const uint8_t *mask,
+                              float exposure, glow_eval_metrics *out, char *message, size_t message_size);
+
+/* The individual metrics (NAN on a size mismatch or NULL). */
+double glow_eval_rel_rmse(const glow_eval_image *test, const glow_eval_image *ref, const uint8_t *mask);
+double glow_eval_psnr(const glow_eval_image *test, const glow_eval_image *ref, const uint8_t *mask, float exposure);
+double glow_eval_ssim(const glow_eval_image *test, const glow_eval_image *ref, const uint8_t *mask, float exposure);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* GLOW_EVAL_H */
