@@ -22,6 +22,10 @@ typedef struct glow__cl_args {
      * node[16] then IEEE-half weight[luma²][16] (k_l(cos α) y_lm(dir), coefficient-major);
      * glow__cl_xblock_size(luma) bytes each, blocks_per_cache per cache */
     const unsigned char *xblocks;
+    size_t xblock_size; /* bytes per expanded block; 0 = glow__cl_xblock_size(luma). The bake's full-SH
+                           links (SHLK, same layout with the bake's sh_bands² rows) pass their own */
+    float xscale;       /* expanded links only: every cache coefficient times this (SHLK: the bake's
+                           factor_scale, with rad_* the node flux); 0 = 1 */
 } glow__cl_args;
 
 static inline size_t glow__cl_xblock_size(uint32_t luma) { return (size_t)64u + (size_t)32u * luma * luma; }

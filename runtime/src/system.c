@@ -56,6 +56,10 @@ struct glow_system {
     glow__cl_isa isa;
     glow_link_mode link_mode;
     unsigned char *xblocks; /* expanded links (GLOW_LINK_MODE_EXPANDED), else NULL */
+    const unsigned char *xlinks; /* what the kernel reads as expanded blocks: xblocks, or the bake's
+                                    full-SH links (GLOW_LINK_MODE_SH), else NULL */
+    size_t xlink_size;           /* bytes per block of xlinks (0 = from luma) */
+    float xscale;                /* SH mode: the bake's factor_scale (SHLK is against node flux) */
     uint64_t memory_bytes;
     /* surfels */
     float *pos4, *nrm4;
@@ -98,12 +102,6 @@ static double now_ms(void) {
 
 static uint32_t div_up(uint32_t a, uint32_t b) { return (a + b - 1u) / b; }
 
-static void to_ycocg(const float rgb[3], float *y, float *co, float *cg) {
-    *y = 0.25f * rgb[0] + 0.5f * rgb[1] + 0.25f * rgb[2];
-    *co = 0.5f * rgb[0] - 0.5f * rgb[2];
-    *cg = -0.25f * rgb[0] + 0.5f * rgb[1] - 0.25f * rgb[2];
-}
-
 /* ------------------------------------------------------------------------------ stage tasks */
 /* surfel lighting: one hook call per batch, into the spare buffer, checked */
 static void task_hook(void *data, uint32_t b, uint32_t worker) {
@@ -137,47 +135,63 @@ static void task_hook(void *data, uint32_t b, uint32_t worker) {
     s->batch_negative[b] = neg;
 }
 
-/* surfel flux for surfels [k*SURFEL_CHUNK, ...): leaves of the node arrays */
+/* surfel flux for surfels [k*SURFEL_CHUNK, ...): leaves of the node arrays.
+ * Written for the compiler: every array through a restrict-qualified local (no reloads after the
+ * stores), the YCoCg conversions inline, the bounce branch hoisted, no fmaxf call (which GCC keeps
+ * as a libm call without -ffinite-math-only). Measured on Sponza moderate, 2 threads: 0.58 -> 0.37 ms
+ * (medians of 6 alternating runs on a shared machine). */
 static void task_flux(void *data, uint32_t k, uint32_t worker) {
     (void)worker;
     glow_system *s = data;
     const uint32_t first = k * SURFEL_CHUNK, end = first + SURFEL_CHUNK < s->S ? first + SURFEL_CHUNK : s->S;
-    const uint32_t L2 = s->luma * s->luma, C2 = s->chroma * s->chroma, nc = s->coeffs;
+    const uint32_t L2 = s->luma * s->luma, C2 = s->chroma * s->chroma, nc = s->coeffs, fbk = s->fbk;
     const float bounce = s->params.bounce_intensity, es = s->params.emission_scale;
     const float area = s->meta->surfel_area;
     const size_t N = s->N;
+    const uint32_t *restrict mat = s->mat, *restrict feedback = s->feedback;
+    const float *restrict mas = s->mat_albedo_scale, *restrict mes = s->mat_emis_scale;
+    const float *restrict cache_sh = s->cache_sh, *restrict fb_w = s->fb_w, *restrict albedo = s->albedo;
+    const float *restrict rho_max = s->rho_ind_max, *restrict direct = s->direct, *restrict emis = s->emis;
+    const float *restrict inv_pi_area = s->inv_pi_area;
+    float *restrict fy_out = s->flux, *restrict fco_out = s->flux + N, *restrict fcg_out = s->flux + 2 * N;
+    float *restrict rad = s->rad;
+    const bool fb = bounce > 0.0f;
     for (uint32_t i = first; i < end; ++i) {
-        const uint32_t m = s->mat[i];
-        const float *ms = s->mat_albedo_scale + 3 * (size_t)m, *me = s->mat_emis_scale + 3 * (size_t)m;
-        float ind[3] = {0, 0, 0};
-        if (bounce > 0.0f) {
-            const float *sh = s->cache_sh + (size_t)s->feedback[i] * nc, *w = s->fb_w + (size_t)i * s->fbk;
-            float ycc[3] = {0, 0, 0};
-            for (uint32_t q = 0; q < L2; ++q) ycc[0] += w[q] * sh[q];
+        const uint32_t m = mat[i];
+        const float *ms = mas + 3 * (size_t)m, *me = mes + 3 * (size_t)m;
+        float ind[3] = {0.0f, 0.0f, 0.0f};
+        if (fb) {
+            const float *sh = cache_sh + (size_t)feedback[i] * nc, *w = fb_w + (size_t)i * fbk;
+            float y = 0.0f, co = 0.0f, cg = 0.0f;
+            for (uint32_t q = 0; q < L2; ++q) y += w[q] * sh[q];
             for (uint32_t q = 0; q < C2; ++q) {
-                ycc[1] += w[q] * sh[L2 + q];
-                ycc[2] += w[q] * sh[L2 + C2 + q];
+                co += w[q] * sh[L2 + q];
+                cg += w[q] * sh[L2 + C2 + q];
             }
-            glow_ycocg_to_rgb(ycc, ind);
+            ind[0] = y + co - cg; /* glow_ycocg_to_rgb */
+            ind[1] = y + cg;
+            ind[2] = y - co - cg;
         }
+        const float rmax = rho_max[i];
         float B[3];
         for (int c = 0; c < 3; ++c) {
-            float rho = s->albedo[3 * (size_t)i + c] * ms[c];
+            float rho = albedo[3 * (size_t)i + c] * ms[c];
             rho = rho < 0.0f ? 0.0f : (rho > ALBEDO_MAX ? ALBEDO_MAX : rho);
-            float rho_ind = rho < s->rho_ind_max[i] ? rho : s->rho_ind_max[i];
-            float e_ind = ind[c] > 0.0f ? ind[c] * bounce : 0.0f;
-            B[c] = rho * s->direct[3 * (size_t)i + c] + rho_ind * e_ind + PI_F * s->emis[3 * (size_t)i + c] * es * me[c];
+            const float rho_ind = rho < rmax ? rho : rmax;
+            const float e_ind = ind[c] > 0.0f ? ind[c] * bounce : 0.0f;
+            B[c] = rho * direct[3 * (size_t)i + c] + rho_ind * e_ind + PI_F * emis[3 * (size_t)i + c] * es * me[c];
         }
-        float fy, fco, fcg;
-        to_ycocg(B, &fy, &fco, &fcg);
-        s->flux[i] = fy * area;
-        s->flux[N + i] = fco * area;
-        s->flux[2 * N + i] = fcg * area;
-        const float ipa = s->inv_pi_area[i];
-        float *r = s->rad + 4 * (size_t)i;
-        r[0] = s->flux[i] * ipa;
-        r[1] = s->flux[N + i] * ipa;
-        r[2] = s->flux[2 * N + i] * ipa;
+        const float ipa = inv_pi_area[i];
+        const float fy = (0.25f * B[0] + 0.5f * B[1] + 0.25f * B[2]) * area; /* RGB -> YCoCg */
+        const float fco = (0.5f * B[0] - 0.5f * B[2]) * area;
+        const float fcg = (-0.25f * B[0] + 0.5f * B[1] - 0.25f * B[2]) * area;
+        fy_out[i] = fy;
+        fco_out[i] = fco;
+        fcg_out[i] = fcg;
+        float *r = rad + 4 * (size_t)i;
+        r[0] = fy * ipa;
+        r[1] = fco * ipa;
+        r[2] = fcg * ipa;
         r[3] = 0.0f;
     }
 }
@@ -208,18 +222,21 @@ static void task_pull(void *data, uint32_t k, uint32_t worker) {
 static void task_caches(void *data, uint32_t k, uint32_t worker) {
     (void)worker;
     glow_system *s = data;
+    const bool sh = s->link_mode == GLOW_LINK_MODE_SH; /* SHLK weights multiply node flux (planar) */
     glow__cl_args a = {.blocks = glow__bake_link_blocks(s->bake),
                        .blocks_per_cache = s->bpc,
-                       .rad_y = s->rad,
-                       .rad_co = s->rad + 1,
-                       .rad_cg = s->rad + 2,
-                       .rad_stride = 4,
+                       .rad_y = sh ? s->flux : s->rad,
+                       .rad_co = sh ? s->flux + s->N : s->rad + 1,
+                       .rad_cg = sh ? s->flux + 2 * s->N : s->rad + 2,
+                       .rad_stride = sh ? 1 : 4,
                        .luma = s->luma,
                        .chroma = s->chroma,
                        .coeffs = s->coeffs,
                        .cache_sh = s->cache_sh,
                        .isa = s->isa,
-                       .xblocks = s->xblocks};
+                       .xblocks = s->xlinks,
+                       .xblock_size = s->xlink_size,
+                       .xscale = s->xscale};
     uint32_t first = k * CACHE_CHUNK, count = s->C - first < CACHE_CHUNK ? s->C - first : CACHE_CHUNK;
     glow__cl_light_caches(&a, first, count);
 }
@@ -354,9 +371,22 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     }
     uint32_t batch = desc->surfel_batch_size ? desc->surfel_batch_size : 1024u;
     glow_link_mode link_mode = desc->link_mode == GLOW_LINK_MODE_DEFAULT ? GLOW_LINK_MODE_COMPACT : desc->link_mode;
-    if (link_mode != GLOW_LINK_MODE_EXPANDED && link_mode != GLOW_LINK_MODE_COMPACT) {
+    if (link_mode != GLOW_LINK_MODE_EXPANDED && link_mode != GLOW_LINK_MODE_COMPACT && link_mode != GLOW_LINK_MODE_SH) {
         GLOW__LOG_ERROR(ctx, GLOW_ERROR_INVALID_ARGUMENT, "glow_system_create(%s): unknown link_mode %u", label,
                         (unsigned)desc->link_mode);
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    if (link_mode == GLOW_LINK_MODE_SH && (!(m->link_kind & GLOW_LINK_KIND_FULL_SH) || !glow__bake_shlk_blocks(desc->bake))) {
+        GLOW__LOG_ERROR(ctx, GLOW_ERROR_UNSUPPORTED,
+                        "glow_system_create(%s): GLOW_LINK_MODE_SH needs full-SH links, and this bake has none "
+                        "(bake it with glow-bake --sh-links)",
+                        label);
+        return GLOW_ERROR_UNSUPPORTED;
+    }
+    if (link_mode == GLOW_LINK_MODE_SH && luma > m->sh_bands) {
+        GLOW__LOG_ERROR(ctx, GLOW_ERROR_INVALID_ARGUMENT,
+                        "glow_system_create(%s): sh_bands_luma %u > the bake's %u: full-SH links carry only %u bands",
+                        label, luma, m->sh_bands, m->sh_bands);
         return GLOW_ERROR_INVALID_ARGUMENT;
     }
 
@@ -477,6 +507,12 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     glow__ctx_start_pool(ctx); /* threads start here, never in an update */
     glow__ctx_run(ctx, task_feedback_setup, s, div_up(s->S, SURFEL_CHUNK));
     if (s->xblocks) glow__ctx_run(ctx, task_expand, s, div_up(s->C, EXPAND_CHUNK));
+    s->xlinks = s->xblocks;
+    if (link_mode == GLOW_LINK_MODE_SH) { /* read in place: no copy, no extra memory */
+        s->xlinks = glow__bake_shlk_blocks(desc->bake);
+        s->xlink_size = glow_bake_shlk_block_size(m->sh_bands);
+        s->xscale = m->factor_scale;
+    }
 
     s->out = (glow_cache_outputs){.sh_bands_luma = luma,
                                   .sh_bands_chroma = chroma,

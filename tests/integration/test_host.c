@@ -415,26 +415,32 @@ static void run_hook(glow_host *h, const surfels *s, float *out) {
     }
 }
 
+/* The hook (the exact kind traces 16-ray packets) against glow_host_irradiance (one ray at a time),
+ * with a point, a spot and a sun (the closed box shadows the sun everywhere: its rays test the
+ * unbounded-ray path) and with shadowed and lit surfels. */
 static void test_hook_matches_scalar(void **state) {
     fixture *fx = *state;
-    glow_scene_light l[2] = {
+    glow_scene_light l[3] = {
         {.type = GLOW_SCENE_LIGHT_POINT, .position = {0.1f, 1.5f, 0.2f}, .intensity = {2, 3, 4}},
         {.type = GLOW_SCENE_LIGHT_SPOT, .position = {0.6f, 1.8f, 0.6f}, .direction = {-1, -2, -1}, .intensity = {9, 9, 9},
          .outer_deg = 35, .inner_deg = 25},
+        {.type = GLOW_SCENE_LIGHT_SUN, .direction = {0.3f, -1.0f, 0.2f}, .irradiance = {5, 5, 5}},
     };
     surfels s = get_surfels(fx->cornell);
     float *out = malloc(sizeof(float) * 3 * s.n);
     for (int kind = GLOW_HOST_KIND_EXACT; kind <= GLOW_HOST_KIND_SHADOW_MAP; ++kind) {
-        glow_host *h = make_host(fx->cornell, (glow_host_kind)kind, l, 2, NULL);
+        glow_host *h = make_host(fx->cornell, (glow_host_kind)kind, l, 3, NULL);
         run_hook(h, &s, out);
-        uint32_t nonzero = 0;
+        uint32_t nonzero = 0, dark = 0;
         for (uint32_t i = 0; i < s.n; ++i) {
             float want[3];
             assert_int_equal(glow_host_irradiance(h, s.pos + 4 * i, s.nor + 4 * i, want), GLOW_OK);
             for (int c = 0; c < 3; ++c) assert_true(fabsf(out[3 * i + c] - want[c]) <= 1e-5f * want[c] + 1e-7f);
             nonzero += out[3 * i] > 0.0f;
+            dark += out[3 * i] == 0.0f;
         }
         assert_true(nonzero > s.n / 4);
+        assert_true(dark > s.n / 20); /* shadowed or facing away: occluded rays are in the comparison */
         /* a batch beyond the bake's surfels is refused */
         glow_lighting_hooks hk = glow_host_hooks(h);
         glow_surfel_batch b = {.first = s.n - 10, .count = 11, .positions = s.pos, .normals = s.nor};

@@ -31,7 +31,8 @@ typedef struct fixture {
 static int setup(void **state) {
     static fixture f;
     snprintf(f.path, sizeof f.path, "/tmp/glow_furnace_%d.glow", (int)getpid());
-    glow_pc_settings s = {.quality = GLOW_PC_QUALITY_LOW, .surfels = 4096, .links = 96, .bands = 3, .threads = 2, .seed = 1};
+    glow_pc_settings s = {.quality = GLOW_PC_QUALITY_LOW, .surfels = 4096, .links = 96, .bands = 3, .threads = 2, .seed = 1,
+                          .sh_links = true}; /* SHLK too, for GLOW_LINK_MODE_SH */
     glow_pc_stats st;
     if (glow_pc_bake("builtin:furnace", f.path, &s, &st) != GLOW_OK) {
         fprintf(stderr, "bake failed: %s\n", st.error);
@@ -93,12 +94,16 @@ static void furnace(fixture *f, float rho, glow_link_mode mode) {
     const double lm_mean = lm_sum / o->lightmap_cache_count, grid_mean = grid_sum / o->grid_cache_count;
     printf("furnace (%s links) rho %.2f: expected %.4f; lightmap caches mean %.4f (%+.2f %%, worst %.2f %%), grid caches mean %.4f "
            "(%+.2f %%, worst %.2f %%)\n",
-           us.link_mode == GLOW_LINK_MODE_COMPACT ? "compact" : "expanded", rho, expect, lm_mean, 100.0 * (lm_mean / expect - 1.0), 100.0 * lm_worst, grid_mean,
+           us.link_mode == GLOW_LINK_MODE_COMPACT ? "compact" : us.link_mode == GLOW_LINK_MODE_SH ? "full-SH" : "expanded", rho, expect, lm_mean, 100.0 * (lm_mean / expect - 1.0), 100.0 * lm_worst, grid_mean,
            100.0 * (grid_mean / expect - 1.0), 100.0 * grid_worst);
     assert_true(fabs(lm_mean / expect - 1.0) < 0.02);
     assert_true(fabs(grid_mean / expect - 1.0) < 0.02);
-    /* every single cache, not only the mean (corners and edges are where links are hardest) */
-    assert_true(lm_worst < 0.05);
+    /* every single cache, not only the mean (corners and edges are where links are hardest). The
+     * full-SH links are the comparison baseline (PIC Eq. 2 as published): their lightmap caches at
+     * the cube's edges are off by up to 8.7 % at rho 0.5 (leaf sums that straddle the texel's horizon,
+     * which the cone links' edge fix and cone fit correct; docs/results.md), so for them only the
+     * means and the grid caches are held to the product's bounds */
+    if (mode != GLOW_LINK_MODE_SH) assert_true(lm_worst < 0.05);
     assert_true(grid_worst < 0.05);
     glow_system_destroy(sys);
 }
@@ -107,9 +112,52 @@ static void test_furnace_half(void **state) { furnace(*state, 0.5f, GLOW_LINK_MO
 static void test_furnace_090(void **state) { furnace(*state, 0.9f, GLOW_LINK_MODE_DEFAULT); }
 /* the expanded links (half-float k_l y_lm per link, computed at create) must agree as well */
 static void test_furnace_090_expanded(void **state) { furnace(*state, 0.9f, GLOW_LINK_MODE_EXPANDED); }
+/* the bake's full-SH links (PIC Eq. 2): projected from the visible leaves, not a cone. A uniform
+ * field over a hemisphere has no even bands above 0, so 3 bands shade it exactly: the remaining
+ * error is the links' leaf sums (measured at rho 0.9: means -1.1 % / -1.2 %, lightmap worst 9.3 %) */
+static void test_furnace_050_sh(void **state) { furnace(*state, 0.5f, GLOW_LINK_MODE_SH); }
+/* SH mode asks for the bake's full-SH links: refused without them, and above the bake's bands */
+static void test_sh_mode_errors(void **state) {
+    fixture *f = *state;
+    glow_system *sys = (glow_system *)1;
+    assert_int_equal(glow_system_create(f->ctx, &(glow_system_desc){.bake = f->bake, .link_mode = GLOW_LINK_MODE_SH,
+                                                                     .sh_bands_luma = 4},
+                                        &sys),
+                     GLOW_ERROR_INVALID_ARGUMENT);
+    assert_null(sys);
+    /* fewer bands than the bake's: the kernel reads the first 2² rows of each 3-band SHLK block */
+    assert_int_equal(glow_system_create(f->ctx, &(glow_system_desc){.bake = f->bake, .link_mode = GLOW_LINK_MODE_SH,
+                                                                     .sh_bands_luma = 2, .sh_bands_chroma = 1},
+                                        &sys),
+                     GLOW_OK);
+    assert_int_equal(glow_system_set_params(sys, &(glow_system_params){.bounce_intensity = 1.0f, .emission_scale = 1.0f,
+                                                                        .bounce_iterations = 64}),
+                     GLOW_OK);
+    assert_int_equal(glow_system_update(sys, NULL), GLOW_OK);
+    const glow_cache_outputs *o = glow_system_outputs(sys);
+    assert_int_equal(o->coeff_count, 4u + 2u);
+    double mean = 0.0;
+    for (uint32_t c = 0; c < o->grid_cache_count; ++c) mean += o->cache_sh[(size_t)c * o->coeff_count] * 0.28209479177387814;
+    mean /= o->grid_cache_count;
+    assert_true(fabs(mean / 2.0 - 1.0) < 0.02); /* albedo 0.5, L_e 1 */
+    glow_system_destroy(sys);
+    char path[256];
+    snprintf(path, sizeof path, "/tmp/glow_furnace_nosh_%d.glow", (int)getpid());
+    glow_pc_settings s = {.quality = GLOW_PC_QUALITY_LOW, .surfels = 1024, .links = 32, .bands = 3, .threads = 2, .seed = 1};
+    assert_int_equal(glow_pc_bake("builtin:furnace", path, &s, NULL), GLOW_OK);
+    glow_bake *b;
+    assert_int_equal(glow_bake_load_file(f->ctx, path, &b), GLOW_OK);
+    sys = (glow_system *)1;
+    assert_int_equal(glow_system_create(f->ctx, &(glow_system_desc){.bake = b, .link_mode = GLOW_LINK_MODE_SH}, &sys),
+                     GLOW_ERROR_UNSUPPORTED);
+    assert_null(sys);
+    glow_bake_destroy(b);
+    remove(path);
+}
 
 int main(void) {
     const struct CMUnitTest tests[] = {cmocka_unit_test(test_furnace_half), cmocka_unit_test(test_furnace_090),
-                                       cmocka_unit_test(test_furnace_090_expanded)};
+                                       cmocka_unit_test(test_furnace_090_expanded), cmocka_unit_test(test_furnace_050_sh),
+                                       cmocka_unit_test(test_sh_mode_errors)};
     return cmocka_run_group_tests(tests, setup, teardown);
 }

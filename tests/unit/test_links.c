@@ -50,7 +50,9 @@ static void test_sh_orthonormal(void **state) {
 static void test_cone_factors_quadrature(void **state) {
     (void)state;
     const double xs[] = {0.99, 0.9, 0.5, 0.0, -0.3, -0.9};
-    for (uint32_t l = 0; l <= 8; ++l) {
+    /* l + 1 <= GLOW_MAX_SH_BANDS: the SH basis has 8 bands (l = 0..7); asking for 9 leaves y unset (an
+     * earlier l <= 8 here read uninitialised memory and failed at random) */
+    for (uint32_t l = 0; l < GLOW_MAX_SH_BANDS; ++l) {
         for (size_t k = 0; k < sizeof xs / sizeof xs[0]; ++k) {
             double x = xs[k];
             /* ∫_0^{2π} ∫_x^1 y_l0(t) dt dφ by midpoint rule on t */

@@ -35,10 +35,14 @@ typedef struct options {
     float probes[MAX_PROBES][3];
 } options;
 
+static const char *link_mode_name(uint32_t mode) {
+    return mode == GLOW_LINK_MODE_EXPANDED ? "expanded" : mode == GLOW_LINK_MODE_SH ? "sh" : "compact";
+}
+
 static void usage(FILE *f) {
     fprintf(f,
             "usage: glow-bench BAKE SCENE [--frames N] [--warmup N] [--threads N] [--luma L] [--chroma C]\n"
-            "                  [--iterations K] [--host exact|shadow-map] [--link-mode expanded|compact]\n"
+            "                  [--iterations K] [--host exact|shadow-map] [--link-mode compact|expanded|sh]\n"
             "                  [--probe X,Y,Z]... [--no-machine]\n"
             "                  [--json] [-q]\n"
             "  BAKE   a bake written by glow-bake;  SCENE  its scene description JSON (docs/scene-format.md)\n"
@@ -47,7 +51,8 @@ static void usage(FILE *f) {
             "  --luma/--chroma SH bands (default: the bake's; chroma = luma)\n"
             "  --iterations K  bounce iterations per update (default 1)\n"
             "  --host          surfel lighting: exact Embree rays (default) or software shadow maps\n"
-            "  --link-mode     links projected every update (compact, default) or expanded at create (more memory)\n"
+            "  --link-mode     links projected every update (compact, default), expanded at create (more memory),\n"
+            "                  or the bake's full-SH links (sh: needs glow-bake --sh-links)\n"
             "  --probe X,Y,Z   print the indirect light at this point (repeatable; default: 3 points)\n"
             "  --no-machine    skip the STREAM-triad and FMA-peak probes\n");
 }
@@ -86,11 +91,13 @@ static int parse_args(int argc, char **argv, options *o) {
             o->host = strcmp(v, "exact") ? GLOW_HOST_KIND_SHADOW_MAP : GLOW_HOST_KIND_EXACT;
             ++i;
         } else if (!strcmp(a, "--link-mode")) {
-            if (!v || (strcmp(v, "expanded") && strcmp(v, "compact"))) {
-                fprintf(stderr, "glow-bench: --link-mode must be expanded or compact\n");
+            if (!v || (strcmp(v, "expanded") && strcmp(v, "compact") && strcmp(v, "sh"))) {
+                fprintf(stderr, "glow-bench: --link-mode must be compact, expanded or sh\n");
                 return 0;
             }
-            o->link_mode = strcmp(v, "expanded") ? GLOW_LINK_MODE_COMPACT : GLOW_LINK_MODE_EXPANDED;
+            o->link_mode = !strcmp(v, "expanded") ? GLOW_LINK_MODE_EXPANDED
+                         : !strcmp(v, "sh")       ? GLOW_LINK_MODE_SH
+                                                  : GLOW_LINK_MODE_COMPACT;
             ++i;
         } else if (!strcmp(a, "--probe")) {
             float p[3];
@@ -285,7 +292,7 @@ int main(int argc, char **argv) {
         printf("{\"bake\": \"%s\", \"scene\": \"%s\", \"host\": \"%s\", \"threads\": %u, \"frames\": %u,\n", o.bake,
                o.scene, o.host == GLOW_HOST_KIND_EXACT ? "exact" : "shadow-map", threads, n);
         printf(" \"link_mode\": \"%s\", \"kernel\": \"%s\", \"system_memory_bytes\": %llu,\n",
-               st.link_mode == GLOW_LINK_MODE_COMPACT ? "compact" : "expanded", st.kernel ? st.kernel : "-",
+               link_mode_name(st.link_mode), st.kernel ? st.kernel : "-",
                (unsigned long long)st.memory_bytes);
         printf(" \"surfels\": %u, \"caches\": %u, \"links_per_cache\": %u, \"luma\": %u, \"chroma\": %u, \"iterations\": %u,\n",
                info.surfel_count, info.cache_count, info.links_per_cache, out->sh_bands_luma, out->sh_bands_chroma,
@@ -309,7 +316,7 @@ int main(int argc, char **argv) {
         printf("glow-bench %s + %s: %u surfels, %u caches x %u links, SH luma %u chroma %u, %u thread(s), %s host\n",
                o.bake, o.scene, info.surfel_count, info.cache_count, info.links_per_cache, out->sh_bands_luma,
                out->sh_bands_chroma, threads, o.host == GLOW_HOST_KIND_EXACT ? "exact" : "shadow-map");
-        printf("links %s, kernel %s, system memory %.1f MiB\n", st.link_mode == GLOW_LINK_MODE_COMPACT ? "compact" : "expanded",
+        printf("links %s, kernel %s, system memory %.1f MiB\n", link_mode_name(st.link_mode),
                st.kernel ? st.kernel : "-", (double)st.memory_bytes / (1024.0 * 1024.0));
         printf("median of %u updates (ms):\n", n);
         printf("  light move (host, outside update) %8.3f\n", m_move);

@@ -228,6 +228,15 @@ typedef enum glow_link_mode {
                                     bytes per link (22 at l = 3: +29 MB for 1.37 M links). Measured no
                                     faster on an AVX-512 Zen 4 (the node-radiance gathers bound both);
                                     for CPUs with slow FMA and fast gathers */
+    GLOW_LINK_MODE_SH,           /* the bake's full-SH links (glow-bake --sh-links, PIC Eq. 2): each link's
+                                    SH coefficients were projected at bake time from the visible leaf
+                                    surfels (one sample per leaf) instead of a cone, read in place (no
+                                    extra memory here; the bake is larger by 2 l² bytes per link). The
+                                    comparison point for runtime projection ("RTP vs SH links" in
+                                    docs/results.md). Needs sh_bands_luma <= the bake's bands (else
+                                    GLOW_ERROR_INVALID_ARGUMENT) and a bake with them (else
+                                    GLOW_ERROR_UNSUPPORTED). The non-divergence cap is still computed from
+                                    the cone links */
     GLOW_LINK_MODE_FORCE_U32 = 0x7FFFFFFF
 } glow_link_mode;
 
@@ -245,7 +254,8 @@ typedef struct glow_system_desc {
 /** Creates a solver for `desc->bake`: allocates every buffer, decodes nothing per frame.
  * Outputs start at zero (no light) until the first update.
  * \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT (NULL, band counts out of range, a bake without
- * runtime-projection links); GLOW_ERROR_OUT_OF_MEMORY. *out_system is NULL on failure.
+ * runtime-projection links, an unknown link_mode); GLOW_ERROR_UNSUPPORTED (GLOW_LINK_MODE_SH with a
+ * bake without full-SH links); GLOW_ERROR_OUT_OF_MEMORY. *out_system is NULL on failure.
  * \threadsafety Any thread; several systems may share one bake. \since 0.1 */
 GLOW_API glow_result glow_system_create(glow_context *context, const glow_system_desc *desc,
                                         glow_system **out_system);
