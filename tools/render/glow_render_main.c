@@ -1,0 +1,244 @@
+/* glow-render — the reference path tracer (Embree) and Glow's view of the same camera, over one scene
+ * description file. See docs/render.md and tools/render/lib/glow_render.h for the definitions.
+ *
+ *   glow-render SCENE.json --out PREFIX [options]              the reference
+ *   glow-render SCENE.json --glow BAKE --out PREFIX [options]  Glow's view (bake made from SCENE's mesh)
+ *
+ * Writes PREFIX.exr (final), PREFIX_direct.exr, PREFIX_indirect.exr (linear radiance, 32-bit float) and
+ * PREFIX.png (final, exposure + sRGB), all or nothing; prints a summary on stdout.
+ * Exit: 0 ok, 1 failure (input, bake, output), 2 usage. */
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "glow_render.h"
+
+static void usage(FILE *f) {
+    fprintf(f,
+            "usage: glow-render SCENE.json --out PREFIX [--spp N] [--seed S] [--threads N] [--width W --height H]\n"
+            "                   [--exposure E] [--max-depth D] [--albedo-scale A]\n"
+            "                   [--glow BAKE [--bounces K] [--sky-rays R] [--luma L] [--chroma C]\n"
+            "                   [--link-mode compact|expanded|sh]] [--progress | -q]\n"
+            "  SCENE.json       scene description (docs/scene-format.md): mesh, camera, lights, environment\n"
+            "  --out PREFIX     writes PREFIX.exr (final), PREFIX_direct.exr, PREFIX_indirect.exr, PREFIX.png\n"
+            "  --spp N          samples per pixel (default 64)\n"
+            "  --seed S         random seed (default 1); same seed and size: same image for any --threads\n"
+            "  --threads N      worker threads (default: one per online CPU)\n"
+            "  --width/--height image size (default: the scene camera's); give both\n"
+            "  --exposure E     PNG exposure multiplier before sRGB encoding (default 1)\n"
+            "  --max-depth D    path vertices at most (default 256; Russian roulette ends paths well before)\n"
+            "  --albedo-scale A multiplies every albedo, clamped to 0.999 (default 1; e.g. the furnace at 0.9: 1.8)\n"
+            "  --glow BAKE      render Glow's view: direct light as the reference computes it, indirect light\n"
+            "                   from BAKE's caches (lightmap on static surfaces, else the grid)\n"
+            "  --bounces K      Glow's feedback iterations in all, run as updates of up to 64 (default 192)\n"
+            "  --sky-rays R     the host's rays per surfel for sky visibility (default: glow_host's 128)\n"
+            "  --luma L         SH bands of Glow's luma (default: the bake's); --chroma C of its chroma (default L)\n"
+            "  --link-mode M    compact (runtime projection, default), expanded, or sh (the bake's full-SH links,\n"
+            "                   glow-bake --sh-links)\n"
+            "  --progress       progress bar on stderr even when it is not a terminal; -q: none, no summary\n");
+}
+
+static int parse_u64(const char *s, uint64_t max, uint64_t *out) {
+    if (!s || !*s || *s == '-' || *s == '+') return 0;
+    char *end;
+    errno = 0;
+    unsigned long long v = strtoull(s, &end, 10);
+    if (*end || errno || v > max) return 0;
+    *out = v;
+    return 1;
+}
+
+static int parse_float(const char *s, float *out) {
+    if (!s || !*s) return 0;
+    char *end;
+    errno = 0;
+    double v = strtod(s, &end);
+    if (*end || errno || !isfinite(v) || fabs(v) > 3.0e38) return 0;
+    *out = (float)v;
+    return 1;
+}
+
+typedef struct options {
+    const char *scene, *out, *bake;
+    glow_render_settings rs;
+    glow_render_glow_settings gs;
+    float exposure;
+    int quiet, progress;
+} options;
+
+typedef struct progress_state {
+    int last;
+} progress_state;
+
+static void progress_bar(void *user, double fraction) {
+    progress_state *p = user;
+    int pct = (int)(fraction * 100.0 + 1e-9);
+    if (pct == p->last) return;
+    p->last = pct;
+    char bar[41];
+    int fill = pct * 40 / 100;
+    for (int i = 0; i < 40; ++i) bar[i] = i < fill ? '#' : '.';
+    bar[40] = 0;
+    fprintf(stderr, "\rglow-render [%s] %3d%%", bar, pct);
+    if (pct >= 100) fputc('\n', stderr);
+    fflush(stderr);
+}
+
+static int parse_args(int argc, char **argv, options *o) {
+    memset(o, 0, sizeof *o);
+    o->exposure = 1.0f;
+    o->rs.seed = 1;
+    o->rs.spp = 64;
+    int have_w = 0, have_h = 0;
+    for (int i = 1; i < argc; ++i) {
+        const char *a = argv[i];
+        const char *v = i + 1 < argc ? argv[i + 1] : NULL;
+        uint64_t u;
+#define NEED_U(min, max, dst, what)                                                               \
+    do {                                                                                          \
+        if (!parse_u64(v, max, &u) || u < (min)) {                                                \
+            fprintf(stderr, "glow-render: %s needs %s, not \"%s\"\n", a, what, v ? v : "nothing"); \
+            return 0;                                                                             \
+        }                                                                                         \
+        dst = u;                                                                                  \
+        ++i;                                                                                      \
+    } while (0)
+        if (!strcmp(a, "--out")) {
+            if (!v || !*v) { fprintf(stderr, "glow-render: --out needs a PREFIX\n"); return 0; }
+            o->out = v;
+            ++i;
+        } else if (!strcmp(a, "--glow")) {
+            if (!v || !*v) { fprintf(stderr, "glow-render: --glow needs a BAKE file\n"); return 0; }
+            o->bake = v;
+            ++i;
+        } else if (!strcmp(a, "--spp")) NEED_U(1, 1u << 20, o->rs.spp, "a number of samples in 1..1048576");
+        else if (!strcmp(a, "--seed")) {
+            if (!parse_u64(v, UINT64_MAX, &o->rs.seed)) {
+                fprintf(stderr, "glow-render: --seed needs a whole number >= 0, not \"%s\"\n", v ? v : "nothing");
+                return 0;
+            }
+            ++i;
+        }
+        else if (!strcmp(a, "--threads")) NEED_U(1, 1024, o->rs.threads, "a number of threads in 1..1024");
+        else if (!strcmp(a, "--width")) { NEED_U(1, 16384, o->rs.width, "a width in 1..16384"); have_w = 1; }
+        else if (!strcmp(a, "--height")) { NEED_U(1, 16384, o->rs.height, "a height in 1..16384"); have_h = 1; }
+        else if (!strcmp(a, "--max-depth")) NEED_U(1, 1u << 16, o->rs.max_depth, "a depth in 1..65536");
+        else if (!strcmp(a, "--bounces")) NEED_U(1, 100000, o->gs.bounce_iterations, "a number of iterations in 1..100000");
+        else if (!strcmp(a, "--sky-rays")) NEED_U(1, 65536, o->gs.sky_rays, "a number of rays in 1..65536");
+        else if (!strcmp(a, "--luma")) NEED_U(1, GLOW_MAX_SH_BANDS, o->gs.sh_bands_luma, "a band count in 1..8");
+        else if (!strcmp(a, "--chroma")) NEED_U(1, GLOW_MAX_SH_BANDS, o->gs.sh_bands_chroma, "a band count in 1..8");
+        else if (!strcmp(a, "--link-mode")) {
+            if (!v || (strcmp(v, "compact") && strcmp(v, "expanded") && strcmp(v, "sh"))) {
+                fprintf(stderr, "glow-render: --link-mode must be compact, expanded or sh, not \"%s\"\n", v ? v : "nothing");
+                return 0;
+            }
+            o->gs.link_mode = !strcmp(v, "sh") ? GLOW_LINK_MODE_SH : !strcmp(v, "expanded") ? GLOW_LINK_MODE_EXPANDED
+                                                                                           : GLOW_LINK_MODE_COMPACT;
+            ++i;
+        }
+        else if (!strcmp(a, "--exposure")) {
+            if (!parse_float(v, &o->exposure) || o->exposure < 0.0f) {
+                fprintf(stderr, "glow-render: --exposure needs a finite number >= 0, not \"%s\"\n", v ? v : "nothing");
+                return 0;
+            }
+            ++i;
+        } else if (!strcmp(a, "--albedo-scale")) {
+            if (!parse_float(v, &o->rs.albedo_scale) || !(o->rs.albedo_scale > 0.0f)) {
+                fprintf(stderr, "glow-render: --albedo-scale needs a finite number > 0, not \"%s\"\n", v ? v : "nothing");
+                return 0;
+            }
+            ++i;
+        } else if (!strcmp(a, "-q") || !strcmp(a, "--quiet")) o->quiet = 1;
+        else if (!strcmp(a, "--progress")) o->progress = 1;
+        else if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
+            usage(stdout);
+            exit(0);
+        } else if (a[0] == '-' && a[1]) {
+            fprintf(stderr, "glow-render: unknown option %s\n", a);
+            return 0;
+        } else if (!o->scene) o->scene = a;
+        else {
+            fprintf(stderr, "glow-render: unexpected argument %s (one SCENE.json only)\n", a);
+            return 0;
+        }
+#undef NEED_U
+    }
+    if (!o->scene) { fprintf(stderr, "glow-render: need a SCENE.json\n"); return 0; }
+    if (!o->out) { fprintf(stderr, "glow-render: need --out PREFIX\n"); return 0; }
+    if (have_w != have_h) { fprintf(stderr, "glow-render: give both --width and --height\n"); return 0; }
+    if (!o->bake && (o->gs.bounce_iterations || o->gs.sky_rays || o->gs.sh_bands_luma || o->gs.sh_bands_chroma ||
+                     o->gs.link_mode)) {
+        fprintf(stderr, "glow-render: --bounces, --sky-rays, --luma, --chroma and --link-mode go with --glow BAKE\n");
+        return 0;
+    }
+    return 1;
+}
+
+int main(int argc, char **argv) {
+    options o;
+    if (!parse_args(argc, argv, &o)) {
+        fprintf(stderr, "(glow-render --help for the options)\n");
+        return 2;
+    }
+    /* fail before rendering, not after, when the output folder is missing or read-only */
+    char dir[1024];
+    snprintf(dir, sizeof dir, "%s", o.out);
+    char *slash = strrchr(dir, '/');
+    if (slash) slash[slash == dir ? 1 : 0] = 0;
+    else snprintf(dir, sizeof dir, ".");
+    if (access(dir, W_OK | X_OK) != 0) {
+        fprintf(stderr, "glow-render: --out %s: the folder %s does not exist or is not writable\n", o.out, dir);
+        return 1;
+    }
+    char msg[2048];
+    glow_render_scene *scene = NULL;
+    glow_result r = glow_render_scene_load(o.scene, &scene, msg, sizeof msg);
+    if (r != GLOW_OK) {
+        fprintf(stderr, "glow-render: %s\n", msg);
+        return 1;
+    }
+    progress_state ps = {-1};
+    if (!o.quiet && (o.progress || isatty(STDERR_FILENO))) {
+        o.rs.progress = progress_bar;
+        o.rs.progress_user = &ps;
+    }
+    glow_render_result res;
+    if (o.bake) r = glow_render_glow(scene, o.bake, &o.rs, &o.gs, &res, msg, sizeof msg);
+    else r = glow_render_reference(scene, &o.rs, &res, msg, sizeof msg);
+    if (r != GLOW_OK) {
+        fprintf(stderr, "glow-render: %s\n", msg);
+        glow_render_scene_destroy(scene);
+        return 1;
+    }
+    r = glow_render_write(&res, o.out, o.exposure, msg, sizeof msg);
+    if (r != GLOW_OK) {
+        fprintf(stderr, "glow-render: %s\n", msg);
+        glow_render_result_free(&res);
+        glow_render_scene_destroy(scene);
+        return 1;
+    }
+    if (!o.quiet) {
+        glow_render_scene_info info;
+        glow_render_scene_get_info(scene, &info);
+        printf("glow-render %s: %s (%u triangles, %u emissive, %u lights)%s%s\n", o.scene, info.mesh, info.triangle_count,
+               info.emissive_triangle_count, info.light_count, o.bake ? ", Glow's view of " : ", reference",
+               o.bake ? o.bake : "");
+        if (o.bake)
+            printf("  glow: solve %.2f s (%u bounce iterations); first hits from the lightmap %llu, grid %llu, none %llu\n",
+                   res.solve_seconds, o.gs.bounce_iterations ? o.gs.bounce_iterations : 192u,
+                   (unsigned long long)res.lightmap_lookups, (unsigned long long)res.grid_lookups,
+                   (unsigned long long)res.missed_lookups);
+        printf("  %u x %u, %u spp, seed %llu, %u threads: %.2f s, %.1f M rays, %.2f Mrays/s\n", res.width, res.height,
+               res.spp, (unsigned long long)o.rs.seed, res.threads, res.seconds, (double)res.rays * 1e-6, res.mrays_per_s);
+        printf("  mean radiance W/(m^2 sr) (R G B): final %.5g %.5g %.5g | direct %.5g %.5g %.5g | indirect %.5g %.5g %.5g\n",
+               res.mean_final[0], res.mean_final[1], res.mean_final[2], res.mean_direct[0], res.mean_direct[1],
+               res.mean_direct[2], res.mean_indirect[0], res.mean_indirect[1], res.mean_indirect[2]);
+        printf("  wrote %s.exr %s_direct.exr %s_indirect.exr %s.png\n", o.out, o.out, o.out, o.out);
+    }
+    glow_render_result_free(&res);
+    glow_render_scene_destroy(scene);
+    return 0;
+}

@@ -1,0 +1,137 @@
+/*
+ * glow_render.h — glow-render as a library: the reference path tracer (Embree) and Glow's view of the
+ * same camera, over one scene description file (docs/scene-format.md). Tool code (tools/render/,
+ * target glow_render), not part of the runtime. Full documentation: docs/render.md.
+ *
+ * THE LIGHT MODEL is the runtime's and the host's (glow_host.h "THE CONTRACT", docs/scene-format.md):
+ *   - materials are Lambertian: albedo ρ = material albedo × albedo texture (glow__texture_sample at
+ *     the interpolated uv0, finest mip level), times settings.albedo_scale, clamped to [0, 0.999] (the
+ *     runtime's clamp); emission L_e = material emission × the scene's emission_scale, W/(m²·sr),
+ *     emitted by the FRONT face only (counter-clockwise winding, geometric normal (p1-p0)×(p2-p0));
+ *   - point: E = I·max(0, n·l)/d²; spot: × smoothstep falloff of the cone; sun: E = irradiance ·
+ *     max(0, -n·direction) — delta lights, reached by next-event estimation only (exact shadow rays);
+ *   - environment: constant radiance for every ray that leaves the scene, in any direction.
+ * SURFACES reflect on BOTH sides in the reference (the normal is flipped to face the arriving ray);
+ * Glow's surfels live on front faces only, so the two differ where back faces receive light (not in
+ * closed rooms). Emission is front-face only in both. Lighting cosines use the interpolated shading
+ * normal (the normal Glow's surfels carry); a direction below the geometric surface carries nothing.
+ *
+ * THE IMAGES (radiance W/(m²·sr), linear RGB, top row first):
+ *   direct   = what the camera ray sees directly (front-face emission × emission_scale, or the
+ *              environment when it leaves the scene) + the first hit's reflection of the host-style
+ *              lights: point/spot/sun by next-event estimation with an exact shadow ray, and the
+ *              environment reached by the first bounce (a cosine-sampled ray that escapes). These are
+ *              exactly the terms Glow's host computes per surfel (the lighting hook's E).
+ *   indirect = everything else: light after two or more bounces from lights and environment, and
+ *              emissive surfaces' light reflected at the first hit or later. Glow transports emitters
+ *              through its surfels and caches (PIC), so their light at the first hit is Glow's
+ *              "indirect" too.
+ *   final    = direct + indirect (per pixel, in float).
+ * Glow's view (glow_render_glow): the same camera rays, random numbers and direct term (same seed and
+ * size: a bit-identical direct image); indirect = ρ · glow_shade_sh(SH, n, 1) at the first hit, the SH
+ * from the lightmap (bilinear at the hit's lightmap UV, when a texel with a cache is among the four;
+ * front-face hits only) else from the grid (trilinear at the hit position), clamped at 0 per channel.
+ * The difference between the two final images is Glow's error alone.
+ *
+ * PATH TRACING (reference): cosine-weighted sampling of the Lambertian lobe; next-event estimation of
+ * every delta light at every vertex; emissive triangles sampled by area × luminance (a CDF) and
+ * combined with BSDF-sampled emitter hits by multiple importance sampling (power heuristic);
+ * Russian roulette from the third vertex on (survival min(0.95, max channel of throughput × ρ)); no
+ * depth limit except settings.max_depth (default 256 vertices: the bias left is below ρ^256).
+ * Deterministic per seed for any thread count: each pixel has its own PCG32 streams seeded from
+ * hash(seed, pixel); rows are shared among threads, each pixel is computed by one thread.
+ *
+ * ON ERRORS: functions return a glow_result and write one line naming the file and the problem into
+ * `message` (may be NULL). Nothing is printed.
+ * ON THREADS: a glow_render_scene is read-only after load; renders of it may run concurrently.
+ */
+#ifndef GLOW_RENDER_H
+#define GLOW_RENDER_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "glow/glow.h"
+#include "glow/glow_scene.h"
+#include "glow_eval.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct glow_render_scene glow_render_scene;
+
+/* Loads the scene description `scene_json`, the mesh it names (glow-bake's importer: the same
+ * triangles, materials and textures) and builds the Embree scene. */
+glow_result glow_render_scene_load(const char *scene_json, glow_render_scene **out_scene, char *message,
+                                   size_t message_size);
+void glow_render_scene_destroy(glow_render_scene *scene);
+
+typedef struct glow_render_scene_info {
+    uint32_t triangle_count, material_count, texture_count;
+    uint32_t emissive_triangle_count; /* with emission > 0 (before emission_scale) */
+    uint32_t light_count;
+    float environment[3], emission_scale;
+    glow_scene_camera camera;          /* resolved (glow_scene_camera_default when the file had none) */
+    float bounds_min[3], bounds_max[3];
+    const char *mesh;                  /* as the scene file resolved it */
+} glow_render_scene_info;
+glow_result glow_render_scene_get_info(const glow_render_scene *scene, glow_render_scene_info *out_info);
+
+typedef void (*glow_render_progress_fn)(void *user, double fraction);
+
+typedef struct glow_render_settings {
+    uint32_t width, height;   /* 0 = the scene camera's */
+    uint32_t spp;             /* samples per pixel; 0 = 64 */
+    uint64_t seed;            /* same seed, same size: same image, bit for bit, any thread count */
+    uint32_t threads;         /* 0 = one per online CPU */
+    uint32_t max_depth;       /* path vertices; 0 = 256 (reference only) */
+    float albedo_scale;       /* multiplies every albedo (clamped to 0.999); 0 = 1 */
+    glow_render_progress_fn progress; /* optional: called with the fraction of rows done (serialised) */
+    void *progress_user;
+} glow_render_settings;
+
+typedef struct glow_render_glow_settings {
+    uint32_t bounce_iterations; /* runtime feedback iterations in all (updates of up to 64); 0 = 192 */
+    uint32_t sky_rays;          /* the host's rays per surfel for the sky visibility; 0 = its default */
+    uint32_t sh_bands_luma;     /* glow_system_desc's: 0 = the bake's bands */
+    uint32_t sh_bands_chroma;   /* 0 = luma */
+    glow_link_mode link_mode;   /* 0 = compact (runtime projection) */
+} glow_render_glow_settings;
+
+typedef struct glow_render_result {
+    glow_eval_image final, direct, indirect;
+    uint32_t width, height, spp, threads;
+    double seconds;           /* the rendering itself (glow: not the solve) */
+    uint64_t rays;            /* Embree queries: camera, bounce and shadow rays */
+    double mrays_per_s;
+    double mean_final[3], mean_direct[3], mean_indirect[3];
+    /* glow view only */
+    double solve_seconds;     /* bake load, host, system, updates */
+    uint64_t lightmap_lookups, grid_lookups, missed_lookups; /* first hits (per sample) */
+} glow_render_result;
+
+/* The reference path tracer. `out` is zeroed first and owns its images (glow_render_result_free). */
+glow_result glow_render_reference(const glow_render_scene *scene, const glow_render_settings *settings,
+                                  glow_render_result *out, char *message, size_t message_size);
+
+/* Glow's view: loads `bake_path` (which must have been baked from the scene's mesh: the triangle
+ * count and every position are checked), lights it with glow_host (exact kind) and the scene's
+ * lights, environment and emission_scale, runs glow->bounce_iterations feedback iterations, then
+ * renders. `glow` may be NULL (defaults). */
+glow_result glow_render_glow(const glow_render_scene *scene, const char *bake_path, const glow_render_settings *settings,
+                             const glow_render_glow_settings *glow, glow_render_result *out, char *message,
+                             size_t message_size);
+
+void glow_render_result_free(glow_render_result *result);
+
+/* Writes PREFIX.exr (final), PREFIX_direct.exr, PREFIX_indirect.exr and PREFIX.png (final, display
+ * transform of glow_eval_write_png at `exposure`). All or nothing: every file is written under a
+ * temporary name first and renamed only when all were written. */
+glow_result glow_render_write(const glow_render_result *result, const char *prefix, float exposure, char *message,
+                              size_t message_size);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* GLOW_RENDER_H */

@@ -1,0 +1,736 @@
+/* render_trace.c — the reference path tracer and Glow's view of the same camera (glow_render.h has
+ * the definitions: direct / indirect split, light model, sampling, determinism; docs/render.md).
+ *
+ * One function renders both: sample() computes the camera ray, the first hit and the direct term
+ * (the same code and the same random numbers in both modes), then either continues the path
+ * (reference) or reads Glow's caches at the first hit (glow view). Random numbers: per pixel, two
+ * PCG32 streams seeded from hash(seed, pixel): stream 0 ("direct": pixel jitter, the first bounce
+ * direction) and stream 1 ("path": everything after), so the direct image does not depend on the
+ * mode and no pixel depends on the thread that renders it. */
+#include <math.h>
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "glow/glow_host.h"
+#include "render_internal.h"
+
+#define PI_F 3.14159265358979323846f
+#define INV_PI_F 0.31830988618379067154f
+#define DEFAULT_SPP 64u
+#define DEFAULT_MAX_DEPTH 256u
+#define DEFAULT_BOUNCES 192u
+#define RR_START 3u /* Russian roulette from this path vertex on (1 = the camera's hit) */
+
+/* ------------------------------------------------------------------------------------- random */
+typedef struct rng {
+    uint64_t state, inc;
+} rng;
+
+static inline uint32_t pcg32(rng *r) {
+    uint64_t old = r->state;
+    r->state = old * 6364136223846793005ull + r->inc;
+    uint32_t xs = (uint32_t)(((old >> 18u) ^ old) >> 27u);
+    uint32_t rot = (uint32_t)(old >> 59u);
+    return (xs >> rot) | (xs << ((32u - rot) & 31u));
+}
+static inline float rnd(rng *r) { return (float)(pcg32(r) >> 8) * 0x1p-24f; } /* [0, 1) */
+
+static uint64_t splitmix64(uint64_t *x) {
+    uint64_t z = (*x += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+static void rng_init(rng *r, uint64_t seed, uint64_t pixel, uint32_t stream) {
+    uint64_t x = seed;
+    x = splitmix64(&x) ^ (2u * pixel + stream);
+    r->state = splitmix64(&x);
+    r->inc = (splitmix64(&x) << 1) | 1u;
+    (void)pcg32(r);
+}
+
+/* ------------------------------------------------------------------------------------- vectors */
+static inline void v_madd(float o[3], const float a[3], float s, const float b[3]) {
+    for (int k = 0; k < 3; ++k) o[k] = a[k] + s * b[k];
+}
+static inline float v_norm(float v[3]) {
+    float l = sqrtf(glow__dot(v, v));
+    if (l > 0.0f)
+        for (int k = 0; k < 3; ++k) v[k] /= l;
+    return l;
+}
+/* Orthonormal basis around unit n (Duff et al. 2017). */
+static void onb(const float n[3], float t[3], float b[3]) {
+    float sign = copysignf(1.0f, n[2]);
+    float a = -1.0f / (sign + n[2]);
+    float c = n[0] * n[1] * a;
+    t[0] = 1.0f + sign * n[0] * n[0] * a; t[1] = sign * c; t[2] = -sign * n[0];
+    b[0] = c; b[1] = sign + n[1] * n[1] * a; b[2] = -n[1];
+}
+/* Cosine-weighted direction around unit n; returns cos θ (pdf = cos θ / π). */
+static float sample_cosine(const float n[3], float r1, float r2, float out[3]) {
+    float t[3], b[3];
+    onb(n, t, b);
+    float phi = 2.0f * PI_F * r1, sr = sqrtf(r2), z = sqrtf(fmaxf(0.0f, 1.0f - r2));
+    float x = sr * cosf(phi), y = sr * sinf(phi);
+    for (int k = 0; k < 3; ++k) out[k] = x * t[k] + y * b[k] + z * n[k];
+    v_norm(out);
+    return z;
+}
+
+/* ------------------------------------------------------------------------------------- setup */
+typedef struct render_light {
+    glow_scene_light l;
+    float cos_outer, cos_inner;
+} render_light;
+
+typedef struct glow_view {
+    glow_context *ctx;
+    glow_bake *bake;
+    glow_host *host;
+    glow_system *sys;
+    const glow_cache_outputs *out;
+    float (*lm_uv)[6]; /* [tri] the bake's lightmap UV per corner, or NULL without a lightmap */
+} glow_view;
+
+typedef struct worker_stats {
+    uint64_t rays, lm, grid, missed;
+} worker_stats;
+
+typedef struct render_ctx {
+    const glow_render_scene *sc;
+    uint32_t w, h, spp, max_depth, threads;
+    uint64_t seed;
+    float albedo_scale, emission_scale;
+    bool emitters_on, env_on;
+    float env[3];
+    render_light *lights;
+    uint32_t light_count;
+    /* camera */
+    float org[3], fwd[3], right[3], up[3], tan_y, tan_x;
+    /* glow view (NULL = reference) */
+    const glow_view *gv;
+    /* accumulators: per pixel RGB */
+    float *direct, *indirect;
+    /* scheduling */
+    atomic_uint next_row, rows_done;
+    pthread_mutex_t progress_lock;
+    glow_render_progress_fn progress;
+    void *progress_user;
+    worker_stats *ws;
+} render_ctx;
+
+typedef struct surf {
+    float p[3];     /* hit point */
+    float o[3];     /* ray origin for rays leaving it: p + eps ng */
+    float ng[3];    /* unit geometric normal, facing the arriving ray */
+    float ns[3];    /* unit shading normal, facing the arriving ray (ng when it disagrees) */
+    float rho[3];   /* albedo (texture, scale, clamp) */
+    uint32_t tri;
+    float b1, b2;   /* barycentrics of corners 1, 2 */
+    bool back;      /* the ray arrived at the back face */
+} surf;
+
+static void make_surf(const render_ctx *c, const glow__hit *h, surf *s) {
+    const glow__scene *m = &c->sc->mesh;
+    const uint32_t t = h->tri;
+    const float(*p)[3] = m->pos + 3 * (size_t)t;
+    const float b1 = h->u, b2 = h->v, b0 = 1.0f - b1 - b2;
+    for (int k = 0; k < 3; ++k) s->p[k] = p[0][k] + b1 * (p[1][k] - p[0][k]) + b2 * (p[2][k] - p[0][k]);
+    const float(*n)[3] = m->nrm + 3 * (size_t)t;
+    float ns[3];
+    for (int k = 0; k < 3; ++k) ns[k] = b0 * n[0][k] + b1 * n[1][k] + b2 * n[2][k];
+    const float *ng = c->sc->ng[t];
+    const float sign = h->back_face ? -1.0f : 1.0f;
+    for (int k = 0; k < 3; ++k) {
+        s->ng[k] = sign * ng[k];
+        ns[k] *= sign;
+    }
+    if (!(v_norm(ns) > 0.0f) || glow__dot(ns, s->ng) <= 0.0f) memcpy(ns, s->ng, sizeof ns);
+    memcpy(s->ns, ns, sizeof ns);
+    v_madd(s->o, s->p, c->sc->eps, s->ng);
+    s->tri = t;
+    s->b1 = b1;
+    s->b2 = b2;
+    s->back = h->back_face;
+    const glow__material *mat = &m->materials[m->tri_material[t]];
+    float tex[3] = {1.0f, 1.0f, 1.0f};
+    if (mat->texture >= 0 && (uint32_t)mat->texture < m->texture_count && m->uv0) {
+        const float(*uv)[2] = m->uv0 + 3 * (size_t)t;
+        float u = b0 * uv[0][0] + b1 * uv[1][0] + b2 * uv[2][0];
+        float v = b0 * uv[0][1] + b1 * uv[1][1] + b2 * uv[2][1];
+        glow__texture_sample(&m->textures[mat->texture], u, v, 0.0f, tex);
+    }
+    for (int k = 0; k < 3; ++k) s->rho[k] = fminf(fmaxf(mat->albedo[k] * tex[k] * c->albedo_scale, 0.0f), 0.999f);
+}
+
+/* Emitted radiance of triangle t towards a ray that hit it (front face only). */
+static bool emission_of(const render_ctx *c, uint32_t t, bool back, float le[3]) {
+    if (back || !(c->emission_scale > 0.0f)) return false;
+    const glow__scene *m = &c->sc->mesh;
+    const float *e = m->materials[m->tri_material[t]].emission;
+    if (!(e[0] > 0.0f || e[1] > 0.0f || e[2] > 0.0f)) return false;
+    for (int k = 0; k < 3; ++k) le[k] = e[k] * c->emission_scale;
+    return true;
+}
+
+/* The host's lights at s (glow_host.h, THE CONTRACT), exact shadow rays: irradiance E, W/m². */
+static void delta_irradiance(const render_ctx *c, const surf *s, float E[3], uint64_t *rays) {
+    E[0] = E[1] = E[2] = 0.0f;
+    for (uint32_t i = 0; i < c->light_count; ++i) {
+        const render_light *hl = &c->lights[i];
+        const glow_scene_light *L = &hl->l;
+        const float *pw = L->type == GLOW_SCENE_LIGHT_SUN ? L->irradiance : L->intensity;
+        if (pw[0] == 0.0f && pw[1] == 0.0f && pw[2] == 0.0f) continue;
+        float l[3], f;
+        if (L->type == GLOW_SCENE_LIGHT_SUN) {
+            for (int k = 0; k < 3; ++k) l[k] = -L->direction[k];
+            f = fmaxf(glow__dot(s->ns, l), 0.0f);
+            if (!(f > 0.0f) || glow__dot(s->ng, l) <= 0.0f) continue;
+            ++*rays;
+            if (glow__rt_occluded(c->sc->rt, s->o, l, 0.0f, INFINITY)) continue;
+        } else {
+            float d[3];
+            glow__sub(L->position, s->p, d);
+            float d2 = glow__dot(d, d);
+            if (!(d2 > 1e-20f)) continue;
+            float dl = sqrtf(d2);
+            for (int k = 0; k < 3; ++k) l[k] = d[k] / dl;
+            float cs = glow__dot(s->ns, l);
+            if (!(cs > 0.0f) || glow__dot(s->ng, l) <= 0.0f) continue;
+            f = cs / d2;
+            if (L->type == GLOW_SCENE_LIGHT_SPOT) {
+                float cos_theta = -glow__dot(l, L->direction), t;
+                if (hl->cos_inner > hl->cos_outer) {
+                    t = (cos_theta - hl->cos_outer) / (hl->cos_inner - hl->cos_outer);
+                    t = fminf(fmaxf(t, 0.0f), 1.0f);
+                } else {
+                    t = cos_theta >= hl->cos_outer ? 1.0f : 0.0f;
+                }
+                f *= t * t * (3.0f - 2.0f * t);
+                if (!(f > 0.0f)) continue;
+            }
+            float v[3];
+            glow__sub(L->position, s->o, v);
+            float vl = sqrtf(glow__dot(v, v)), tfar = vl - c->sc->eps;
+            if (tfar > 0.0f) {
+                for (int k = 0; k < 3; ++k) v[k] /= vl;
+                ++*rays;
+                if (glow__rt_occluded(c->sc->rt, s->o, v, 0.0f, tfar)) continue;
+            }
+        }
+        for (int k = 0; k < 3; ++k) E[k] += f * pw[k];
+    }
+}
+
+static inline float mis2(float a, float b) { /* power heuristic, weight of a */
+    float a2 = a * a, b2 = b * b;
+    return a2 + b2 > 0.0f ? a2 / (a2 + b2) : 0.0f;
+}
+
+/* Next-event estimation of the emissive triangles at s: reflected radiance (before the path's
+ * throughput), MIS-weighted against BSDF sampling. Always draws 3 numbers. */
+static void emitter_nee(const render_ctx *c, rng *rp, const surf *s, float out[3], uint64_t *rays) {
+    out[0] = out[1] = out[2] = 0.0f;
+    const glow_render_scene *sc = c->sc;
+    float u = rnd(rp), r1 = rnd(rp), r2 = rnd(rp);
+    if (!c->emitters_on) return;
+    uint32_t lo = 0, hi = sc->emitter_count - 1; /* first i with cdf[i] > u */
+    while (lo < hi) {
+        uint32_t mid = (lo + hi) / 2;
+        if (sc->emitter_cdf[mid] > (double)u) hi = mid;
+        else lo = mid + 1;
+    }
+    const uint32_t t = sc->emitter_tri[lo];
+    const float(*p)[3] = sc->mesh.pos + 3 * (size_t)t;
+    float su = sqrtf(r1), b1 = su * (1.0f - r2), b2 = su * r2;
+    float q[3], d[3];
+    for (int k = 0; k < 3; ++k) q[k] = p[0][k] + b1 * (p[1][k] - p[0][k]) + b2 * (p[2][k] - p[0][k]);
+    glow__sub(q, s->p, d);
+    float d2 = glow__dot(d, d);
+    if (!(d2 > 1e-20f)) return;
+    float dl = sqrtf(d2), w[3] = {d[0] / dl, d[1] / dl, d[2] / dl};
+    float cos_s = glow__dot(s->ns, w);
+    if (!(cos_s > 0.0f) || glow__dot(s->ng, w) <= 0.0f) return;
+    float cos_l = -glow__dot(sc->ng[t], w);
+    if (!(cos_l > 0.0f)) return;
+    float le[3];
+    if (!emission_of(c, t, false, le)) return;
+    float v[3];
+    glow__sub(q, s->o, v);
+    float vl = sqrtf(glow__dot(v, v)), tfar = vl - sc->eps;
+    if (tfar > 0.0f) {
+        for (int k = 0; k < 3; ++k) v[k] /= vl;
+        ++*rays;
+        if (glow__rt_occluded(sc->rt, s->o, v, 0.0f, tfar)) return;
+    }
+    float pl = sc->light_pdf_area[t] * d2 / cos_l, pb = cos_s * INV_PI_F;
+    if (!(pl > 0.0f) || !isfinite(pl)) return;
+    float g = mis2(pl, pb) * cos_s * INV_PI_F / pl;
+    for (int k = 0; k < 3; ++k) out[k] = s->rho[k] * le[k] * g;
+}
+
+/* Glow's indirect light at the first hit: ρ · (cosine-lobe mean incident radiance of the caches). */
+static void glow_indirect(const render_ctx *c, const surf *s, float *coeffs, worker_stats *ws, float out[3]) {
+    out[0] = out[1] = out[2] = 0.0f;
+    const glow_cache_outputs *o = c->gv->out;
+    bool ok = false;
+    if (!s->back && c->gv->lm_uv) {
+        const float *uv = c->gv->lm_uv[s->tri];
+        float b0 = 1.0f - s->b1 - s->b2;
+        float u = b0 * uv[0] + s->b1 * uv[2] + s->b2 * uv[4];
+        float v = b0 * uv[1] + s->b1 * uv[3] + s->b2 * uv[5];
+        ok = glow_sample_lightmap(o, u, v, coeffs) == GLOW_OK;
+        if (ok) ws->lm++;
+    }
+    if (!ok && o->grid_sh) {
+        ok = glow_sample_grid(o, s->p, coeffs) == GLOW_OK;
+        if (ok) ws->grid++;
+    }
+    if (!ok) {
+        ws->missed++;
+        return;
+    }
+    float e[3];
+    glow_shade_sh(coeffs, o->sh_bands_luma, o->sh_bands_chroma, s->ns, 1.0f, e);
+    for (int k = 0; k < 3; ++k) out[k] = s->rho[k] * fmaxf(e[k], 0.0f);
+}
+
+/* One sample of pixel (x, y): adds to direct[3] and indirect[3]. */
+static void sample(const render_ctx *c, uint32_t x, uint32_t y, rng *rd, rng *rp, float *coeffs, worker_stats *ws,
+                   float direct[3], float indirect[3]) {
+    const glow_render_scene *sc = c->sc;
+    /* ---- camera ray (stream rd) */
+    float jx = rnd(rd), jy = rnd(rd);
+    float sx = (2.0f * ((float)x + jx) / (float)c->w - 1.0f) * c->tan_x;
+    float sy = (1.0f - 2.0f * ((float)y + jy) / (float)c->h) * c->tan_y;
+    float dir[3];
+    for (int k = 0; k < 3; ++k) dir[k] = c->fwd[k] + sx * c->right[k] + sy * c->up[k];
+    v_norm(dir);
+    ws->rays++;
+    glow__hit h = glow__rt_intersect(sc->rt, c->org, dir, 0.0f, INFINITY);
+    if (h.tri == UINT32_MAX) {
+        for (int k = 0; k < 3; ++k) direct[k] += c->env[k];
+        return;
+    }
+    surf s;
+    make_surf(c, &h, &s);
+    float le[3];
+    if (emission_of(c, s.tri, s.back, le))
+        for (int k = 0; k < 3; ++k) direct[k] += le[k];
+    /* ---- the host's lights at the first hit */
+    float E[3];
+    delta_irradiance(c, &s, E, &ws->rays);
+    for (int k = 0; k < 3; ++k) direct[k] += s.rho[k] * INV_PI_F * E[k];
+    /* ---- the first bounce (stream rd): the environment it reaches is direct */
+    float w1[3];
+    float r1 = rnd(rd), r2 = rnd(rd);
+    float cos1 = sample_cosine(s.ns, r1, r2, w1);
+    bool valid = cos1 > 0.0f && glow__dot(w1, s.ng) > 0.0f;
+    glow__hit h1 = {.t = INFINITY, .tri = UINT32_MAX};
+    if (valid) {
+        ws->rays++;
+        h1 = glow__rt_intersect(sc->rt, s.o, w1, 0.0f, INFINITY);
+        if (h1.tri == UINT32_MAX && c->env_on)
+            for (int k = 0; k < 3; ++k) direct[k] += s.rho[k] * c->env[k];
+    }
+    /* ---- Glow's view: the caches at the first hit */
+    if (c->gv) {
+        float g[3];
+        glow_indirect(c, &s, coeffs, ws, g);
+        for (int k = 0; k < 3; ++k) indirect[k] += g[k];
+        return;
+    }
+    /* ---- reference: the rest of the path (stream rp) */
+    float nee[3];
+    emitter_nee(c, rp, &s, nee, &ws->rays);
+    for (int k = 0; k < 3; ++k) indirect[k] += nee[k];
+    if (!valid || h1.tri == UINT32_MAX) return;
+    float beta[3] = {s.rho[0], s.rho[1], s.rho[2]}; /* f cos / pdf = ρ for cosine sampling */
+    float pdf_prev = cos1 * INV_PI_F, prev_p[3], wdir[3];
+    memcpy(prev_p, s.p, sizeof prev_p);
+    memcpy(wdir, w1, sizeof wdir);
+    h = h1;
+    for (uint32_t depth = 2;; ++depth) {
+        make_surf(c, &h, &s);
+        if (emission_of(c, s.tri, s.back, le)) { /* BSDF-sampled emitter hit, MIS against NEE */
+            float d[3];
+            glow__sub(s.p, prev_p, d);
+            float cos_l = -glow__dot(sc->ng[s.tri], wdir);
+            float pl = cos_l > 0.0f ? sc->light_pdf_area[s.tri] * glow__dot(d, d) / cos_l : 0.0f;
+            float wgt = c->emitters_on && pl > 0.0f && isfinite(pl) ? mis2(pdf_prev, pl) : 1.0f;
+            for (int k = 0; k < 3; ++k) indirect[k] += beta[k] * le[k] * wgt;
+        }
+        if (depth >= c->max_depth) break;
+        delta_irradiance(c, &s, E, &ws->rays);
+        emitter_nee(c, rp, &s, nee, &ws->rays);
+        for (int k = 0; k < 3; ++k) indirect[k] += beta[k] * (s.rho[k] * INV_PI_F * E[k] + nee[k]);
+        float r = rnd(rp), a = rnd(rp), b = rnd(rp);
+        float nb[3] = {beta[0] * s.rho[0], beta[1] * s.rho[1], beta[2] * s.rho[2]};
+        if (depth >= RR_START) {
+            float q = fminf(0.95f, fmaxf(nb[0], fmaxf(nb[1], nb[2])));
+            if (!(r < q)) break;
+            for (int k = 0; k < 3; ++k) nb[k] /= q;
+        }
+        float cw = sample_cosine(s.ns, a, b, wdir);
+        if (!(cw > 0.0f) || glow__dot(wdir, s.ng) <= 0.0f) break;
+        memcpy(beta, nb, sizeof beta);
+        pdf_prev = cw * INV_PI_F;
+        memcpy(prev_p, s.p, sizeof prev_p);
+        ws->rays++;
+        h = glow__rt_intersect(sc->rt, s.o, wdir, 0.0f, INFINITY);
+        if (h.tri == UINT32_MAX) {
+            for (int k = 0; k < 3; ++k) indirect[k] += beta[k] * c->env[k];
+            break;
+        }
+    }
+}
+
+typedef struct worker_arg {
+    render_ctx *c;
+    uint32_t index;
+} worker_arg;
+
+static void *worker(void *p) {
+    worker_arg *a = p;
+    render_ctx *c = a->c;
+    worker_stats local = {0}, *ws = &local; /* counted here, stored once: no false sharing between workers */
+    float coeffs[GLOW_MAX_SH_BANDS * GLOW_MAX_SH_BANDS * 3];
+    for (;;) {
+        uint32_t y = atomic_fetch_add(&c->next_row, 1u);
+        if (y >= c->h) break;
+        for (uint32_t x = 0; x < c->w; ++x) {
+            const uint64_t pixel = (uint64_t)y * c->w + x;
+            rng rd, rp;
+            rng_init(&rd, c->seed, pixel, 0);
+            rng_init(&rp, c->seed, pixel, 1);
+            double sd[3] = {0, 0, 0}, si[3] = {0, 0, 0};
+            for (uint32_t n = 0; n < c->spp; ++n) {
+                float d[3] = {0, 0, 0}, ind[3] = {0, 0, 0};
+                sample(c, x, y, &rd, &rp, coeffs, ws, d, ind);
+                for (int k = 0; k < 3; ++k) {
+                    sd[k] += d[k];
+                    si[k] += ind[k];
+                }
+            }
+            for (int k = 0; k < 3; ++k) {
+                c->direct[3 * pixel + k] = (float)(sd[k] / c->spp);
+                c->indirect[3 * pixel + k] = (float)(si[k] / c->spp);
+            }
+        }
+        unsigned done = atomic_fetch_add(&c->rows_done, 1u) + 1u;
+        if (c->progress) {
+            pthread_mutex_lock(&c->progress_lock);
+            c->progress(c->progress_user, (double)done / c->h);
+            pthread_mutex_unlock(&c->progress_lock);
+        }
+    }
+    c->ws[a->index] = local;
+    return NULL;
+}
+
+static double now_s(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static void image_mean(const glow_eval_image *img, double out[3]) {
+    double s[3] = {0, 0, 0};
+    size_t n = (size_t)img->width * img->height;
+    for (size_t i = 0; i < n; ++i)
+        for (int k = 0; k < 3; ++k) s[k] += img->rgb[3 * i + k];
+    for (int k = 0; k < 3; ++k) out[k] = n ? s[k] / (double)n : 0.0;
+}
+
+static uint32_t resolve_threads(uint32_t t) {
+    if (t) return t;
+    long n = sysconf(_SC_NPROCESSORS_ONLN);
+    return n > 0 ? (uint32_t)n : 1u;
+}
+
+static glow_result check_settings(const glow_render_scene *sc, const glow_render_settings *s, char *message,
+                                  size_t message_size) {
+    if (!sc || !s) return glow__render_fail(message, message_size, GLOW_ERROR_INVALID_ARGUMENT, "glow_render: NULL argument");
+    if ((s->width == 0) != (s->height == 0))
+        return glow__render_fail(message, message_size, GLOW_ERROR_INVALID_ARGUMENT,
+                                 "glow_render: give both width and height, or neither (got %u x %u)", s->width, s->height);
+    if (s->width > 16384 || s->height > 16384)
+        return glow__render_fail(message, message_size, GLOW_ERROR_INVALID_ARGUMENT,
+                                 "glow_render: image size %u x %u is outside 1..16384", s->width, s->height);
+    if (s->spp > (1u << 20))
+        return glow__render_fail(message, message_size, GLOW_ERROR_INVALID_ARGUMENT, "glow_render: spp %u is above 1048576",
+                                 s->spp);
+    if (s->threads > 1024)
+        return glow__render_fail(message, message_size, GLOW_ERROR_INVALID_ARGUMENT, "glow_render: threads %u is above 1024",
+                                 s->threads);
+    if (!isfinite(s->albedo_scale) || s->albedo_scale < 0.0f)
+        return glow__render_fail(message, message_size, GLOW_ERROR_INVALID_ARGUMENT,
+                                 "glow_render: albedo_scale %g must be finite and >= 0", (double)s->albedo_scale);
+    return GLOW_OK;
+}
+
+/* Renders with `gv` (NULL = reference) into out. */
+static glow_result render(const glow_render_scene *sc, const glow_render_settings *st, const glow_view *gv,
+                          glow_render_result *out, char *message, size_t message_size) {
+    render_ctx c;
+    memset(&c, 0, sizeof c);
+    c.sc = sc;
+    c.w = st->width ? st->width : sc->camera.width;
+    c.h = st->height ? st->height : sc->camera.height;
+    c.spp = st->spp ? st->spp : DEFAULT_SPP;
+    c.max_depth = st->max_depth ? st->max_depth : DEFAULT_MAX_DEPTH;
+    c.threads = resolve_threads(st->threads);
+    if (c.threads > c.h) c.threads = c.h;
+    c.seed = st->seed;
+    c.albedo_scale = st->albedo_scale > 0.0f ? st->albedo_scale : 1.0f;
+    c.emission_scale = sc->desc.emission_scale;
+    c.emitters_on = sc->emitter_count > 0 && c.emission_scale > 0.0f;
+    memcpy(c.env, sc->desc.environment, sizeof c.env);
+    c.env_on = c.env[0] > 0.0f || c.env[1] > 0.0f || c.env[2] > 0.0f;
+    c.gv = gv;
+    c.progress = st->progress;
+    c.progress_user = st->progress_user;
+    /* camera */
+    const glow_scene_camera *cam = &sc->camera;
+    memcpy(c.org, cam->position, sizeof c.org);
+    glow__sub(cam->target, cam->position, c.fwd);
+    glow__cross(c.fwd, cam->up, c.right);
+    if (!(v_norm(c.fwd) > 0.0f) || !(v_norm(c.right) > 0.0f))
+        return glow__render_fail(message, message_size, GLOW_ERROR_INVALID_ARGUMENT,
+                                 "%s: camera: target equals position, or up is parallel to the view", sc->path);
+    glow__cross(c.right, c.fwd, c.up);
+    c.tan_y = tanf(0.5f * cam->vfov_deg * PI_F / 180.0f);
+    c.tan_x = c.tan_y * (float)c.w / (float)c.h;
+
+    glow_result r = GLOW_OK;
+    c.lights = sc->desc.light_count ? calloc(sc->desc.light_count, sizeof *c.lights) : NULL;
+    c.ws = calloc(c.threads, sizeof *c.ws);
+    pthread_t *tid = calloc(c.threads, sizeof *tid);
+    worker_arg *args = calloc(c.threads, sizeof *args);
+    if ((sc->desc.light_count && !c.lights) || !c.ws || !tid || !args) {
+        r = glow__render_fail(message, message_size, GLOW_ERROR_OUT_OF_MEMORY, "%s: out of memory", sc->path);
+        goto done;
+    }
+    for (uint32_t i = 0; i < sc->desc.light_count; ++i) {
+        c.lights[i].l = sc->desc.lights[i];
+        v_norm(c.lights[i].l.direction);
+        c.lights[i].cos_outer = cosf(c.lights[i].l.outer_deg * PI_F / 180.0f);
+        c.lights[i].cos_inner = cosf(c.lights[i].l.inner_deg * PI_F / 180.0f);
+    }
+    c.light_count = sc->desc.light_count;
+    if ((r = glow_eval_image_alloc(&out->direct, c.w, c.h)) != GLOW_OK ||
+        (r = glow_eval_image_alloc(&out->indirect, c.w, c.h)) != GLOW_OK ||
+        (r = glow_eval_image_alloc(&out->final, c.w, c.h)) != GLOW_OK) {
+        r = glow__render_fail(message, message_size, r, "%s: cannot allocate %u x %u images", sc->path, c.w, c.h);
+        goto done;
+    }
+    c.direct = out->direct.rgb;
+    c.indirect = out->indirect.rgb;
+    atomic_init(&c.next_row, 0u);
+    atomic_init(&c.rows_done, 0u);
+    pthread_mutex_init(&c.progress_lock, NULL);
+    double t0 = now_s();
+    uint32_t started = 0;
+    for (uint32_t i = 1; i < c.threads; ++i) {
+        args[i] = (worker_arg){&c, i};
+        if (pthread_create(&tid[i], NULL, worker, &args[i]) != 0) break;
+        started = i;
+    }
+    args[0] = (worker_arg){&c, 0};
+    worker(&args[0]);
+    for (uint32_t i = 1; i <= started; ++i) pthread_join(tid[i], NULL);
+    double t1 = now_s();
+    pthread_mutex_destroy(&c.progress_lock);
+    size_t n = (size_t)c.w * c.h * 3;
+    for (size_t i = 0; i < n; ++i) out->final.rgb[i] = c.direct[i] + c.indirect[i];
+    out->width = c.w;
+    out->height = c.h;
+    out->spp = c.spp;
+    out->threads = started + 1;
+    out->seconds = t1 - t0;
+    for (uint32_t i = 0; i < c.threads; ++i) {
+        out->rays += c.ws[i].rays;
+        out->lightmap_lookups += c.ws[i].lm;
+        out->grid_lookups += c.ws[i].grid;
+        out->missed_lookups += c.ws[i].missed;
+    }
+    out->mrays_per_s = out->seconds > 0.0 ? (double)out->rays / out->seconds * 1e-6 : 0.0;
+    image_mean(&out->final, out->mean_final);
+    image_mean(&out->direct, out->mean_direct);
+    image_mean(&out->indirect, out->mean_indirect);
+done:
+    free(c.lights);
+    free(c.ws);
+    free(tid);
+    free(args);
+    if (r != GLOW_OK) glow_render_result_free(out);
+    return r;
+}
+
+glow_result glow_render_reference(const glow_render_scene *sc, const glow_render_settings *st, glow_render_result *out,
+                                  char *message, size_t message_size) {
+    if (message && message_size) message[0] = 0;
+    if (out) memset(out, 0, sizeof *out);
+    if (!out) return glow__render_fail(message, message_size, GLOW_ERROR_INVALID_ARGUMENT, "glow_render: NULL argument");
+    glow_result r = check_settings(sc, st, message, message_size);
+    if (r != GLOW_OK) return r;
+    return render(sc, st, NULL, out, message, message_size);
+}
+
+/* ------------------------------------------------------------------------------------- glow view */
+typedef struct capture_log {
+    pthread_mutex_t lock;
+    char first_error[512];
+} capture_log;
+
+static void capture(void *user, glow_log_level level, glow_result code, const char *msg, const char *file, int line) {
+    (void)code; (void)file; (void)line;
+    capture_log *cl = user;
+    if (level != GLOW_LOG_ERROR || !msg) return;
+    pthread_mutex_lock(&cl->lock);
+    if (!cl->first_error[0]) snprintf(cl->first_error, sizeof cl->first_error, "%s", msg);
+    pthread_mutex_unlock(&cl->lock);
+}
+
+static void glow_view_free(glow_view *gv) {
+    glow_system_destroy(gv->sys);
+    glow_host_destroy(gv->host);
+    glow_bake_destroy(gv->bake);
+    glow_context_destroy(gv->ctx);
+    free(gv->lm_uv);
+    memset(gv, 0, sizeof *gv);
+}
+
+static glow_result glow_view_create(const glow_render_scene *sc, const char *bake_path, const glow_render_settings *st,
+                                    const glow_render_glow_settings *gs, capture_log *cl, glow_view *gv, char *message,
+                                    size_t message_size) {
+    memset(gv, 0, sizeof *gv);
+    glow_logger logger = {capture, cl};
+    const uint32_t threads = resolve_threads(st->threads);
+    glow_result r = glow_context_create(
+        &(glow_context_desc){.api_version = GLOW_VERSION, .logger = logger, .tasks = {.worker_count = threads}}, &gv->ctx);
+    if (r != GLOW_OK) return glow__render_fail(message, message_size, r, "glow_render: cannot create a context: %s", glow_result_string(r));
+#define FAIL(code, ...)                                                   \
+    do {                                                                  \
+        r = glow__render_fail(message, message_size, code, __VA_ARGS__); \
+        goto fail;                                                        \
+    } while (0)
+    if ((r = glow_bake_load_file(gv->ctx, bake_path, &gv->bake)) != GLOW_OK)
+        FAIL(r, "%s: cannot load the bake: %s%s%s", bake_path, glow_result_string(r), cl->first_error[0] ? ": " : "",
+             cl->first_error);
+    glow_bake_info info;
+    glow_bake_get_info(gv->bake, &info);
+    glow_bake_geometry geo;
+    glow_bake_get_geometry(gv->bake, &geo);
+    const glow__scene *m = &sc->mesh;
+    if (geo.triangle_count == 0) FAIL(GLOW_ERROR_CORRUPT_DATA, "%s: the bake carries no geometry", bake_path);
+    if (geo.triangle_count != m->tri_count)
+        FAIL(GLOW_ERROR_INVALID_ARGUMENT, "%s: the bake has %u triangles but the scene's mesh %s has %u: it was baked from another mesh",
+             bake_path, geo.triangle_count, sc->desc.mesh, m->tri_count);
+    if (info.material_count != m->material_count)
+        FAIL(GLOW_ERROR_INVALID_ARGUMENT, "%s: the bake has %u materials but the scene's mesh %s has %u: it was baked from another mesh",
+             bake_path, info.material_count, sc->desc.mesh, m->material_count);
+    const unsigned char *base = (const unsigned char *)geo.positions;
+    const unsigned char *lmb = (const unsigned char *)geo.lightmap_uv;
+    const bool has_lm = info.lightmap_width > 0 && info.lightmap_cache_count > 0;
+    if (has_lm && !(gv->lm_uv = malloc((size_t)m->tri_count * sizeof *gv->lm_uv)))
+        FAIL(GLOW_ERROR_OUT_OF_MEMORY, "%s: out of memory", bake_path);
+    for (uint32_t t = 0; t < m->tri_count; ++t) {
+        float p[9];
+        uint16_t uv[6];
+        memcpy(p, base + (size_t)t * geo.stride, sizeof p);
+        if (memcmp(p, m->pos[3 * (size_t)t], sizeof p) != 0)
+            FAIL(GLOW_ERROR_INVALID_ARGUMENT,
+                 "%s: triangle %u is (%g %g %g) (%g %g %g) (%g %g %g) in the bake but (%g %g %g) (%g %g %g) (%g %g %g) in the "
+                 "scene's mesh %s: it was baked from another mesh",
+                 bake_path, t, p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], m->pos[3 * (size_t)t][0],
+                 m->pos[3 * (size_t)t][1], m->pos[3 * (size_t)t][2], m->pos[3 * (size_t)t + 1][0],
+                 m->pos[3 * (size_t)t + 1][1], m->pos[3 * (size_t)t + 1][2], m->pos[3 * (size_t)t + 2][0],
+                 m->pos[3 * (size_t)t + 2][1], m->pos[3 * (size_t)t + 2][2], sc->desc.mesh);
+        if (has_lm) {
+            memcpy(uv, lmb + (size_t)t * geo.stride, sizeof uv);
+            for (int k = 0; k < 6; ++k) gv->lm_uv[t][k] = (float)uv[k] / 65535.0f;
+        }
+    }
+    glow_host_desc hd = glow_host_desc_from_scene(&sc->desc, gv->bake, GLOW_HOST_KIND_EXACT);
+    hd.sky_rays = gs->sky_rays;
+    hd.logger = logger;
+    if ((r = glow_host_create(&hd, &gv->host)) != GLOW_OK)
+        FAIL(r, "%s: cannot create the host: %s%s%s", bake_path, glow_result_string(r), cl->first_error[0] ? ": " : "",
+             cl->first_error);
+    if ((r = glow_system_create(gv->ctx,
+                                &(glow_system_desc){.bake = gv->bake, .lighting = glow_host_hooks(gv->host),
+                                                    .sh_bands_luma = gs->sh_bands_luma, .sh_bands_chroma = gs->sh_bands_chroma,
+                                                    .link_mode = gs->link_mode,
+                                                    .label = bake_path},
+                                &gv->sys)) != GLOW_OK)
+        FAIL(r, "%s: cannot create the system: %s%s%s", bake_path, glow_result_string(r), cl->first_error[0] ? ": " : "",
+             cl->first_error);
+    const float as = st->albedo_scale > 0.0f ? st->albedo_scale : 1.0f;
+    if (as != 1.0f)
+        for (uint32_t i = 0; i < info.material_count; ++i)
+            if ((r = glow_system_set_material(gv->sys, i, NULL, (float[3]){as, as, as})) != GLOW_OK)
+                FAIL(r, "%s: albedo scale %g: %s", bake_path, (double)as, cl->first_error);
+    uint32_t left = gs->bounce_iterations ? gs->bounce_iterations : DEFAULT_BOUNCES;
+    while (left > 0) {
+        uint32_t it = left > 64 ? 64 : left;
+        left -= it;
+        if ((r = glow_system_set_params(gv->sys, &(glow_system_params){.bounce_intensity = 1.0f,
+                                                                        .emission_scale = sc->desc.emission_scale,
+                                                                        .bounce_iterations = it})) != GLOW_OK)
+            FAIL(r, "%s: glow_system_set_params: %s", bake_path, cl->first_error);
+        if ((r = glow_system_update(gv->sys, NULL)) != GLOW_OK)
+            FAIL(r, "%s: glow_system_update: %s%s%s", bake_path, glow_result_string(r), cl->first_error[0] ? ": " : "",
+                 cl->first_error);
+    }
+    gv->out = glow_system_outputs(gv->sys);
+    if (!gv->out || (!gv->out->grid_sh && !gv->out->lightmap_sh))
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "%s: the bake has neither a grid nor a lightmap", bake_path);
+    if (!gv->out->lightmap_sh) {
+        free(gv->lm_uv);
+        gv->lm_uv = NULL;
+    }
+#undef FAIL
+    return GLOW_OK;
+fail:
+    glow_view_free(gv);
+    return r;
+}
+
+glow_result glow_render_glow(const glow_render_scene *sc, const char *bake_path, const glow_render_settings *st,
+                             const glow_render_glow_settings *gs, glow_render_result *out, char *message,
+                             size_t message_size) {
+    if (message && message_size) message[0] = 0;
+    if (out) memset(out, 0, sizeof *out);
+    if (!out || !bake_path)
+        return glow__render_fail(message, message_size, GLOW_ERROR_INVALID_ARGUMENT, "glow_render: NULL argument");
+    glow_result r = check_settings(sc, st, message, message_size);
+    if (r != GLOW_OK) return r;
+    glow_render_glow_settings g = gs ? *gs : (glow_render_glow_settings){0};
+    if (g.bounce_iterations > 100000)
+        return glow__render_fail(message, message_size, GLOW_ERROR_INVALID_ARGUMENT,
+                                 "glow_render: %u bounce iterations is above 100000", g.bounce_iterations);
+    if (g.sky_rays > 65536)
+        return glow__render_fail(message, message_size, GLOW_ERROR_INVALID_ARGUMENT, "glow_render: sky_rays %u is above 65536",
+                                 g.sky_rays);
+    capture_log cl;
+    memset(&cl, 0, sizeof cl);
+    pthread_mutex_init(&cl.lock, NULL);
+    glow_view gv;
+    double t0 = now_s();
+    r = glow_view_create(sc, bake_path, st, &g, &cl, &gv, message, message_size);
+    double t1 = now_s();
+    if (r == GLOW_OK) {
+        r = render(sc, st, &gv, out, message, message_size);
+        if (r == GLOW_OK) out->solve_seconds = t1 - t0;
+        glow_view_free(&gv);
+    }
+    pthread_mutex_destroy(&cl.lock);
+    return r;
+}
