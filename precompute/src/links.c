@@ -7,8 +7,10 @@
  *     Near surfels: the disc approximation is wrong there (a cache beside a wall sees the wall at
  *     angles no disc represents), so their solid angle is measured by rays instead — NEAR_RAYS
  *     directions over the sphere (hemisphere for lightmap caches), each hit closer than the near
- *     radius credits its solid angle to the surfel nearest to the hit point. Back-facing surfels and,
- *     for lightmap caches, surfels below the cache's horizon get zero.
+ *     radius credits its solid angle to the surfel nearest to the hit point that faces the cache and
+ *     that nothing separates from the hit point (surfel_reaches_hit: not the surfel on the other side
+ *     of a thin wall). Back-facing surfels and, for lightmap caches, surfels below the cache's horizon
+ *     get zero.
  *     Normalisation: the same rays, continued to unlimited length, measure the solid angle of the
  *     visible geometry (first hits on front faces). The disc approximation of the far field falls a
  *     few % short of it, energy the runtime would lose at every bounce, so every leaf's solid angle
@@ -35,6 +37,8 @@
 
 #define NEAR_RADII 4.0f
 #define NEAR_RAYS 1024u /* over the sphere; a hemisphere gets half, so each ray is 4π/1024 sr */
+#define NEAR_KNN 8u       /* candidate surfels for a near-field hit */
+#define NEAR_KNN_MORE 32u /* ... when none of the first NEAR_KNN may take it (surfel_reaches_hit) */
 /* Bounds of the normalisation factor. In the closed Cornell box every cache needs 0.975-1.072; in
  * the Dabrovic Sponza (moderate) 99.8 % of the caches need 0.89-2. Beyond 2, more than half of
  * what the rays hit has no surfel within reach of the near-field credit (texels at the inner edge
@@ -130,6 +134,58 @@ static void disc_point(const glow__surfel *s, float radius, uint32_t k, uint32_t
     for (int i = 0; i < 3; ++i) out[i] = s->pos[i] + c * t[i] + d * b[i];
 }
 
+/* Is the segment from `from` to `to` blocked by geometry other than the surface the start point
+ * stands on (the plane through plane_p with unit normal plane_n)? A first hit on that surface itself
+ * (parallel and within a few ray offsets of its plane) is the segment cutting across a convex edge of
+ * that surface, not an obstacle. */
+static bool blocked_elsewhere(const link_job *job, const float from[3], const float to[3], const float plane_p[3],
+                              const float plane_n[3]) {
+    float d[3];
+    glow__sub(to, from, d);
+    const float len = sqrtf(glow__dot(d, d));
+    if (!(len > 2.0f * job->ray_eps)) return false;
+    const float f = job->ray_eps / len;
+    glow__hit hit = glow__rt_intersect(job->rt, from, d, f, 1.0f - f);
+    if (hit.t == INFINITY) return false;
+    const float(*P)[3] = job->scene->pos + 3 * (size_t)hit.tri;
+    float e1[3], e2[3], n[3], h[3], off[3];
+    glow__sub(P[1], P[0], e1);
+    glow__sub(P[2], P[0], e2);
+    glow__cross(e1, e2, n);
+    const float nl = sqrtf(glow__dot(n, n));
+    for (int k = 0; k < 3; ++k) h[k] = from[k] + hit.t * d[k];
+    glow__sub(h, plane_p, off);
+    const bool own_surface = nl > 0.0f && fabsf(glow__dot(n, plane_n)) > 0.99f * nl &&
+                             fabsf(glow__dot(off, plane_n)) < 4.0f * job->ray_eps;
+    return !own_surface;
+}
+
+/* Does the surfel stand for the surface at the hit point p (on triangle tri, ray direction dir)?
+ * Not when something else lies between them: the nearest facing surfel may lie on the other side
+ * of a thin wall. A texel in the corner of one room, where its floor meets the separating wall,
+ * credited its near-field rays to the surfels on the other room's edge (0.1 m away, nearer than its
+ * own room's) and linked that room's light (tests/unit/test_stability_leak.c). Checked from both
+ * ends, from p lifted 2 eps back towards the cache and from the surfel lifted 2 eps along its normal,
+ * each ignoring its own surface: a surfel around a convex edge of the hit surface (the next face of
+ * a pillar) stays creditable, although the straight segment to it cuts through the pillar. Surfels on
+ * the hit triangle itself need no ray. */
+static bool surfel_reaches_hit(const link_job *job, const glow__surfel *s, const float p[3], const float dir[3],
+                               uint32_t tri) {
+    const float lift = 2.0f * job->ray_eps;
+    float a[3], b[3], e1[3], e2[3], n[3];
+    for (int k = 0; k < 3; ++k) {
+        a[k] = p[k] - lift * dir[k];
+        b[k] = s->pos[k] + lift * s->nrm[k];
+    }
+    const float(*P)[3] = job->scene->pos + 3 * (size_t)tri;
+    glow__sub(P[1], P[0], e1);
+    glow__sub(P[2], P[0], e2);
+    glow__cross(e1, e2, n);
+    const float nl = sqrtf(glow__dot(n, n));
+    for (int k = 0; k < 3; ++k) n[k] = nl > 0.0f ? n[k] / nl : -dir[k]; /* (the scene has no zero-area triangles) */
+    return !blocked_elsewhere(job, a, b, p, n) && !blocked_elsewhere(job, b, a, s->pos, s->nrm);
+}
+
 /* Near field: rays from the cache, each hit within the near radius credits its solid angle (and its
  * direction) to the nearest surfel that faces the cache on the hit surface. Only surfels whose
  * centre lies within the near radius are credited, the same surfels the disc pass skipped.
@@ -161,19 +217,27 @@ static uint32_t near_field(const link_job *job, const glow__cache *cache, float 
         if (!(hit.t < R)) continue; /* beyond the near field: counted, not credited */
         float p[3];
         for (int k = 0; k < 3; ++k) p[k] = cache->pos[k] + hit.t * dir[k];
-        uint32_t idx[8];
-        float dist2[8];
-        uint32_t found = glow__kdtree_knn(job->surfel_tree, p, 8, UINT32_MAX, idx, dist2);
-        for (uint32_t q = 0; q < found; ++q) {
+        /* the NEAR_KNN surfels nearest to the hit point; when none of them may take the credit, the next ones */
+        uint32_t idx[NEAR_KNN_MORE];
+        float dist2[NEAR_KNN_MORE];
+        uint32_t found = glow__kdtree_knn(job->surfel_tree, p, NEAR_KNN, UINT32_MAX, idx, dist2);
+        for (uint32_t q = 0, round = 0; q < found; ++q) {
             const glow__surfel *s = &S->s[idx[q]];
             float d[3];
             glow__sub(s->pos, cache->pos, d);
-            if (glow__dot(d, d) >= R * R) continue;        /* a far surfel: the disc pass has it */
-            if (glow__dot(s->nrm, dir) >= 0.0f) continue;  /* faces away: another surface */
-            if (hemi && glow__dot(cache->nrm, d) <= -0.5f * eps) continue;
-            omega[idx[q]] += dw;
-            for (int k = 0; k < 3; ++k) dirsum[3 * idx[q] + k] += dw * dir[k];
-            break;
+            bool ok = glow__dot(d, d) < R * R                         /* else a far surfel: the disc pass has it */
+                      && glow__dot(s->nrm, dir) < 0.0f                /* else it faces away: another surface */
+                      && !(hemi && glow__dot(cache->nrm, d) <= -0.5f * eps)
+                      && (s->tri == hit.tri || surfel_reaches_hit(job, s, p, dir, hit.tri));
+            if (ok) {
+                omega[idx[q]] += dw;
+                for (int k = 0; k < 3; ++k) dirsum[3 * idx[q] + k] += dw * dir[k];
+                break;
+            }
+            if (q + 1 == found && round == 0 && found == NEAR_KNN) {
+                round = 1;
+                found = glow__kdtree_knn(job->surfel_tree, p, NEAR_KNN_MORE, UINT32_MAX, idx, dist2);
+            }
         }
     }
     return front_hits;

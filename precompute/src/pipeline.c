@@ -9,6 +9,7 @@
 
 #include "bake/bake_format.h"
 #include "bake_write.h"
+#include "hierarchy.h"
 #include "pc_internal.h"
 
 static const char *const stage_names[GLOW_PC_STAGE_COUNT] = {"import", "bvh", "surfels", "hierarchy",
@@ -357,7 +358,7 @@ glow_result glow_pc_bake(const char *scene_path, const char *out_path, const glo
     stats->surfels = surfels.count;
 
     STAGE_BEGIN(ST_HIER);
-    res = glow__hierarchy_build(&surfels, scene.bounds_min, scene.bounds_max, pool, &log, &hier);
+    res = glow__hierarchy_build_rt(&surfels, scene.bounds_min, scene.bounds_max, rt, pool, &log, &hier);
     STAGE_END(ST_HIER);
     if (res != GLOW_OK) goto done;
     stats->nodes = hier.node_count;
