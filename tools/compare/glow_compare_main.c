@@ -1,7 +1,9 @@
 /* glow-compare — the error metrics of glow_eval.h on two image files, for scripts (glow-eval).
  *
- *   glow-compare TEST.exr REF.exr [--exposure E] [--json]
+ *   glow-compare TEST.exr REF.exr [--exposure E] [--add IMAGE.exr] [--json]
  *
+ * --add adds IMAGE to TEST first (same size): glow-eval compares Glow's indirect-only view plus the
+ * reference's direct image (which Glow's view reproduces to the bit) with the reference's final.
  * Prints relative RMSE (HDR), display RMSE, PSNR and SSIM after `--exposure` (default 1) and sRGB
  * encoding (definitions in tools/eval/glow_eval.h and docs/results.md), and both images' mean
  * radiance. Exit status: 0 success, 1 an image cannot be read or the sizes differ (the message
@@ -14,9 +16,10 @@
 #include "glow_eval.h"
 
 static int usage(FILE *f) {
-    fprintf(f, "usage: glow-compare TEST.exr REF.exr [--exposure E] [--json]\n"
+    fprintf(f, "usage: glow-compare TEST.exr REF.exr [--exposure E] [--add IMAGE.exr] [--json]\n"
                "Compares TEST with the reference REF: relative RMSE of the HDR values, RMSE and PSNR of\n"
-               "the display images (x * exposure, clamped, sRGB-encoded) and their mean SSIM.\n");
+               "the display images (x * exposure, clamped, sRGB-encoded) and their mean SSIM.\n"
+               "--add IMAGE.exr adds IMAGE to TEST before comparing.\n");
     return f == stdout ? 0 : 2;
 }
 
@@ -26,7 +29,7 @@ static void print_num(const char *key, double v, const char *sep) {
 }
 
 int main(int argc, char **argv) {
-    const char *paths[2] = {NULL, NULL};
+    const char *paths[2] = {NULL, NULL}, *add = NULL;
     int np = 0, json = 0;
     float exposure = 1.0f;
     for (int i = 1; i < argc; ++i) {
@@ -34,6 +37,9 @@ int main(int argc, char **argv) {
         if (!strcmp(a, "-h") || !strcmp(a, "--help")) return usage(stdout);
         if (!strcmp(a, "--json")) {
             json = 1;
+        } else if (!strcmp(a, "--add")) {
+            if (i + 1 >= argc) return usage(stderr);
+            add = argv[++i];
         } else if (!strcmp(a, "--exposure")) {
             char *end = NULL;
             if (i + 1 >= argc) return usage(stderr);
@@ -60,6 +66,25 @@ int main(int argc, char **argv) {
             glow_eval_image_free(&img[0]);
             return 1;
         }
+    if (add) {
+        glow_eval_image extra = {0};
+        if (glow_eval_read_exr(add, &extra, msg, sizeof msg) != GLOW_OK) {
+            fprintf(stderr, "glow-compare: %s\n", msg);
+            glow_eval_image_free(&img[0]);
+            glow_eval_image_free(&img[1]);
+            return 1;
+        }
+        if (extra.width != img[0].width || extra.height != img[0].height) {
+            fprintf(stderr, "glow-compare: %s is %ux%u but %s is %ux%u\n", add, extra.width, extra.height, paths[0],
+                    img[0].width, img[0].height);
+            glow_eval_image_free(&extra);
+            glow_eval_image_free(&img[0]);
+            glow_eval_image_free(&img[1]);
+            return 1;
+        }
+        for (size_t i = 0; i < (size_t)extra.width * extra.height * 3; ++i) img[0].rgb[i] += extra.rgb[i];
+        glow_eval_image_free(&extra);
+    }
     glow_eval_metrics m;
     glow_result r = glow_eval_compare(&img[0], &img[1], NULL, exposure, &m, msg, sizeof msg);
     glow_eval_image_free(&img[0]);

@@ -21,7 +21,7 @@ static void usage(FILE *f) {
             "usage: glow-render SCENE.json --out PREFIX [--spp N] [--seed S] [--threads N] [--width W --height H]\n"
             "                   [--exposure E] [--max-depth D] [--albedo-scale A]\n"
             "                   [--glow BAKE [--bounces K] [--sky-rays R] [--luma L] [--chroma C]\n"
-            "                   [--link-mode compact|expanded|sh]] [--progress | -q]\n"
+            "                   [--link-mode compact|expanded|sh] [--indirect-only]] [--progress | -q]\n"
             "  SCENE.json       scene description (docs/scene-format.md): mesh, camera, lights, environment\n"
             "  --out PREFIX     writes PREFIX.exr (final), PREFIX_direct.exr, PREFIX_indirect.exr, PREFIX.png\n"
             "  --spp N          samples per pixel (default 64)\n"
@@ -38,6 +38,8 @@ static void usage(FILE *f) {
             "  --luma L         SH bands of Glow's luma (default: the bake's); --chroma C of its chroma (default L)\n"
             "  --link-mode M    compact (runtime projection, default), expanded, or sh (the bake's full-SH links,\n"
             "                   glow-bake --sh-links)\n"
+            "  --indirect-only  Glow's view without the direct term (only camera rays and cache lookups): its\n"
+            "                   direct image equals the reference's for the same seed, size and spp\n"
             "  --progress       progress bar on stderr even when it is not a terminal; -q: none, no summary\n");
 }
 
@@ -130,6 +132,7 @@ static int parse_args(int argc, char **argv, options *o) {
         else if (!strcmp(a, "--sky-rays")) NEED_U(1, 65536, o->gs.sky_rays, "a number of rays in 1..65536");
         else if (!strcmp(a, "--luma")) NEED_U(1, GLOW_MAX_SH_BANDS, o->gs.sh_bands_luma, "a band count in 1..8");
         else if (!strcmp(a, "--chroma")) NEED_U(1, GLOW_MAX_SH_BANDS, o->gs.sh_bands_chroma, "a band count in 1..8");
+        else if (!strcmp(a, "--indirect-only")) o->gs.indirect_only = true;
         else if (!strcmp(a, "--link-mode")) {
             if (!v || (strcmp(v, "compact") && strcmp(v, "expanded") && strcmp(v, "sh"))) {
                 fprintf(stderr, "glow-render: --link-mode must be compact, expanded or sh, not \"%s\"\n", v ? v : "nothing");
@@ -170,8 +173,9 @@ static int parse_args(int argc, char **argv, options *o) {
     if (!o->out) { fprintf(stderr, "glow-render: need --out PREFIX\n"); return 0; }
     if (have_w != have_h) { fprintf(stderr, "glow-render: give both --width and --height\n"); return 0; }
     if (!o->bake && (o->gs.bounce_iterations || o->gs.sky_rays || o->gs.sh_bands_luma || o->gs.sh_bands_chroma ||
-                     o->gs.link_mode)) {
-        fprintf(stderr, "glow-render: --bounces, --sky-rays, --luma, --chroma and --link-mode go with --glow BAKE\n");
+                     o->gs.link_mode || o->gs.indirect_only)) {
+        fprintf(stderr, "glow-render: --bounces, --sky-rays, --luma, --chroma, --link-mode and --indirect-only go with "
+                        "--glow BAKE\n");
         return 0;
     }
     return 1;

@@ -97,6 +97,10 @@ typedef struct glow_render_glow_settings {
     uint32_t sh_bands_luma;     /* glow_system_desc's: 0 = the bake's bands */
     uint32_t sh_bands_chroma;   /* 0 = luma */
     glow_link_mode link_mode;   /* 0 = compact (runtime projection) */
+    bool indirect_only;         /* skip the direct term (its image stays 0): the camera rays, their jitter
+                                   and the cache lookups only. Glow's direct image equals the reference's
+                                   for the same seed, size and spp, so final = reference direct + this
+                                   indirect (glow-compare --add): the sweeps of glow-eval run this way */
 } glow_render_glow_settings;
 
 typedef struct glow_render_result {

@@ -95,6 +95,7 @@ typedef struct glow_view {
     glow_host *host;
     glow_system *sys;
     const glow_cache_outputs *out;
+    bool indirect_only; /* glow_render_glow_settings.indirect_only */
     float (*lm_uv)[6]; /* [tri] the bake's lightmap UV per corner, or NULL without a lightmap */
 } glow_view;
 
@@ -320,6 +321,14 @@ static void sample(const render_ctx *c, uint32_t x, uint32_t y, rng *rd, rng *rp
     }
     surf s;
     make_surf(c, &h, &s);
+    if (c->gv && c->gv->indirect_only) { /* the caches alone; stream rd advances as below */
+        (void)rnd(rd);
+        (void)rnd(rd);
+        float g[3];
+        glow_indirect(c, &s, coeffs, ws, g);
+        for (int k = 0; k < 3; ++k) indirect[k] += g[k];
+        return;
+    }
     float le[3];
     if (emission_of(c, s.tri, s.back, le))
         for (int k = 0; k < 3; ++k) direct[k] += le[k];
@@ -727,6 +736,7 @@ glow_result glow_render_glow(const glow_render_scene *sc, const char *bake_path,
     r = glow_view_create(sc, bake_path, st, &g, &cl, &gv, message, message_size);
     double t1 = now_s();
     if (r == GLOW_OK) {
+        gv.indirect_only = g.indirect_only;
         r = render(sc, st, &gv, out, message, message_size);
         if (r == GLOW_OK) out->solve_seconds = t1 - t0;
         glow_view_free(&gv);
