@@ -13,6 +13,7 @@ PKGS=(
   clang                # libFuzzer target for the bake reader
   libglfw3-dev libosmesa6-dev libegl-dev libgl-dev libcglm-dev   # integration (later issues)
   libopenexr-dev glslang-tools gnuplot-nox                       # evaluation, shaders, charts
+  python3              # tools/glow-eval (the sweep driver) and its CLI test
 )
 missing=()
 for p in "${PKGS[@]}"; do

@@ -1,0 +1,76 @@
+#!/usr/bin/env bash
+# CLI behaviour of the evaluation tools: glow-render (reference and Glow's view), glow-compare and
+# glow-eval --quick on the built-in Cornell box at CI size (32x32). Checks exit codes and messages
+# for bad input, that nothing is left behind on failure, that Glow's indirect-only view plus the
+# reference's direct image scores exactly what the full Glow view scores, and that glow-eval writes
+# its CSV, summary and charts.
+#   usage: test_eval_cli.sh BIN_DIR SHARED_DIR
+set -u
+BIN=$1
+ROOT=$(cd "$(dirname "$0")/../.." && pwd)
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+fails=0
+pass() { echo "ok   $1"; }
+fail() { echo "FAIL $1"; fails=$((fails + 1)); }
+expect() {
+  local want=$1 name=$2; shift 2
+  "$@" >"$T/out" 2>"$T/err"; local got=$?
+  if [ "$got" = "$want" ]; then pass "$name (exit $got)"; else fail "$name: exit $got, wanted $want"; sed 's/^/     /' "$T/err" | head -5; fi
+}
+err_has() { if grep -q -- "$1" "$T/err"; then pass "  message mentions '$1'"; else fail "  message lacks '$1':"; sed 's/^/     /' "$T/err" | head -5; fi; }
+json_num() { python3 -c "import json,sys; print(json.load(open(sys.argv[1]))[sys.argv[2]])" "$1" "$2"; }
+
+SCENE=$ROOT/scenes/cornell-builtin.json
+# --- glow-render: bad input
+expect 2 "render: no arguments" "$BIN/glow-render"
+expect 2 "render: unknown option" "$BIN/glow-render" "$SCENE" --out "$T/x" --frobnicate; err_has "frobnicate"
+expect 2 "render: bad spp" "$BIN/glow-render" "$SCENE" --out "$T/x" --spp 0
+expect 2 "render: --luma without --glow" "$BIN/glow-render" "$SCENE" --out "$T/x" --luma 2; err_has "glow"
+expect 1 "render: missing scene" "$BIN/glow-render" "$T/none.json" --out "$T/x"; err_has "none.json"
+echo '{"mesh": ' > "$T/broken.json"
+expect 1 "render: broken JSON" "$BIN/glow-render" "$T/broken.json" --out "$T/x"; err_has "broken.json"
+expect 1 "render: missing bake" "$BIN/glow-render" "$SCENE" --glow "$T/none.glow" --out "$T/x"; err_has "none.glow"
+expect 1 "render: unwritable output" "$BIN/glow-render" "$SCENE" --out "$T/no/such/dir/x" --spp 1 --width 8 --height 8
+if ls "$T"/x* >/dev/null 2>&1; then fail "  output left behind"; else pass "  nothing left behind"; fi
+
+# --- a bake of another mesh is refused
+"$BIN/glow-bake" builtin:furnace -o "$T/furnace.glow" --surfels 512 --links 16 -q >/dev/null 2>&1
+expect 1 "render: bake of another mesh" "$BIN/glow-render" "$SCENE" --glow "$T/furnace.glow" --out "$T/x" --spp 1 --width 8 --height 8
+err_has "furnace.glow"
+
+# --- reference, Glow's view, indirect-only view
+R=(--width 32 --height 32 --spp 16 --seed 7 -q)
+expect 0 "render: reference" "$BIN/glow-render" "$SCENE" --out "$T/ref" "${R[@]}"
+for f in ref.exr ref_direct.exr ref_indirect.exr ref.png; do [ -s "$T/$f" ] && pass "  wrote $f" || fail "  missing $f"; done
+"$BIN/glow-bake" builtin:cornell -o "$T/cornell.glow" --quality low -q >/dev/null 2>&1 && pass "bake builtin:cornell (low)" || fail "bake builtin:cornell"
+expect 0 "render: Glow's view" "$BIN/glow-render" "$SCENE" --glow "$T/cornell.glow" --out "$T/glow" "${R[@]}" --bounces 64
+expect 0 "render: Glow's indirect only" "$BIN/glow-render" "$SCENE" --glow "$T/cornell.glow" --out "$T/gi" "${R[@]}" --bounces 64 --indirect-only
+cmp -s "$T/glow_indirect.exr" "$T/gi_indirect.exr" && pass "  indirect-only gives the same indirect image" || fail "  indirect images differ"
+cmp -s "$T/glow_direct.exr" "$T/ref_direct.exr" && pass "  Glow's direct image is the reference's" || fail "  direct images differ"
+
+# --- glow-compare
+expect 2 "compare: one file" "$BIN/glow-compare" "$T/ref.exr"
+expect 1 "compare: missing file" "$BIN/glow-compare" "$T/none.exr" "$T/ref.exr"; err_has "none.exr"
+expect 0 "compare: self" "$BIN/glow-compare" "$T/ref.exr" "$T/ref.exr" --json
+cp "$T/out" "$T/self.json"
+python3 -c "import sys; sys.exit(0 if float(sys.argv[1]) == 0 else 1)" "$(json_num "$T/self.json" rel_rmse)" && pass "  rel RMSE of an image against itself is 0" || fail "  self rel RMSE not 0"
+expect 0 "compare: full view" "$BIN/glow-compare" "$T/glow.exr" "$T/ref.exr" --json; cp "$T/out" "$T/full.json"
+expect 0 "compare: indirect-only + reference direct" "$BIN/glow-compare" "$T/gi_indirect.exr" "$T/ref.exr" --add "$T/ref_direct.exr" --json
+cp "$T/out" "$T/added.json"
+a=$(json_num "$T/full.json" psnr_db); b=$(json_num "$T/added.json" psnr_db)
+python3 -c "import sys; a,b=float(sys.argv[1]),float(sys.argv[2]); sys.exit(0 if abs(a-b) < 1e-3 and 10 < a < 90 else 1)" "$a" "$b" \
+  && pass "  same PSNR both ways ($a dB)" || fail "  PSNR $a vs $b"
+
+# --- glow-eval quick (two settings of one parameter)
+expect 0 "glow-eval quick" python3 "$ROOT/tools/glow-eval" sweep "$SCENE" --out "$T/eval" --quick --params chroma --bin "$BIN" \
+  --width 24 --height 24 --ref-spp 8 --frames 3
+[ "$(wc -l < "$T/eval/results.csv")" -ge 3 ] && pass "  results.csv has the rows" || fail "  results.csv short"
+grep -q "rel. RMSE indirect" "$T/eval/summary.md" && pass "  summary.md written" || fail "  summary.md missing"
+if command -v gnuplot >/dev/null; then
+  [ -s "$T/eval/cornell-builtin_error_vs_time.png" ] && pass "  chart written" || fail "  chart missing"
+fi
+expect 2 "glow-eval: unknown parameter" python3 "$ROOT/tools/glow-eval" sweep "$SCENE" --out "$T/eval2" --params frob --bin "$BIN"
+
+echo "$fails failure(s)"
+[ "$fails" = 0 ]
