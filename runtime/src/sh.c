@@ -46,6 +46,13 @@ float glow_sh_lobe_factor(uint32_t l, float n) {
     return (float)s;
 }
 
+float glow_sh_window_factor(uint32_t l, uint32_t bands) {
+    if (l >= bands) return 0.0f;
+    if (l == 0) return 1.0f;
+    const double x = PI_D * (double)l / (double)bands;
+    return (float)(sin(x) / x);
+}
+
 void glow_rgb_to_ycocg(const float rgb[3], float out[3]) {
     const float r = rgb[0], g = rgb[1], b = rgb[2];
     out[0] = 0.25f * r + 0.5f * g + 0.25f * b;

@@ -195,6 +195,37 @@ static void test_point_and_sun_over_floor(void **state) {
     glow_render_result_free(&r);
 }
 
+/* Irradiance probes (glow_render_irradiance): in the furnace every wall point receives E = π L with
+ * L = L_e / (1 - ρ) = 2 (all of it emitted or reflected: nothing is excluded); under the floor scene's
+ * point light and sun a point on the open floor receives nothing (the only other surface is the floor
+ * itself), and the estimates are deterministic per seed and index. */
+static void test_irradiance_probes(void **state) {
+    fixture *f = *state;
+    char msg[512];
+    glow_render_settings st = {.seed = 3, .threads = 2};
+    const float pts[4 * 6] = {-1, 0.1f, 0.2f, 1, 0, 0,     0.3f, -1, -0.7f, 0, 1, 0,
+                              0.95f, 0.95f, 1, 0, 0, -1,  -0.2f, 1, 0.4f, 0, -1, 0};
+    float e[4 * 3], e2[4 * 3];
+    uint64_t rays = 0;
+    assert_int_equal(glow_render_irradiance(f->furnace, NULL, 0, &st, pts, 4, 4096, 0, e, &rays, msg, sizeof msg), GLOW_OK);
+    assert_true(rays > 4 * 4096);
+    for (int i = 0; i < 4; ++i) {
+        printf("furnace probe %d: E = %.4f (expected %.4f)\n", i, e[3 * i], 2.0 * 3.14159265358979323846);
+        /* 4096 paths, each an unbiased estimate with a relative spread of about 0.6 (path length): ~1 % */
+        assert_true(fabs(e[3 * i] / (2.0 * 3.14159265358979323846) - 1.0) < 0.04);
+    }
+    assert_int_equal(glow_render_irradiance(f->furnace, NULL, 0, &st, pts, 4, 4096, 0, e2, NULL, msg, sizeof msg), GLOW_OK);
+    assert_memory_equal(e, e2, sizeof e);
+    st.threads = 1;
+    assert_int_equal(glow_render_irradiance(f->furnace, NULL, 0, &st, pts, 4, 4096, 0, e2, NULL, msg, sizeof msg), GLOW_OK);
+    assert_memory_equal(e, e2, sizeof e);
+    const float floor_pt[6] = {1, 0, 0.5f, 0, 1, 0};
+    assert_int_equal(glow_render_irradiance(f->floor, NULL, 0, &st, floor_pt, 1, 256, 0, e, NULL, msg, sizeof msg), GLOW_OK);
+    assert_true(e[0] == 0.0f && e[1] == 0.0f && e[2] == 0.0f);
+    assert_int_equal(glow_render_irradiance(f->floor, NULL, 0, &st, floor_pt, 1, 0, 0, e, NULL, msg, sizeof msg),
+                     GLOW_ERROR_INVALID_ARGUMENT);
+}
+
 static void furnace_glow(fixture *f, float albedo_scale, double expect, double tol) {
     char msg[512];
     glow_render_settings st = {.spp = 4, .seed = 9, .threads = 2, .albedo_scale = albedo_scale};
@@ -298,6 +329,7 @@ int main(void) {
         cmocka_unit_test(test_furnace_reference_half), cmocka_unit_test(test_furnace_reference_090),
         cmocka_unit_test(test_determinism),            cmocka_unit_test(test_point_and_sun_over_floor),
         cmocka_unit_test(test_furnace_glow_half),      cmocka_unit_test(test_furnace_glow_090),
-        cmocka_unit_test(test_glow_direct_matches_with_lights), cmocka_unit_test(test_errors_and_files)};
+        cmocka_unit_test(test_glow_direct_matches_with_lights), cmocka_unit_test(test_errors_and_files),
+        cmocka_unit_test(test_irradiance_probes)};
     return cmocka_run_group_tests(tests, setup, teardown);
 }

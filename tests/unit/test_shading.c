@@ -369,6 +369,47 @@ static void put_uniform(float *coeffs, uint32_t luma, uint32_t chroma, const flo
     coeffs[luma * luma + chroma * chroma] = (float)(s * (-0.25 * rgb[0] + 0.5 * rgb[1] - 0.25 * rgb[2]));
 }
 
+/* Lanczos sigma factors, and what they are for: a narrow cone (a small bright source) projected into
+ * L bands rings, its reconstruction dips below zero away from the cone; windowed, the dip shrinks
+ * while the DC term (the mean, so the energy) is untouched. */
+static void test_sh_window(void **state) {
+    (void)state;
+    assert_true(glow_sh_window_factor(0, 3) == 1.0f);
+    assert_true(fabsf(glow_sh_window_factor(1, 2) - (float)(2.0 / M_PI)) < 1e-6f); /* sin(pi/2)/(pi/2) */
+    assert_true(fabsf(glow_sh_window_factor(1, 3) - (float)(sin(M_PI / 3.0) / (M_PI / 3.0))) < 1e-6f);
+    assert_true(glow_sh_window_factor(3, 3) == 0.0f && glow_sh_window_factor(9, 3) == 0.0f);
+    for (uint32_t L = 2; L <= GLOW_MAX_SH_BANDS; ++L)
+        for (uint32_t l = 1; l < L; ++l) {
+            float w = glow_sh_window_factor(l, L);
+            assert_true(w > 0.0f && w < glow_sh_window_factor(l - 1, L));
+        }
+    for (uint32_t L = 3; L <= GLOW_MAX_SH_BANDS; ++L) {
+        /* a cone of half-angle 10 degrees around +z, unit radiance: c_l0 = k_l(cos a) y_l0(z) */
+        float up[3] = {0, 0, 1}, y[GLOW_MAX_SH_BANDS * GLOW_MAX_SH_BANDS];
+        glow_sh_eval(L, up, y);
+        float c[GLOW_MAX_SH_BANDS * GLOW_MAX_SH_BANDS] = {0}, cw[GLOW_MAX_SH_BANDS * GLOW_MAX_SH_BANDS] = {0};
+        for (uint32_t l = 0; l < L; ++l) {
+            c[l * l + l] = glow_sh_cone_factor(l, cosf(10.0f * (float)M_PI / 180.0f)) * y[l * l + l];
+            cw[l * l + l] = c[l * l + l] * glow_sh_window_factor(l, L);
+        }
+        float lo = 0.0f, lo_w = 0.0f;
+        for (int k = 0; k <= 180; ++k) { /* along a meridian */
+            float th = (float)k * (float)M_PI / 180.0f, d[3] = {sinf(th), 0.0f, cosf(th)};
+            glow_sh_eval(L, d, y);
+            float v = 0.0f, vw = 0.0f;
+            for (uint32_t q = 0; q < L * L; ++q) {
+                v += c[q] * y[q];
+                vw += cw[q] * y[q];
+            }
+            lo = fminf(lo, v);
+            lo_w = fminf(lo_w, vw);
+        }
+        assert_true(lo < 0.0f);          /* it rings */
+        assert_true(lo_w > 0.5f * lo);   /* windowed: less than half the dip */
+        assert_true(cw[0] == c[0]);      /* same mean */
+    }
+}
+
 static void test_shade_uniform(void **state) {
     (void)state;
     const uint32_t combos[][2] = {{1, 1}, {2, 1}, {3, 1}, {3, 3}, {4, 2}, {8, 2}, {8, 8}};
@@ -842,7 +883,7 @@ int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_ycocg),          cmocka_unit_test(test_sh_orthonormal), cmocka_unit_test(test_sh_closed_forms),
         cmocka_unit_test(test_cone_factor),    cmocka_unit_test(test_sh_projection),  cmocka_unit_test(test_lobe_factor),
-        cmocka_unit_test(test_shade_uniform),  cmocka_unit_test(test_shade_linear),   cmocka_unit_test(test_shade_cone),
+        cmocka_unit_test(test_sh_window),      cmocka_unit_test(test_shade_uniform),  cmocka_unit_test(test_shade_linear),   cmocka_unit_test(test_shade_cone),
         cmocka_unit_test(test_sample_grid),    cmocka_unit_test(test_sample_lightmap), cmocka_unit_test(test_kernels),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

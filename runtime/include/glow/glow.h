@@ -379,6 +379,11 @@ GLOW_API float glow_sh_cone_factor(uint32_t l, float cos_half_angle);
 /** Lobe factor s_l of the normalised Phong lobe (n+1)/(2π) cos^n (PIC App. B): s_0 = 1,
  * s_1 = (n+1)/(n+2), s_l = s_{l-2} (n+2-l)/(n+1+l). n = 1 is the diffuse cosine lobe. \since 0.1 */
 GLOW_API float glow_sh_lobe_factor(uint32_t l, float exponent);
+/** Ringing window σ_l for band l of an SH signal truncated to `bands` bands (Lanczos sigma factors):
+ * σ_0 = 1, σ_l = sin(π l / bands) / (π l / bands). Multiplying band l of a cache (or a lobe factor)
+ * by σ_l trades sharpness for less ringing (negative lobes opposite bright sources); measured in
+ * docs/results.md ("SH ringing"). 0 for l >= bands. \since 0.1 */
+GLOW_API float glow_sh_window_factor(uint32_t l, uint32_t bands);
 GLOW_API void glow_rgb_to_ycocg(const float rgb[3], float out_ycocg[3]);
 GLOW_API void glow_ycocg_to_rgb(const float ycocg[3], float out_rgb[3]);
 

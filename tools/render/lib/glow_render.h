@@ -129,6 +129,22 @@ glow_result glow_render_glow(const glow_render_scene *scene, const char *bake_pa
 
 void glow_render_result_free(glow_render_result *result);
 
+/* The reference's irradiance at points, for comparisons with Glow's caches (glow-stability): for each
+ * point (6 floats: position, normal) E = ∫ L_in cos over the hemisphere of the normal, W/m², RGB, from
+ * everything Glow's caches hold: emitters seen from the point and all light reflected by the scene
+ * (host lights and sky after at least one reflection), not the host's lights or the sky reaching the
+ * point directly. `samples` cosine-distributed paths per point, NEE + MIS as the reference;
+ * deterministic per (settings->seed, point index) whatever the threads, so the same seed with the
+ * light moved reuses the same random numbers (correlated estimates: frame-to-frame differences carry
+ * far less noise than each estimate). `lights` (light_count of them) replace the scene's; NULL = the
+ * scene's. `group` > 1: points i and j with i / group == j / group use the same random numbers (pairs
+ * of neighbours whose difference is wanted); 0 or 1: every point its own. Uses settings->seed, threads,
+ * albedo_scale and max_depth. out_rays (optional): Embree rays. */
+glow_result glow_render_irradiance(const glow_render_scene *scene, const glow_scene_light *lights, uint32_t light_count,
+                                   const glow_render_settings *settings, const float *points, uint32_t count,
+                                   uint32_t samples, uint32_t group, float *out_rgb, uint64_t *out_rays, char *message,
+                                   size_t message_size);
+
 /* Writes PREFIX.exr (final), PREFIX_direct.exr, PREFIX_indirect.exr and PREFIX.png (final, display
  * transform of glow_eval_write_png at `exposure`). All or nothing: every file is written under a
  * temporary name first and renamed only when all were written. */

@@ -744,3 +744,152 @@ glow_result glow_render_glow(const glow_render_scene *sc, const char *bake_path,
     pthread_mutex_destroy(&cl.lock);
     return r;
 }
+
+/* ------------------------------------------------------------------------------ irradiance probes */
+/* Radiance arriving at a point from direction w: the first surface's emission at full weight (there
+ * is no emitter NEE at the probe point) and everything reflected there and after, with NEE + MIS as in
+ * sample(); the environment counts only after a reflection (Glow's caches hold no sky seen directly,
+ * the host lights surfels with it). */
+static void trace_incoming(const render_ctx *c, rng *rp, const float o[3], const float w[3], float out[3],
+                           uint64_t *rays) {
+    const glow_render_scene *sc = c->sc;
+    out[0] = out[1] = out[2] = 0.0f;
+    ++*rays;
+    glow__hit h = glow__rt_intersect(sc->rt, o, w, 0.0f, INFINITY);
+    if (h.tri == UINT32_MAX) return;
+    float beta[3] = {1.0f, 1.0f, 1.0f}, pdf_prev = 0.0f, prev_p[3], wdir[3], le[3], E[3], nee[3];
+    memcpy(prev_p, o, sizeof prev_p);
+    memcpy(wdir, w, sizeof wdir);
+    surf s;
+    for (uint32_t depth = 2;; ++depth) {
+        make_surf(c, &h, &s);
+        if (emission_of(c, s.tri, s.back, le)) {
+            float wgt = 1.0f;
+            if (depth > 2) {
+                float d[3];
+                glow__sub(s.p, prev_p, d);
+                float cos_l = -glow__dot(sc->ng[s.tri], wdir);
+                float pl = cos_l > 0.0f ? sc->light_pdf_area[s.tri] * glow__dot(d, d) / cos_l : 0.0f;
+                wgt = c->emitters_on && pl > 0.0f && isfinite(pl) ? mis2(pdf_prev, pl) : 1.0f;
+            }
+            for (int k = 0; k < 3; ++k) out[k] += beta[k] * le[k] * wgt;
+        }
+        if (depth >= c->max_depth) break;
+        delta_irradiance(c, &s, E, rays);
+        emitter_nee(c, rp, &s, nee, rays);
+        for (int k = 0; k < 3; ++k) out[k] += beta[k] * (s.rho[k] * INV_PI_F * E[k] + nee[k]);
+        float r = rnd(rp), a = rnd(rp), b = rnd(rp);
+        float nb[3] = {beta[0] * s.rho[0], beta[1] * s.rho[1], beta[2] * s.rho[2]};
+        if (depth >= RR_START) {
+            float q = fminf(0.95f, fmaxf(nb[0], fmaxf(nb[1], nb[2])));
+            if (!(r < q)) break;
+            for (int k = 0; k < 3; ++k) nb[k] /= q;
+        }
+        float cw = sample_cosine(s.ns, a, b, wdir);
+        if (!(cw > 0.0f) || glow__dot(wdir, s.ng) <= 0.0f) break;
+        memcpy(beta, nb, sizeof beta);
+        pdf_prev = cw * INV_PI_F;
+        memcpy(prev_p, s.p, sizeof prev_p);
+        ++*rays;
+        h = glow__rt_intersect(sc->rt, s.o, wdir, 0.0f, INFINITY);
+        if (h.tri == UINT32_MAX) {
+            for (int k = 0; k < 3; ++k) out[k] += beta[k] * c->env[k];
+            break;
+        }
+    }
+}
+
+typedef struct probe_job {
+    const render_ctx *c;
+    const float *points;
+    uint32_t count, samples, group;
+    float *out;
+    atomic_uint next;
+    uint64_t rays[64];
+} probe_job;
+
+typedef struct probe_arg {
+    probe_job *j;
+    uint32_t index;
+} probe_arg;
+
+static void *probe_worker(void *p) {
+    probe_arg *a = p;
+    probe_job *j = a->j;
+    const render_ctx *c = j->c;
+    uint64_t rays = 0;
+    for (;;) {
+        uint32_t i = atomic_fetch_add(&j->next, 1u);
+        if (i >= j->count) break;
+        const float *pt = j->points + 6 * (size_t)i;
+        float n[3] = {pt[3], pt[4], pt[5]}, o[3];
+        v_norm(n);
+        v_madd(o, pt, c->sc->eps, n);
+        rng rp;
+        rng_init(&rp, c->seed, j->group > 1 ? i / j->group : i, 1);
+        double acc[3] = {0, 0, 0};
+        for (uint32_t s = 0; s < j->samples; ++s) {
+            float w[3], L[3];
+            float r1 = rnd(&rp), r2 = rnd(&rp);
+            if (!(sample_cosine(n, r1, r2, w) > 0.0f)) continue;
+            trace_incoming(c, &rp, o, w, L, &rays);
+            for (int k = 0; k < 3; ++k) acc[k] += L[k];
+        }
+        for (int k = 0; k < 3; ++k) j->out[3 * (size_t)i + k] = (float)(PI_F * acc[k] / j->samples);
+    }
+    j->rays[a->index % 64] += rays;
+    return NULL;
+}
+
+glow_result glow_render_irradiance(const glow_render_scene *sc, const glow_scene_light *lights, uint32_t light_count,
+                                   const glow_render_settings *st, const float *points, uint32_t count, uint32_t samples,
+                                   uint32_t group, float *out_rgb, uint64_t *out_rays, char *message,
+                                   size_t message_size) {
+    if (message && message_size) message[0] = 0;
+    if (!sc || !st || (count && (!points || !out_rgb)) || (light_count && !lights) || samples == 0)
+        return glow__render_fail(message, message_size, GLOW_ERROR_INVALID_ARGUMENT, "glow_render_irradiance: bad arguments");
+    render_ctx c;
+    memset(&c, 0, sizeof c);
+    c.sc = sc;
+    c.max_depth = st->max_depth ? st->max_depth : DEFAULT_MAX_DEPTH;
+    c.threads = resolve_threads(st->threads);
+    if (c.threads > 64) c.threads = 64;
+    c.seed = st->seed;
+    c.albedo_scale = st->albedo_scale > 0.0f ? st->albedo_scale : 1.0f;
+    c.emission_scale = sc->desc.emission_scale;
+    c.emitters_on = sc->emitter_count > 0 && c.emission_scale > 0.0f;
+    memcpy(c.env, sc->desc.environment, sizeof c.env);
+    if (!lights) {
+        lights = sc->desc.lights;
+        light_count = sc->desc.light_count;
+    }
+    c.lights = light_count ? calloc(light_count, sizeof *c.lights) : NULL;
+    if (light_count && !c.lights)
+        return glow__render_fail(message, message_size, GLOW_ERROR_OUT_OF_MEMORY, "%s: out of memory", sc->path);
+    for (uint32_t i = 0; i < light_count; ++i) {
+        c.lights[i].l = lights[i];
+        v_norm(c.lights[i].l.direction);
+        c.lights[i].cos_outer = cosf(c.lights[i].l.outer_deg * PI_F / 180.0f);
+        c.lights[i].cos_inner = cosf(c.lights[i].l.inner_deg * PI_F / 180.0f);
+    }
+    c.light_count = light_count;
+    probe_job j = {.c = &c, .points = points, .count = count, .samples = samples, .group = group, .out = out_rgb};
+    atomic_init(&j.next, 0u);
+    pthread_t tid[64];
+    probe_arg args[64];
+    uint32_t started = 0;
+    for (uint32_t i = 1; i < c.threads; ++i) {
+        args[i] = (probe_arg){&j, i};
+        if (pthread_create(&tid[i], NULL, probe_worker, &args[i]) != 0) break;
+        started = i;
+    }
+    args[0] = (probe_arg){&j, 0};
+    probe_worker(&args[0]);
+    for (uint32_t i = 1; i <= started; ++i) pthread_join(tid[i], NULL);
+    if (out_rays) {
+        *out_rays = 0;
+        for (int i = 0; i < 64; ++i) *out_rays += j.rays[i];
+    }
+    free(c.lights);
+    return GLOW_OK;
+}

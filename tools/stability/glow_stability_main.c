@@ -1,0 +1,505 @@
+/* glow-stability — measurements of the stability suite that are charts, not pass/fail (issue 4):
+ *
+ *   glow-stability ringing BAKE SCENE.json [--bands-max L] [--dirs N] [--json]
+ *   glow-stability flicker BAKE SCENE.json [--frames N] [--iterations K] [--probes P] [--samples S] [--csv FILE]
+ *   glow-stability jumps   BAKE SCENE.json [--pairs P] [--samples S] [--csv FILE]
+ *
+ * SH ringing: for l = 2 .. min(L, the bake's bands) the runtime is converged (luma = chroma = l,
+ * multi-bounce, the scene's lights through the exact host) and every cache's radiance is evaluated in
+ * N Fibonacci directions (grid caches: the sphere; lightmap caches: the hemisphere above their
+ * normal, the only directions a surface can receive from). Reported per l: the share of
+ * (cache, direction) pairs whose RGB radiance has a channel below zero, the same with the
+ * Lanczos window of glow_sh_window_factor applied to the bands, and the share of lightmap caches
+ * whose diffuse-shaded irradiance (what a surface shows) is negative, without and with the window.
+ * A pair counts as negative when a channel is below -1e-6 of the cache's mean luma (so exact zeros
+ * in unlit caches do not count).
+ *
+ * Flicker: the scene's first light (point or spot) moves once around a horizontal circle (radius 15 %
+ * of the scene's diagonal, centred on its position: keep it clear of walls) in N frames; Glow runs K feedback iterations per
+ * frame (progressive, as an engine would; converged before frame 0), the reference estimates the same
+ * irradiance at P lightmap caches per frame with glow_render_irradiance and the same random numbers
+ * every frame (correlated). Per frame: mean over the probes of |E(f) - E(f-1)| / mean E, for both;
+ * the summary compares Glow's frame-to-frame change with the reference's.
+ *
+ * Jumps (link-cut discontinuities): Glow converged with the scene's lights; P pairs of neighbouring
+ * lightmap texels (adjacent in the lightmap, caches within 2.5 texel spacings in space, normals within
+ * 25 degrees); per pair the jump |E_a - E_b| (luma) from Glow's caches and from the reference (the pair
+ * shares its random numbers). Reports the largest and 99th-percentile jumps relative to the mean
+ * irradiance, Glow against the reference.
+ *
+ * Exit 0, 1 on a failure (the message names the file), 2 bad usage. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "glow/glow.h"
+#include "glow/glow_host.h"
+#include "glow/glow_scene.h"
+#include "glow_render.h"
+#include "runtime_internal.h" /* the bake's cache normals (glow__bake_caches); a tool of this repository */
+
+#define PI_D 3.14159265358979323846
+
+static int usage(FILE *f) {
+    fprintf(f, "usage: glow-stability ringing BAKE SCENE.json [--bands-max L] [--dirs N] [--json]\n"
+               "       glow-stability flicker BAKE SCENE.json [--frames N] [--iterations K] [--probes P] [--samples S]\n"
+               "                              [--csv FILE]\n"
+               "       glow-stability jumps   BAKE SCENE.json [--pairs P] [--samples S] [--csv FILE]\n"
+               "Share of negative radiance in Glow's converged caches for SH bands 2..L, with and without\n"
+               "the Lanczos window (glow_sh_window_factor); see docs/results.md.\n");
+    return f == stdout ? 0 : 2;
+}
+
+static void logger_fn(void *user, glow_log_level level, glow_result code, const char *msg, const char *file, int line) {
+    (void)user, (void)code, (void)file, (void)line;
+    if (level >= GLOW_LOG_WARNING) fprintf(stderr, "glow-stability: %s\n", msg);
+}
+
+typedef struct counts {
+    double pairs, neg, neg_w;            /* (cache, direction) pairs */
+    double lm, lm_neg_irr, lm_neg_irr_w; /* lightmap caches, diffuse irradiance */
+    double worst, worst_w;               /* most negative radiance relative to the cache's mean luma */
+} counts;
+
+static void radiance(const float *c, uint32_t L, const float *y, const float *win, float rgb[3]) {
+    float ycc[3] = {0, 0, 0};
+    const float *co = c + L * L, *cg = co + L * L;
+    for (uint32_t l = 0; l < L; ++l)
+        for (uint32_t q = l * l; q < (l + 1) * (l + 1); ++q) {
+            const float w = win ? win[l] : 1.0f;
+            ycc[0] += w * c[q] * y[q];
+            ycc[1] += w * co[q] * y[q];
+            ycc[2] += w * cg[q] * y[q];
+        }
+    glow_ycocg_to_rgb(ycc, rgb);
+}
+
+static int ringing(const char *bake_path, const char *scene_path, uint32_t lmax, uint32_t ndirs, int json) {
+    glow_logger lg = {.log = logger_fn};
+    glow_scene_desc scene;
+    char msg[512];
+    if (glow_scene_load(scene_path, &lg, &scene, msg, sizeof msg) != GLOW_OK) {
+        fprintf(stderr, "glow-stability: %s\n", msg);
+        return 1;
+    }
+    glow_context *ctx = NULL;
+    glow_bake *bake = NULL;
+    glow_host *host = NULL;
+    int rc = 1;
+    float *dirs = malloc(sizeof(float) * 3 * ndirs);
+    if (!dirs) goto done;
+    for (uint32_t i = 0; i < ndirs; ++i) { /* Fibonacci sphere */
+        double z = 1.0 - (2.0 * i + 1.0) / ndirs, r = sqrt(fmax(0.0, 1.0 - z * z)), phi = i * PI_D * (3.0 - sqrt(5.0));
+        dirs[3 * i] = (float)(r * cos(phi));
+        dirs[3 * i + 1] = (float)(r * sin(phi));
+        dirs[3 * i + 2] = (float)z;
+    }
+    if (glow_context_create(&(glow_context_desc){.api_version = GLOW_VERSION, .logger = lg}, &ctx) != GLOW_OK) goto done;
+    if (glow_bake_load_file(ctx, bake_path, &bake) != GLOW_OK) {
+        fprintf(stderr, "glow-stability: %s: cannot load the bake\n", bake_path);
+        goto done;
+    }
+    glow_bake_info info;
+    glow_bake_get_info(bake, &info);
+    glow_host_desc hd = glow_host_desc_from_scene(&scene, bake, GLOW_HOST_KIND_EXACT);
+    hd.logger = lg;
+    if (glow_host_create(&hd, &host) != GLOW_OK) {
+        fprintf(stderr, "glow-stability: %s: cannot create the host\n", bake_path);
+        goto done;
+    }
+    if (lmax > info.sh_bands) lmax = info.sh_bands;
+    if (json) printf("[");
+    else
+        printf("%s (%u caches, bake bands %u), %u directions\n"
+               "bands  negative radiance (pairs)  windowed   worst (x mean luma)  windowed   lightmap irradiance < 0  windowed\n",
+               bake_path, info.cache_count, info.sh_bands, ndirs);
+    for (uint32_t L = 2; L <= lmax; ++L) {
+        glow_system *sys;
+        if (glow_system_create(ctx, &(glow_system_desc){.bake = bake, .lighting = glow_host_hooks(host),
+                                                          .sh_bands_luma = L, .sh_bands_chroma = L},
+                               &sys) != GLOW_OK)
+            goto done;
+        glow_system_set_params(sys, &(glow_system_params){.bounce_intensity = 1.0f,
+                                                          .emission_scale = scene.emission_scale,
+                                                          .bounce_iterations = 64});
+        for (int u = 0; u < 3; ++u)
+            if (glow_system_update(sys, NULL) != GLOW_OK) {
+                glow_system_destroy(sys);
+                goto done;
+            }
+        const glow_cache_outputs *o = glow_system_outputs(sys);
+        const glow_bake_cache *caches = glow__bake_caches(bake);
+        float win[GLOW_MAX_SH_BANDS], y[GLOW_MAX_SH_BANDS * GLOW_MAX_SH_BANDS];
+        for (uint32_t l = 0; l < L; ++l) win[l] = glow_sh_window_factor(l, L);
+        counts k = {0};
+        for (uint32_t c = 0; c < o->cache_count; ++c) {
+            const float *sh = o->cache_sh + (size_t)c * o->coeff_count;
+            const double mean = sh[0] * 0.28209479177387814;
+            if (!(mean > 0.0)) continue;
+            const bool lm = c >= o->grid_cache_count;
+            float nrm[3] = {0, 0, 0};
+            if (lm) glow__oct_decode(caches[c].normal_oct, nrm);
+            for (uint32_t d = 0; d < ndirs; ++d) {
+                const float *w = dirs + 3 * d;
+                if (lm && w[0] * nrm[0] + w[1] * nrm[1] + w[2] * nrm[2] <= 0.0f) continue;
+                glow_sh_eval(L, w, y);
+                float a[3], b[3];
+                radiance(sh, L, y, NULL, a);
+                radiance(sh, L, y, win, b);
+                const double ma = fmin(a[0], fmin(a[1], a[2])) / mean, mb = fmin(b[0], fmin(b[1], b[2])) / mean;
+                k.pairs += 1.0;
+                k.neg += ma < -1e-6;
+                k.neg_w += mb < -1e-6;
+                k.worst = fmin(k.worst, ma);
+                k.worst_w = fmin(k.worst_w, mb);
+            }
+            if (lm) {
+                float e[3], ew[3], tmp[3 * GLOW_MAX_SH_BANDS * GLOW_MAX_SH_BANDS];
+                glow_shade_sh(sh, L, L, nrm, 1.0f, e);
+                memcpy(tmp, sh, sizeof(float) * 3 * L * L);
+                for (uint32_t ch = 0; ch < 3; ++ch)
+                    for (uint32_t l = 0; l < L; ++l)
+                        for (uint32_t q = l * l; q < (l + 1) * (l + 1); ++q) tmp[ch * L * L + q] *= win[l];
+                glow_shade_sh(tmp, L, L, nrm, 1.0f, ew);
+                k.lm += 1.0;
+                k.lm_neg_irr += fmin(e[0], fmin(e[1], e[2])) < -1e-6 * mean;
+                k.lm_neg_irr_w += fmin(ew[0], fmin(ew[1], ew[2])) < -1e-6 * mean;
+            }
+        }
+        glow_system_destroy(sys);
+        const double sh_neg = k.pairs ? k.neg / k.pairs : 0.0, sh_neg_w = k.pairs ? k.neg_w / k.pairs : 0.0;
+        const double irr = k.lm ? k.lm_neg_irr / k.lm : 0.0, irr_w = k.lm ? k.lm_neg_irr_w / k.lm : 0.0;
+        if (json)
+            printf("%s\n {\"bands\": %u, \"negative_share\": %.6f, \"negative_share_windowed\": %.6f, "
+                   "\"worst\": %.6f, \"worst_windowed\": %.6f, \"lightmap_irradiance_negative_share\": %.6f, "
+                   "\"lightmap_irradiance_negative_share_windowed\": %.6f, \"pairs\": %.0f}",
+                   L == 2 ? "" : ",", L, sh_neg, sh_neg_w, k.worst, k.worst_w, irr, irr_w, k.pairs);
+        else
+            printf("%5u  %25.2f %%  %8.2f %%  %19.3f  %8.3f  %22.2f %%  %6.2f %%\n", L, 100 * sh_neg, 100 * sh_neg_w, k.worst,
+                   k.worst_w, 100 * irr, 100 * irr_w);
+        fflush(stdout);
+    }
+    if (json) printf("\n]\n");
+    rc = 0;
+done:
+    glow_host_destroy(host);
+    glow_bake_destroy(bake);
+    glow_context_destroy(ctx);
+    glow_scene_free(&scene);
+    free(dirs);
+    return rc;
+}
+
+/* ------------------------------------------------------------------ shared: Glow and the reference */
+typedef struct session {
+    glow_scene_desc scene;
+    glow_render_scene *rs;
+    glow_context *ctx;
+    glow_bake *bake;
+    glow_host *host;
+    glow_system *sys;
+    const glow_bake_cache *caches;
+    glow_bake_info info;
+} session;
+
+static void session_free(session *s) {
+    glow_system_destroy(s->sys);
+    glow_host_destroy(s->host);
+    glow_bake_destroy(s->bake);
+    glow_context_destroy(s->ctx);
+    glow_render_scene_destroy(s->rs);
+    glow_scene_free(&s->scene);
+}
+
+static int session_open(session *s, const char *bake_path, const char *scene_path, uint32_t iterations) {
+    memset(s, 0, sizeof *s);
+    glow_logger lg = {.log = logger_fn};
+    char msg[512];
+    if (glow_scene_load(scene_path, &lg, &s->scene, msg, sizeof msg) != GLOW_OK ||
+        glow_render_scene_load(scene_path, &s->rs, msg, sizeof msg) != GLOW_OK) {
+        fprintf(stderr, "glow-stability: %s\n", msg);
+        return 0;
+    }
+    if (glow_context_create(&(glow_context_desc){.api_version = GLOW_VERSION, .logger = lg}, &s->ctx) != GLOW_OK) return 0;
+    if (glow_bake_load_file(s->ctx, bake_path, &s->bake) != GLOW_OK) {
+        fprintf(stderr, "glow-stability: %s: cannot load the bake\n", bake_path);
+        return 0;
+    }
+    glow_bake_get_info(s->bake, &s->info);
+    s->caches = glow__bake_caches(s->bake);
+    glow_host_desc hd = glow_host_desc_from_scene(&s->scene, s->bake, GLOW_HOST_KIND_EXACT);
+    hd.logger = lg;
+    if (glow_host_create(&hd, &s->host) != GLOW_OK) {
+        fprintf(stderr, "glow-stability: %s: cannot create the host\n", bake_path);
+        return 0;
+    }
+    if (glow_system_create(s->ctx, &(glow_system_desc){.bake = s->bake, .lighting = glow_host_hooks(s->host)}, &s->sys) !=
+        GLOW_OK)
+        return 0;
+    glow_system_set_params(s->sys, &(glow_system_params){.bounce_intensity = 1.0f, .emission_scale = s->scene.emission_scale,
+                                                         .bounce_iterations = 64});
+    for (int u = 0; u < 3; ++u)
+        if (glow_system_update(s->sys, NULL) != GLOW_OK) return 0;
+    glow_system_set_params(s->sys, &(glow_system_params){.bounce_intensity = 1.0f, .emission_scale = s->scene.emission_scale,
+                                                         .bounce_iterations = iterations});
+    return 1;
+}
+
+/* Glow's irradiance E (W/m², RGB) at lightmap cache c: π x the diffuse-shaded cache along its normal */
+static void glow_irradiance(const session *s, uint32_t c, float out[3]) {
+    const glow_cache_outputs *o = glow_system_outputs(s->sys);
+    float n[3];
+    glow__oct_decode(s->caches[c].normal_oct, n);
+    glow_shade_sh(o->cache_sh + (size_t)c * o->coeff_count, o->sh_bands_luma, o->sh_bands_chroma, n, 1.0f, out);
+    for (int k = 0; k < 3; ++k) out[k] *= (float)PI_D;
+}
+
+static float luma(const float *rgb) { return 0.25f * rgb[0] + 0.5f * rgb[1] + 0.25f * rgb[2]; }
+
+static void cache_point(const session *s, uint32_t c, float *pt) {
+    memcpy(pt, s->caches[c].position, 3 * sizeof(float));
+    glow__oct_decode(s->caches[c].normal_oct, pt + 3);
+}
+
+/* ------------------------------------------------------------------ flicker */
+static int flicker(const char *bake_path, const char *scene_path, uint32_t frames, uint32_t iterations, uint32_t nprobes,
+                   uint32_t samples, const char *csv_path) {
+    session s;
+    int rc = 1;
+    float *pts = NULL, *eg = NULL, *er = NULL, *pg = NULL, *pr = NULL;
+    FILE *csv = NULL;
+    if (!session_open(&s, bake_path, scene_path, iterations)) goto done;
+    if (s.scene.light_count == 0 || s.scene.lights[0].type == GLOW_SCENE_LIGHT_SUN) {
+        fprintf(stderr, "glow-stability: %s: flicker moves the first light, which must be a point or spot light\n",
+                scene_path);
+        goto done;
+    }
+    const uint32_t lm = s.info.lightmap_cache_count, first = s.info.grid_cache_count;
+    if (nprobes > lm) nprobes = lm;
+    pts = malloc(sizeof(float) * 6 * nprobes);
+    eg = malloc(sizeof(float) * 3 * nprobes);
+    er = malloc(sizeof(float) * 3 * nprobes);
+    pg = malloc(sizeof(float) * 3 * nprobes);
+    pr = malloc(sizeof(float) * 3 * nprobes);
+    if (!pts || !eg || !er || !pg || !pr || nprobes == 0) goto done;
+    for (uint32_t i = 0; i < nprobes; ++i) cache_point(&s, first + (uint32_t)((uint64_t)i * lm / nprobes), pts + 6 * i);
+    if (csv_path && !(csv = fopen(csv_path, "w"))) {
+        fprintf(stderr, "glow-stability: %s: cannot write\n", csv_path);
+        goto done;
+    }
+    if (csv) fprintf(csv, "frame,mean_glow,mean_ref,change_glow,change_ref,rel_error\n");
+    const float diag = sqrtf((s.info.bounds_max[0] - s.info.bounds_min[0]) * (s.info.bounds_max[0] - s.info.bounds_min[0]) +
+                             (s.info.bounds_max[1] - s.info.bounds_min[1]) * (s.info.bounds_max[1] - s.info.bounds_min[1]) +
+                             (s.info.bounds_max[2] - s.info.bounds_min[2]) * (s.info.bounds_max[2] - s.info.bounds_min[2]));
+    const glow_scene_light base = s.scene.lights[0];
+    glow_scene_light *lights = s.scene.lights;
+    glow_render_settings st = {.seed = 11};
+    double sum_cg = 0, sum_cr = 0, max_cg = 0, max_cr = 0, sum_err = 0, sum_excess = 0;
+    char msg[512];
+    for (uint32_t f = 0; f <= frames; ++f) {
+        const double a = 2.0 * PI_D * f / frames, r = 0.15 * diag;
+        lights[0] = base;
+        lights[0].position[0] = base.position[0] + (float)(r * cos(a));
+        lights[0].position[2] = base.position[2] + (float)(r * sin(a));
+        if (glow_host_set_light(s.host, 0, &lights[0]) != GLOW_OK) goto done;
+        if (f > 0 && glow_system_update(s.sys, NULL) != GLOW_OK) goto done; /* frame 0: the converged start */
+        for (uint32_t i = 0; i < nprobes; ++i) glow_irradiance(&s, first + (uint32_t)((uint64_t)i * lm / nprobes), eg + 3 * i);
+        if (glow_render_irradiance(s.rs, lights, s.scene.light_count, &st, pts, nprobes, samples, 0, er, NULL, msg,
+                                   sizeof msg) != GLOW_OK) {
+            fprintf(stderr, "glow-stability: %s\n", msg);
+            goto done;
+        }
+        double mg = 0, mr = 0, cg = 0, cr = 0, err = 0, ex = 0;
+        for (uint32_t i = 0; i < nprobes; ++i) {
+            const double g = luma(eg + 3 * i), rr = luma(er + 3 * i);
+            mg += g;
+            mr += rr;
+            err += fabs(g - rr);
+            if (f > 0) {
+                const double dg = fabs(g - luma(pg + 3 * i)), dr = fabs(rr - luma(pr + 3 * i));
+                cg += dg;
+                cr += dr;
+                ex += fmax(0.0, dg - dr);
+            }
+        }
+        const double norm = mr > 0 ? mr : 1.0;
+        cg /= norm;
+        cr /= norm;
+        ex /= norm;
+        err /= norm;
+        mg /= nprobes;
+        mr /= nprobes;
+        if (f > 0) {
+            sum_cg += cg;
+            sum_cr += cr;
+            sum_excess += ex;
+            max_cg = fmax(max_cg, cg);
+            max_cr = fmax(max_cr, cr);
+        }
+        sum_err += err;
+        if (csv) fprintf(csv, "%u,%.6g,%.6g,%.6g,%.6g,%.6g\n", f, mg, mr, f ? cg : 0.0, f ? cr : 0.0, err);
+        memcpy(pg, eg, sizeof(float) * 3 * nprobes);
+        memcpy(pr, er, sizeof(float) * 3 * nprobes);
+    }
+    printf("flicker: %s, %u frames, %u iteration(s) per frame, %u probes x %u paths\n"
+           "  mean frame-to-frame change: Glow %.4f, reference %.4f (ratio %.2f); largest: Glow %.4f, reference %.4f\n"
+           "  change of Glow beyond the reference's (per frame, mean): %.4f; mean |Glow - reference| %.4f (all relative to "
+           "the mean irradiance)\n",
+           scene_path, frames, iterations, nprobes, samples, sum_cg / frames, sum_cr / frames,
+           sum_cr > 0 ? sum_cg / sum_cr : 0.0, max_cg, max_cr, sum_excess / frames, sum_err / (frames + 1));
+    rc = 0;
+done:
+    if (csv) fclose(csv);
+    free(pts);
+    free(eg);
+    free(er);
+    free(pg);
+    free(pr);
+    session_free(&s);
+    return rc;
+}
+
+/* ------------------------------------------------------------------ link-cut jumps */
+static int cmp_double(const void *a, const void *b) {
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static int jumps(const char *bake_path, const char *scene_path, uint32_t max_pairs, uint32_t samples, const char *csv_path) {
+    session s;
+    int rc = 1;
+    uint32_t *pa = NULL, *pb = NULL;
+    float *pts = NULL, *er = NULL;
+    double *jg = NULL, *jr = NULL;
+    FILE *csv = NULL;
+    if (!session_open(&s, bake_path, scene_path, 64)) goto done;
+    const glow_cache_outputs *o = glow_system_outputs(s.sys);
+    const uint32_t W = o->lightmap_width, H = o->lightmap_height;
+    if (!W || !H) {
+        fprintf(stderr, "glow-stability: %s: the bake has no lightmap\n", bake_path);
+        goto done;
+    }
+    const float spacing = 1.0f / s.info.texel_density;
+    uint32_t cand = 0;
+    pa = malloc(sizeof(uint32_t) * 2 * (size_t)W * H);
+    pb = malloc(sizeof(uint32_t) * 2 * (size_t)W * H);
+    if (!pa || !pb) goto done;
+    for (uint32_t y = 0; y < H; ++y)
+        for (uint32_t x = 0; x < W; ++x)
+            for (int d = 0; d < 2; ++d) {
+                uint32_t x2 = x + (d == 0), y2 = y + (d == 1);
+                if (x2 >= W || y2 >= H) continue;
+                uint32_t a = o->lightmap_map[y * W + x], b = o->lightmap_map[y2 * W + x2];
+                if (a == GLOW_MAP_EMPTY || b == GLOW_MAP_EMPTY || a == b) continue;
+                float na[3], nb[3];
+                glow__oct_decode(s.caches[a].normal_oct, na);
+                glow__oct_decode(s.caches[b].normal_oct, nb);
+                float dx = 0, dot = na[0] * nb[0] + na[1] * nb[1] + na[2] * nb[2];
+                for (int k = 0; k < 3; ++k) dx += (s.caches[a].position[k] - s.caches[b].position[k]) * (s.caches[a].position[k] - s.caches[b].position[k]);
+                if (dot < 0.906f || dx > (2.5f * spacing) * (2.5f * spacing)) continue;
+                pa[cand] = a;
+                pb[cand] = b;
+                cand++;
+            }
+    uint32_t n = cand < max_pairs ? cand : max_pairs;
+    if (n == 0) {
+        fprintf(stderr, "glow-stability: %s: no neighbouring lightmap caches\n", bake_path);
+        goto done;
+    }
+    pts = malloc(sizeof(float) * 12 * n);
+    er = malloc(sizeof(float) * 6 * n);
+    jg = malloc(sizeof(double) * n);
+    jr = malloc(sizeof(double) * n);
+    if (!pts || !er || !jg || !jr) goto done;
+    for (uint32_t i = 0; i < n; ++i) {
+        uint32_t k = (uint32_t)((uint64_t)i * cand / n);
+        cache_point(&s, pa[k], pts + 12 * i);
+        cache_point(&s, pb[k], pts + 12 * i + 6);
+        pa[i] = pa[k];
+        pb[i] = pb[k];
+    }
+    glow_render_settings st = {.seed = 5};
+    char msg[512];
+    if (glow_render_irradiance(s.rs, NULL, 0, &st, pts, 2 * n, samples, 2, er, NULL, msg, sizeof msg) != GLOW_OK) {
+        fprintf(stderr, "glow-stability: %s\n", msg);
+        goto done;
+    }
+    if (csv_path && !(csv = fopen(csv_path, "w"))) {
+        fprintf(stderr, "glow-stability: %s: cannot write\n", csv_path);
+        goto done;
+    }
+    if (csv) fprintf(csv, "x,y,z,glow_a,glow_b,ref_a,ref_b\n");
+    double mean = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        float ga[3], gb[3];
+        glow_irradiance(&s, pa[i], ga);
+        glow_irradiance(&s, pb[i], gb);
+        jg[i] = fabs((double)luma(ga) - luma(gb));
+        jr[i] = fabs((double)luma(er + 6 * i) - luma(er + 6 * i + 3));
+        mean += 0.5 * (luma(er + 6 * i) + luma(er + 6 * i + 3));
+        if (csv)
+            fprintf(csv, "%g,%g,%g,%g,%g,%g,%g\n", pts[12 * i], pts[12 * i + 1], pts[12 * i + 2], luma(ga), luma(gb),
+                    luma(er + 6 * i), luma(er + 6 * i + 3));
+    }
+    mean /= n;
+    qsort(jg, n, sizeof *jg, cmp_double);
+    qsort(jr, n, sizeof *jr, cmp_double);
+    const uint32_t p99 = (uint32_t)(0.99 * (n - 1));
+    printf("jumps: %s, %u neighbouring cache pairs (of %u), %u paths per cache, mean irradiance %.4g W/m^2\n"
+           "  largest jump / mean: Glow %.4f, reference %.4f; 99th percentile: Glow %.4f, reference %.4f; median: Glow %.4f, "
+           "reference %.4f\n",
+           scene_path, n, cand, samples, mean, jg[n - 1] / mean, jr[n - 1] / mean, jg[p99] / mean, jr[p99] / mean,
+           jg[n / 2] / mean, jr[n / 2] / mean);
+    rc = 0;
+done:
+    if (csv) fclose(csv);
+    free(pa);
+    free(pb);
+    free(pts);
+    free(er);
+    free(jg);
+    free(jr);
+    session_free(&s);
+    return rc;
+}
+
+int main(int argc, char **argv) {
+    if (argc >= 2 && (!strcmp(argv[1], "-h") || !strcmp(argv[1], "--help"))) return usage(stdout);
+    if (argc < 4 || (strcmp(argv[1], "ringing") && strcmp(argv[1], "flicker") && strcmp(argv[1], "jumps")))
+        return usage(stderr);
+    uint32_t lmax = GLOW_MAX_SH_BANDS, ndirs = 256, frames = 240, iterations = 1, probes = 96, samples = 1024, pairs = 3000;
+    const char *csv = NULL;
+    int json = 0;
+    for (int i = 4; i < argc; ++i) {
+        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        uint32_t *dst = !strcmp(a, "--bands-max") ? &lmax : !strcmp(a, "--dirs") ? &ndirs : !strcmp(a, "--frames") ? &frames
+                      : !strcmp(a, "--iterations") ? &iterations : !strcmp(a, "--probes") ? &probes
+                      : !strcmp(a, "--samples") ? &samples : !strcmp(a, "--pairs") ? &pairs : NULL;
+        if (!strcmp(a, "--json")) {
+            json = 1;
+        } else if (!strcmp(a, "--csv") && v) {
+            csv = v;
+            ++i;
+        } else if (dst && v) {
+            char *end = NULL;
+            unsigned long x = strtoul(v, &end, 10);
+            if (!end || *end || x == 0 || x > 1000000) {
+                fprintf(stderr, "glow-stability: %s needs a whole number in 1..1000000, not '%s'\n", a, v);
+                return 2;
+            }
+            *dst = (uint32_t)x;
+            ++i;
+        } else {
+            fprintf(stderr, "glow-stability: unknown option '%s'\n", a);
+            return usage(stderr);
+        }
+    }
+    if (lmax < 2 || lmax > GLOW_MAX_SH_BANDS || ndirs < 8 || ndirs > 65536 || iterations > 64) {
+        fprintf(stderr, "glow-stability: --bands-max must be 2..8, --dirs 8..65536, --iterations 1..64\n");
+        return 2;
+    }
+    if (!strcmp(argv[1], "ringing")) return ringing(argv[2], argv[3], lmax, ndirs, json);
+    if (!strcmp(argv[1], "flicker")) return flicker(argv[2], argv[3], frames, iterations, probes, samples, csv);
+    return jumps(argv[2], argv[3], pairs, samples, csv);
+}
