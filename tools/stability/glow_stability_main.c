@@ -303,7 +303,18 @@ static int flicker(const char *bake_path, const char *scene_path, uint32_t frame
         lights[0].position[0] = base.position[0] + (float)(r * cos(a));
         lights[0].position[2] = base.position[2] + (float)(r * sin(a));
         if (glow_host_set_light(s.host, 0, &lights[0]) != GLOW_OK) goto done;
-        if (f > 0 && glow_system_update(s.sys, NULL) != GLOW_OK) goto done; /* frame 0: the converged start */
+        if (f == 0) { /* frame 0: converged at the path's first position, as the engine's first frame would be */
+            glow_system_set_params(s.sys, &(glow_system_params){.bounce_intensity = 1.0f,
+                                                                .emission_scale = s.scene.emission_scale,
+                                                                .bounce_iterations = 64});
+            for (int u = 0; u < 3; ++u)
+                if (glow_system_update(s.sys, NULL) != GLOW_OK) goto done;
+            glow_system_set_params(s.sys, &(glow_system_params){.bounce_intensity = 1.0f,
+                                                                .emission_scale = s.scene.emission_scale,
+                                                                .bounce_iterations = iterations});
+        } else if (glow_system_update(s.sys, NULL) != GLOW_OK) {
+            goto done;
+        }
         for (uint32_t i = 0; i < nprobes; ++i) glow_irradiance(&s, first + (uint32_t)((uint64_t)i * lm / nprobes), eg + 3 * i);
         if (glow_render_irradiance(s.rs, lights, s.scene.light_count, &st, pts, nprobes, samples, 0, er, NULL, msg,
                                    sizeof msg) != GLOW_OK) {

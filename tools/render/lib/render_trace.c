@@ -316,7 +316,8 @@ static void sample(const render_ctx *c, uint32_t x, uint32_t y, rng *rd, rng *rp
     ws->rays++;
     glow__hit h = glow__rt_intersect(sc->rt, c->org, dir, 0.0f, INFINITY);
     if (h.tri == UINT32_MAX) {
-        for (int k = 0; k < 3; ++k) direct[k] += c->env[k];
+        if (!(c->gv && c->gv->indirect_only))
+            for (int k = 0; k < 3; ++k) direct[k] += c->env[k];
         return;
     }
     surf s;
