@@ -62,6 +62,22 @@ a=$(json_num "$T/full.json" psnr_db); b=$(json_num "$T/added.json" psnr_db)
 python3 -c "import sys; a,b=float(sys.argv[1]),float(sys.argv[2]); sys.exit(0 if abs(a-b) < 1e-3 and 10 < a < 90 else 1)" "$a" "$b" \
   && pass "  same PSNR both ways ($a dB)" || fail "  PSNR $a vs $b"
 
+# --- glow-stability: the three measurements at toy sizes (they must run and report; the figures are
+#     docs/results.md's, from full-size runs)
+SCN=$ROOT/scenes
+expect 2 "stability: no arguments" "$BIN/glow-stability"
+expect 2 "stability: bad number" "$BIN/glow-stability" flicker "$T/cornell.glow" "$SCN/cornell-builtin-moving.json" --frames 0
+expect 1 "stability: missing bake" "$BIN/glow-stability" ringing "$T/none.glow" "$SCENE"; err_has "none.glow"
+expect 1 "stability: flicker needs a point or spot light" "$BIN/glow-stability" flicker "$T/cornell.glow" "$SCENE" --frames 2
+err_has "point or spot"
+expect 0 "stability: ringing" "$BIN/glow-stability" ringing "$T/cornell.glow" "$SCENE" --bands-max 3 --dirs 16 --json
+python3 -c "import json,sys; r=json.load(open(sys.argv[1])); sys.exit(0 if len(r)==2 and all(0<=x['negative_share']<=1 and x['negative_share_windowed']<=x['negative_share'] for x in r) else 1)" "$T/out" \
+  && pass "  ringing JSON: bands 2, 3, windowed share <= plain" || fail "  ringing JSON wrong"
+expect 0 "stability: flicker" "$BIN/glow-stability" flicker "$T/cornell.glow" "$SCN/cornell-builtin-moving.json" --frames 4 --probes 8 --samples 16 --csv "$T/flicker.csv"
+[ "$(wc -l < "$T/flicker.csv")" = 6 ] && pass "  flicker CSV: header + 5 frames" || fail "  flicker CSV"
+expect 0 "stability: jumps" "$BIN/glow-stability" jumps "$T/cornell.glow" "$SCN/cornell-builtin-spot.json" --pairs 20 --samples 16
+grep -q "largest jump" "$T/out" && pass "  jumps reported" || fail "  jumps output"
+
 # --- glow-eval quick (two settings of one parameter)
 expect 0 "glow-eval quick" python3 "$ROOT/tools/glow-eval" sweep "$SCENE" --out "$T/eval" --quick --params chroma --bin "$BIN" \
   --width 24 --height 24 --ref-spp 8 --frames 3
