@@ -11,6 +11,7 @@
 #include "bake_write.h"
 #include "hierarchy.h"
 #include "pc_internal.h"
+#include "grid_vis.h"
 
 static const char *const stage_names[GLOW_PC_STAGE_COUNT] = {"import", "bvh", "surfels", "hierarchy",
                                                              "caches", "links", "write"};
@@ -120,7 +121,7 @@ static void add_section(sections *ss, uint32_t fourcc, void *data, uint64_t size
 }
 
 static glow_result serialise(const glow_pc_settings *set, const glow__scene *sc, const glow__surfels *sf,
-                             const glow__hierarchy *h, const glow__caches *ca, const glow__links *lk,
+                             const glow__hierarchy *h, const glow__caches *ca, const glow__links *lk, uint8_t *gvis,
                              sections *ss, glow__log *log) {
     const uint32_t nl = lk->per_cache;
     const uint32_t blocks = (nl + GLOW_LINK_BLOCK - 1) / GLOW_LINK_BLOCK;
@@ -129,6 +130,7 @@ static glow_result serialise(const glow_pc_settings *set, const glow__scene *sc,
     if (h->node_count > GLOW_LINK_MAX_NODES) {
         glow__errorf(log, "write: %u hierarchy nodes exceed the bake format's limit of %u (24-bit link node index)",
                      h->node_count, GLOW_LINK_MAX_NODES);
+        free(gvis);
         return GLOW_ERROR_UNSUPPORTED;
     }
     /* META */
@@ -149,6 +151,7 @@ static glow_result serialise(const glow_pc_settings *set, const glow__scene *sc,
     if (!m || !mat || !su || !no || !lv || !cc || (grid_cells && !gm) || (lm_texels && !lmm) || !lb ||
         (lk->sh && !sh) || !tr) {
         free(m); free(mat); free(su); free(no); free(lv); free(cc); free(gm); free(lmm); free(lb); free(sh); free(tr);
+        free(gvis);
         glow__errorf(log, "write: out of memory while serialising the bake");
         return GLOW_ERROR_OUT_OF_MEMORY;
     }
@@ -276,6 +279,8 @@ static glow_result serialise(const glow_pc_settings *set, const glow__scene *sc,
     add_section(ss, GLOW_SECTION_CACH, cc, (uint64_t)ca->count * sizeof *cc);
     if (gm) add_section(ss, GLOW_SECTION_GRID, gm, grid_cells * sizeof *gm);
     else free(gm);
+    if (gvis && gm) add_section(ss, GLOW_SECTION_GVIS, gvis, grid_cells * 8u);
+    else free(gvis);
     if (lmm) add_section(ss, GLOW_SECTION_LMAP, lmm, lm_texels * sizeof *lmm);
     else free(lmm);
     add_section(ss, GLOW_SECTION_LINK, lb, (uint64_t)ca->count * blocks * sizeof *lb);
@@ -316,6 +321,7 @@ glow_result glow_pc_bake(const char *scene_path, const char *out_path, const glo
     glow__surfels surfels = {0};
     glow__hierarchy hier = {0};
     glow__caches caches = {0};
+    uint8_t *gvis = NULL; /* GVIS, until serialise takes it */
     glow__links links = {0};
     sections ss = {0};
     glow__pool *pool = glow__pool_create(set.threads);
@@ -368,6 +374,19 @@ glow_result glow_pc_bake(const char *scene_path, const char *out_path, const glo
     glow__cache_settings scache = {.grid_spacing = set.grid_spacing, .texel_density = set.texel_density,
                                    .target_grid = p->grid, .target_lightmap = p->lightmap, .seed = set.seed};
     res = glow__caches_build(&scene, rt, &surfels, &scache, pool, &log, &caches);
+    if (res == GLOW_OK && caches.grid_dims[0] && caches.grid_dims[1] && caches.grid_dims[2]) {
+        /* which corners of each grid cell a lookup may blend (grid_vis.c) */
+        const size_t cells = (size_t)caches.grid_dims[0] * caches.grid_dims[1] * caches.grid_dims[2];
+        float ext[3];
+        glow__sub(scene.bounds_max, scene.bounds_min, ext);
+        gvis = malloc(cells * 8);
+        if (!gvis) {
+            glow__errorf(&log, "%s: out of memory for the grid visibility", scene_path);
+            res = GLOW_ERROR_OUT_OF_MEMORY;
+        } else {
+            res = glow__grid_visibility(rt, &caches, sqrtf(glow__dot(ext, ext)), pool, gvis);
+        }
+    }
     STAGE_END(ST_CACHES);
     if (res != GLOW_OK) goto done;
     stats->grid_spacing = caches.grid_spacing;
@@ -404,7 +423,8 @@ glow_result glow_pc_bake(const char *scene_path, const char *out_path, const glo
     stats->seed = set.seed;
 
     STAGE_BEGIN(ST_WRITE);
-    res = serialise(&set, &scene, &surfels, &hier, &caches, &links, &ss, &log);
+    res = serialise(&set, &scene, &surfels, &hier, &caches, &links, gvis, &ss, &log);
+    gvis = NULL; /* the sections own it now */
     if (res == GLOW_OK) res = glow__bake_write_file(out_path, ss.s, ss.n, &log, &stats->file_size);
     STAGE_END(ST_WRITE);
     if (res != GLOW_OK) goto done;
@@ -419,6 +439,7 @@ glow_result glow_pc_bake(const char *scene_path, const char *out_path, const glo
 #undef STAGE_BEGIN
 #undef STAGE_END
 done:
+    free(gvis);
     for (uint32_t i = 0; i < ss.n; ++i) free(ss.owned[i]);
     glow__links_free(&links);
     glow__caches_free(&caches);

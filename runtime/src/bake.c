@@ -31,11 +31,11 @@
 #define BAKE_ENTRY_SIZE ((uint64_t)sizeof(glow_bake_section))
 #define MAX_SH_BANDS 16u
 
-enum { S_META, S_MATL, S_SURF, S_NODE, S_LEVL, S_CACH, S_GRID, S_LMAP, S_LINK, S_SHLK, S_GEOM, S_KNOWN_COUNT };
+enum { S_META, S_MATL, S_SURF, S_NODE, S_LEVL, S_CACH, S_GRID, S_LMAP, S_LINK, S_SHLK, S_GEOM, S_GVIS, S_KNOWN_COUNT };
 
 static const uint32_t known_fourcc[S_KNOWN_COUNT] = {
     GLOW_SECTION_META, GLOW_SECTION_MATL, GLOW_SECTION_SURF, GLOW_SECTION_NODE, GLOW_SECTION_LEVL, GLOW_SECTION_CACH,
-    GLOW_SECTION_GRID, GLOW_SECTION_LMAP, GLOW_SECTION_LINK, GLOW_SECTION_SHLK, GLOW_SECTION_GEOM,
+    GLOW_SECTION_GRID, GLOW_SECTION_LMAP, GLOW_SECTION_LINK, GLOW_SECTION_SHLK, GLOW_SECTION_GEOM, GLOW_SECTION_GVIS,
 };
 
 typedef struct section_ref {
@@ -295,6 +295,10 @@ static glow_result check_meta(const vstate *v, const glow_bake_meta *m, section_
         return r;
     if (sec[S_GEOM].present && (r = check_section_size(v, &sec[S_GEOM], GLOW_SECTION_GEOM, m->triangle_count,
                                                        sizeof(glow_bake_triangle), "triangle_count")))
+        return r;
+    /* GVIS (optional): 8 octant masks per grid cell; any byte value is valid */
+    if (sec[S_GVIS].present &&
+        (r = check_section_size(v, &sec[S_GVIS], GLOW_SECTION_GVIS, d->grid_cells, 8u, "grid cells x 8 octants")))
         return r;
     return GLOW_OK;
 }
@@ -745,6 +749,10 @@ const glow_bake_cache *glow__bake_caches(const glow_bake *b) { return known_ptr(
 const uint32_t *glow__bake_grid_map(const glow_bake *b) {
     uint64_t cells = (uint64_t)b->meta.grid_dims[0] * b->meta.grid_dims[1] * b->meta.grid_dims[2];
     return cells ? known_ptr(b, S_GRID) : NULL;
+}
+const uint8_t *glow__bake_grid_visibility(const glow_bake *b) {
+    uint64_t cells = (uint64_t)b->meta.grid_dims[0] * b->meta.grid_dims[1] * b->meta.grid_dims[2];
+    return cells && b->known[S_GVIS].present ? known_ptr(b, S_GVIS) : NULL;
 }
 const uint32_t *glow__bake_lightmap_map(const glow_bake *b) {
     return b->meta.lightmap_count ? known_ptr(b, S_LMAP) : NULL;

@@ -87,6 +87,9 @@ const uint32_t *glow__bake_level_starts(const glow_bake *bake);        /* [level
 const glow_bake_cache *glow__bake_caches(const glow_bake *bake);       /* [cache_count] */
 /* [grid_dims[0]*grid_dims[1]*grid_dims[2]]; NULL when the grid has no cells. */
 const uint32_t *glow__bake_grid_map(const glow_bake *bake);
+/* [grid cells][8]: per octant of each grid cell, the corners a lookup may blend (GVIS, optional,
+ * see bake_format.h); NULL when the bake has no grid or was baked before it existed. */
+const uint8_t *glow__bake_grid_visibility(const glow_bake *bake);
 /* [lightmap_width*lightmap_height]; NULL when lightmap_count == 0. */
 const uint32_t *glow__bake_lightmap_map(const glow_bake *bake);
 /* [cache_count * link_blocks_per_cache] */

@@ -129,9 +129,15 @@ glow_result glow_sample_grid(const glow_cache_outputs *o, const float p[3], floa
     uint32_t idx[8];
     float w[8];
     const uint32_t dx = o->grid_dims[0], dxy = dx * o->grid_dims[1];
+    uint32_t vis = 0xFFu;
+    if (o->grid_visibility) { /* the corners visible from this octant of the cell (GVIS) */
+        const uint32_t oct = (t[0] >= 0.5f ? 1u : 0u) | (t[1] >= 0.5f ? 2u : 0u) | (t[2] >= 0.5f ? 4u : 0u);
+        vis = o->grid_visibility[((size_t)i0[2] * dxy + (size_t)i0[1] * dx + i0[0]) * 8u + oct];
+    }
     for (int c = 0; c < 8; ++c) {
         uint32_t x = (c & 1) ? i1[0] : i0[0], y = (c & 2) ? i1[1] : i0[1], z = (c & 4) ? i1[2] : i0[2];
         w[c] = ((c & 1) ? t[0] : 1.0f - t[0]) * ((c & 2) ? t[1] : 1.0f - t[1]) * ((c & 4) ? t[2] : 1.0f - t[2]);
+        if (!((vis >> c) & 1u)) w[c] = 0.0f;
         idx[c] = o->grid_map[(size_t)z * dxy + (size_t)y * dx + x];
     }
     return blend(o, idx, w, 8, out);

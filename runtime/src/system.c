@@ -525,6 +525,7 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
                                   .grid_sh = s->grid_cells ? s->grid_sh : NULL,
                                   .lightmap_sh = s->lm_texels ? s->lm_sh : NULL,
                                   .grid_map = s->grid_cells ? s->grid_map : NULL,
+                                  .grid_visibility = s->grid_cells ? glow__bake_grid_visibility(desc->bake) : NULL,
                                   .lightmap_map = s->lm_texels ? s->lm_map : NULL};
     if (s->grid_cells) {
         memcpy(s->out.grid_dims, m->grid_dims, sizeof s->out.grid_dims);

@@ -613,6 +613,21 @@ static void test_sample_grid(void **state) {
                w6 = 0.3 * 0.4 * 0.25;
         double ch0 = (w0 * 1 + w1 * 2 + w3 * 4 + w5 * 6 + w6 * 7) / (w0 + w1 + w3 + w5 + w6);
         assert_true(fabs(out[0] - ch0) < 1e-5);
+        /* grid visibility (GVIS): the point is in octant (t >= 0.5 per axis) 0b010 of cell (0, 0, 0);
+         * hiding corners 1 (x+1) and 5 (x+1, z+1) there leaves caches 0, 3, 5 blended; other octants
+         * and other cells keep everything */
+        uint8_t vis[12][8];
+        memset(vis, 0xFF, sizeof vis);
+        vis[0][2] = (uint8_t)~((1u << 1) | (1u << 5));
+        glow_cache_outputs ov = o;
+        ov.grid_visibility = &vis[0][0];
+        assert_int_equal(glow_sample_grid(&ov, p, out), GLOW_OK);
+        double ch0v = (w0 * 1 + w3 * 4 + w5 * 6) / (w0 + w3 + w5);
+        assert_true(fabs(out[0] - ch0v) < 1e-5);
+        vis[0][2] = 0xFF;
+        vis[0][0] = 0x01; /* another octant: no effect at p */
+        assert_int_equal(glow_sample_grid(&ov, p, out), GLOW_OK);
+        assert_true(fabs(out[0] - ch0) < 1e-5);
     }
     /* block (1..2, 0..1, 0..1) */
     {

@@ -361,6 +361,12 @@ typedef struct glow_cache_outputs {
     const uint32_t *grid_map;    /* [dz][dy][dx]: cache index of each cell, 0xFFFFFFFF = empty */
     const uint32_t *lightmap_map;/* [height][width]: cache index of each texel (gutter and seam texels
                                     name the cache they copy), 0xFFFFFFFF = empty */
+    const uint8_t *grid_visibility; /* [dz][dy][dx][8] or NULL (bakes made before GVIS): for the grid cell
+                                    whose lowest corner is point (x, y, z) and each octant o of it (bit a
+                                    of o: the upper half along axis a), bit k set when corner k (x + (k&1),
+                                    y + (k>>1&1), z + (k>>2), clamped to the grid) is visible from the
+                                    octant's centre. glow_sample_grid blends only those corners, so a
+                                    lookup does not read light through a wall thinner than the spacing */
     uint64_t update_index;       /* successful updates so far */
 } glow_cache_outputs;
 /** The outputs, owned by the system, valid (and unchanged) until the next update or destroy.
@@ -396,7 +402,8 @@ GLOW_API void glow_shade_sh(const float *coeffs, uint32_t sh_bands_luma, uint32_
                             const float axis[3], float exponent, float out_rgb[3]);
 
 /** Trilinear sample of the grid at `position` (m) into out_coeffs[coeff_count]. Cells without a
- * cache get weight 0 and the rest are renormalised; outside the grid the position is clamped to it.
+ * cache get weight 0, and so do corners that outputs->grid_visibility marks as hidden from the
+ * lookup's octant of the cell; the rest are renormalised. Outside the grid the position is clamped.
  * \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT (NULL, no grid); GLOW_ERROR_OUT_OF_RANGE when no
  * cache is among the 8 neighbours (out_coeffs zeroed). \since 0.1 */
 GLOW_API glow_result glow_sample_grid(const glow_cache_outputs *outputs, const float position[3], float *out_coeffs);

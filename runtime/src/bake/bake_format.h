@@ -47,6 +47,7 @@
 #define GLOW_SECTION_LINK GLOW_FOURCC('L', 'I', 'N', 'K') /* glow_bake_link_block[cache_count*blocks] */
 #define GLOW_SECTION_SHLK GLOW_FOURCC('S', 'H', 'L', 'K') /* full-SH links (optional), see below */
 #define GLOW_SECTION_GEOM GLOW_FOURCC('G', 'E', 'O', 'M') /* glow_bake_triangle[triangle_count] */
+#define GLOW_SECTION_GVIS GLOW_FOURCC('G', 'V', 'I', 'S') /* uint8_t[dx*dy*dz][8] grid cell visibility (optional; readers that predate it skip it) */
 
 /* Cache-map entries (GRID and LMAP): the low 31 bits index the cache array. */
 #define GLOW_MAP_EMPTY 0xFFFFFFFFu   /* no cache here; samples read zero */
