@@ -60,8 +60,12 @@ expect 0 "bake other seed" "$BIN" builtin:cornell -o "$T/c3.glow" "${SMALL[@]}" 
 if cmp -s "$T/c1.glow" "$T/c3.glow"; then fail "seed has no effect"; else pass "seed changes the bake"; fi
 
 # a corrupted bake is refused by --info with a named problem
-# (a byte in the middle of the file: inside the LINK payload, the largest section, never in padding)
-cp "$T/c1.glow" "$T/bad.glow"; printf '\x55' | dd of="$T/bad.glow" bs=1 seek=$(( $(stat -c %s "$T/c1.glow") / 2 )) conv=notrunc 2>/dev/null
+# (the byte in the middle of the file, inside the LINK payload, inverted so that it surely changes)
+cp "$T/c1.glow" "$T/bad.glow"
+mid=$(( $(stat -c %s "$T/c1.glow") / 2 ))
+old=$(od -An -tu1 -j "$mid" -N1 "$T/c1.glow" | tr -d ' ')
+printf "\\$(printf '%03o' $(( 255 - old )))" | dd of="$T/bad.glow" bs=1 seek="$mid" conv=notrunc 2>/dev/null
+cmp -s "$T/c1.glow" "$T/bad.glow" && fail "  corruption did not change the file" || pass "  one byte changed"
 expect 1 "--info on corrupted bake" "$BIN" --info "$T/bad.glow"; err_has "checksum\|CRC\|crc"
 head -c 100 "$T/c1.glow" > "$T/short.glow"
 expect 1 "--info on truncated bake" "$BIN" --info "$T/short.glow"; err_has "short.glow"
