@@ -6,19 +6,7 @@
 set -u
 BIN=$1/glow-bake
 SHARED=${2:-}
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
-fails=0
-pass() { echo "ok   $1"; }
-fail() { echo "FAIL $1"; fails=$((fails + 1)); }
-
-# expect CODE NAME CMD... : run, check the exit status, keep stderr in $T/err
-expect() {
-  local want=$1 name=$2; shift 2
-  "$@" >"$T/out" 2>"$T/err"; local got=$?
-  if [ "$got" = "$want" ]; then pass "$name (exit $got)"; else fail "$name: exit $got, wanted $want"; sed 's/^/     /' "$T/err" | head -5; fi
-}
-err_has() { if grep -q -- "$1" "$T/err"; then pass "  message mentions '$1'"; else fail "  message lacks '$1':"; sed 's/^/     /' "$T/err" | head -5; fi; }
+. "$(dirname "$0")/lib/common.sh"
 no_file() { if [ ! -e "$1" ] && ! ls "$1".tmp.* >/dev/null 2>&1; then pass "  no output left at $1"; else fail "  output left at $1"; fi; }
 
 SMALL=(--surfels 1024 --links 32 --grid-spacing 0.5 --texel-density 3 -q)

@@ -8,17 +8,7 @@
 set -u
 BIN=$1
 ROOT=$(cd "$(dirname "$0")/../.." && pwd)
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
-fails=0
-pass() { echo "ok   $1"; }
-fail() { echo "FAIL $1"; fails=$((fails + 1)); }
-expect() {
-  local want=$1 name=$2; shift 2
-  "$@" >"$T/out" 2>"$T/err"; local got=$?
-  if [ "$got" = "$want" ]; then pass "$name (exit $got)"; else fail "$name: exit $got, wanted $want"; sed 's/^/     /' "$T/err" | head -5; fi
-}
-err_has() { if grep -q -- "$1" "$T/err"; then pass "  message mentions '$1'"; else fail "  message lacks '$1':"; sed 's/^/     /' "$T/err" | head -5; fi; }
+. "$(dirname "$0")/lib/common.sh"
 json_num() { python3 -c "import json,sys; print(json.load(open(sys.argv[1]))[sys.argv[2]])" "$1" "$2"; }
 
 SCENE=$ROOT/scenes/cornell-builtin.json

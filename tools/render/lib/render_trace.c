@@ -302,6 +302,57 @@ static void glow_indirect(const render_ctx *c, const surf *s, float *coeffs, wor
     for (int k = 0; k < 3; ++k) out[k] = s->rho[k] * fmaxf(e[k], 0.0f);
 }
 
+/* The rest of a path from hit h (its vertex 2 onwards), reached from prev_p along wdir with throughput
+ * beta: emission found by BSDF sampling (MIS-weighted against the previous vertex's emitter NEE; at
+ * full weight when pdf_prev is 0, i.e. the previous vertex did no NEE), NEE of the host's lights and of
+ * the emitters at every vertex, Russian roulette, the environment where the path escapes. Adds the
+ * radiance it carries to out. Shared by the reference's pixels and its irradiance probes. */
+static void continue_path(const render_ctx *c, rng *rp, glow__hit h, const float beta_in[3], const float prev_in[3],
+                          const float w_in[3], float pdf_prev, float out[3], uint64_t *rays) {
+    const glow_render_scene *sc = c->sc;
+    float beta[3], prev_p[3], wdir[3], le[3], E[3], nee[3];
+    memcpy(beta, beta_in, sizeof beta);
+    memcpy(prev_p, prev_in, sizeof prev_p);
+    memcpy(wdir, w_in, sizeof wdir);
+    surf s;
+    for (uint32_t depth = 2;; ++depth) {
+        make_surf(c, &h, &s);
+        if (emission_of(c, s.tri, s.back, le)) { /* BSDF-sampled emitter hit, MIS against NEE */
+            float wgt = 1.0f;
+            if (pdf_prev > 0.0f) {
+                float d[3];
+                glow__sub(s.p, prev_p, d);
+                float cos_l = -glow__dot(sc->ng[s.tri], wdir);
+                float pl = cos_l > 0.0f ? sc->light_pdf_area[s.tri] * glow__dot(d, d) / cos_l : 0.0f;
+                wgt = c->emitters_on && pl > 0.0f && isfinite(pl) ? mis2(pdf_prev, pl) : 1.0f;
+            }
+            for (int k = 0; k < 3; ++k) out[k] += beta[k] * le[k] * wgt;
+        }
+        if (depth >= c->max_depth) break;
+        delta_irradiance(c, &s, E, rays);
+        emitter_nee(c, rp, &s, nee, rays);
+        for (int k = 0; k < 3; ++k) out[k] += beta[k] * (s.rho[k] * INV_PI_F * E[k] + nee[k]);
+        float r = rnd(rp), a = rnd(rp), b = rnd(rp);
+        float nb[3] = {beta[0] * s.rho[0], beta[1] * s.rho[1], beta[2] * s.rho[2]};
+        if (depth >= RR_START) {
+            float q = fminf(0.95f, fmaxf(nb[0], fmaxf(nb[1], nb[2])));
+            if (!(r < q)) break;
+            for (int k = 0; k < 3; ++k) nb[k] /= q;
+        }
+        float cw = sample_cosine(s.ns, a, b, wdir);
+        if (!(cw > 0.0f) || glow__dot(wdir, s.ng) <= 0.0f) break;
+        memcpy(beta, nb, sizeof beta);
+        pdf_prev = cw * INV_PI_F;
+        memcpy(prev_p, s.p, sizeof prev_p);
+        ++*rays;
+        h = glow__rt_intersect(sc->rt, s.o, wdir, 0.0f, INFINITY);
+        if (h.tri == UINT32_MAX) {
+            for (int k = 0; k < 3; ++k) out[k] += beta[k] * c->env[k];
+            break;
+        }
+    }
+}
+
 /* One sample of pixel (x, y): adds to direct[3] and indirect[3]. */
 static void sample(const render_ctx *c, uint32_t x, uint32_t y, rng *rd, rng *rp, float *coeffs, worker_stats *ws,
                    float direct[3], float indirect[3]) {
@@ -361,44 +412,8 @@ static void sample(const render_ctx *c, uint32_t x, uint32_t y, rng *rd, rng *rp
     emitter_nee(c, rp, &s, nee, &ws->rays);
     for (int k = 0; k < 3; ++k) indirect[k] += nee[k];
     if (!valid || h1.tri == UINT32_MAX) return;
-    float beta[3] = {s.rho[0], s.rho[1], s.rho[2]}; /* f cos / pdf = ρ for cosine sampling */
-    float pdf_prev = cos1 * INV_PI_F, prev_p[3], wdir[3];
-    memcpy(prev_p, s.p, sizeof prev_p);
-    memcpy(wdir, w1, sizeof wdir);
-    h = h1;
-    for (uint32_t depth = 2;; ++depth) {
-        make_surf(c, &h, &s);
-        if (emission_of(c, s.tri, s.back, le)) { /* BSDF-sampled emitter hit, MIS against NEE */
-            float d[3];
-            glow__sub(s.p, prev_p, d);
-            float cos_l = -glow__dot(sc->ng[s.tri], wdir);
-            float pl = cos_l > 0.0f ? sc->light_pdf_area[s.tri] * glow__dot(d, d) / cos_l : 0.0f;
-            float wgt = c->emitters_on && pl > 0.0f && isfinite(pl) ? mis2(pdf_prev, pl) : 1.0f;
-            for (int k = 0; k < 3; ++k) indirect[k] += beta[k] * le[k] * wgt;
-        }
-        if (depth >= c->max_depth) break;
-        delta_irradiance(c, &s, E, &ws->rays);
-        emitter_nee(c, rp, &s, nee, &ws->rays);
-        for (int k = 0; k < 3; ++k) indirect[k] += beta[k] * (s.rho[k] * INV_PI_F * E[k] + nee[k]);
-        float r = rnd(rp), a = rnd(rp), b = rnd(rp);
-        float nb[3] = {beta[0] * s.rho[0], beta[1] * s.rho[1], beta[2] * s.rho[2]};
-        if (depth >= RR_START) {
-            float q = fminf(0.95f, fmaxf(nb[0], fmaxf(nb[1], nb[2])));
-            if (!(r < q)) break;
-            for (int k = 0; k < 3; ++k) nb[k] /= q;
-        }
-        float cw = sample_cosine(s.ns, a, b, wdir);
-        if (!(cw > 0.0f) || glow__dot(wdir, s.ng) <= 0.0f) break;
-        memcpy(beta, nb, sizeof beta);
-        pdf_prev = cw * INV_PI_F;
-        memcpy(prev_p, s.p, sizeof prev_p);
-        ws->rays++;
-        h = glow__rt_intersect(sc->rt, s.o, wdir, 0.0f, INFINITY);
-        if (h.tri == UINT32_MAX) {
-            for (int k = 0; k < 3; ++k) indirect[k] += beta[k] * c->env[k];
-            break;
-        }
-    }
+    const float beta[3] = {s.rho[0], s.rho[1], s.rho[2]}; /* f cos / pdf = ρ for cosine sampling */
+    continue_path(c, rp, h1, beta, s.p, w1, cos1 * INV_PI_F, indirect, &ws->rays);
 }
 
 typedef struct worker_arg {
@@ -753,51 +768,12 @@ glow_result glow_render_glow(const glow_render_scene *sc, const char *bake_path,
  * the host lights surfels with it). */
 static void trace_incoming(const render_ctx *c, rng *rp, const float o[3], const float w[3], float out[3],
                            uint64_t *rays) {
-    const glow_render_scene *sc = c->sc;
     out[0] = out[1] = out[2] = 0.0f;
     ++*rays;
-    glow__hit h = glow__rt_intersect(sc->rt, o, w, 0.0f, INFINITY);
+    glow__hit h = glow__rt_intersect(c->sc->rt, o, w, 0.0f, INFINITY);
     if (h.tri == UINT32_MAX) return;
-    float beta[3] = {1.0f, 1.0f, 1.0f}, pdf_prev = 0.0f, prev_p[3], wdir[3], le[3], E[3], nee[3];
-    memcpy(prev_p, o, sizeof prev_p);
-    memcpy(wdir, w, sizeof wdir);
-    surf s;
-    for (uint32_t depth = 2;; ++depth) {
-        make_surf(c, &h, &s);
-        if (emission_of(c, s.tri, s.back, le)) {
-            float wgt = 1.0f;
-            if (depth > 2) {
-                float d[3];
-                glow__sub(s.p, prev_p, d);
-                float cos_l = -glow__dot(sc->ng[s.tri], wdir);
-                float pl = cos_l > 0.0f ? sc->light_pdf_area[s.tri] * glow__dot(d, d) / cos_l : 0.0f;
-                wgt = c->emitters_on && pl > 0.0f && isfinite(pl) ? mis2(pdf_prev, pl) : 1.0f;
-            }
-            for (int k = 0; k < 3; ++k) out[k] += beta[k] * le[k] * wgt;
-        }
-        if (depth >= c->max_depth) break;
-        delta_irradiance(c, &s, E, rays);
-        emitter_nee(c, rp, &s, nee, rays);
-        for (int k = 0; k < 3; ++k) out[k] += beta[k] * (s.rho[k] * INV_PI_F * E[k] + nee[k]);
-        float r = rnd(rp), a = rnd(rp), b = rnd(rp);
-        float nb[3] = {beta[0] * s.rho[0], beta[1] * s.rho[1], beta[2] * s.rho[2]};
-        if (depth >= RR_START) {
-            float q = fminf(0.95f, fmaxf(nb[0], fmaxf(nb[1], nb[2])));
-            if (!(r < q)) break;
-            for (int k = 0; k < 3; ++k) nb[k] /= q;
-        }
-        float cw = sample_cosine(s.ns, a, b, wdir);
-        if (!(cw > 0.0f) || glow__dot(wdir, s.ng) <= 0.0f) break;
-        memcpy(beta, nb, sizeof beta);
-        pdf_prev = cw * INV_PI_F;
-        memcpy(prev_p, s.p, sizeof prev_p);
-        ++*rays;
-        h = glow__rt_intersect(sc->rt, s.o, wdir, 0.0f, INFINITY);
-        if (h.tri == UINT32_MAX) {
-            for (int k = 0; k < 3; ++k) out[k] += beta[k] * c->env[k];
-            break;
-        }
-    }
+    const float one[3] = {1.0f, 1.0f, 1.0f};
+    continue_path(c, rp, h, one, o, w, 0.0f, out, rays); /* pdf 0: no emitter NEE at the probe point */
 }
 
 typedef struct probe_job {
@@ -805,23 +781,16 @@ typedef struct probe_job {
     const float *points;
     uint32_t count, samples, group;
     float *out;
-    atomic_uint next;
-    uint64_t rays[64];
+    uint64_t rays[256]; /* per worker (the pool has at most 256) */
 } probe_job;
 
-typedef struct probe_arg {
-    probe_job *j;
-    uint32_t index;
-} probe_arg;
-
-static void *probe_worker(void *p) {
-    probe_arg *a = p;
-    probe_job *j = a->j;
+/* points [first, end): each from its own random stream (per point, or per group), so the result does
+ * not depend on which worker runs it */
+static void probe_range(void *ctx, uint32_t first, uint32_t end, uint32_t worker) {
+    probe_job *j = ctx;
     const render_ctx *c = j->c;
     uint64_t rays = 0;
-    for (;;) {
-        uint32_t i = atomic_fetch_add(&j->next, 1u);
-        if (i >= j->count) break;
+    for (uint32_t i = first; i < end; ++i) {
         const float *pt = j->points + 6 * (size_t)i;
         float n[3] = {pt[3], pt[4], pt[5]}, o[3];
         v_norm(n);
@@ -838,8 +807,7 @@ static void *probe_worker(void *p) {
         }
         for (int k = 0; k < 3; ++k) j->out[3 * (size_t)i + k] = (float)(PI_F * acc[k] / j->samples);
     }
-    j->rays[a->index % 64] += rays;
-    return NULL;
+    j->rays[worker % 256] += rays;
 }
 
 glow_result glow_render_irradiance(const glow_render_scene *sc, const glow_scene_light *lights, uint32_t light_count,
@@ -854,7 +822,6 @@ glow_result glow_render_irradiance(const glow_render_scene *sc, const glow_scene
     c.sc = sc;
     c.max_depth = st->max_depth ? st->max_depth : DEFAULT_MAX_DEPTH;
     c.threads = resolve_threads(st->threads);
-    if (c.threads > 64) c.threads = 64;
     c.seed = st->seed;
     c.albedo_scale = st->albedo_scale > 0.0f ? st->albedo_scale : 1.0f;
     c.emission_scale = sc->desc.emission_scale;
@@ -875,21 +842,12 @@ glow_result glow_render_irradiance(const glow_render_scene *sc, const glow_scene
     }
     c.light_count = light_count;
     probe_job j = {.c = &c, .points = points, .count = count, .samples = samples, .group = group, .out = out_rgb};
-    atomic_init(&j.next, 0u);
-    pthread_t tid[64];
-    probe_arg args[64];
-    uint32_t started = 0;
-    for (uint32_t i = 1; i < c.threads; ++i) {
-        args[i] = (probe_arg){&j, i};
-        if (pthread_create(&tid[i], NULL, probe_worker, &args[i]) != 0) break;
-        started = i;
-    }
-    args[0] = (probe_arg){&j, 0};
-    probe_worker(&args[0]);
-    for (uint32_t i = 1; i <= started; ++i) pthread_join(tid[i], NULL);
+    glow__pool *pool = glow__pool_create(c.threads); /* NULL (no memory): glow__parallel_for runs serially */
+    glow__parallel_for(pool, count, 1, probe_range, &j);
+    glow__pool_destroy(pool);
     if (out_rays) {
         *out_rays = 0;
-        for (int i = 0; i < 64; ++i) *out_rays += j.rays[i];
+        for (int i = 0; i < 256; ++i) *out_rays += j.rays[i];
     }
     free(c.lights);
     return GLOW_OK;
