@@ -91,6 +91,7 @@ struct glow_system {
     glow_update_stats stats;
     /* per-stage task arguments */
     uint32_t pull_first, pull_count;
+    uint64_t emission_revision, direct_revision;
 };
 
 /* ------------------------------------------------------------------------------------------ */
@@ -585,7 +586,9 @@ static glow_result store_checked(glow_system *s, const char *fn, float *dst, con
 glow_result glow_system_set_surfel_irradiance(glow_system *s, uint32_t first, uint32_t count, const float *rgb) {
     glow_result r = check_range(s, "glow_system_set_surfel_irradiance", first, count, rgb, true);
     if (r != GLOW_OK) return r;
-    return store_checked(s, "glow_system_set_surfel_irradiance", s->direct, rgb, first, count);
+    r = store_checked(s, "glow_system_set_surfel_irradiance", s->direct, rgb, first, count);
+    if (r == GLOW_OK) s->direct_revision++;
+    return r;
 }
 
 glow_result glow_system_set_surfel_emission(glow_system *s, uint32_t first, uint32_t count, const float *rgb) {
@@ -593,9 +596,12 @@ glow_result glow_system_set_surfel_emission(glow_system *s, uint32_t first, uint
     if (r != GLOW_OK) return r;
     if (!rgb) {
         memcpy(s->emis + 3 * (size_t)first, s->emis_base + 3 * (size_t)first, 3 * (size_t)count * sizeof(float));
+        s->emission_revision++;
         return GLOW_OK;
     }
-    return store_checked(s, "glow_system_set_surfel_emission", s->emis, rgb, first, count);
+    r = store_checked(s, "glow_system_set_surfel_emission", s->emis, rgb, first, count);
+    if (r == GLOW_OK) s->emission_revision++;
+    return r;
 }
 
 static glow_result null_arg(const glow_system *s, const char *fn) {
@@ -701,6 +707,7 @@ glow_result glow_system_update(glow_system *s, const glow_update_desc *desc) {
         float *t = s->direct;
         s->direct = s->direct_spare;
         s->direct_spare = t;
+        s->direct_revision++;
     }
     if (flags & GLOW_UPDATE_FLAG_RESET_BOUNCE) memset(s->cache_sh, 0, (size_t)s->C * s->coeffs * sizeof(float));
     double t = now_ms();
@@ -741,3 +748,39 @@ glow_result glow_system_get_stats(const glow_system *s, glow_update_stats *out) 
 }
 
 const glow_cache_outputs *glow_system_outputs(const glow_system *s) { return s ? &s->out : NULL; }
+
+glow_result glow_system_get_solver_tables(const glow_system *s, glow_solver_tables *t) {
+    if (!s || !t) return null_arg(s, "glow_system_get_solver_tables");
+    *t = (glow_solver_tables){.surfel_count = s->S,
+                              .node_count = s->N,
+                              .level_count = s->levels,
+                              .cache_count = s->C,
+                              .material_count = s->M,
+                              .links_per_cache = s->meta->links_per_cache,
+                              .link_blocks_per_cache = s->bpc,
+                              .sh_bands_luma = s->luma,
+                              .sh_bands_chroma = s->chroma,
+                              .coeff_count = s->coeffs,
+                              .surfel_area = s->meta->surfel_area,
+                              .albedo = s->albedo,
+                              .emission = s->emis,
+                              .materials = s->mat,
+                              .feedback = s->feedback,
+                              .feedback_weights = s->fb_w,
+                              .indirect_albedo_max = s->rho_ind_max,
+                              .node_children = s->nodes[0].child,
+                              .node_stride = (uint32_t)(sizeof(glow_bake_node) / sizeof(uint32_t)),
+                              .node_inv_pi_area = s->inv_pi_area,
+                              .level_starts = s->level_starts,
+                              .link_blocks = glow__bake_link_blocks(s->bake),
+                              .output_index = s->out_index,
+                              .output_cache = s->out_cache,
+                              .grid_used = (uint32_t)s->grid_used,
+                              .lightmap_used = (uint32_t)s->lm_used,
+                              .material_emission_scale = s->mat_emis_scale,
+                              .material_albedo_scale = s->mat_albedo_scale,
+                              .emission_revision = s->emission_revision,
+                              .direct_irradiance = s->direct,
+                              .direct_revision = s->direct_revision};
+    return GLOW_OK;
+}
