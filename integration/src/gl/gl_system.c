@@ -1,0 +1,667 @@
+/* gl_system.c — glow_gl_system (glow_gl.h): the GL 4.5 compute backend of the solver.
+ *
+ * Buffers (created once; an update allocates nothing, host or GPU):
+ *   geom, mat (glow_shared.h structs), direct (vec4/surfel), feedback weights, cache_sh, nodes (uvec4),
+ *   flux (vec4/node), links (the bake's blocks verbatim), output pairs (uvec2), status, params (UBO)
+ * Host memory: staging arrays for the re-uploads (surfel material state, direct light), sized at create.
+ * Kernels: shaders/NAME.comp embedded by cmake/glow_embed.cmake, compiled here with the band counts as
+ * #defines (so every SH loop has constant bounds), the hook spliced into surfel_direct.
+ *
+ * Allocation: host memory with malloc (integration code, like glow_host; the runtime's allocator hooks
+ * are not public). */
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "glow/glow_gl.h"
+#include "glow/glow_glfns.h"
+
+#include "glow_shared.h" /* shaders/include: layouts and bindings shared with the kernels */
+
+#define PI_F 3.14159265358979323846f
+#define ALBEDO_MAX 0.999f
+#define MAP_EMPTY 0xFFFFFFFFu
+
+extern const char glow__shading_glsl[];
+extern const struct { const char *name, *source; } glow__kernels[];
+
+enum { K_DIRECT, K_FLUX, K_PULL, K_CACHE, K_OUTPUT, K_COUNT };
+static const char *const kernel_names[K_COUNT] = {"surfel_direct", "surfel_flux", "pull", "cache_light", "outputs"};
+enum { B_GEOM, B_MAT, B_DIRECT, B_FBW, B_CACHE, B_NODES, B_FLUX, B_LINKS, B_PAIRS, B_STATUS, B_PARAMS, B_COUNT };
+enum { T_BEGIN, T_DIRECT, T_FLUX, T_PULL, T_CACHE, T_OUTPUT, T_COUNT };
+
+struct glow_gl_system {
+    glow_glfns gl;
+    glow_system *sys;
+    glow_logger logger;
+    char label[64];
+    uint32_t flags;
+    glow_solver_tables t;
+    uint32_t S, N, C, levels, planes;
+    GLuint prog[K_COUNT];
+    GLint level_loc;
+    GLuint buf[B_COUNT];
+    GLuint grid_tex, grid_mask_tex, lm_tex, lm_valid_tex;
+    int own_grid, own_lm;
+    GLuint queries[T_COUNT];
+    int queries_pending;
+    uint32_t pull_dispatches;
+    glow_gl_outputs out;
+    glow_gl_params params;
+    /* what the material state was last computed from */
+    float *mat_scales_seen; /* [M][6] */
+    uint64_t emission_rev_seen, direct_rev_seen;
+    float emission_scale_seen;
+    int mat_valid, direct_valid;
+    glow_gl_surfel_mat *mat_staging; /* [S] */
+    float *direct_staging;           /* [S][4] */
+    uint64_t updates, gpu_bytes;
+    char renderer[96];
+};
+
+/* ------------------------------------------------------------------------------------------ log */
+static void logf_(const glow_gl_system *s, const glow_logger *lg, glow_log_level level, glow_result code,
+                  const char *fmt, ...) {
+    const glow_logger *l = s ? &s->logger : lg;
+    if (!l || !l->log) return;
+    char msg[4096];
+    int n = snprintf(msg, sizeof msg, "glow_gl(%s): ", s ? s->label : "gl");
+    va_list ap;
+    va_start(ap, fmt);
+    if (n > 0 && (size_t)n < sizeof msg) vsnprintf(msg + n, sizeof msg - (size_t)n, fmt, ap);
+    va_end(ap);
+    l->log(l->user, level, code, msg, __FILE__, __LINE__);
+}
+#define LOG_ERR(s, code, ...) logf_((s), NULL, GLOW_LOG_ERROR, (code), __VA_ARGS__)
+#define LOG_WARN(s, code, ...) logf_((s), NULL, GLOW_LOG_WARNING, (code), __VA_ARGS__)
+
+/* ------------------------------------------------------------------------------------ programs */
+static const char *kernel_source(const char *name) {
+    for (size_t i = 0; glow__kernels[i].name; ++i)
+        if (!strcmp(glow__kernels[i].name, name)) return glow__kernels[i].source;
+    return NULL;
+}
+
+static uint32_t count_lines(const char *p, size_t n) {
+    uint32_t c = 0;
+    for (size_t i = 0; i < n; ++i) c += p[i] == '\n';
+    return c;
+}
+
+/* Compiles kernel `k` with the prelude; for surfel_direct the hook replaces GLOW_HOST_HOOK_SOURCE.
+ * Returns 0 on failure (logged, with the info log). */
+static GLuint build_program(glow_gl_system *s, int k, const char *hook, glow_result *err) {
+    glow_glfns *gl = &s->gl;
+    const char *src = kernel_source(kernel_names[k]);
+    if (!src) {
+        LOG_ERR(s, GLOW_ERROR_UNSUPPORTED, "kernel %s is not embedded (build problem)", kernel_names[k]);
+        *err = GLOW_ERROR_UNSUPPORTED;
+        return 0;
+    }
+    char prelude[256];
+    snprintf(prelude, sizeof prelude,
+             "#version 450 core\n#define GLOW_GLSL 1\n#define GLOW_LUMA_BANDS %u\n#define GLOW_CHROMA_BANDS %u\n#line 1 0\n",
+             s->t.sh_bands_luma, s->t.sh_bands_chroma);
+    const char *strings[6];
+    GLint lengths[6];
+    int n = 0;
+    char line_hook[32], line_back[32];
+    strings[n] = prelude, lengths[n++] = -1;
+    const char *mark = k == K_DIRECT ? strstr(src, "GLOW_HOST_HOOK_SOURCE") : NULL;
+    if (mark) {
+        size_t before = (size_t)(mark - src);
+        const char *after = mark + strlen("GLOW_HOST_HOOK_SOURCE");
+        snprintf(line_hook, sizeof line_hook, "\n#line 1 1\n");
+        snprintf(line_back, sizeof line_back, "\n#line %u 0\n", count_lines(src, before) + 1u);
+        strings[n] = src, lengths[n++] = (GLint)before;
+        strings[n] = line_hook, lengths[n++] = -1;
+        strings[n] = hook, lengths[n++] = -1;
+        strings[n] = line_back, lengths[n++] = -1;
+        strings[n] = after, lengths[n++] = -1;
+    } else {
+        strings[n] = src, lengths[n++] = -1;
+    }
+    GLuint sh = gl->CreateShader(GL_COMPUTE_SHADER);
+    gl->ShaderSource(sh, n, strings, lengths);
+    gl->CompileShader(sh);
+    GLint ok = 0;
+    gl->GetShaderiv(sh, GL_COMPILE_STATUS, &ok);
+    char info[3000];
+    info[0] = '\0';
+    if (!ok) {
+        gl->GetShaderInfoLog(sh, sizeof info, NULL, info);
+        gl->DeleteShader(sh);
+        *err = k == K_DIRECT ? GLOW_ERROR_HOST_CALLBACK : GLOW_ERROR_UNSUPPORTED;
+        LOG_ERR(s, *err, "%s.comp does not compile%s:\n%s", kernel_names[k],
+                k == K_DIRECT ? " with the host hook (GLSL source string 1 = the hook, its own line numbers)" : "", info);
+        return 0;
+    }
+    GLuint p = gl->CreateProgram();
+    gl->AttachShader(p, sh);
+    gl->LinkProgram(p);
+    gl->DeleteShader(sh);
+    gl->GetProgramiv(p, GL_LINK_STATUS, &ok);
+    if (!ok) {
+        gl->GetProgramInfoLog(p, sizeof info, NULL, info);
+        gl->DeleteProgram(p);
+        *err = k == K_DIRECT ? GLOW_ERROR_HOST_CALLBACK : GLOW_ERROR_UNSUPPORTED;
+        LOG_ERR(s, *err, "%s.comp does not link: %s", kernel_names[k], info);
+        return 0;
+    }
+    return p;
+}
+
+/* ------------------------------------------------------------------------------------- buffers */
+static GLuint make_buffer(glow_gl_system *s, size_t size, const void *data, GLbitfield flags) {
+    GLuint b = 0;
+    s->gl.CreateBuffers(1, &b);
+    s->gl.NamedBufferStorage(b, (GLsizeiptr)(size ? size : 16), data, flags);
+    s->gpu_bytes += size;
+    return b;
+}
+
+/* Per-surfel material state from the CPU system's tables (task_flux's arithmetic, folded per surfel). */
+static void fill_mat(glow_gl_system *s, float emission_scale) {
+    const glow_solver_tables *t = &s->t;
+    for (uint32_t i = 0; i < s->S; ++i) {
+        const uint32_t m = t->materials[i];
+        const float *ms = t->material_albedo_scale + 3 * (size_t)m, *me = t->material_emission_scale + 3 * (size_t)m;
+        const float rmax = t->indirect_albedo_max[i];
+        glow_gl_surfel_mat *g = &s->mat_staging[i];
+        float rho[3], rho_ind[3], emit[3];
+        for (int c = 0; c < 3; ++c) {
+            float r = t->albedo[3 * (size_t)i + c] * ms[c];
+            r = r < 0.0f ? 0.0f : (r > ALBEDO_MAX ? ALBEDO_MAX : r);
+            rho[c] = r;
+            rho_ind[c] = r < rmax ? r : rmax;
+            emit[c] = PI_F * t->emission[3 * (size_t)i + c] * emission_scale * me[c];
+        }
+        g->rho = (glow_vec4){rho[0], rho[1], rho[2], 0.0f};
+        g->rho_ind = (glow_vec4){rho_ind[0], rho_ind[1], rho_ind[2], 0.0f};
+        g->emit = (glow_vec4){emit[0], emit[1], emit[2], 0.0f};
+        g->feedback = t->feedback[i];
+        g->material = m;
+        g->reserved0 = g->reserved1 = 0;
+    }
+}
+
+static void free_system(glow_gl_system *s) {
+    if (!s) return;
+    glow_glfns *gl = &s->gl;
+    if (gl->DeleteProgram)
+        for (int k = 0; k < K_COUNT; ++k)
+            if (s->prog[k]) gl->DeleteProgram(s->prog[k]);
+    if (gl->DeleteBuffers) gl->DeleteBuffers(B_COUNT, s->buf);
+    if (gl->DeleteTextures) {
+        GLuint tex[4] = {s->own_grid ? s->grid_tex : 0u, s->grid_mask_tex, s->own_lm ? s->lm_tex : 0u, s->lm_valid_tex};
+        gl->DeleteTextures(4, tex);
+    }
+    if (gl->DeleteQueries && s->queries[0]) gl->DeleteQueries(T_COUNT, s->queries);
+    free(s->mat_scales_seen);
+    free(s->mat_staging);
+    free(s->direct_staging);
+    free(s);
+}
+
+/* Checks a host texture: target, RGBA32F, size. */
+static int check_host_texture(glow_gl_system *s, GLuint tex, GLenum target, int w, int h, int d, const char *what) {
+    glow_glfns *gl = &s->gl;
+    while (gl->GetError() != GL_NO_ERROR) {}
+    GLint fmt = 0, tw = 0, th = 0, td = 0;
+    gl->GetTextureLevelParameteriv(tex, 0, GL_TEXTURE_INTERNAL_FORMAT, &fmt);
+    gl->GetTextureLevelParameteriv(tex, 0, GL_TEXTURE_WIDTH, &tw);
+    gl->GetTextureLevelParameteriv(tex, 0, GL_TEXTURE_HEIGHT, &th);
+    gl->GetTextureLevelParameteriv(tex, 0, GL_TEXTURE_DEPTH, &td);
+    if (gl->GetError() != GL_NO_ERROR || fmt != GL_RGBA32F || tw != w || th != h || td != d) {
+        LOG_ERR(s, GLOW_ERROR_INVALID_ARGUMENT,
+                "host %s texture %u: need %s RGBA32F %d x %d x %d, it is format 0x%x %d x %d x %d", what, tex,
+                target == GL_TEXTURE_3D ? "GL_TEXTURE_3D" : "GL_TEXTURE_2D_ARRAY", w, h, d, fmt, tw, th, td);
+        return 0;
+    }
+    return 1;
+}
+
+glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out) {
+    if (out) *out = NULL;
+    if (!desc || !out || !desc->system || !desc->get_proc_address) {
+        logf_(NULL, desc ? &desc->logger : NULL, GLOW_LOG_ERROR, GLOW_ERROR_INVALID_ARGUMENT,
+              "glow_gl_system_create: desc, out, desc->system and desc->get_proc_address are required");
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    glow_gl_system *s = calloc(1, sizeof *s);
+    if (!s) return GLOW_ERROR_OUT_OF_MEMORY;
+    s->sys = desc->system;
+    s->logger = desc->logger;
+    s->flags = desc->flags;
+    snprintf(s->label, sizeof s->label, "%s", desc->label ? desc->label : "gl");
+    char missing[256];
+    if (!glow_glfns_load(&s->gl, desc->get_proc_address, missing, sizeof missing)) {
+        LOG_ERR(s, GLOW_ERROR_UNSUPPORTED, "the GL context lacks GL 4.5 entry points: %s", missing);
+        free_system(s);
+        return GLOW_ERROR_UNSUPPORTED;
+    }
+    glow_glfns *gl = &s->gl;
+    while (gl->GetError() != GL_NO_ERROR) {}
+    GLint major = 0, minor = 0;
+    gl->GetIntegerv(GL_MAJOR_VERSION, &major);
+    gl->GetIntegerv(GL_MINOR_VERSION, &minor);
+    const char *rend = (const char *)gl->GetString(GL_RENDERER);
+    snprintf(s->renderer, sizeof s->renderer, "%s", rend ? rend : "?");
+    if (major * 10 + minor < 45) {
+        LOG_ERR(s, GLOW_ERROR_UNSUPPORTED, "needs OpenGL 4.5, the current context is %d.%d (%s)", major, minor,
+                s->renderer);
+        free_system(s);
+        return GLOW_ERROR_UNSUPPORTED;
+    }
+    glow_system_get_solver_tables(desc->system, &s->t);
+    const glow_solver_tables *t = &s->t;
+    const glow_cache_outputs *co = glow_system_outputs(desc->system);
+    s->S = t->surfel_count;
+    s->N = t->node_count;
+    s->C = t->cache_count;
+    s->levels = t->level_count;
+    s->planes = (t->coeff_count + 3u) / 4u;
+    GLint64 max_ssbo_size = 0;
+    GLint max_3d = 0, max_layers = 0, max_shared = 0, max_bindings = 0;
+    gl->GetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &max_ssbo_size);
+    gl->GetIntegerv(GL_MAX_3D_TEXTURE_SIZE, &max_3d);
+    gl->GetIntegerv(GL_MAX_ARRAY_TEXTURE_LAYERS, &max_layers);
+    gl->GetIntegerv(GL_MAX_COMPUTE_SHARED_MEMORY_SIZE, &max_shared);
+    gl->GetIntegerv(GL_MAX_SHADER_STORAGE_BUFFER_BINDINGS, &max_bindings);
+    const size_t links_bytes = (size_t)s->C * t->link_blocks_per_cache * 128u;
+    const size_t big = links_bytes > (size_t)s->C * t->coeff_count * 4u ? links_bytes : (size_t)s->C * t->coeff_count * 4u;
+    if (max_ssbo_size > 0 && (uint64_t)max_ssbo_size < (uint64_t)big) {
+        LOG_ERR(s, GLOW_ERROR_UNSUPPORTED, "GL_MAX_SHADER_STORAGE_BLOCK_SIZE %lld < %zu bytes needed (links / cache SH)",
+                (long long)max_ssbo_size, big);
+        free_system(s);
+        return GLOW_ERROR_UNSUPPORTED;
+    }
+    if (co->grid_map && (int64_t)co->grid_dims[2] * s->planes > max_3d) {
+        LOG_ERR(s, GLOW_ERROR_UNSUPPORTED,
+                "the grid texture needs depth %u x %u planes = %u > GL_MAX_3D_TEXTURE_SIZE %d (use fewer bands)",
+                co->grid_dims[2], s->planes, co->grid_dims[2] * s->planes, max_3d);
+        free_system(s);
+        return GLOW_ERROR_UNSUPPORTED;
+    }
+    if ((int64_t)s->planes > max_layers || max_shared < (int)(GLOW_REDUCE_CHUNK * (GLOW_CACHE_GROUP + 1) * 4) ||
+        max_bindings < GLOW_BINDING_HOST_FIRST) {
+        LOG_ERR(s, GLOW_ERROR_UNSUPPORTED, "GL limits too small (array layers %d, compute shared memory %d, SSBO bindings %d)",
+                max_layers, max_shared, max_bindings);
+        free_system(s);
+        return GLOW_ERROR_UNSUPPORTED;
+    }
+
+    /* programs */
+    glow_result err = GLOW_OK;
+    for (int k = 0; k < K_COUNT; ++k) {
+        if (k == K_DIRECT && !desc->hook_glsl) continue;
+        s->prog[k] = build_program(s, k, desc->hook_glsl, &err);
+        if (!s->prog[k]) {
+            free_system(s);
+            return err;
+        }
+    }
+    s->level_loc = gl->GetUniformLocation(s->prog[K_PULL], "glow_level");
+
+    /* host staging */
+    s->mat_staging = malloc((size_t)(s->S ? s->S : 1u) * sizeof *s->mat_staging);
+    s->direct_staging = malloc((size_t)(s->S ? s->S : 1u) * 4u * sizeof(float));
+    s->mat_scales_seen = malloc((size_t)(t->material_count ? t->material_count : 1u) * 6u * sizeof(float));
+    void *geom = malloc((size_t)(s->S ? s->S : 1u) * sizeof(glow_gl_surfel_geom));
+    uint32_t *nodes = malloc((size_t)(s->N ? s->N : 1u) * 4u * sizeof(uint32_t));
+    const size_t pairs_n = (size_t)t->grid_used + t->lightmap_used;
+    uint32_t *pairs = malloc((pairs_n ? pairs_n : 1u) * 2u * sizeof(uint32_t));
+    if (!s->mat_staging || !s->direct_staging || !s->mat_scales_seen || !geom || !nodes || !pairs) {
+        free(geom), free(nodes), free(pairs);
+        LOG_ERR(s, GLOW_ERROR_OUT_OF_MEMORY, "out of host memory (%u surfels)", s->S);
+        free_system(s);
+        return GLOW_ERROR_OUT_OF_MEMORY;
+    }
+    glow_surfel_view sv;
+    glow_system_get_surfels(desc->system, &sv);
+    glow_gl_surfel_geom *g = geom;
+    for (uint32_t i = 0; i < s->S; ++i) {
+        g[i].position_area = (glow_vec4){sv.positions[4 * i], sv.positions[4 * i + 1], sv.positions[4 * i + 2],
+                                         sv.positions[4 * i + 3]};
+        g[i].normal = (glow_vec4){sv.normals[4 * i], sv.normals[4 * i + 1], sv.normals[4 * i + 2], 0.0f};
+    }
+    for (uint32_t n = 0; n < s->N; ++n) {
+        const int leaf = n < s->S;
+        nodes[4 * n] = leaf ? 0u : t->node_children[(size_t)n * t->node_stride];
+        nodes[4 * n + 1] = leaf ? 0u : t->node_children[(size_t)n * t->node_stride + 1];
+        memcpy(&nodes[4 * n + 2], &t->node_inv_pi_area[n], 4);
+        nodes[4 * n + 3] = 0u;
+    }
+    for (size_t i = 0; i < pairs_n; ++i) {
+        pairs[2 * i] = t->output_index[i];
+        pairs[2 * i + 1] = t->output_cache[i];
+    }
+    fill_mat(s, 1.0f);
+    const GLbitfield dyn = GL_DYNAMIC_STORAGE_BIT;
+    s->buf[B_GEOM] = make_buffer(s, (size_t)s->S * sizeof(glow_gl_surfel_geom), geom, 0);
+    s->buf[B_MAT] = make_buffer(s, (size_t)s->S * sizeof(glow_gl_surfel_mat), s->mat_staging, dyn);
+    s->buf[B_DIRECT] = make_buffer(s, (size_t)s->S * 16u, NULL, dyn);
+    s->buf[B_FBW] = make_buffer(s, (size_t)s->S * t->sh_bands_luma * t->sh_bands_luma * 4u, t->feedback_weights, 0);
+    s->buf[B_CACHE] = make_buffer(s, (size_t)s->C * t->coeff_count * 4u, NULL, dyn);
+    s->buf[B_NODES] = make_buffer(s, (size_t)s->N * 16u, nodes, 0);
+    s->buf[B_FLUX] = make_buffer(s, (size_t)s->N * 16u, NULL, dyn);
+    s->buf[B_LINKS] = make_buffer(s, links_bytes, t->link_blocks, 0);
+    s->buf[B_PAIRS] = make_buffer(s, pairs_n * 8u, pairs, 0);
+    s->buf[B_STATUS] = make_buffer(s, sizeof(glow_gl_status), NULL, dyn);
+    s->buf[B_PARAMS] = make_buffer(s, sizeof(glow_gl_params), NULL, dyn);
+    free(geom), free(nodes), free(pairs);
+    const float zero = 0.0f;
+    gl->ClearNamedBufferData(s->buf[B_DIRECT], GL_R32F, GL_RED, GL_FLOAT, &zero);
+    gl->ClearNamedBufferData(s->buf[B_CACHE], GL_R32F, GL_RED, GL_FLOAT, &zero);
+    gl->ClearNamedBufferData(s->buf[B_FLUX], GL_R32F, GL_RED, GL_FLOAT, &zero);
+    memcpy(s->mat_scales_seen, t->material_albedo_scale, 3u * t->material_count * sizeof(float));
+    memcpy(s->mat_scales_seen + 3u * t->material_count, t->material_emission_scale, 3u * t->material_count * sizeof(float));
+    s->mat_valid = 0; /* first update computes it with the real params */
+
+    /* output textures */
+    s->out = (glow_gl_outputs){.sh_bands_luma = t->sh_bands_luma,
+                               .sh_bands_chroma = t->sh_bands_chroma,
+                               .coeff_count = t->coeff_count,
+                               .planes = s->planes,
+                               .cache_sh_buffer = s->buf[B_CACHE],
+                               .cache_count = s->C,
+                               .hook_program = s->prog[K_DIRECT]};
+    const float zero4[4] = {0, 0, 0, 0};
+    if (co->grid_map) {
+        const uint32_t dx = co->grid_dims[0], dy = co->grid_dims[1], dz = co->grid_dims[2];
+        memcpy(s->out.grid_dims, co->grid_dims, sizeof s->out.grid_dims);
+        memcpy(s->out.grid_origin, co->grid_origin, sizeof s->out.grid_origin);
+        s->out.grid_spacing = co->grid_spacing;
+        if (desc->grid_texture) {
+            if (!check_host_texture(s, desc->grid_texture, GL_TEXTURE_3D, (int)dx, (int)dy, (int)(dz * s->planes), "grid")) {
+                free_system(s);
+                return GLOW_ERROR_INVALID_ARGUMENT;
+            }
+            s->grid_tex = desc->grid_texture;
+        } else {
+            gl->CreateTextures(GL_TEXTURE_3D, 1, &s->grid_tex);
+            gl->TextureStorage3D(s->grid_tex, 1, GL_RGBA32F, (GLsizei)dx, (GLsizei)dy, (GLsizei)(dz * s->planes));
+            s->own_grid = 1;
+            s->gpu_bytes += (size_t)dx * dy * dz * s->planes * 16u;
+        }
+        gl->ClearTexImage(s->grid_tex, 0, GL_RGBA, GL_FLOAT, zero4);
+        /* mask: per cell and octant, the corners that hold a cache and are visible (GVIS) */
+        const size_t cells = (size_t)dx * dy * dz;
+        uint32_t *mask = malloc(cells * 2u * sizeof(uint32_t));
+        if (!mask) {
+            free_system(s);
+            return GLOW_ERROR_OUT_OF_MEMORY;
+        }
+        for (uint32_t z = 0; z < dz; ++z)
+            for (uint32_t y = 0; y < dy; ++y)
+                for (uint32_t x = 0; x < dx; ++x) {
+                    const size_t cell = ((size_t)z * dy + y) * dx + x;
+                    const uint32_t x1 = x + 1 < dx ? x + 1 : x, y1 = y + 1 < dy ? y + 1 : y, z1 = z + 1 < dz ? z + 1 : z;
+                    uint32_t filled = 0;
+                    for (uint32_t c = 0; c < 8; ++c) {
+                        const uint32_t cx = (c & 1) ? x1 : x, cy = (c & 2) ? y1 : y, cz = (c & 4) ? z1 : z;
+                        if (co->grid_map[((size_t)cz * dy + cy) * dx + cx] != MAP_EMPTY) filled |= 1u << c;
+                    }
+                    uint32_t m[2] = {0, 0};
+                    for (uint32_t o = 0; o < 8; ++o) {
+                        const uint32_t vis = co->grid_visibility ? co->grid_visibility[cell * 8u + o] : 0xFFu;
+                        m[o >> 2] |= (vis & filled) << (8u * (o & 3u));
+                    }
+                    mask[2 * cell] = m[0];
+                    mask[2 * cell + 1] = m[1];
+                }
+        gl->CreateTextures(GL_TEXTURE_3D, 1, &s->grid_mask_tex);
+        gl->TextureStorage3D(s->grid_mask_tex, 1, GL_RG32UI, (GLsizei)dx, (GLsizei)dy, (GLsizei)dz);
+        gl->TextureSubImage3D(s->grid_mask_tex, 0, 0, 0, 0, (GLsizei)dx, (GLsizei)dy, (GLsizei)dz, GL_RG_INTEGER,
+                              GL_UNSIGNED_INT, mask);
+        s->gpu_bytes += cells * 8u;
+        free(mask);
+        s->out.grid_texture = s->grid_tex;
+        s->out.grid_mask_texture = s->grid_mask_tex;
+    }
+    if (co->lightmap_map) {
+        const uint32_t W = co->lightmap_width, H = co->lightmap_height;
+        s->out.lightmap_width = W;
+        s->out.lightmap_height = H;
+        if (desc->lightmap_texture) {
+            if (!check_host_texture(s, desc->lightmap_texture, GL_TEXTURE_2D_ARRAY, (int)W, (int)H, (int)s->planes,
+                                    "lightmap")) {
+                free_system(s);
+                return GLOW_ERROR_INVALID_ARGUMENT;
+            }
+            s->lm_tex = desc->lightmap_texture;
+        } else {
+            gl->CreateTextures(GL_TEXTURE_2D_ARRAY, 1, &s->lm_tex);
+            gl->TextureStorage3D(s->lm_tex, 1, GL_RGBA32F, (GLsizei)W, (GLsizei)H, (GLsizei)s->planes);
+            s->own_lm = 1;
+            s->gpu_bytes += (size_t)W * H * s->planes * 16u;
+        }
+        gl->ClearTexImage(s->lm_tex, 0, GL_RGBA, GL_FLOAT, zero4);
+        uint8_t *valid = malloc((size_t)W * H);
+        if (!valid) {
+            free_system(s);
+            return GLOW_ERROR_OUT_OF_MEMORY;
+        }
+        for (size_t i = 0; i < (size_t)W * H; ++i) valid[i] = co->lightmap_map[i] != MAP_EMPTY;
+        gl->CreateTextures(GL_TEXTURE_2D, 1, &s->lm_valid_tex);
+        gl->TextureStorage2D(s->lm_valid_tex, 1, GL_R8UI, (GLsizei)W, (GLsizei)H);
+        gl->PixelStorei(GL_UNPACK_ALIGNMENT, 1);
+        gl->TextureSubImage2D(s->lm_valid_tex, 0, 0, 0, (GLsizei)W, (GLsizei)H, GL_RED_INTEGER, GL_UNSIGNED_BYTE, valid);
+        gl->PixelStorei(GL_UNPACK_ALIGNMENT, 4);
+        s->gpu_bytes += (size_t)W * H;
+        free(valid);
+        s->out.lightmap_texture = s->lm_tex;
+        s->out.lightmap_valid_texture = s->lm_valid_tex;
+    }
+    if (!(s->flags & GLOW_GL_FLAG_NO_TIMERS)) gl->CreateQueries(GL_TIMESTAMP, T_COUNT, s->queries);
+    GLenum e = gl->GetError();
+    if (e != GL_NO_ERROR) {
+        LOG_ERR(s, GLOW_ERROR_UNSUPPORTED, "GL error 0x%x while creating buffers/textures (%.1f MB)", e,
+                (double)s->gpu_bytes / 1048576.0);
+        free_system(s);
+        return GLOW_ERROR_UNSUPPORTED;
+    }
+    s->params = (glow_gl_params){.surfel_count = s->S,
+                                 .node_count = s->N,
+                                 .cache_count = s->C,
+                                 .coeff_count = t->coeff_count,
+                                 .blocks_per_cache = t->link_blocks_per_cache,
+                                 .grid_used = t->grid_used,
+                                 .lightmap_used = t->lightmap_used,
+                                 .planes = s->planes,
+                                 .grid_dx = co->grid_dims[0],
+                                 .grid_dy = co->grid_dims[1],
+                                 .grid_dz = co->grid_dims[2],
+                                 .lightmap_width = co->lightmap_width,
+                                 .lightmap_height = co->lightmap_height,
+                                 .surfel_area = t->surfel_area};
+    *out = s;
+    return GLOW_OK;
+}
+
+void glow_gl_system_destroy(glow_gl_system *s) { free_system(s); }
+
+/* ------------------------------------------------------------------------------------- update */
+static void dispatch(glow_gl_system *s, uint32_t groups) {
+    if (groups == 0) return;
+    uint32_t x = groups < GLOW_MAX_GROUPS_X ? groups : GLOW_MAX_GROUPS_X;
+    uint32_t y = (groups + GLOW_MAX_GROUPS_X - 1u) / GLOW_MAX_GROUPS_X;
+    s->gl.DispatchCompute(x, y, 1);
+}
+
+static void stamp(glow_gl_system *s, int q) {
+    if (s->queries[0]) s->gl.QueryCounter(s->queries[q], GL_TIMESTAMP);
+}
+
+static void bind(glow_gl_system *s, int binding, int b) { s->gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, (GLuint)binding, s->buf[b]); }
+
+glow_result glow_gl_system_update(glow_gl_system *s, const glow_update_desc *desc) {
+    if (!s) return GLOW_ERROR_INVALID_ARGUMENT;
+    const uint32_t flags = desc ? desc->flags : 0u;
+    if (flags & ~(GLOW_UPDATE_FLAG_RESET_BOUNCE | GLOW_UPDATE_FLAG_KEEP_LIGHTING)) {
+        LOG_ERR(s, GLOW_ERROR_INVALID_ARGUMENT, "glow_gl_system_update: unknown flags 0x%x", flags);
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    glow_glfns *gl = &s->gl;
+    glow_system_params prm;
+    glow_system_get_params(s->sys, &prm);
+    glow_system_get_solver_tables(s->sys, &s->t);
+    const glow_solver_tables *t = &s->t;
+    /* material state: recomputed when emission, material scales or the emission scale changed */
+    const size_t M3 = 3u * t->material_count;
+    if (!s->mat_valid || t->emission_revision != s->emission_rev_seen || prm.emission_scale != s->emission_scale_seen ||
+        memcmp(s->mat_scales_seen, t->material_albedo_scale, M3 * sizeof(float)) ||
+        memcmp(s->mat_scales_seen + M3, t->material_emission_scale, M3 * sizeof(float))) {
+        fill_mat(s, prm.emission_scale);
+        gl->NamedBufferSubData(s->buf[B_MAT], 0, (GLsizeiptr)((size_t)s->S * sizeof(glow_gl_surfel_mat)), s->mat_staging);
+        memcpy(s->mat_scales_seen, t->material_albedo_scale, M3 * sizeof(float));
+        memcpy(s->mat_scales_seen + M3, t->material_emission_scale, M3 * sizeof(float));
+        s->emission_rev_seen = t->emission_revision;
+        s->emission_scale_seen = prm.emission_scale;
+        s->mat_valid = 1;
+    }
+    s->params.bounce_intensity = prm.bounce_intensity;
+    gl->NamedBufferSubData(s->buf[B_PARAMS], 0, sizeof s->params, &s->params);
+    gl->BindBufferBase(GL_UNIFORM_BUFFER, GLOW_BINDING_PARAMS, s->buf[B_PARAMS]);
+    const uint32_t sgroups = (s->S + GLOW_SURFEL_GROUP - 1u) / GLOW_SURFEL_GROUP;
+
+    stamp(s, T_BEGIN);
+    /* 1. direct light */
+    if (!(flags & GLOW_UPDATE_FLAG_KEEP_LIGHTING)) {
+        if (s->prog[K_DIRECT]) {
+            const glow_gl_status st0 = {0, 0, 0xFFFFFFFFu, 0};
+            gl->NamedBufferSubData(s->buf[B_STATUS], 0, sizeof st0, &st0);
+            gl->UseProgram(s->prog[K_DIRECT]);
+            bind(s, GLOW_BINDING_SURFEL_GEOM, B_GEOM);
+            bind(s, GLOW_BINDING_SURFEL_MAT, B_MAT);
+            bind(s, GLOW_BINDING_DIRECT, B_DIRECT);
+            bind(s, GLOW_BINDING_STATUS, B_STATUS);
+            dispatch(s, sgroups);
+            gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+            if (s->flags & GLOW_GL_FLAG_CHECK_HOOK) {
+                glow_gl_status st;
+                gl->GetNamedBufferSubData(s->buf[B_STATUS], 0, sizeof st, &st);
+                if (st.nonfinite) {
+                    LOG_ERR(s, GLOW_ERROR_HOST_CALLBACK,
+                            "glow_gl_system_update: the hook returned NaN/Inf for %u surfel(s) (first: %u); the update "
+                            "was abandoned and the previous outputs kept",
+                            st.nonfinite, st.first_bad);
+                    s->direct_valid = 0;
+                    return GLOW_ERROR_HOST_CALLBACK;
+                }
+            }
+        } else if (!s->direct_valid || t->direct_revision != s->direct_rev_seen) {
+            for (uint32_t i = 0; i < s->S; ++i) {
+                memcpy(s->direct_staging + 4 * (size_t)i, t->direct_irradiance + 3 * (size_t)i, 3 * sizeof(float));
+                s->direct_staging[4 * (size_t)i + 3] = 0.0f;
+            }
+            gl->NamedBufferSubData(s->buf[B_DIRECT], 0, (GLsizeiptr)((size_t)s->S * 16u), s->direct_staging);
+            s->direct_rev_seen = t->direct_revision;
+            s->direct_valid = 1;
+        }
+    }
+    if (flags & GLOW_UPDATE_FLAG_RESET_BOUNCE) {
+        const float zero = 0.0f;
+        gl->ClearNamedBufferData(s->buf[B_CACHE], GL_R32F, GL_RED, GL_FLOAT, &zero);
+    }
+    stamp(s, T_DIRECT);
+    const uint32_t iters = prm.bounce_iterations ? prm.bounce_iterations : 1u;
+    s->pull_dispatches = 0;
+    for (uint32_t it = 0; it < iters; ++it) {
+        /* 2. surfel flux */
+        gl->UseProgram(s->prog[K_FLUX]);
+        bind(s, GLOW_BINDING_SURFEL_MAT, B_MAT);
+        bind(s, GLOW_BINDING_DIRECT, B_DIRECT);
+        bind(s, GLOW_BINDING_FEEDBACK_W, B_FBW);
+        bind(s, GLOW_BINDING_CACHE_SH, B_CACHE);
+        bind(s, GLOW_BINDING_NODES, B_NODES);
+        bind(s, GLOW_BINDING_FLUX, B_FLUX);
+        dispatch(s, sgroups);
+        gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        if (it == 0) stamp(s, T_FLUX);
+        /* 3. pull, one dispatch per level */
+        gl->UseProgram(s->prog[K_PULL]);
+        for (uint32_t lv = 1; lv < s->levels; ++lv) {
+            const uint32_t first = t->level_starts[lv], count = t->level_starts[lv + 1] - first;
+            gl->Uniform2ui(s->level_loc, first, count);
+            dispatch(s, (count + GLOW_PULL_GROUP - 1u) / GLOW_PULL_GROUP);
+            gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+            s->pull_dispatches++;
+        }
+        if (it == 0) stamp(s, T_PULL);
+        /* 4. cache lighting: one workgroup per cache */
+        gl->UseProgram(s->prog[K_CACHE]);
+        bind(s, GLOW_BINDING_LINKS, B_LINKS);
+        bind(s, GLOW_BINDING_FLUX, B_FLUX);
+        bind(s, GLOW_BINDING_CACHE_SH, B_CACHE);
+        dispatch(s, s->C);
+        gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    }
+    stamp(s, T_CACHE);
+    /* 5. outputs (seam/gutter texels are pairs too) */
+    if (t->grid_used + t->lightmap_used) {
+        gl->UseProgram(s->prog[K_OUTPUT]);
+        bind(s, GLOW_BINDING_OUTPUT_PAIRS, B_PAIRS);
+        bind(s, GLOW_BINDING_CACHE_SH, B_CACHE);
+        if (s->grid_tex) gl->BindImageTexture(GLOW_IMAGE_GRID, s->grid_tex, 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+        if (s->lm_tex) gl->BindImageTexture(GLOW_IMAGE_LIGHTMAP, s->lm_tex, 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+        dispatch(s, (t->grid_used + t->lightmap_used + GLOW_OUTPUT_GROUP - 1u) / GLOW_OUTPUT_GROUP);
+        gl->MemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT |
+                          GL_TEXTURE_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+    }
+    stamp(s, T_OUTPUT);
+    gl->UseProgram(0);
+    s->queries_pending = s->queries[0] != 0;
+    s->updates++;
+    s->out.update_index = s->updates;
+    return GLOW_OK;
+}
+
+glow_result glow_gl_system_get_stats(glow_gl_system *s, glow_gl_stats *out) {
+    if (!s || !out) return GLOW_ERROR_INVALID_ARGUMENT;
+    memset(out, 0, sizeof *out);
+    glow_glfns *gl = &s->gl;
+    if (s->queries_pending) {
+        GLuint64 ts[T_COUNT];
+        for (int q = 0; q < T_COUNT; ++q) gl->GetQueryObjectui64v(s->queries[q], GL_QUERY_RESULT, &ts[q]);
+        const double ms = 1e-6;
+        out->host_ms = (double)(ts[T_DIRECT] - ts[T_BEGIN]) * ms;
+        out->surfel_lighting_ms = (double)(ts[T_FLUX] - ts[T_BEGIN]) * ms;
+        out->pull_ms = (double)(ts[T_PULL] - ts[T_FLUX]) * ms;
+        out->cache_lighting_ms = (double)(ts[T_CACHE] - ts[T_PULL]) * ms;
+        out->output_ms = (double)(ts[T_OUTPUT] - ts[T_CACHE]) * ms;
+        out->total_ms = (double)(ts[T_OUTPUT] - ts[T_BEGIN]) * ms;
+    }
+    if (s->prog[K_DIRECT]) {
+        glow_gl_status st;
+        gl->GetNamedBufferSubData(s->buf[B_STATUS], 0, sizeof st, &st);
+        out->hook_nonfinite = st.nonfinite;
+        out->hook_negative = st.negative;
+        if (st.nonfinite)
+            LOG_WARN(s, GLOW_ERROR_HOST_CALLBACK, "the hook returned NaN/Inf for %u surfel(s) (first: %u); stored as 0",
+                     st.nonfinite, st.first_bad);
+    }
+    out->pull_dispatches = s->pull_dispatches;
+    out->updates = s->updates;
+    out->gpu_memory_bytes = s->gpu_bytes;
+    snprintf(out->renderer, sizeof out->renderer, "%s", s->renderer);
+    return GLOW_OK;
+}
+
+const glow_gl_outputs *glow_gl_system_outputs(const glow_gl_system *s) { return s ? &s->out : NULL; }
+
+glow_result glow_gl_system_read_cache_sh(glow_gl_system *s, float *out, size_t count) {
+    if (!s || !out || count != (size_t)s->C * s->t.coeff_count) {
+        if (s)
+            LOG_ERR(s, GLOW_ERROR_INVALID_ARGUMENT, "glow_gl_system_read_cache_sh: need %zu floats, got %zu",
+                    (size_t)s->C * s->t.coeff_count, count);
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    s->gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+    s->gl.GetNamedBufferSubData(s->buf[B_CACHE], 0, (GLsizeiptr)(count * sizeof(float)), out);
+    return GLOW_OK;
+}
+
+const char *glow_gl_shading_source(void) { return glow__shading_glsl; }

@@ -1,0 +1,74 @@
+/*
+ * cache_light.comp — PIC step 4: every cache sums its links into SH of incident radiance with runtime
+ * projection (PIC 4.6), as runtime/src/cache_lighting.c does:
+ *     L_lm += R[node] · k_l(1 - omc) · y_lm(dir),   R = flux · 1/(π area) (YCoCg)
+ * for l < luma (Y) and l < chroma (Co, Cg); k_0 = 2π omc, k_l = 2π/(2l+1) (P_(l-1)(x) - P_(l+1)(x)).
+ * One workgroup per cache; its GLOW_CACHE_GROUP invocations take links j = lid, lid + group, ...;
+ * the partial sums are reduced through shared memory GLOW_REDUCE_CHUNK coefficients at a time, each
+ * coefficient by one invocation in a fixed order (deterministic). Link block layout: glow.h
+ * glow_solver_tables.link_blocks (32 uints per block of 16 links).
+ */
+#include "glow_kernel_common.glsl"
+#ifndef GLOW_CACHE_GROUP
+#error "GLOW_CACHE_GROUP must be defined (glow_shared.h)"
+#endif
+#define GLOW_SH_MAX_BANDS GLOW_LUMA_BANDS
+#include "glow_sh.glsl"
+layout(local_size_x = GLOW_CACHE_GROUP) in;
+
+layout(std430, binding = GLOW_BINDING_LINKS) readonly buffer GlowLinks { uint glow_links[]; };
+layout(std430, binding = GLOW_BINDING_FLUX) readonly buffer GlowFlux { vec4 glow_flux[]; };
+layout(std430, binding = GLOW_BINDING_CACHE_SH) writeonly buffer GlowCacheSh { float glow_cache_sh[]; };
+
+shared float glow_red[GLOW_REDUCE_CHUNK][GLOW_CACHE_GROUP + 1];
+
+void main() {
+    uint c = glow_group_index();
+    if (c >= glow_p.cache_count) return; /* whole workgroup: uniform */
+    uint lid = gl_LocalInvocationID.x;
+    float acc[GLOW_NCO];
+    for (int i = 0; i < GLOW_NCO; ++i) acc[i] = 0.0;
+    uint nlinks = glow_p.blocks_per_cache * 16u;
+    for (uint j = lid; j < nlinks; j += uint(GLOW_CACHE_GROUP)) {
+        uint base = (c * glow_p.blocks_per_cache + j / 16u) * 32u, lane = j & 15u;
+        uint nd = glow_links[base + lane];
+        uint w16 = glow_links[base + 16u + lane / 2u], lo16 = glow_links[base + 24u + lane / 2u];
+        uint shift = (lane & 1u) * 16u;
+        float omc = unpackHalf2x16((w16 >> shift) & 0xFFFFu).x;
+        if (!(omc > 0.0)) continue; /* unused lanes: k_l(1) = 0, they add nothing */
+        uint lo = (lo16 >> shift) & 0xFFFFu;
+        vec3 d = glow_oct_decode12(((nd >> 24) << 4) | (lo & 15u), lo >> 4);
+        vec4 f = glow_flux[nd & 0x00FFFFFFu];
+        vec3 R = f.xyz * f.w;
+        float y[GLOW_L2];
+        glow_sh_eval(GLOW_LUMA_BANDS, d, y);
+        float x = 1.0 - omc;
+        float P[GLOW_LUMA_BANDS + 2];
+        P[0] = 1.0;
+        P[1] = x;
+        for (int l = 1; l <= GLOW_LUMA_BANDS; ++l)
+            P[l + 1] = (float(2 * l + 1) * x * P[l] - float(l) * P[l - 1]) * (1.0 / float(l + 1));
+        for (int l = 0; l < GLOW_LUMA_BANDS; ++l) {
+            float k = l == 0 ? omc * float(2.0 * GLOW_PI) : (P[l - 1] - P[l + 1]) * float(2.0 * GLOW_PI / (2.0 * l + 1.0));
+            vec3 w = R * k;
+            for (int i = l * l; i < (l + 1) * (l + 1); ++i) acc[i] += w.x * y[i];
+            if (l < GLOW_CHROMA_BANDS)
+                for (int i = l * l; i < (l + 1) * (l + 1); ++i) {
+                    acc[GLOW_L2 + i] += w.y * y[i];
+                    acc[GLOW_L2 + GLOW_C2 + i] += w.z * y[i];
+                }
+        }
+    }
+    /* reduce: chunk by chunk, invocation q sums coefficient base + q over all invocations */
+    for (int base = 0; base < GLOW_NCO; base += GLOW_REDUCE_CHUNK) {
+        for (int q = 0; q < GLOW_REDUCE_CHUNK; ++q)
+            if (base + q < GLOW_NCO) glow_red[q][lid] = acc[base + q];
+        barrier();
+        if (lid < uint(GLOW_REDUCE_CHUNK) && base + int(lid) < GLOW_NCO) {
+            float s = 0.0;
+            for (int t = 0; t < GLOW_CACHE_GROUP; ++t) s += glow_red[lid][t];
+            glow_cache_sh[c * glow_p.coeff_count + uint(base) + lid] = s;
+        }
+        barrier();
+    }
+}

@@ -1,0 +1,117 @@
+/*
+ * glow_shading.glsl — what a host's material shader #includes to shade with Glow's caches: sample the
+ * grid (dynamic objects) or the lightmap (static surfaces) and convolve with a diffuse or Phong lobe
+ * (PIC 3.2, App. B). The same maths as the runtime's C reference (glow.h: glow_sample_grid,
+ * glow_sample_lightmap, glow_shade_sh); tests/gpu checks them against each other.
+ *
+ * THE TEXTURES (glow_gl.h, glow_gl_outputs): coefficients of a cache are Y luma², Co chroma², Cg chroma²
+ * (incident radiance, W/(m²·sr), YCoCg), 4 per RGBA32F texel ("planes", GLOW_SH_PLANES of them):
+ *   grid      sampler3D, dims (dx, dy, dz · planes): plane p of cell (x,y,z) at texel (x, y, z + p·dz)
+ *   grid mask usampler3D RG32UI (dx, dy, dz): for the cell whose lowest corner is (x,y,z) and each octant o
+ *             of it, byte o (x: octants 0-3, y: 4-7) has bit k set when corner k may be blended (it holds a
+ *             cache and, with the bake's GVIS, is visible from that octant's centre)
+ *   lightmap  sampler2DArray, layer p = plane p; lightmap valid: usampler2D R8UI, 1 where a texel holds a cache
+ * Lookups use texelFetch and weight empty/hidden neighbours 0 (renormalising the rest), so set any filter.
+ *
+ * USAGE (GLSL 4.50, in any stage)
+ *   #define GLOW_SH_BANDS_LUMA 3          (the system's bands: glow_gl_outputs.sh_bands_luma / _chroma)
+ *   #define GLOW_SH_BANDS_CHROMA 3
+ *   #include "glow_shading.glsl"
+ *   vec4 sh[GLOW_SH_PLANES];
+ *   if (glow_sample_lightmap(lm, lm_valid, uv, sh)) color += albedo * glow_shade_sh(sh, n, 1.0);
+ * glow_shade_sh(sh, n, 1) is the cosine-weighted mean incident radiance E/π, so a Lambertian surface of
+ * albedo ρ reflects ρ · glow_shade_sh(...); for a glossy lobe pass the reflection vector and its exponent.
+ */
+#ifndef GLOW_SHADING_GLSL
+#define GLOW_SHADING_GLSL
+
+#ifndef GLOW_SH_BANDS_LUMA
+#error "define GLOW_SH_BANDS_LUMA (and GLOW_SH_BANDS_CHROMA) to the system's band counts before including glow_shading.glsl"
+#endif
+#ifndef GLOW_SH_BANDS_CHROMA
+#define GLOW_SH_BANDS_CHROMA GLOW_SH_BANDS_LUMA
+#endif
+#ifndef GLOW_SH_MAX_BANDS
+#define GLOW_SH_MAX_BANDS GLOW_SH_BANDS_LUMA
+#endif
+#include "glow_sh.glsl"
+
+#define GLOW_SH_L2 (GLOW_SH_BANDS_LUMA * GLOW_SH_BANDS_LUMA)
+#define GLOW_SH_C2 (GLOW_SH_BANDS_CHROMA * GLOW_SH_BANDS_CHROMA)
+#define GLOW_SH_COEFFS (GLOW_SH_L2 + 2 * GLOW_SH_C2)
+#define GLOW_SH_PLANES ((GLOW_SH_COEFFS + 3) / 4)
+
+/** Coefficient k of a cache held in planes. */
+float glow_sh_coeff(vec4 sh[GLOW_SH_PLANES], int k) { return sh[k >> 2][k & 3]; }
+
+/** Lobe-weighted mean incident radiance (RGB, W/(m²·sr)) around unit `axis` for the normalised Phong
+ * lobe of `exponent` (1 = diffuse: E/π). */
+vec3 glow_shade_sh(vec4 sh[GLOW_SH_PLANES], vec3 axis, float exponent) {
+    float y[GLOW_SH_MAX_BANDS * GLOW_SH_MAX_BANDS];
+    glow_sh_eval(GLOW_SH_BANDS_LUMA, axis, y);
+    vec3 ycc = vec3(0.0);
+    for (int l = 0; l < GLOW_SH_BANDS_LUMA; ++l) {
+        float s = glow_sh_lobe_factor(l, exponent);
+        vec3 acc = vec3(0.0);
+        for (int k = l * l; k < (l + 1) * (l + 1); ++k) {
+            acc.x += glow_sh_coeff(sh, k) * y[k];
+            if (l < GLOW_SH_BANDS_CHROMA) {
+                acc.y += glow_sh_coeff(sh, GLOW_SH_L2 + k) * y[k];
+                acc.z += glow_sh_coeff(sh, GLOW_SH_L2 + GLOW_SH_C2 + k) * y[k];
+            }
+        }
+        ycc += s * acc;
+    }
+    return glow_ycocg_to_rgb(ycc);
+}
+
+/** Trilinear lookup of the grid at `p` (m; clamped to the grid), blending only the corners the mask allows,
+ * renormalised. origin = centre of cell (0,0,0), spacing in m, dims = cells (dx, dy, dz).
+ * \returns false (sh zeroed) when no corner may be blended. */
+bool glow_sample_grid(sampler3D grid, usampler3D grid_mask, vec3 origin, float spacing, ivec3 dims, vec3 p,
+                      out vec4 sh[GLOW_SH_PLANES]) {
+    for (int q = 0; q < GLOW_SH_PLANES; ++q) sh[q] = vec4(0.0);
+    vec3 f = clamp((p - origin) / spacing, vec3(0.0), vec3(dims - 1));
+    vec3 fl = floor(f);
+    ivec3 i0 = ivec3(fl), i1 = min(i0 + 1, dims - 1);
+    vec3 t = f - fl;
+    uint oct = (t.x >= 0.5 ? 1u : 0u) | (t.y >= 0.5 ? 2u : 0u) | (t.z >= 0.5 ? 4u : 0u);
+    uvec2 m2 = texelFetch(grid_mask, i0, 0).xy;
+    uint mask = ((oct < 4u ? m2.x : m2.y) >> (8u * (oct & 3u))) & 0xFFu;
+    float wsum = 0.0;
+    for (int c = 0; c < 8; ++c) {
+        if (((mask >> uint(c)) & 1u) == 0u) continue;
+        ivec3 cc = ivec3((c & 1) != 0 ? i1.x : i0.x, (c & 2) != 0 ? i1.y : i0.y, (c & 4) != 0 ? i1.z : i0.z);
+        float w = ((c & 1) != 0 ? t.x : 1.0 - t.x) * ((c & 2) != 0 ? t.y : 1.0 - t.y) * ((c & 4) != 0 ? t.z : 1.0 - t.z);
+        if (!(w > 0.0)) continue;
+        wsum += w;
+        for (int q = 0; q < GLOW_SH_PLANES; ++q) sh[q] += w * texelFetch(grid, cc + ivec3(0, 0, q * dims.z), 0);
+    }
+    if (!(wsum > 0.0)) return false;
+    for (int q = 0; q < GLOW_SH_PLANES; ++q) sh[q] /= wsum;
+    return true;
+}
+
+/** Bilinear lookup of the lightmap at uv in [0,1]² (texel centres at (i + 0.5)/size, v = 0 is row 0),
+ * clamped to the edge, empty texels weighted 0 and the rest renormalised. \returns false when all 4 are empty. */
+bool glow_sample_lightmap(sampler2DArray lightmap, usampler2D lightmap_valid, vec2 uv, out vec4 sh[GLOW_SH_PLANES]) {
+    for (int q = 0; q < GLOW_SH_PLANES; ++q) sh[q] = vec4(0.0);
+    ivec2 size = textureSize(lightmap_valid, 0);
+    vec2 f = clamp(uv * vec2(size) - 0.5, vec2(0.0), vec2(size - 1));
+    vec2 fl = floor(f);
+    ivec2 i0 = ivec2(fl), i1 = min(i0 + 1, size - 1);
+    vec2 t = f - fl;
+    float wsum = 0.0;
+    for (int c = 0; c < 4; ++c) {
+        ivec2 cc = ivec2((c & 1) != 0 ? i1.x : i0.x, (c & 2) != 0 ? i1.y : i0.y);
+        float w = ((c & 1) != 0 ? t.x : 1.0 - t.x) * ((c & 2) != 0 ? t.y : 1.0 - t.y);
+        if (!(w > 0.0) || texelFetch(lightmap_valid, cc, 0).x == 0u) continue;
+        wsum += w;
+        for (int q = 0; q < GLOW_SH_PLANES; ++q) sh[q] += w * texelFetch(lightmap, ivec3(cc, q), 0);
+    }
+    if (!(wsum > 0.0)) return false;
+    for (int q = 0; q < GLOW_SH_PLANES; ++q) sh[q] /= wsum;
+    return true;
+}
+
+#endif /* GLOW_SHADING_GLSL */

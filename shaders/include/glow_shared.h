@@ -1,0 +1,90 @@
+/*
+ * glow_shared.h — what Glow's GL kernels and their C host (integration/src/gl/) must agree on: buffer
+ * bindings, struct layouts (std430 / std140 with only 4-byte scalars and vec4s, so C and GLSL lay them
+ * out alike), workgroup sizes. Valid C11 and GLSL 4.50: the embed step defines GLOW_GLSL before it.
+ *
+ * Bindings are per kernel (the backend binds before every dispatch); the HOST HOOK (surfel_direct.comp)
+ * may use any texture unit and SSBO/UBO bindings >= GLOW_BINDING_HOST_FIRST. Glow's kernels use no
+ * texture units and image units 0..1 only (outputs.comp).
+ *
+ *   kernel            SSBO bindings (see GLOW_BINDING_*)                         UBO 0
+ *   surfel_direct     SURFEL_GEOM, DIRECT (w), STATUS (rw)                       params
+ *   surfel_flux       SURFEL_MAT, DIRECT, FEEDBACK_W, CACHE_SH, NODES, FLUX (w) params
+ *   pull              NODES, FLUX (rw)                          uniform uvec2 glow_level (first, count)
+ *   cache_light       LINKS, FLUX, CACHE_SH (w)                                  params
+ *   outputs           OUTPUT_PAIRS, CACHE_SH; images 0 grid, 1 lightmap          params
+ */
+#ifndef GLOW_SHARED_H
+#define GLOW_SHARED_H
+
+#ifndef GLOW_GLSL
+#include <stdint.h>
+typedef uint32_t glow_uint;
+typedef float glow_float;
+typedef struct glow_vec4 { float x, y, z, w; } glow_vec4;
+#define GLOW_STRUCT(name) typedef struct name name; struct name
+#else
+#define glow_uint uint
+#define glow_float float
+#define glow_vec4 vec4
+#define GLOW_STRUCT(name) struct name
+#endif
+
+/* SSBO bindings */
+#define GLOW_BINDING_SURFEL_GEOM 0  /* glow_gl_surfel_geom[S] */
+#define GLOW_BINDING_SURFEL_MAT 1   /* glow_gl_surfel_mat[S] */
+#define GLOW_BINDING_DIRECT 2       /* vec4[S]: direct irradiance W/m² (rgb), w unused */
+#define GLOW_BINDING_FEEDBACK_W 3   /* float[S][luma²]: π s_l(1) y_lm(n) */
+#define GLOW_BINDING_STATUS 3       /* surfel_direct only: glow_gl_status */
+#define GLOW_BINDING_CACHE_SH 4     /* float[C][coeff_count]: Y luma², Co chroma², Cg chroma² */
+#define GLOW_BINDING_NODES 5        /* uvec4[N]: child0, child1, floatBits(1/(π area)), 0 */
+#define GLOW_BINDING_FLUX 6         /* vec4[N]: flux Y Co Cg (W), w = 1/(π area): radiance = xyz * w */
+#define GLOW_BINDING_LINKS 7        /* uint[]: the bake's link blocks (32 uints = 16 links each) */
+#define GLOW_BINDING_OUTPUT_PAIRS 7 /* outputs only: uvec2[grid_used + lightmap_used] (cell/texel, cache) */
+#define GLOW_BINDING_HOST_FIRST 8   /* first SSBO/UBO binding the host hook may use */
+/* UBO binding of glow_gl_params */
+#define GLOW_BINDING_PARAMS 0
+/* image units of outputs.comp */
+#define GLOW_IMAGE_GRID 0     /* image3D rgba32f: plane p of cell (x,y,z) at (x, y, z + p * dz) */
+#define GLOW_IMAGE_LIGHTMAP 1 /* image2DArray rgba32f: plane p of texel (x,y) at layer p */
+
+/* workgroup sizes (the kernels #error without them; the backend defines them from here) */
+#define GLOW_SURFEL_GROUP 64
+#define GLOW_PULL_GROUP 64
+#define GLOW_CACHE_GROUP 64   /* one workgroup per cache, threads across its links */
+#define GLOW_OUTPUT_GROUP 64
+#define GLOW_REDUCE_CHUNK 32  /* coefficients reduced per shared-memory pass */
+#define GLOW_MAX_GROUPS_X 65535u /* dispatches wider than this use y (index = y * 65535 + x) */
+
+/* Per-surfel material state, recomputed on the CPU when albedo/emission scales change:
+ * B = rho · E_direct + rho_ind · bounce · max(0, E_indirect) + emit;  flux = B · surfel_area. */
+GLOW_STRUCT(glow_gl_surfel_mat) {
+    glow_vec4 rho;     /* rgb: albedo × material scale, clamped to [0, 0.999] */
+    glow_vec4 rho_ind; /* rgb: min(rho, the non-divergence cap) */
+    glow_vec4 emit;    /* rgb: π L_e · emission_scale · material emission scale (W/m²) */
+    glow_uint feedback, material, reserved0, reserved1;
+};
+
+GLOW_STRUCT(glow_gl_surfel_geom) {
+    glow_vec4 position_area; /* m, m² */
+    glow_vec4 normal;        /* unit, w = 0 */
+};
+
+/* Counters the hook kernel raises (read back only when the host asks for stats). */
+GLOW_STRUCT(glow_gl_status) {
+    glow_uint nonfinite; /* surfels whose hook value was NaN/Inf (stored as 0) */
+    glow_uint negative;  /* channels clamped to 0 */
+    glow_uint first_bad; /* lowest surfel index with a non-finite value (0xFFFFFFFF = none) */
+    glow_uint reserved;
+};
+
+/* std140 with 4-byte scalars only: C and GLSL agree without padding rules. */
+GLOW_STRUCT(glow_gl_params) {
+    glow_uint surfel_count, node_count, cache_count, coeff_count;
+    glow_uint blocks_per_cache, grid_used, lightmap_used, planes;
+    glow_uint grid_dx, grid_dy, grid_dz, lightmap_width;
+    glow_uint lightmap_height, reserved0, reserved1, reserved2;
+    glow_float surfel_area, bounce_intensity, reserved3, reserved4;
+};
+
+#endif /* GLOW_SHARED_H */

@@ -1,0 +1,35 @@
+/*
+ * outputs.comp — the output textures: every non-empty grid cell and lightmap texel (the bake's map,
+ * lightmap gutter and seam texels included: they name the cache they copy, so this is also the seam
+ * copy) gets its cache's coefficients, 4 per RGBA32F texel: plane p holds coefficients 4p..4p+3 of
+ * the cache layout (Y luma², Co chroma², Cg chroma², zero-padded). Empty texels stay 0 (cleared at create).
+ */
+#include "glow_kernel_common.glsl"
+#ifndef GLOW_OUTPUT_GROUP
+#error "GLOW_OUTPUT_GROUP must be defined (glow_shared.h)"
+#endif
+layout(local_size_x = GLOW_OUTPUT_GROUP) in;
+
+layout(std430, binding = GLOW_BINDING_OUTPUT_PAIRS) readonly buffer GlowPairs { uvec2 glow_pairs[]; };
+layout(std430, binding = GLOW_BINDING_CACHE_SH) readonly buffer GlowCacheSh { float glow_cache_sh[]; };
+layout(rgba32f, binding = GLOW_IMAGE_GRID) uniform writeonly image3D glow_grid;
+layout(rgba32f, binding = GLOW_IMAGE_LIGHTMAP) uniform writeonly image2DArray glow_lightmap;
+
+float glow_coeff(uint base, uint k) { return k < glow_p.coeff_count ? glow_cache_sh[base + k] : 0.0; }
+
+void main() {
+    uint i = glow_global_index(GLOW_OUTPUT_GROUP);
+    if (i >= glow_p.grid_used + glow_p.lightmap_used) return;
+    uvec2 pr = glow_pairs[i];
+    uint base = pr.y * glow_p.coeff_count;
+    bool grid = i < glow_p.grid_used;
+    uint dx = glow_p.grid_dx, dxy = glow_p.grid_dx * glow_p.grid_dy, W = glow_p.lightmap_width;
+    ivec3 cell = ivec3(pr.x % dx, (pr.x / dx) % glow_p.grid_dy, pr.x / dxy);
+    ivec2 texel = ivec2(pr.x % max(W, 1u), pr.x / max(W, 1u));
+    for (uint p = 0u; p < glow_p.planes; ++p) {
+        vec4 v = vec4(glow_coeff(base, 4u * p), glow_coeff(base, 4u * p + 1u), glow_coeff(base, 4u * p + 2u),
+                      glow_coeff(base, 4u * p + 3u));
+        if (grid) imageStore(glow_grid, cell + ivec3(0, 0, int(p * glow_p.grid_dz)), v);
+        else imageStore(glow_lightmap, ivec3(texel, int(p)), v);
+    }
+}
