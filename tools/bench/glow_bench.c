@@ -22,6 +22,11 @@
 #include "glow/glow_host.h"
 #include "glow/glow_scene.h"
 #include "machine_probe.h"
+#ifdef GLOW_BENCH_HAVE_GL
+#include "glow/glow_gl.h"
+#include "glow/glow_gl_lights.h"
+#include "glow/glow_glctx.h"
+#endif
 
 #define MAX_PROBES 16
 
@@ -30,7 +35,7 @@ typedef struct options {
     uint32_t frames, warmup, threads, luma, chroma, iterations;
     glow_host_kind host;
     glow_link_mode link_mode;
-    int json, quiet, no_probe_machine;
+    int json, quiet, no_probe_machine, gl;
     uint32_t probe_count;
     float probes[MAX_PROBES][3];
 } options;
@@ -43,7 +48,7 @@ static void usage(FILE *f) {
     fprintf(f,
             "usage: glow-bench BAKE SCENE [--frames N] [--warmup N] [--threads N] [--luma L] [--chroma C]\n"
             "                  [--iterations K] [--host exact|shadow-map] [--link-mode compact|expanded|sh]\n"
-            "                  [--probe X,Y,Z]... [--no-machine]\n"
+            "                  [--probe X,Y,Z]... [--no-machine] [--backend cpu|gl]\n"
             "                  [--json] [-q]\n"
             "  BAKE   a bake written by glow-bake;  SCENE  its scene description JSON (docs/scene-format.md)\n"
             "  --frames N      timed updates (default 60); --warmup N untimed first (default 5)\n"
@@ -54,7 +59,10 @@ static void usage(FILE *f) {
             "  --link-mode     links projected every update (compact, default), expanded at create (more memory),\n"
             "                  or the bake's full-SH links (sh: needs glow-bake --sh-links)\n"
             "  --probe X,Y,Z   print the indirect light at this point (repeatable; default: 3 points)\n"
-            "  --no-machine    skip the STREAM-triad and FMA-peak probes\n");
+            "  --no-machine    skip the STREAM-triad and FMA-peak probes\n"
+            "  --backend gl    the GL 4.5 solver (glow_gl.h) on a headless context (EGL, else OSMesa; GLOW_GLCTX=egl|osmesa),\n"
+            "                  surfels lit by the GPU shadow-map hook (glow_gl_lights.h); per-stage GPU times from timer\n"
+            "                  queries (--threads, --host and --link-mode do not apply)\n");
 }
 
 static int parse_u32(const char *s, uint32_t *out) {
@@ -108,6 +116,13 @@ static int parse_args(int argc, char **argv, options *o) {
             }
             memcpy(o->probes[o->probe_count++], p, sizeof p);
             ++i;
+        } else if (!strcmp(a, "--backend")) {
+            if (!v || (strcmp(v, "cpu") && strcmp(v, "gl"))) {
+                fprintf(stderr, "glow-bench: --backend must be cpu or gl\n");
+                return 0;
+            }
+            o->gl = !strcmp(v, "gl");
+            ++i;
         } else if (!strcmp(a, "--no-machine")) o->no_probe_machine = 1;
         else if (!strcmp(a, "--json")) o->json = 1;
         else if (!strcmp(a, "-q")) o->quiet = 1;
@@ -122,6 +137,12 @@ static int parse_args(int argc, char **argv, options *o) {
         fprintf(stderr, "glow-bench: need BAKE and SCENE\n");
         return 0;
     }
+#ifndef GLOW_BENCH_HAVE_GL
+    if (o->gl) {
+        fprintf(stderr, "glow-bench: --backend gl: this build has no GL backend (GLOW_WITH_GL=OFF)\n");
+        return 0;
+    }
+#endif
     if (o->frames == 0) {
         fprintf(stderr, "glow-bench: --frames must be >= 1\n");
         return 0;
@@ -189,6 +210,15 @@ int main(int argc, char **argv) {
     glow_bake *bake = NULL;
     glow_host *host = NULL;
     glow_system *sys = NULL;
+#ifdef GLOW_BENCH_HAVE_GL
+    glow_glctx *glc = NULL;
+    glow_gl_lights *gll = NULL;
+    glow_gl_system *gls = NULL;
+    glow_scene_light *lights = NULL;
+    char gl_renderer[96] = "";
+#endif
+    float *gpu_sh = NULL;
+    glow_cache_outputs gpu_out;
     double *v_host = NULL, *v_light = NULL, *v_pull = NULL, *v_cache = NULL, *v_out = NULL, *v_total = NULL, *v_move = NULL;
     int rc = 1;
     glow_result r = glow_context_create(
@@ -199,8 +229,8 @@ int main(int argc, char **argv) {
     glow_bake_get_info(bake, &info);
     glow_host_desc hd = glow_host_desc_from_scene(&scene, bake, o.host);
     hd.logger = logger;
-    if ((r = glow_host_create(&hd, &host)) != GLOW_OK) goto done;
-    glow_system_desc sd = {.bake = bake, .lighting = glow_host_hooks(host), .sh_bands_luma = o.luma,
+    if (!o.gl && (r = glow_host_create(&hd, &host)) != GLOW_OK) goto done;
+    glow_system_desc sd = {.bake = bake, .lighting = o.gl ? (glow_lighting_hooks){0} : glow_host_hooks(host), .sh_bands_luma = o.luma,
                            .sh_bands_chroma = o.chroma, .label = o.bake, .link_mode = o.link_mode};
     if ((r = glow_system_create(ctx, &sd, &sys)) != GLOW_OK) goto done;
     if ((r = glow_system_set_params(sys, &(glow_system_params){.bounce_intensity = 1.0f,
@@ -208,6 +238,24 @@ int main(int argc, char **argv) {
                                                                 .bounce_iterations = o.iterations})) != GLOW_OK)
         goto done;
     const glow_cache_outputs *out = glow_system_outputs(sys);
+#ifdef GLOW_BENCH_HAVE_GL
+    if (o.gl) {
+        if ((r = glow_glctx_create(&(glow_glctx_desc){.kind = GLOW_GLCTX_HEADLESS}, &glc, msg, sizeof msg)) != GLOW_OK) {
+            fprintf(stderr, "glow-bench: --backend gl: no OpenGL 4.5 context: %s\n", msg);
+            goto done;
+        }
+        snprintf(gl_renderer, sizeof gl_renderer, "%s", glow_glctx_renderer(glc));
+        glow_gl_lights_desc ld = {.loader = glow_glctx_get_proc_address(glc), .bake = bake, .logger = logger};
+        if ((r = glow_gl_lights_create(&ld, &gll)) != GLOW_OK) goto done;
+        if ((r = glow_gl_lights_set(gll, scene.lights, scene.light_count, scene.environment)) != GLOW_OK) goto done;
+        glow_gl_desc gd = {.system = sys, .get_proc_address = glow_glctx_get_proc_address(glc),
+                           .hook_glsl = glow_gl_lights_hook_source(gll), .label = o.bake, .logger = logger};
+        if ((r = glow_gl_system_create(&gd, &gls)) != GLOW_OK) goto done;
+        lights = calloc(scene.light_count ? scene.light_count : 1u, sizeof *lights);
+        if (!lights) goto done;
+        if (scene.light_count) memcpy(lights, scene.lights, scene.light_count * sizeof *lights);
+    }
+#endif
     uint32_t threads = o.threads;
     if (threads == 0) {
         long n = sysconf(_SC_NPROCESSORS_ONLN);
@@ -225,6 +273,34 @@ int main(int argc, char **argv) {
     glow_update_stats st = {0};
     for (uint32_t f = 0; f < total; ++f) {
         double t0 = now_ms();
+#ifdef GLOW_BENCH_HAVE_GL
+        if (o.gl) {
+            if (scene.light_count > 0) {
+                animate(&scene.lights[0], &lights[0], f, total, 0.05f * diag);
+                if ((r = glow_gl_lights_set(gll, lights, scene.light_count, scene.environment)) != GLOW_OK) goto done;
+            } else {
+                float pulse = scene.emission_scale * (0.75f + 0.25f * (float)cos(6.283185307 * f / total));
+                glow_system_set_params(sys, &(glow_system_params){1.0f, pulse, o.iterations});
+            }
+            glow_gl_lights_bind(gll);
+            double t1g = now_ms();
+            if ((r = glow_gl_system_update(gls, NULL)) != GLOW_OK) goto done;
+            glow_gl_stats gs;
+            glow_gl_system_get_stats(gls, &gs); /* waits for this update's timer queries */
+            if (f >= o.warmup) {
+                uint32_t i = f - o.warmup;
+                v_move[i] = t1g - t0;
+                v_host[i] = gs.host_ms;
+                v_light[i] = gs.surfel_lighting_ms;
+                v_pull[i] = gs.pull_ms;
+                v_cache[i] = gs.cache_lighting_ms;
+                v_out[i] = gs.output_ms;
+                v_total[i] = gs.total_ms;
+                st.memory_bytes = gs.gpu_memory_bytes;
+            }
+            continue;
+        }
+#endif
         if (scene.light_count > 0) {
             glow_scene_light l;
             animate(&scene.lights[0], &l, f, total, 0.05f * diag);
@@ -257,7 +333,7 @@ int main(int argc, char **argv) {
     const double gflops = (double)links * fpl / (m_cache * 1e-3) * 1e-9;
     double triad = -1.0, peak = -1.0;
     const char *fma_isa = "-";
-    if (!o.no_probe_machine) {
+    if (!o.no_probe_machine && !o.gl) { /* the CPU's limits say nothing about a GPU */
         triad = glow_probe_stream_triad(threads, (size_t)1 << 23, 8); /* 3 x 64 MiB */
         peak = glow_probe_fma_peak(threads, 300.0, &fma_isa);
     }
@@ -270,6 +346,16 @@ int main(int argc, char **argv) {
         }
         o.probe_count = 3;
     }
+#ifdef GLOW_BENCH_HAVE_GL
+    if (o.gl) { /* probes read the GPU's caches (read back) through the C sampler */
+        const size_t ncs = (size_t)out->cache_count * out->coeff_count;
+        gpu_sh = malloc(ncs * sizeof *gpu_sh);
+        if (!gpu_sh || (r = glow_gl_system_read_cache_sh(gls, gpu_sh, ncs)) != GLOW_OK) goto done;
+        gpu_out = *out;
+        gpu_out.cache_sh = gpu_sh;
+        out = &gpu_out;
+    }
+#endif
     float probe_rgb[MAX_PROBES][3];
     int probe_ok[MAX_PROBES];
     float *coeffs = calloc(out->coeff_count, sizeof(float));
@@ -291,7 +377,13 @@ int main(int argc, char **argv) {
     if (o.json) {
         printf("{\"bake\": \"%s\", \"scene\": \"%s\", \"host\": \"%s\", \"threads\": %u, \"frames\": %u,\n", o.bake,
                o.scene, o.host == GLOW_HOST_KIND_EXACT ? "exact" : "shadow-map", threads, n);
-        printf(" \"link_mode\": \"%s\", \"kernel\": \"%s\", \"system_memory_bytes\": %llu,\n",
+#ifdef GLOW_BENCH_HAVE_GL
+        if (o.gl)
+            printf(" \"backend\": \"gl\", \"renderer\": \"%s\", \"gpu_memory_bytes\": %llu,\n", gl_renderer,
+                   (unsigned long long)st.memory_bytes);
+        else
+#endif
+        printf(" \"backend\": \"cpu\", \"link_mode\": \"%s\", \"kernel\": \"%s\", \"system_memory_bytes\": %llu,\n",
                link_mode_name(st.link_mode), st.kernel ? st.kernel : "-",
                (unsigned long long)st.memory_bytes);
         printf(" \"surfels\": %u, \"caches\": %u, \"links_per_cache\": %u, \"luma\": %u, \"chroma\": %u, \"iterations\": %u,\n",
@@ -316,10 +408,16 @@ int main(int argc, char **argv) {
         printf("glow-bench %s + %s: %u surfels, %u caches x %u links, SH luma %u chroma %u, %u thread(s), %s host\n",
                o.bake, o.scene, info.surfel_count, info.cache_count, info.links_per_cache, out->sh_bands_luma,
                out->sh_bands_chroma, threads, o.host == GLOW_HOST_KIND_EXACT ? "exact" : "shadow-map");
+#ifdef GLOW_BENCH_HAVE_GL
+        if (o.gl)
+            printf("backend gl: %s, GPU memory %.1f MiB (GPU times from timer queries)\n", gl_renderer,
+                   (double)st.memory_bytes / (1024.0 * 1024.0));
+        else
+#endif
         printf("links %s, kernel %s, system memory %.1f MiB\n", link_mode_name(st.link_mode),
                st.kernel ? st.kernel : "-", (double)st.memory_bytes / (1024.0 * 1024.0));
         printf("median of %u updates (ms):\n", n);
-        printf("  light move (host, outside update) %8.3f\n", m_move);
+        printf("  light move (host, outside update) %8.3f%s\n", m_move, o.gl ? "  (GPU shadow maps: CPU time to submit)" : "");
         printf("  surfel lighting                   %8.3f  (host hook %.3f)\n", m_light, m_host);
         printf("  pull                              %8.3f\n", m_pull);
         printf("  cache lighting                    %8.3f  (%.2f ns/link)\n", m_cache, m_cache * 1e6 / (double)links);
@@ -338,6 +436,13 @@ int main(int argc, char **argv) {
     rc = 0;
 done:
     if (rc != 0 && r != GLOW_OK) fprintf(stderr, "glow-bench: failed: %s\n", glow_result_string(r));
+    free(gpu_sh);
+#ifdef GLOW_BENCH_HAVE_GL
+    free(lights);
+    glow_gl_system_destroy(gls);
+    glow_gl_lights_destroy(gll);
+    glow_glctx_destroy(glc);
+#endif
     free(v_host); free(v_light); free(v_pull); free(v_cache); free(v_out); free(v_total); free(v_move);
     glow_system_destroy(sys);
     glow_host_destroy(host);
