@@ -2,16 +2,19 @@
  * (each kind explicitly, HEADLESS's pick, the GLOW_GLCTX override), GL reached only through the
  * context's loader (renderer/version strings, compute limits, a 64-float SSBO doubled by a GLSL 450
  * compute shader and read back two ways), two contexts alive at once and in sequence (run under ASan
- * for leaks), and bad input: NULL desc/out, unknown kind, oversize, a bad GLOW_GLCTX, a WINDOW with
+ * for leaks), moving a context to another thread and back, and bad input: NULL desc/out, unknown kind, oversize, a bad GLOW_GLCTX, a WINDOW with
  * no display (UNSUPPORTED with a reason, no crash).
  *
  * Exit 77 (skipped) when no headless GL 4.5 context can be made; the no-GL checks run first and still
- * fail the test if they fail. */
+ * fail the test if they fail.
+ *
+ * Under ASan: LSAN_OPTIONS=suppressions=tests/gpu/lsan.supp (leaks inside Mesa's OSMesa only). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <cmocka.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -86,62 +89,71 @@ static void check_context(glow_glctx *gl) {
 }
 
 /* 64 floats in an SSBO, doubled by a compute shader, read back with glGetNamedBufferSubData and
- * glMapNamedBufferRange. */
-static void compute_round_trip(glow_glctx *gl) {
+ * glMapNamedBufferRange. Returns NULL, or what went wrong (no cmocka asserts: runs on other threads
+ * too). */
+#define NEED(type, name)                                                                                 \
+    type name = (type)load(#name);                                                                      \
+    if (!name) return "loader returned NULL for " #name
+
+static const char *compute_round_trip_err(glow_glctx *gl, char *msg, size_t msg_size) {
     glow_gl_loader load = glow_glctx_get_proc_address(gl);
-    LOAD(PFNGLCREATESHADERPROC, glCreateShader);
-    LOAD(PFNGLSHADERSOURCEPROC, glShaderSource);
-    LOAD(PFNGLCOMPILESHADERPROC, glCompileShader);
-    LOAD(PFNGLGETSHADERIVPROC, glGetShaderiv);
-    LOAD(PFNGLGETSHADERINFOLOGPROC, glGetShaderInfoLog);
-    LOAD(PFNGLCREATEPROGRAMPROC, glCreateProgram);
-    LOAD(PFNGLATTACHSHADERPROC, glAttachShader);
-    LOAD(PFNGLLINKPROGRAMPROC, glLinkProgram);
-    LOAD(PFNGLGETPROGRAMIVPROC, glGetProgramiv);
-    LOAD(PFNGLGETPROGRAMINFOLOGPROC, glGetProgramInfoLog);
-    LOAD(PFNGLDELETESHADERPROC, glDeleteShader);
-    LOAD(PFNGLDELETEPROGRAMPROC, glDeleteProgram);
-    LOAD(PFNGLUSEPROGRAMPROC, glUseProgram);
-    LOAD(PFNGLCREATEBUFFERSPROC, glCreateBuffers);
-    LOAD(PFNGLNAMEDBUFFERSTORAGEPROC, glNamedBufferStorage);
-    LOAD(PFNGLBINDBUFFERBASEPROC, glBindBufferBase);
-    LOAD(PFNGLDISPATCHCOMPUTEPROC, glDispatchCompute);
-    LOAD(PFNGLMEMORYBARRIERPROC, glMemoryBarrier);
-    LOAD(PFNGLGETNAMEDBUFFERSUBDATAPROC, glGetNamedBufferSubData);
-    LOAD(PFNGLMAPNAMEDBUFFERRANGEPROC, glMapNamedBufferRange);
-    LOAD(PFNGLUNMAPNAMEDBUFFERPROC, glUnmapNamedBuffer);
-    LOAD(PFNGLDELETEBUFFERSPROC, glDeleteBuffers);
-    LOAD(PFNGLGETERRORPROC, glGetError);
+    if (!load) return "no loader";
+    NEED(PFNGLCREATESHADERPROC, glCreateShader);
+    NEED(PFNGLSHADERSOURCEPROC, glShaderSource);
+    NEED(PFNGLCOMPILESHADERPROC, glCompileShader);
+    NEED(PFNGLGETSHADERIVPROC, glGetShaderiv);
+    NEED(PFNGLGETSHADERINFOLOGPROC, glGetShaderInfoLog);
+    NEED(PFNGLCREATEPROGRAMPROC, glCreateProgram);
+    NEED(PFNGLATTACHSHADERPROC, glAttachShader);
+    NEED(PFNGLLINKPROGRAMPROC, glLinkProgram);
+    NEED(PFNGLGETPROGRAMIVPROC, glGetProgramiv);
+    NEED(PFNGLGETPROGRAMINFOLOGPROC, glGetProgramInfoLog);
+    NEED(PFNGLDELETESHADERPROC, glDeleteShader);
+    NEED(PFNGLDELETEPROGRAMPROC, glDeleteProgram);
+    NEED(PFNGLUSEPROGRAMPROC, glUseProgram);
+    NEED(PFNGLCREATEBUFFERSPROC, glCreateBuffers);
+    NEED(PFNGLNAMEDBUFFERSTORAGEPROC, glNamedBufferStorage);
+    NEED(PFNGLBINDBUFFERBASEPROC, glBindBufferBase);
+    NEED(PFNGLDISPATCHCOMPUTEPROC, glDispatchCompute);
+    NEED(PFNGLMEMORYBARRIERPROC, glMemoryBarrier);
+    NEED(PFNGLGETNAMEDBUFFERSUBDATAPROC, glGetNamedBufferSubData);
+    NEED(PFNGLMAPNAMEDBUFFERRANGEPROC, glMapNamedBufferRange);
+    NEED(PFNGLUNMAPNAMEDBUFFERPROC, glUnmapNamedBuffer);
+    NEED(PFNGLDELETEBUFFERSPROC, glDeleteBuffers);
+    NEED(PFNGLGETERRORPROC, glGetError);
 
     static const char *src = "#version 450\n"
                              "layout(local_size_x = 32) in;\n"
                              "layout(std430, binding = 0) buffer Data { float v[]; };\n"
                              "void main() { v[gl_GlobalInvocationID.x] *= 2.0; }\n";
     GLuint shader = glCreateShader(GL_COMPUTE_SHADER);
+    if (!shader) return "glCreateShader returned 0 (context not current?)";
     glShaderSource(shader, 1, &src, NULL);
     glCompileShader(shader);
     GLint ok = 0;
-    char log[1024] = "";
+    char log[512] = "";
     glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
     if (!ok) {
         glGetShaderInfoLog(shader, sizeof log, NULL, log);
-        fail_msg("compute shader did not compile: %s", log);
+        snprintf(msg, msg_size, "compute shader did not compile: %s", log);
+        return msg;
     }
     GLuint program = glCreateProgram();
     glAttachShader(program, shader);
     glLinkProgram(program);
+    glDeleteShader(shader);
     glGetProgramiv(program, GL_LINK_STATUS, &ok);
     if (!ok) {
         glGetProgramInfoLog(program, sizeof log, NULL, log);
-        fail_msg("compute program did not link: %s", log);
+        snprintf(msg, msg_size, "compute program did not link: %s", log);
+        return msg;
     }
-    glDeleteShader(shader);
 
     float in[64], out[64];
     for (int i = 0; i < 64; ++i) in[i] = (float)i * 0.75f - 11.0f;
     GLuint buffer = 0;
     glCreateBuffers(1, &buffer);
-    assert_true(buffer != 0);
+    if (!buffer) return "glCreateBuffers gave 0";
     glNamedBufferStorage(buffer, sizeof in, in, GL_MAP_READ_BIT);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, buffer);
     glUseProgram(program);
@@ -149,15 +161,37 @@ static void compute_round_trip(glow_glctx *gl) {
     glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
     memset(out, 0, sizeof out);
     glGetNamedBufferSubData(buffer, 0, sizeof out, out);
-    for (int i = 0; i < 64; ++i) assert_true(out[i] == 2.0f * in[i]);
+    const char *err = NULL;
+    for (int i = 0; i < 64 && !err; ++i) {
+        if (out[i] != 2.0f * in[i]) {
+            snprintf(msg, msg_size, "glGetNamedBufferSubData: v[%d] = %g, expected %g", i, out[i], 2.0f * in[i]);
+            err = msg;
+        }
+    }
     const float *mapped = glMapNamedBufferRange(buffer, 0, sizeof out, GL_MAP_READ_BIT);
-    assert_non_null(mapped);
-    for (int i = 0; i < 64; ++i) assert_true(mapped[i] == 2.0f * in[i]);
-    assert_true(glUnmapNamedBuffer(buffer));
+    if (!mapped && !err) err = "glMapNamedBufferRange returned NULL";
+    for (int i = 0; mapped && i < 64 && !err; ++i) {
+        if (mapped[i] != 2.0f * in[i]) {
+            snprintf(msg, msg_size, "glMapNamedBufferRange: v[%d] = %g, expected %g", i, mapped[i], 2.0f * in[i]);
+            err = msg;
+        }
+    }
+    if (mapped && !glUnmapNamedBuffer(buffer) && !err) err = "glUnmapNamedBuffer failed";
     glUseProgram(0);
     glDeleteBuffers(1, &buffer);
     glDeleteProgram(program);
-    assert_int_equal(glGetError(), GL_NO_ERROR);
+    GLenum e = glGetError();
+    if (e != GL_NO_ERROR && !err) {
+        snprintf(msg, msg_size, "glGetError 0x%04X after the round trip", (unsigned)e);
+        err = msg;
+    }
+    return err;
+}
+
+static void compute_round_trip(glow_glctx *gl) {
+    char msg[640];
+    const char *err = compute_round_trip_err(gl, msg, sizeof msg);
+    if (err) fail_msg("%s compute round trip: %s", glow_glctx_kind_name(glow_glctx_get_kind(gl)), err);
 }
 
 /* Creates kind `kind`; on UNSUPPORTED prints why and returns NULL (caller skips). */
@@ -368,6 +402,55 @@ static void test_two_contexts(void **state) {
     }
 }
 
+/* Moving a context between threads: release_current on one, make_current on the other. */
+typedef struct thread_job {
+    glow_glctx *gl;
+    glow_result made_current, released;
+    const char *err;
+    char msg[640];
+} thread_job;
+
+static void *thread_main(void *arg) {
+    thread_job *job = arg;
+    job->made_current = glow_glctx_make_current(job->gl);
+    if (job->made_current == GLOW_OK) {
+        job->err = compute_round_trip_err(job->gl, job->msg, sizeof job->msg);
+        job->released = glow_glctx_release_current(job->gl);
+    }
+    return NULL;
+}
+
+static void run_thread(thread_job *job) {
+    pthread_t thread;
+    assert_int_equal(pthread_create(&thread, NULL, thread_main, job), 0);
+    assert_int_equal(pthread_join(thread, NULL), 0);
+}
+
+static void test_threads(void **state) {
+    (void)state;
+    static const glow_glctx_kind kinds[] = {GLOW_GLCTX_EGL, GLOW_GLCTX_OSMESA};
+    for (size_t k = 0; k < 2; ++k) {
+        glow_glctx *gl = NULL;
+        char why[512];
+        if (glow_glctx_create(&(glow_glctx_desc){.kind = kinds[k]}, &gl, why, sizeof why) != GLOW_OK) continue;
+        thread_job job = {.gl = gl, .released = GLOW_ERROR_HOST_CALLBACK};
+        if (kinds[k] == GLOW_GLCTX_EGL) { /* still current here: EGL refuses it elsewhere */
+            run_thread(&job);
+            assert_int_equal(job.made_current, GLOW_ERROR_INVALID_OPERATION);
+        }
+        assert_int_equal(glow_glctx_release_current(gl), GLOW_OK);
+        assert_int_equal(glow_glctx_release_current(gl), GLOW_OK); /* not current: no-op */
+        run_thread(&job);
+        assert_int_equal(job.made_current, GLOW_OK);
+        if (job.err) fail_msg("%s on a second thread: %s", glow_glctx_kind_name(kinds[k]), job.err);
+        assert_int_equal(job.released, GLOW_OK);
+        assert_int_equal(glow_glctx_make_current(gl), GLOW_OK); /* and back */
+        compute_round_trip(gl);
+        glow_glctx_destroy(gl);
+    }
+    assert_int_equal(glow_glctx_release_current(NULL), GLOW_ERROR_INVALID_ARGUMENT);
+}
+
 int main(void) {
     const struct CMUnitTest no_gl[] = {
         cmocka_unit_test(test_bad_input),
@@ -392,6 +475,7 @@ int main(void) {
         cmocka_unit_test(test_some_backend_worked),
         cmocka_unit_test(test_env_override),
         cmocka_unit_test(test_two_contexts),
+        cmocka_unit_test(test_threads),
     };
     return cmocka_run_group_tests_name("glctx", tests, NULL, NULL);
 }

@@ -15,16 +15,22 @@
  *   ... GL calls ...
  *   glow_glctx_destroy(gl);
  *
- * KINDS: HEADLESS tries EGL surfaceless first, then OSMesa; EGL and OSMESA force one. WINDOW opens a
- * GLFW window (fails without a display: $DISPLAY / $WAYLAND_DISPLAY unset or unreachable). The
- * environment variable GLOW_GLCTX=egl|osmesa overrides what HEADLESS picks (for tests of both paths).
+ * KINDS: HEADLESS tries EGL first, then OSMesa; EGL and OSMESA force one. EGL tries, in order, a
+ * hardware device (EGL_EXT_platform_device: NVIDIA, a Mesa DRM device), Mesa's surfaceless platform
+ * (llvmpipe without a GPU), then the default display; it never calls eglTerminate (displays are
+ * process-wide, possibly shared with the host; libEGL releases them at exit). WINDOW opens a GLFW
+ * window (fails without a display: $DISPLAY / $WAYLAND_DISPLAY unset or unreachable). The
+ * environment variable GLOW_GLCTX=egl|osmesa (or auto) overrides what HEADLESS picks (for tests of
+ * both paths).
  *
  * ON ERRORS: create returns GLOW_ERROR_UNSUPPORTED when no context of that kind with GL >= 4.5 core
  * can be made (why[] says which step failed for each kind tried, with the EGL/OSMesa/GLFW error),
- * GLOW_ERROR_INVALID_ARGUMENT for NULL or a bad desc, GLOW_ERROR_OUT_OF_MEMORY. Never exits, never
- * prints (hosts decide).
+ * GLOW_ERROR_INVALID_ARGUMENT for NULL, a bad desc or a GLOW_GLCTX value other than egl/osmesa/auto,
+ * GLOW_ERROR_OUT_OF_MEMORY. Never exits, never prints (hosts decide; Mesa itself may still log).
  *
- * ON THREADS: a context is current on the thread that created it; make_current moves it.
+ * ON THREADS: a context is current on the thread that created it; to move it, release_current on
+ * the old thread, then make_current on the new one (EGL refuses a context current elsewhere). WINDOW
+ * contexts follow GLFW's rules: create, destroy, swap (it polls events) on the main thread only.
  */
 #ifndef GLOW_GLOW_GLCTX_H
 #define GLOW_GLOW_GLCTX_H
@@ -47,9 +53,9 @@ typedef glow_gl_proc (*glow_gl_loader)(const char *name);
 #endif
 
 typedef enum glow_glctx_kind {
-    GLOW_GLCTX_HEADLESS = 0, /* EGL surfaceless, else OSMesa (GLOW_GLCTX=egl|osmesa overrides) */
-    GLOW_GLCTX_EGL,          /* EGL_PLATFORM_SURFACELESS_MESA (or the default display), no surface */
-    GLOW_GLCTX_OSMESA,       /* OSMesa core profile, drawing into a small private buffer */
+    GLOW_GLCTX_HEADLESS = 0, /* EGL, else OSMesa (GLOW_GLCTX=egl|osmesa overrides) */
+    GLOW_GLCTX_EGL,          /* EGL device / EGL_PLATFORM_SURFACELESS_MESA / default display, no surface */
+    GLOW_GLCTX_OSMESA,       /* OSMesa core profile, drawing into a small private buffer (debug ignored) */
     GLOW_GLCTX_WINDOW,       /* a GLFW window with a GL 4.5 core context */
     GLOW_GLCTX_KIND_FORCE_U32 = 0x7FFFFFFF
 } glow_glctx_kind;
@@ -65,19 +71,28 @@ typedef struct glow_glctx_desc {
 typedef struct glow_glctx glow_glctx;
 
 /** Creates a GL >= 4.5 core context and makes it current on the calling thread. On failure *out is
- * NULL and `why` (may be NULL) holds a one-line reason naming each kind tried.
+ * NULL and `why` (may be NULL) holds a one-line reason naming each kind tried ("EGL: surfaceless:
+ * eglCreateContext(GL 4.5 core) failed (EGL_BAD_MATCH 0x3009); OSMesa: ..."); on success it is "".
  * \returns GLOW_OK, GLOW_ERROR_UNSUPPORTED, GLOW_ERROR_INVALID_ARGUMENT, GLOW_ERROR_OUT_OF_MEMORY. */
 glow_result glow_glctx_create(const glow_glctx_desc *desc, glow_glctx **out, char *why, size_t why_size);
 /** Destroys the context (NULL is a no-op); releases it from the calling thread if current. */
 void glow_glctx_destroy(glow_glctx *ctx);
-/** Makes the context current on the calling thread. \returns GLOW_OK or GLOW_ERROR_INVALID_OPERATION. */
+/** Makes the context current on the calling thread. \returns GLOW_OK, GLOW_ERROR_INVALID_OPERATION
+ * (the driver refused, e.g. current on another thread), GLOW_ERROR_INVALID_ARGUMENT for NULL. */
 glow_result glow_glctx_make_current(glow_glctx *ctx);
-/** The loader for this context's GL functions (valid while it lives). */
+/** Releases the context from the calling thread if it is current there (no-op otherwise), so that
+ * another thread can make it current. \returns GLOW_OK, GLOW_ERROR_INVALID_OPERATION (the driver
+ * refused), GLOW_ERROR_INVALID_ARGUMENT for NULL. */
+glow_result glow_glctx_release_current(glow_glctx *ctx);
+/** The loader for this context's GL functions (valid while it lives; NULL for NULL). Functions from
+ * one kind's loader must not be called while another kind's context is current. */
 glow_gl_loader glow_glctx_get_proc_address(const glow_glctx *ctx);
-/** The kind actually created (EGL, OSMESA or WINDOW) and its name ("egl", "osmesa", "glfw"). */
+/** The kind actually created (EGL, OSMESA or WINDOW; HEADLESS for NULL) and a kind's name ("headless",
+ * "egl", "osmesa", "glfw"; "unknown" out of range). */
 glow_glctx_kind glow_glctx_get_kind(const glow_glctx *ctx);
 const char *glow_glctx_kind_name(glow_glctx_kind kind);
-/** GL_RENDERER and GL_VERSION strings of the context (e.g. "llvmpipe (LLVM 15.0.6, 256 bits)"). */
+/** GL_RENDERER and GL_VERSION strings of the context (e.g. "llvmpipe (LLVM 15.0.6, 256 bits)"),
+ * copied at create (valid while it lives, readable when not current; "" for NULL). */
 const char *glow_glctx_renderer(const glow_glctx *ctx);
 const char *glow_glctx_version(const glow_glctx *ctx);
 

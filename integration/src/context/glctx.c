@@ -179,6 +179,16 @@ glow_result glow_glctx_make_current(glow_glctx *ctx) {
     }
 }
 
+glow_result glow_glctx_release_current(glow_glctx *ctx) {
+    if (!ctx) return GLOW_ERROR_INVALID_ARGUMENT;
+    switch (ctx->kind) {
+    case GLOW_GLCTX_EGL: return glow__glctx_egl_release_current(ctx);
+    case GLOW_GLCTX_OSMESA: return glow__glctx_osmesa_release_current(ctx);
+    case GLOW_GLCTX_WINDOW: return glow__glctx_glfw_release_current(ctx);
+    default: return GLOW_ERROR_INVALID_OPERATION;
+    }
+}
+
 glow_gl_loader glow_glctx_get_proc_address(const glow_glctx *ctx) { return ctx ? ctx->loader : NULL; }
 
 glow_glctx_kind glow_glctx_get_kind(const glow_glctx *ctx) { return ctx ? ctx->kind : GLOW_GLCTX_HEADLESS; }

@@ -10,12 +10,15 @@
  * made current with EGL_NO_SURFACE (EGL_KHR_surfaceless_context); without those, a pbuffer config and,
  * without surfaceless contexts, a 16 x 16 pbuffer.
  *
- * EGL displays are per-process singletons (one per platform + native display) and eglTerminate ends
- * every context on one, so displays are reference-counted here: the last glow_glctx on a display
- * terminates it, unless it was already initialised by someone else (the host) when we first took it. */
+ * eglTerminate is never called. EGL displays are per-process singletons (one per platform + native
+ * display, possibly shared with the host), eglInitialize on an initialised one is a no-op, and
+ * terminating the last one would unload the driver: with Mesa 22 every terminate + re-initialise
+ * cycle leaks 128 bytes inside the reloaded DRI driver (a pthread_once allocation; LeakSanitizer shows
+ * it as "<unknown module>", so it cannot even be suppressed) and costs the driver start-up again
+ * (llvmpipe: ~5-10 ms). So an initialised display (llvmpipe's screen and its rasteriser threads)
+ * stays until exit, where libEGL's own exit handler releases it. */
 #include <EGL/egl.h>
 #include <EGL/eglext.h>
-#include <pthread.h>
 #include <stdbool.h>
 #include <stdio.h>
 #include <string.h>
@@ -23,7 +26,6 @@
 #include "glctx_internal.h"
 
 #define EGL_MAX_DEVICES 16
-#define EGL_MAX_DISPLAYS 16
 
 /* ------------------------------------------------------------------------------ helpers */
 
@@ -66,80 +68,23 @@ static void egl_fail(char *buf, size_t size, const char *what) {
 
 static glow_gl_proc egl_loader(const char *name) { return (glow_gl_proc)eglGetProcAddress(name); }
 
-/* ------------------------------------------------------------------------------ display references */
-
-typedef struct display_ref {
-    EGLDisplay display;
-    int users;
-    bool terminate; /* we initialised it: the last user terminates it */
-} display_ref;
-
-static pthread_mutex_t g_display_lock = PTHREAD_MUTEX_INITIALIZER;
-static display_ref g_displays[EGL_MAX_DISPLAYS];
-
-/* eglInitialize + one more reference. Returns false with the EGL error pending. */
-static bool display_acquire(EGLDisplay display, char *why, size_t why_size) {
-    bool ok = false;
-    pthread_mutex_lock(&g_display_lock);
-    display_ref *ref = NULL, *free_slot = NULL;
-    for (int i = 0; i < EGL_MAX_DISPLAYS; ++i) {
-        if (g_displays[i].users > 0 && g_displays[i].display == display) ref = &g_displays[i];
-        if (g_displays[i].users == 0 && !free_slot) free_slot = &g_displays[i];
-    }
-    if (ref) {
-        ref->users++; /* already initialised by us */
-        ok = true;
-    } else if (!free_slot) {
-        glow__glctx_appendf(why, why_size, "more than %d EGL displays in use", EGL_MAX_DISPLAYS);
-    } else {
-        /* eglQueryString fails with EGL_NOT_INITIALIZED on a display nobody initialised yet. */
-        bool initialised_before = eglQueryString(display, EGL_VERSION) != NULL;
-        (void)eglGetError();
-        EGLint major = 0, minor = 0;
-        if (!eglInitialize(display, &major, &minor)) {
-            egl_fail(why, why_size, "eglInitialize");
-        } else {
-            free_slot->display = display;
-            free_slot->users = 1;
-            free_slot->terminate = !initialised_before;
-            ok = true;
-        }
-    }
-    pthread_mutex_unlock(&g_display_lock);
-    return ok;
-}
-
-static void display_release(EGLDisplay display) {
-    pthread_mutex_lock(&g_display_lock);
-    for (int i = 0; i < EGL_MAX_DISPLAYS; ++i) {
-        display_ref *ref = &g_displays[i];
-        if (ref->users > 0 && ref->display == display) {
-            if (--ref->users == 0) {
-                if (ref->terminate) eglTerminate(display);
-                ref->display = EGL_NO_DISPLAY;
-            }
-            break;
-        }
-    }
-    pthread_mutex_unlock(&g_display_lock);
-}
-
 /* ------------------------------------------------------------------------------ one display */
 
-/* Makes a GL 4.5 core context current on `display` (not yet initialised by this call). */
+/* Initialises `display` and makes a GL 4.5 core context current on it. */
 static glow_result try_display(glow_glctx *ctx, EGLDisplay display, const glow_glctx_desc *desc, char *why,
                                size_t why_size) {
     if (display == EGL_NO_DISPLAY) {
         egl_fail(why, why_size, "getting the display");
         return GLOW_ERROR_UNSUPPORTED;
     }
-    if (!display_acquire(display, why, why_size)) return GLOW_ERROR_UNSUPPORTED;
+    EGLint major = 0, minor = 0;
+    if (!eglInitialize(display, &major, &minor)) {
+        egl_fail(why, why_size, "eglInitialize");
+        return GLOW_ERROR_UNSUPPORTED;
+    }
 
     EGLContext context = EGL_NO_CONTEXT;
     EGLSurface surface = EGL_NO_SURFACE;
-    EGLint major = 0, minor = 0;
-    const char *version = eglQueryString(display, EGL_VERSION);
-    if (!version || sscanf(version, "%d.%d", &major, &minor) != 2) major = 1, minor = 4;
     const char *ext = eglQueryString(display, EGL_EXTENSIONS);
     bool egl15 = major > 1 || minor >= 5;
     if (!egl15 && !has_extension(ext, "EGL_KHR_create_context")) {
@@ -204,8 +149,7 @@ static glow_result try_display(glow_glctx *ctx, EGLDisplay display, const glow_g
 fail:
     if (surface != EGL_NO_SURFACE) eglDestroySurface(display, surface);
     if (context != EGL_NO_CONTEXT) eglDestroyContext(display, context);
-    display_release(display);
-    return GLOW_ERROR_UNSUPPORTED;
+    return GLOW_ERROR_UNSUPPORTED; /* display stays initialised: see the top of this file */
 }
 
 /* ------------------------------------------------------------------------------ back end */
@@ -270,12 +214,9 @@ done:
 void glow__glctx_egl_destroy(glow_glctx *ctx) {
     EGLDisplay display = ctx->egl_display;
     if (!display) return;
-    eglBindAPI(EGL_OPENGL_API);
-    if (eglGetCurrentContext() == (EGLContext)ctx->egl_context)
-        eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+    glow__glctx_egl_release_current(ctx);
     if (ctx->egl_surface != EGL_NO_SURFACE) eglDestroySurface(display, ctx->egl_surface);
     eglDestroyContext(display, ctx->egl_context);
-    display_release(display);
     ctx->egl_display = ctx->egl_context = ctx->egl_surface = NULL;
     ctx->loader = NULL;
 }
@@ -283,6 +224,14 @@ void glow__glctx_egl_destroy(glow_glctx *ctx) {
 glow_result glow__glctx_egl_make_current(glow_glctx *ctx) {
     if (!eglBindAPI(EGL_OPENGL_API)) return GLOW_ERROR_INVALID_OPERATION;
     return eglMakeCurrent(ctx->egl_display, ctx->egl_surface, ctx->egl_surface, ctx->egl_context)
+               ? GLOW_OK
+               : GLOW_ERROR_INVALID_OPERATION;
+}
+
+glow_result glow__glctx_egl_release_current(glow_glctx *ctx) {
+    eglBindAPI(EGL_OPENGL_API); /* eglGetCurrentContext answers for the thread's bound API */
+    if (eglGetCurrentContext() != (EGLContext)ctx->egl_context) return GLOW_OK;
+    return eglMakeCurrent(ctx->egl_display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT)
                ? GLOW_OK
                : GLOW_ERROR_INVALID_OPERATION;
 }

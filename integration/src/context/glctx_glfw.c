@@ -72,6 +72,11 @@ glow_result glow__glctx_glfw_make_current(glow_glctx *ctx) {
     return glfwGetCurrentContext() == (GLFWwindow *)ctx->window ? GLOW_OK : GLOW_ERROR_INVALID_OPERATION;
 }
 
+glow_result glow__glctx_glfw_release_current(glow_glctx *ctx) {
+    if (glfwGetCurrentContext() == (GLFWwindow *)ctx->window) glfwMakeContextCurrent(NULL);
+    return glfwGetCurrentContext() == (GLFWwindow *)ctx->window ? GLOW_ERROR_INVALID_OPERATION : GLOW_OK;
+}
+
 void glow__glctx_glfw_swap(glow_glctx *ctx) {
     glfwSwapBuffers((GLFWwindow *)ctx->window);
     glfwPollEvents();

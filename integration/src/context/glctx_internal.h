@@ -32,14 +32,17 @@ struct glow_glctx {
 glow_result glow__glctx_egl_create(glow_glctx *ctx, const glow_glctx_desc *desc, char *why, size_t why_size);
 void glow__glctx_egl_destroy(glow_glctx *ctx);
 glow_result glow__glctx_egl_make_current(glow_glctx *ctx);
+glow_result glow__glctx_egl_release_current(glow_glctx *ctx);
 
 glow_result glow__glctx_osmesa_create(glow_glctx *ctx, const glow_glctx_desc *desc, char *why, size_t why_size);
 void glow__glctx_osmesa_destroy(glow_glctx *ctx);
 glow_result glow__glctx_osmesa_make_current(glow_glctx *ctx);
+glow_result glow__glctx_osmesa_release_current(glow_glctx *ctx);
 
 glow_result glow__glctx_glfw_create(glow_glctx *ctx, const glow_glctx_desc *desc, char *why, size_t why_size);
 void glow__glctx_glfw_destroy(glow_glctx *ctx);
 glow_result glow__glctx_glfw_make_current(glow_glctx *ctx);
+glow_result glow__glctx_glfw_release_current(glow_glctx *ctx);
 void glow__glctx_glfw_swap(glow_glctx *ctx);
 int glow__glctx_glfw_should_close(const glow_glctx *ctx);
 void glow__glctx_glfw_framebuffer_size(const glow_glctx *ctx, uint32_t *width, uint32_t *height);

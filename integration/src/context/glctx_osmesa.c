@@ -56,8 +56,7 @@ glow_result glow__glctx_osmesa_create(glow_glctx *ctx, const glow_glctx_desc *de
 
 void glow__glctx_osmesa_destroy(glow_glctx *ctx) {
     if (!ctx->osmesa_context) return;
-    if (OSMesaGetCurrentContext() == (OSMesaContext)ctx->osmesa_context)
-        OSMesaMakeCurrent(NULL, NULL, GL_UNSIGNED_BYTE, 0, 0); /* releases the thread's context */
+    glow__glctx_osmesa_release_current(ctx);
     OSMesaDestroyContext((OSMesaContext)ctx->osmesa_context);
     free(ctx->osmesa_buffer);
     ctx->osmesa_context = NULL;
@@ -67,4 +66,10 @@ void glow__glctx_osmesa_destroy(glow_glctx *ctx) {
 
 glow_result glow__glctx_osmesa_make_current(glow_glctx *ctx) {
     return make_current(ctx) ? GLOW_OK : GLOW_ERROR_INVALID_OPERATION;
+}
+
+glow_result glow__glctx_osmesa_release_current(glow_glctx *ctx) {
+    if (OSMesaGetCurrentContext() != (OSMesaContext)ctx->osmesa_context) return GLOW_OK;
+    /* A NULL context and NULL buffer unbind the thread's context. */
+    return OSMesaMakeCurrent(NULL, NULL, GL_UNSIGNED_BYTE, 0, 0) ? GLOW_OK : GLOW_ERROR_INVALID_OPERATION;
 }
