@@ -132,6 +132,7 @@ typedef glow_gl_proc (*glow_gl_loader)(const char *name);
     X(PFNGLUNIFORM2UIPROC, Uniform2ui) \
     X(PFNGLUNIFORM3UIPROC, Uniform3ui) \
     X(PFNGLUNIFORM2IPROC, Uniform2i) \
+    X(PFNGLUNIFORM3IPROC, Uniform3i) \
     X(PFNGLPROGRAMUNIFORM1IPROC, ProgramUniform1i) \
     X(PFNGLPROGRAMUNIFORM1UIPROC, ProgramUniform1ui) \
     X(PFNGLPROGRAMUNIFORM1FPROC, ProgramUniform1f) \

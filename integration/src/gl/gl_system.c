@@ -205,6 +205,16 @@ static void free_system(glow_gl_system *s) {
     free(s);
 }
 
+/* Lookups use texelFetch; NEAREST also makes the integer textures complete (an integer texture with a
+ * linear filter — GL's default minification filter — is incomplete and reads as 0). */
+static void nearest(glow_gl_system *s, GLuint tex) {
+    s->gl.TextureParameteri(tex, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    s->gl.TextureParameteri(tex, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    s->gl.TextureParameteri(tex, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    s->gl.TextureParameteri(tex, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    s->gl.TextureParameteri(tex, GL_TEXTURE_WRAP_R, GL_CLAMP_TO_EDGE);
+}
+
 /* Checks a host texture: target, RGBA32F, size. */
 static int check_host_texture(glow_gl_system *s, GLuint tex, GLenum target, int w, int h, int d, const char *what) {
     glow_glfns *gl = &s->gl;
@@ -418,6 +428,8 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
                               GL_UNSIGNED_INT, mask);
         s->gpu_bytes += cells * 8u;
         free(mask);
+        nearest(s, s->grid_mask_tex);
+        if (s->own_grid) nearest(s, s->grid_tex);
         s->out.grid_texture = s->grid_tex;
         s->out.grid_mask_texture = s->grid_mask_tex;
     }
@@ -452,6 +464,8 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
         gl->PixelStorei(GL_UNPACK_ALIGNMENT, 4);
         s->gpu_bytes += (size_t)W * H;
         free(valid);
+        nearest(s, s->lm_valid_tex);
+        if (s->own_lm) nearest(s, s->lm_tex);
         s->out.lightmap_texture = s->lm_tex;
         s->out.lightmap_valid_texture = s->lm_valid_tex;
     }

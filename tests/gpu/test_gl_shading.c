@@ -1,0 +1,257 @@
+/* test_gl_shading.c — the GLSL shading include (shaders/include/glow_shading.glsl, as hosts get it from
+ * glow_gl_shading_source) computes what the runtime's C reference computes:
+ *   - glow_sh_eval for l = 8 bands at 256 random directions vs glow_sh_eval (C): |diff| <= 2e-5 (the
+ *     basis values are <= 2.3 in magnitude; float recurrences on two compilers);
+ *   - glow_sh_lobe_factor for l = 0..7 and exponents 1, 8, 100 vs glow_sh_lobe_factor: relative 1e-5;
+ *   - glow_sample_grid + glow_shade_sh (diffuse and exponent 20) at 512 random points of the built-in
+ *     Cornell box's grid (GVIS masks, empty cells, clamping at the border) vs glow_sample_grid +
+ *     glow_shade_sh on the same caches (the GPU's, read back), and glow_sample_lightmap at 512 random
+ *     uvs vs glow_sample_lightmap: |diff| <= 1e-4 · (max |result|) — the two blend the same texels with
+ *     weights renormalised in a different order.
+ * Exits 77 (skipped) without a GL 4.5 context. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "glow/glow.h"
+#include "glow/glow_gl.h"
+#include "glow/glow_glctx.h"
+#include "glow/glow_glfns.h"
+#include "glow/glow_precompute.h"
+
+static glow_glctx *g_ctx;
+static glow_glfns gl;
+
+static uint32_t rng_state = 12345u;
+static float frand(void) {
+    rng_state = rng_state * 1664525u + 1013904223u;
+    return (float)(rng_state >> 8) / 16777216.0f;
+}
+
+/* Compiles a compute shader: the shading include with `luma`/`chroma`, then `body`. */
+static GLuint compute_program(uint32_t luma, uint32_t chroma, const char *body) {
+    char head[256];
+    snprintf(head, sizeof head, "#version 450 core\n#define GLOW_SH_BANDS_LUMA %u\n#define GLOW_SH_BANDS_CHROMA %u\n", luma,
+             chroma);
+    const char *src[3] = {head, glow_gl_shading_source(), body};
+    GLuint sh = gl.CreateShader(GL_COMPUTE_SHADER);
+    gl.ShaderSource(sh, 3, src, NULL);
+    gl.CompileShader(sh);
+    GLint ok = 0;
+    gl.GetShaderiv(sh, GL_COMPILE_STATUS, &ok);
+    if (!ok) {
+        char log[4096];
+        gl.GetShaderInfoLog(sh, sizeof log, NULL, log);
+        fail_msg("compute shader: %s", log);
+    }
+    GLuint p = gl.CreateProgram();
+    gl.AttachShader(p, sh);
+    gl.LinkProgram(p);
+    gl.DeleteShader(sh);
+    gl.GetProgramiv(p, GL_LINK_STATUS, &ok);
+    assert_true(ok);
+    return p;
+}
+
+static GLuint ssbo(size_t bytes, const void *data) {
+    GLuint b;
+    gl.CreateBuffers(1, &b);
+    gl.NamedBufferStorage(b, (GLsizeiptr)bytes, data, GL_DYNAMIC_STORAGE_BIT);
+    return b;
+}
+
+static void test_basis_and_lobes(void **state) {
+    (void)state;
+    enum { N = 256 };
+    float dirs[N * 4];
+    for (int i = 0; i < N; ++i) {
+        float z = 2.0f * frand() - 1.0f, phi = 6.2831853f * frand(), r = sqrtf(fmaxf(0.0f, 1.0f - z * z));
+        dirs[4 * i] = r * cosf(phi), dirs[4 * i + 1] = r * sinf(phi), dirs[4 * i + 2] = z, dirs[4 * i + 3] = 0.0f;
+    }
+    const char *body = "layout(local_size_x = 64) in;\n"
+                       "layout(std430, binding = 0) readonly buffer D { vec4 d[]; };\n"
+                       "layout(std430, binding = 1) writeonly buffer Y { float y[]; };\n"
+                       "layout(std430, binding = 2) writeonly buffer S { float s[]; };\n"
+                       "void main() { uint i = gl_GlobalInvocationID.x; float v[64]; glow_sh_eval(8, d[i].xyz, v);\n"
+                       "  for (int k = 0; k < 64; ++k) y[i * 64u + uint(k)] = v[k];\n"
+                       "  if (i < 24u) { float n = i / 8u == 0u ? 1.0 : (i / 8u == 1u ? 8.0 : 100.0); s[i] = glow_sh_lobe_factor(int(i % 8u), n); } }\n";
+    GLuint p = compute_program(8, 8, body);
+    GLuint bd = ssbo(sizeof dirs, dirs), by = ssbo(N * 64 * sizeof(float), NULL), bs = ssbo(24 * sizeof(float), NULL);
+    gl.UseProgram(p);
+    gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, bd);
+    gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, by);
+    gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, bs);
+    gl.DispatchCompute(N / 64, 1, 1);
+    gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+    static float y[N * 64];
+    float s[24];
+    gl.GetNamedBufferSubData(by, 0, sizeof y, y);
+    gl.GetNamedBufferSubData(bs, 0, sizeof s, s);
+    double worst = 0.0, worst_s = 0.0;
+    for (int i = 0; i < N; ++i) {
+        float ref[64];
+        glow_sh_eval(8, dirs + 4 * i, ref);
+        for (int k = 0; k < 64; ++k) worst = fmax(worst, fabs((double)y[i * 64 + k] - ref[k]));
+    }
+    const float ns[3] = {1.0f, 8.0f, 100.0f};
+    for (int i = 0; i < 24; ++i) {
+        float ref = glow_sh_lobe_factor((uint32_t)(i % 8), ns[i / 8]);
+        worst_s = fmax(worst_s, fabs((double)s[i] - ref) / fmax(fabs(ref), 1e-6));
+    }
+    printf("  SH basis l = 8, %d directions: worst |GLSL - C| %.2e; lobe factors worst rel %.2e\n", N, worst, worst_s);
+    assert_true(worst <= 2e-5);
+    assert_true(worst_s <= 1e-5);
+    GLuint bufs[3] = {bd, by, bs};
+    gl.DeleteBuffers(3, bufs);
+    gl.DeleteProgram(p);
+}
+
+static void test_sampling(void **state) {
+    (void)state;
+    char path[256];
+    snprintf(path, sizeof path, "/tmp/glow_gl_shading_%d.glow", (int)getpid());
+    glow_pc_settings st = {.quality = GLOW_PC_QUALITY_LOW, .surfels = 4096, .links = 96, .bands = 3, .threads = 2, .seed = 1};
+    glow_pc_stats stats;
+    assert_int_equal(glow_pc_bake("builtin:cornell", path, &st, &stats), GLOW_OK);
+    glow_context *ctx;
+    glow_bake *bake;
+    glow_system *sys;
+    glow_gl_system *gs;
+    assert_int_equal(glow_context_create(&(glow_context_desc){.api_version = GLOW_VERSION}, &ctx), GLOW_OK);
+    assert_int_equal(glow_bake_load_file(ctx, path, &bake), GLOW_OK);
+    remove(path);
+    assert_int_equal(glow_system_create(ctx, &(glow_system_desc){.bake = bake, .sh_bands_luma = 3, .sh_bands_chroma = 2}, &sys),
+                     GLOW_OK);
+    /* light: every surfel facing down gets a colour depending on its position (so the SH vary) */
+    glow_surfel_view v;
+    glow_system_get_surfels(sys, &v);
+    float *e = malloc((size_t)v.count * 3 * sizeof *e);
+    for (uint32_t i = 0; i < v.count; ++i) {
+        const float *p = v.positions + 4 * (size_t)i;
+        e[3 * i] = 4.0f + 3.0f * p[0], e[3 * i + 1] = 2.0f + p[1], e[3 * i + 2] = 3.0f - 2.0f * p[2];
+        for (int c = 0; c < 3; ++c) e[3 * i + c] = fmaxf(e[3 * i + c], 0.0f);
+    }
+    assert_int_equal(glow_system_set_surfel_irradiance(sys, 0, v.count, e), GLOW_OK);
+    free(e);
+    assert_int_equal(glow_gl_system_create(&(glow_gl_desc){.system = sys, .get_proc_address = glow_glctx_get_proc_address(g_ctx)}, &gs),
+                     GLOW_OK);
+    for (int u = 0; u < 3; ++u) assert_int_equal(glow_gl_system_update(gs, NULL), GLOW_OK);
+    const glow_gl_outputs *go = glow_gl_system_outputs(gs);
+    /* the C reference on the GPU's caches */
+    glow_cache_outputs co = *glow_system_outputs(sys);
+    const size_t ncs = (size_t)co.cache_count * co.coeff_count;
+    float *sh = malloc(ncs * sizeof *sh);
+    assert_int_equal(glow_gl_system_read_cache_sh(gs, sh, ncs), GLOW_OK);
+    co.cache_sh = sh;
+    enum { N = 512 };
+    float pts[N * 4], uvs[N * 4];
+    for (int i = 0; i < N; ++i) {
+        for (int a = 0; a < 3; ++a) { /* a little outside the grid too: clamping */
+            float lo = co.grid_origin[a] - 0.5f * co.grid_spacing;
+            float hi = co.grid_origin[a] + ((float)co.grid_dims[a] - 0.5f) * co.grid_spacing;
+            pts[4 * i + a] = lo + (hi - lo) * frand();
+        }
+        pts[4 * i + 3] = 0.0f;
+        uvs[4 * i] = frand(), uvs[4 * i + 1] = frand();
+        float z = 2.0f * frand() - 1.0f, phi = 6.2831853f * frand(), r = sqrtf(fmaxf(0.0f, 1.0f - z * z));
+        uvs[4 * i + 2] = phi, uvs[4 * i + 3] = z; /* a direction for the shading axis, rebuilt below */
+        (void)r;
+    }
+    const char *body =
+        "layout(local_size_x = 64) in;\n"
+        "layout(std430, binding = 0) readonly buffer P { vec4 pts[]; };\n"
+        "layout(std430, binding = 1) readonly buffer U { vec4 uvs[]; };\n"
+        "layout(std430, binding = 2) writeonly buffer R { vec4 res[]; };\n"
+        "layout(binding = 0) uniform sampler3D grid; layout(binding = 1) uniform usampler3D grid_mask;\n"
+        "layout(binding = 2) uniform sampler2DArray lm; layout(binding = 3) uniform usampler2D lm_valid;\n"
+        "uniform vec3 origin; uniform float spacing; uniform ivec3 dims;\n"
+        "void main() { uint i = gl_GlobalInvocationID.x; vec4 sh[GLOW_SH_PLANES];\n"
+        "  float phi = uvs[i].z, z = uvs[i].w, r = sqrt(max(0.0, 1.0 - z * z)); vec3 axis = vec3(r * cos(phi), r * sin(phi), z);\n"
+        "  bool g = glow_sample_grid(grid, grid_mask, origin, spacing, dims, pts[i].xyz, sh);\n"
+        "  res[4u * i] = vec4(glow_shade_sh(sh, axis, 1.0), g ? 1.0 : 0.0);\n"
+        "  res[4u * i + 1u] = vec4(glow_shade_sh(sh, axis, 20.0), 0.0);\n"
+        "  bool l = glow_sample_lightmap(lm, lm_valid, uvs[i].xy, sh);\n"
+        "  res[4u * i + 2u] = vec4(glow_shade_sh(sh, axis, 1.0), l ? 1.0 : 0.0);\n"
+        "  res[4u * i + 3u] = vec4(glow_shade_sh(sh, axis, 20.0), 0.0); }\n";
+    GLuint p = compute_program(3, 2, body);
+    GLuint bp = ssbo(sizeof pts, pts), bu = ssbo(sizeof uvs, uvs), br = ssbo(N * 4 * 16, NULL);
+    gl.UseProgram(p);
+    gl.Uniform3f(gl.GetUniformLocation(p, "origin"), go->grid_origin[0], go->grid_origin[1], go->grid_origin[2]);
+    gl.Uniform1f(gl.GetUniformLocation(p, "spacing"), go->grid_spacing);
+    gl.Uniform3i(gl.GetUniformLocation(p, "dims"), (GLint)go->grid_dims[0], (GLint)go->grid_dims[1], (GLint)go->grid_dims[2]);
+    gl.BindTextureUnit(0, go->grid_texture);
+    gl.BindTextureUnit(1, go->grid_mask_texture);
+    gl.BindTextureUnit(2, go->lightmap_texture);
+    gl.BindTextureUnit(3, go->lightmap_valid_texture);
+    gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, bp);
+    gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, bu);
+    gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, br);
+    gl.DispatchCompute(N / 64, 1, 1);
+    gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+    static float res[N * 16];
+    gl.GetNamedBufferSubData(br, 0, sizeof res, res);
+    double worst[2] = {0, 0}, scale[2] = {0, 0};
+    int hits[2] = {0, 0}, mismatched_ok = 0;
+    float *coeffs = malloc(co.coeff_count * sizeof *coeffs);
+    for (int i = 0; i < N; ++i) {
+        const float phi = uvs[4 * i + 2], z = uvs[4 * i + 3], r = sqrtf(fmaxf(0.0f, 1.0f - z * z));
+        const float axis[3] = {r * cosf(phi), r * sinf(phi), z};
+        for (int which = 0; which < 2; ++which) {
+            glow_result rr = which == 0 ? glow_sample_grid(&co, pts + 4 * i, coeffs)
+                                        : glow_sample_lightmap(&co, uvs[4 * i], uvs[4 * i + 1], coeffs);
+            const float *g = res + 16 * i + 8 * which;
+            if ((rr == GLOW_OK) != (g[3] == 1.0f)) mismatched_ok++;
+            if (rr != GLOW_OK) continue;
+            hits[which]++;
+            for (int lobe = 0; lobe < 2; ++lobe) {
+                float ref[3];
+                glow_shade_sh(coeffs, 3, 2, axis, lobe ? 20.0f : 1.0f, ref);
+                for (int c = 0; c < 3; ++c) {
+                    worst[which] = fmax(worst[which], fabs((double)g[4 * lobe + c] - ref[c]));
+                    scale[which] = fmax(scale[which], fabs(ref[c]));
+                }
+            }
+        }
+    }
+    printf("  grid: %d/%d lookups hit a cache, worst |GLSL - C| %.2e (max %.3g); lightmap: %d/%d, worst %.2e (max %.3g)\n",
+           hits[0], N, worst[0], scale[0], hits[1], N, worst[1], scale[1]);
+    assert_int_equal(mismatched_ok, 0);
+    assert_true(hits[0] > N / 2 && hits[1] > N / 10);
+    assert_true(scale[0] > 0.0 && scale[1] > 0.0);
+    assert_true(worst[0] <= 1e-4 * scale[0]);
+    assert_true(worst[1] <= 1e-4 * scale[1]);
+    free(coeffs);
+    free(sh);
+    GLuint bufs[3] = {bp, bu, br};
+    gl.DeleteBuffers(3, bufs);
+    gl.DeleteProgram(p);
+    glow_gl_system_destroy(gs);
+    glow_system_destroy(sys);
+    glow_bake_destroy(bake);
+    glow_context_destroy(ctx);
+}
+
+int main(void) {
+    char why[512];
+    glow_result r = glow_glctx_create(&(glow_glctx_desc){.kind = GLOW_GLCTX_HEADLESS}, &g_ctx, why, sizeof why);
+    if (r != GLOW_OK) {
+        printf("SKIP: no OpenGL 4.5 context (%s): %s\n", glow_result_string(r), why);
+        return 77;
+    }
+    if (!glow_glfns_load(&gl, glow_glctx_get_proc_address(g_ctx), why, sizeof why)) {
+        printf("SKIP: GL entry points missing: %s\n", why);
+        glow_glctx_destroy(g_ctx);
+        return 77;
+    }
+    const struct CMUnitTest tests[] = {cmocka_unit_test(test_basis_and_lobes), cmocka_unit_test(test_sampling)};
+    int rc = cmocka_run_group_tests(tests, NULL, NULL);
+    glow_glctx_destroy(g_ctx);
+    return rc;
+}
