@@ -943,6 +943,50 @@ static void test_emission_override(void **state) {
     env_close(&e);
 }
 
+/* glow_system_get_solver_tables: views of what an update reads (the GL backend's input) — the bake's
+ * arrays where they are the bake's, and revisions that grow when the host changes emission or pushes light. */
+static void test_solver_tables(void **state) {
+    (void)state;
+    env e;
+    env_open(&e);
+    glow_system *s = make_system(&e, NULL, 0);
+    glow_solver_tables t;
+    assert_int_equal(glow_system_get_solver_tables(NULL, &t), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(glow_system_get_solver_tables(s, NULL), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(glow_system_get_solver_tables(s, &t), GLOW_OK);
+    const glow_bake_meta *m = e.meta;
+    assert_int_equal(t.surfel_count, m->surfel_count);
+    assert_int_equal(t.node_count, m->node_count);
+    assert_int_equal(t.cache_count, m->cache_count);
+    assert_int_equal(t.coeff_count, t.sh_bands_luma * t.sh_bands_luma + 2 * t.sh_bands_chroma * t.sh_bands_chroma);
+    const glow_bake_node *nodes = glow__bake_nodes(e.bake);
+    const glow_bake_surfel *sf = glow__bake_surfels(e.bake);
+    const glow_bake_cache *caches = glow__bake_caches(e.bake);
+    for (uint32_t n = m->surfel_count; n < m->node_count; n += 97) {
+        assert_int_equal(t.node_children[(size_t)n * t.node_stride], nodes[n].child[0]);
+        assert_int_equal(t.node_children[(size_t)n * t.node_stride + 1], nodes[n].child[1]);
+        assert_true(t.node_positions[(size_t)n * t.node_stride + 2] == nodes[n].position[2]);
+        assert_true(fabsf(t.node_inv_pi_area[n] * 3.14159265f * nodes[n].area - 1.0f) < 1e-5f);
+    }
+    for (uint32_t i = 0; i < m->surfel_count; i += 101) {
+        assert_true(t.node_positions[(size_t)i * t.node_stride] == sf[i].position[0]); /* leaves are the surfels */
+        assert_int_equal(t.feedback[i], sf[i].feedback);
+        assert_true(t.albedo[3 * (size_t)i + 1] == sf[i].albedo[1]);
+    }
+    for (uint32_t c = 0; c < m->cache_count; c += 53) assert_true(t.cache_positions[(size_t)c * t.cache_stride + 1] == caches[c].position[1]);
+    assert_ptr_equal(t.link_blocks, glow__bake_link_blocks(e.bake));
+    assert_int_equal(t.grid_used + t.lightmap_used > 0, 1);
+    const uint64_t er = t.emission_revision, dr = t.direct_revision;
+    float one[3] = {1, 2, 3};
+    assert_int_equal(glow_system_set_surfel_emission(s, 5, 1, one), GLOW_OK);
+    assert_int_equal(glow_system_set_surfel_irradiance(s, 7, 1, one), GLOW_OK);
+    assert_int_equal(glow_system_get_solver_tables(s, &t), GLOW_OK);
+    assert_true(t.emission_revision > er && t.direct_revision > dr);
+    assert_true(t.emission[3 * 5 + 2] == 3.0f && t.direct_irradiance[3 * 7 + 1] == 2.0f);
+    glow_system_destroy(s);
+    env_close(&e);
+}
+
 /* Two systems on one context (one built-in pool) updated from two threads at once: each gets what
  * it gets alone ("different systems may update concurrently"). */
 typedef struct concurrent_arg {
@@ -1236,6 +1280,7 @@ static void test_furnace_converges(void **state) {
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_null_arguments),
+        cmocka_unit_test(test_solver_tables),
         cmocka_unit_test(test_null_out_pointers_logged),
         cmocka_unit_test(test_band_counts),
         cmocka_unit_test(test_version_mismatch),

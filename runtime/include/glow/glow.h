@@ -391,6 +391,10 @@ typedef struct glow_solver_tables {
     const uint32_t *node_children;     /* node n's children at node_children[n * node_stride + 0/1] (leaves: none) */
     uint32_t node_stride;              /* uint32 between nodes */
     const float *node_inv_pi_area;     /* [N] 1 / (π area): node radiance = flux · this */
+    const float *node_positions;       /* node n's area-weighted centre (m) at node_positions[n * node_stride + 0..2]
+                                          (debug views: clusters, a cache's links) */
+    const float *cache_positions;      /* cache c's position (m) at cache_positions[c * cache_stride + 0..2] */
+    uint32_t cache_stride;             /* floats between caches */
     const uint32_t *level_starts;      /* [level_count + 1]: level v's nodes are [starts[v], starts[v+1]); 0 = leaves */
     const void *link_blocks;           /* [cache_count * link_blocks_per_cache] blocks of 128 bytes, 16 links:
                                           uint32 node_dir[16] (bits 0-23 node, 24-31 bits 4-11 of the 12-bit
