@@ -11,7 +11,9 @@
  *             of it, byte o (x: octants 0-3, y: 4-7) has bit k set when corner k may be blended (it holds a
  *             cache and, with the bake's GVIS, is visible from that octant's centre)
  *   lightmap  sampler2DArray, layer p = plane p; lightmap valid: usampler2D R8UI, 1 where a texel holds a cache
- * Lookups use texelFetch and weight empty/hidden neighbours 0 (renormalising the rest), so set any filter.
+ * Lookups use texelFetch and weight empty/hidden neighbours 0 (renormalising the rest). glow_gl creates the
+ * textures with NEAREST filtering; do not sample the integer mask/valid textures through a sampler object with
+ * a LINEAR filter (an integer texture is then incomplete and every fetch returns 0).
  *
  * USAGE (GLSL 4.50, in any stage)
  *   #define GLOW_SH_BANDS_LUMA 3          (the system's bands: glow_gl_outputs.sh_bands_luma / _chroma)

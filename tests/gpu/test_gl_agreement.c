@@ -34,6 +34,26 @@
 
 static glow_glctx *g_gl;
 
+/* A loader that hides one entry point, and one whose context claims GL 4.3: missing GL features. */
+static const char *g_hidden;
+static glow_gl_proc hiding_loader(const char *name) {
+    if (g_hidden && !strcmp(name, g_hidden)) return NULL;
+    return glow_glctx_get_proc_address(g_gl)(name);
+}
+static PFNGLGETINTEGERVPROC g_real_getintegerv;
+static void APIENTRY old_getintegerv(GLenum pname, GLint *v) {
+    g_real_getintegerv(pname, v);
+    if (pname == GL_MINOR_VERSION) *v = 3;
+}
+static glow_gl_proc old_loader(const char *name) {
+    if (!strcmp(name, "glGetIntegerv")) {
+        glow_gl_proc p = glow_glctx_get_proc_address(g_gl)(name);
+        memcpy(&g_real_getintegerv, &p, sizeof p);
+        return (glow_gl_proc)old_getintegerv;
+    }
+    return glow_glctx_get_proc_address(g_gl)(name);
+}
+
 typedef struct fixture {
     glow_context *ctx;
     glow_bake *bake;
@@ -282,6 +302,34 @@ static void test_bad_hooks(void **state) {
     glow_gl_system_destroy(g);
     free(before);
     free(sh);
+    /* missing GL features: a missing entry point, an older context */
+    gd.flags = 0;
+    gd.hook_glsl = NULL;
+    g_hidden = "glDispatchCompute";
+    gd.get_proc_address = hiding_loader;
+    assert_int_equal(glow_gl_system_create(&gd, &g), GLOW_ERROR_UNSUPPORTED);
+    assert_null(g);
+    assert_non_null(strstr(g_last_log, "glDispatchCompute"));
+    printf("  missing entry point: %s\n", g_last_log);
+    gd.get_proc_address = old_loader;
+    assert_int_equal(glow_gl_system_create(&gd, &g), GLOW_ERROR_UNSUPPORTED);
+    assert_non_null(strstr(g_last_log, "4.3"));
+    printf("  old context: %s\n", g_last_log);
+    gd.get_proc_address = glow_glctx_get_proc_address(g_gl);
+    /* host textures of the wrong size */
+    {
+        glow_glfns f2;
+        assert_true(glow_glfns_load(&f2, glow_glctx_get_proc_address(g_gl), NULL, 0));
+        GLuint tex;
+        f2.CreateTextures(GL_TEXTURE_2D_ARRAY, 1, &tex);
+        f2.TextureStorage3D(tex, 1, GL_RGBA32F, 8, 8, 1);
+        gd.lightmap_texture = tex;
+        assert_int_equal(glow_gl_system_create(&gd, &g), GLOW_ERROR_INVALID_ARGUMENT);
+        assert_non_null(strstr(g_last_log, "lightmap"));
+        printf("  wrong host texture: %s\n", g_last_log);
+        gd.lightmap_texture = 0;
+        f2.DeleteTextures(1, &tex);
+    }
     /* bad arguments */
     assert_int_equal(glow_gl_system_create(NULL, &g), GLOW_ERROR_INVALID_ARGUMENT);
     gd.system = NULL;
