@@ -32,6 +32,9 @@
  *             red = large clusters); the cache itself is a white dot
  *   clusters  every surfel coloured by its ancestor at hierarchy level sample_gl_frame.cluster_level
  *             (glow_solver_tables.node_children / level_starts): the clusters links gather from
+ *   lit-clusters  the same clusters, each coloured by its radiance after the last GPU update (flux ·
+ *             1/(π area) from glow_gl_outputs.flux_buffer, YCoCg -> RGB, exposed and tone-mapped): the
+ *             light the caches gather, as the hierarchy sees it
  *
  * TARGETS: colour 0 is the display image (RGBA8, tone-mapped, what the window shows and the PNGs
  * hold). With desc.aux_targets four RGBA32F targets follow, for tests and tools:
@@ -73,12 +76,13 @@ typedef enum sample_view {
     SAMPLE_VIEW_CHARTS,
     SAMPLE_VIEW_LINKS,
     SAMPLE_VIEW_CLUSTERS,
+    SAMPLE_VIEW_LIT_CLUSTERS,
     SAMPLE_VIEW_COUNT
 } sample_view;
 
 static inline const char *sample_view_name(int view) {
     static const char *const names[SAMPLE_VIEW_COUNT] = {"final", "indirect", "direct", "surfels",
-                                                         "charts", "links", "clusters"};
+                                                         "charts", "links", "clusters", "lit-clusters"};
     return view >= 0 && view < SAMPLE_VIEW_COUNT ? names[view] : "?";
 }
 
@@ -201,7 +205,7 @@ static inline int sample_gl__fail(sample_gl *r, const char *fmt, ...) {
 static const char sample_gl__common_glsl[] =
     "#define SAMPLE_VIEW_FINAL 0\n#define SAMPLE_VIEW_INDIRECT 1\n#define SAMPLE_VIEW_DIRECT 2\n"
     "#define SAMPLE_VIEW_SURFELS 3\n#define SAMPLE_VIEW_CHARTS 4\n#define SAMPLE_VIEW_LINKS 5\n"
-    "#define SAMPLE_VIEW_CLUSTERS 6\n"
+    "#define SAMPLE_VIEW_CLUSTERS 6\n#define SAMPLE_VIEW_LIT_CLUSTERS 7\n"
     "uniform int u_view;\n"
     "uniform float u_exposure;\n"
     "uniform float u_time;\n"
@@ -311,7 +315,7 @@ static const char sample_gl__points_fs[] =
     "void main() {\n"
     "    vec3 c;\n"
     "    bool display = u_view == SAMPLE_VIEW_CLUSTERS;\n"
-    "    if (display) c = f_cluster;\n"
+    "    if (display || u_view == SAMPLE_VIEW_LIT_CLUSTERS) c = f_cluster;\n"
     "    else c = (u_hook != 0 ? glow_host_surfel_irradiance(f_pos, normalize(f_nrm), 0u) : f_pushed) * (1.0 / GLOW_PI) + f_emission;\n"
     "    o_color = vec4(display ? c : sample_display(c), 1.0);\n"
     "    o_hdr = vec4(c, 1.0); o_aux0 = vec4(0.0); o_aux1 = vec4(0.0); o_aux2 = vec4(f_pos, 1.0);\n"
@@ -722,6 +726,30 @@ static inline void sample_gl__build_clusters(sample_gl *r, glow_solver_tables *t
     r->gl.NamedBufferSubData(r->vbo_points[4], 0, (GLsizeiptr)((size_t)r->surfel_count * 12), r->staging);
 }
 
+/* lit-clusters: each surfel gets its level-`level` ancestor's radiance (RGB W/(m²·sr)) from the GPU's node
+ * flux (read back: a debug view, not a per-frame path of an engine). */
+static inline void sample_gl__build_lit_clusters(sample_gl *r, glow_solver_tables *t, uint32_t level) {
+    if (sample_gl__hierarchy(r, t) != 0 || !r->out || !r->out->flux_buffer) return;
+    if (level >= t->level_count) level = t->level_count ? t->level_count - 1 : 0;
+    const size_t N = t->node_count;
+    float *flux = malloc(N * 4 * sizeof(float));
+    if (!flux) return;
+    r->gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+    r->gl.GetNamedBufferSubData(r->out->flux_buffer, 0, (GLsizeiptr)(N * 16), flux);
+    for (uint32_t s = 0; s < r->surfel_count; s++) {
+        uint32_t a = s;
+        while (r->node_level[a] < level && r->node_parent[a] != UINT32_MAX) a = r->node_parent[a];
+        const float *f = flux + 4 * (size_t)a;
+        const float y = f[0] * f[3], co = f[1] * f[3], cg = f[2] * f[3];
+        r->staging[3 * (size_t)s] = y + co - cg;
+        r->staging[3 * (size_t)s + 1] = y + cg;
+        r->staging[3 * (size_t)s + 2] = y - co - cg;
+    }
+    free(flux);
+    r->cluster_level_seen = UINT32_MAX; /* the clusters view must rebuild its colours */
+    r->gl.NamedBufferSubData(r->vbo_points[4], 0, (GLsizeiptr)((size_t)r->surfel_count * 12), r->staging);
+}
+
 /* ---------------------------------------------------------------------------------- draw */
 static inline void sample_gl__upload_materials(sample_gl *r, const glow_solver_tables *t) {
     glow_system_params prm;
@@ -797,7 +825,8 @@ static inline int sample_gl_draw(sample_gl *r, const sample_gl_frame *f) {
     } else {
         gl->Disable(GL_CULL_FACE);
     }
-    const bool overlay = f->view == SAMPLE_VIEW_SURFELS || f->view == SAMPLE_VIEW_LINKS || f->view == SAMPLE_VIEW_CLUSTERS;
+    const bool overlay = f->view == SAMPLE_VIEW_SURFELS || f->view == SAMPLE_VIEW_LINKS || f->view == SAMPLE_VIEW_CLUSTERS ||
+                         f->view == SAMPLE_VIEW_LIT_CLUSTERS;
     if (overlay) { /* the dim scene behind the points and lines */
         gl->Enable(GL_POLYGON_OFFSET_FILL);
         gl->PolygonOffset(1.0f, 4.0f);
@@ -837,8 +866,9 @@ static inline int sample_gl_draw(sample_gl *r, const sample_gl_frame *f) {
         gl->DrawElements(GL_TRIANGLES, (GLsizei)r->sphere_index_count, GL_UNSIGNED_INT, NULL);
     }
 
-    if (f->view == SAMPLE_VIEW_SURFELS || f->view == SAMPLE_VIEW_CLUSTERS) {
+    if (f->view == SAMPLE_VIEW_SURFELS || f->view == SAMPLE_VIEW_CLUSTERS || f->view == SAMPLE_VIEW_LIT_CLUSTERS) {
         if (f->view == SAMPLE_VIEW_SURFELS) sample_gl__upload_surfel_light(r, &t);
+        else if (f->view == SAMPLE_VIEW_LIT_CLUSTERS) sample_gl__build_lit_clusters(r, &t, f->cluster_level);
         else sample_gl__build_clusters(r, &t, f->cluster_level);
         p = r->prog_points;
         sample_gl__set_common(r, p, f, vp);
@@ -913,7 +943,7 @@ static inline int sample_gl_read(sample_gl *r, int index, void *out) {
  *        [--exposure E] [--bounce B] [--iterations N] [--no-direct] [--no-indirect] [--pick X,Y,Z] [--level L]
  * Exit status: 0 ok, 1 runtime or file error (the message names the file), 2 usage, 77 no OpenGL 4.5
  * context (the message says why).
- * Keys (window): 1-7 views (final indirect direct surfels charts links clusters), D direct on/off,
+ * Keys (window): 1-8 views (final indirect direct surfels charts links clusters lit-clusters), D direct on/off,
  * I indirect on/off, Z / X bounce intensity -/+ 0.1, C / V exposure / x 1.25, K / L cluster level -/+,
  * R reset the bounce, P pause, Esc quit. */
 #ifdef SAMPLE_GL_APP
@@ -973,13 +1003,13 @@ static inline void sample_app_usage(FILE *f, const char *argv0) {
             "usage: %s BAKE [--headless] [--frames N] [--out DIR] [--view NAME] [--width W] [--height H]\n"
             "       [--scene JSON] [--exposure E] [--bounce B] [--iterations N] [--no-direct] [--no-indirect]\n"
             "       [--pick X,Y,Z] [--level L]\n"
-            "  --view      final (default), indirect, direct, surfels, charts, links, clusters\n"
+            "  --view      final (default), indirect, direct, surfels, charts, links, clusters, lit-clusters\n"
             "  --width/--height  image size (default 320x240 headless, 1280x720 in a window)\n"
             "  --scene     a scene JSON (docs/scene-format.md): camera, lights, environment, emission_scale\n"
             "  --exposure  multiplies radiance before the tone map (default 1)\n"
             "  --bounce    bounce intensity 0..1 (default 1); --iterations: bounce iterations per update (default 1)\n"
             "  --pick      links view: the cache nearest this point; --level: clusters view level\n"
-            "keys (window): 1-7 views, D direct, I indirect, Z/X bounce -/+, C/V exposure -/+, K/L level -/+,\n"
+            "keys (window): 1-8 views, D direct, I indirect, Z/X bounce -/+, C/V exposure -/+, K/L level -/+,\n"
             "  R reset bounce, P pause, Esc quit\n"
             "exit status: 0 ok, 1 runtime or file error, 2 usage, 77 no OpenGL 4.5 context\n",
             argv0);
@@ -1025,7 +1055,7 @@ static inline int sample_app_parse(int argc, char **argv, sample_app_options *o)
         switch (k) {
         case 0:
             if ((o->view = sample_view_parse(v)) < 0)
-                return sample_app__bad(argv[0], a, v, "wants final, indirect, direct, surfels, charts, links or clusters");
+                return sample_app__bad(argv[0], a, v, "wants final, indirect, direct, surfels, charts, links, clusters or lit-clusters");
             break;
         case 1: case 2: {
             long x = strtol(v, &end, 10);
@@ -1188,7 +1218,7 @@ static inline int sample_app_init(sample_app *a, int argc, char **argv, const ch
     printf("%s: %s: %u surfels, %u caches (grid %u, lightmap %u), %u levels; GL %s (%s); %ux%u%s\n", a->name, in,
            a->info.surfel_count, a->info.cache_count, a->info.grid_cache_count, a->info.lightmap_cache_count, t.level_count,
            glow_glctx_renderer(a->glctx), glow_glctx_kind_name(glow_glctx_get_kind(a->glctx)), fw, fh,
-           a->window ? " window (keys: 1-7 views, D direct, I indirect, Z/X bounce, C/V exposure, K/L level, R reset, P pause, Esc)" : "");
+           a->window ? " window (keys: 1-8 views, D direct, I indirect, Z/X bounce, C/V exposure, K/L level, R reset, P pause, Esc)" : "");
     a->last_wall = sample_app_now_ms();
     return -1;
 }

@@ -67,7 +67,7 @@ grep -q 'shaded from the grid' "$T/run3.txt" && pass "  03: sphere shaded from t
 if ! cmp -s "$T/p3/frame_001.png" "$T/p3/frame_002.png"; then pass "  03: frames 1 and 2 differ (moving sphere)"; else fail "  03: frames 1 and 2 identical"; fi
 
 # every view, other sizes, a scene file, a spot light, no --out
-for v in indirect direct surfels charts links clusters; do
+for v in indirect direct surfels charts links clusters lit-clusters; do
   expect 0 "03 --view $v" "$S3" "$T/c.glow" --headless --frames 1 --view "$v" --width 96 --height 64 --out "$T/v_$v"
   is_png "$T/v_$v/frame_000.png" 96 64 && pass "  96x64 PNG" || fail "  $v: no 96x64 PNG"
 done

@@ -42,6 +42,7 @@
  *   grid_mask_texture GL_TEXTURE_3D RG32UI (dx, dy, dz): per cell and octant, the corners a lookup blends
  *   lightmap_texture  GL_TEXTURE_2D_ARRAY (w, h, planes); lightmap_valid_texture GL_TEXTURE_2D R8UI
  *   cache_sh_buffer   SSBO float[cache_count][coeff_count] (the bounce state)
+ *   flux_buffer       SSBO vec4[node_count]: node flux YCoCg, w = 1/(π area) (for debug views)
  * shaders/include/glow_shading.glsl samples them (glow_sample_grid / glow_sample_lightmap / glow_shade_sh).
  * A host that owns its textures passes them in the desc (same formats and sizes: checked at create).
  *
@@ -96,6 +97,8 @@ typedef struct glow_gl_outputs {
     uint32_t lightmap_texture, lightmap_valid_texture; /* 0 without a lightmap */
     uint32_t lightmap_width, lightmap_height;
     uint32_t cache_sh_buffer;
+    uint32_t flux_buffer;                 /* SSBO vec4[node_count]: flux (W) Y Co Cg of every hierarchy node after
+                                             the last update's pull, w = 1/(π area): radiance = xyz · w (debug views) */
     uint32_t cache_count;
     uint32_t hook_program;                /* the program running the hook (0 without one) */
     uint64_t update_index;

@@ -376,6 +376,7 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
                                .coeff_count = t->coeff_count,
                                .planes = s->planes,
                                .cache_sh_buffer = s->buf[B_CACHE],
+                               .flux_buffer = s->buf[B_FLUX],
                                .cache_count = s->C,
                                .hook_program = s->prog[K_DIRECT]};
     const float zero4[4] = {0, 0, 0, 0};
