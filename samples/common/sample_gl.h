@@ -1194,7 +1194,11 @@ static inline int sample_app_init(sample_app *a, int argc, char **argv, const ch
     if (r == GLOW_OK)
         r = glow_gl_system_create(&(glow_gl_desc){.system = a->sys, .get_proc_address = load,
                                                   .hook_glsl = glow_gl_lights_hook_source(a->lights), .label = "sample",
-                                                  .logger = lg},
+                                                  .logger = lg,
+                                                  /* llvmpipe resolves timestamps on its rasteriser thread, out of order with
+                                                     compute: time its stages with glFinish instead (GPUs: timer queries) */
+                                                  .flags = strstr(glow_glctx_renderer(a->glctx), "llvmpipe")
+                                                               ? GLOW_GL_FLAG_FINISH_TIMERS : 0u},
                                   &a->gsys);
     if (r != GLOW_OK) {
         fprintf(stderr, "%s: %s: GL setup failed: %s\n", a->name, in, glow_result_string(r));

@@ -34,6 +34,10 @@ for pg, pc in zip(g["probes"], c["probes"]):
 print("  worst probe difference GL vs CPU: %.2e relative; GL total %.3f ms on %s" % (worst, ms["total"], g["renderer"]))
 assert worst < 1e-3, worst
 PY
+expect 0 "glow-bench --backend gl --gl-timing finish" "$BIN/glow-bench" "$T/c.glow" "$SCENE" --backend gl --gl-timing finish --frames 3 --warmup 1 --json
+python3 -c "import json,sys; j=json.load(open('$T/out')); m=j['median_ms']; assert j['gl_timing']=='finish'; assert all(m[k]>0 for k in ('surfel_lighting','pull','cache_lighting','output','total')), m" \
+  && pass "  every stage timed by glFinish" || fail "  finish timing"
+expect 2 "bad --gl-timing" "$BIN/glow-bench" "$T/c.glow" "$SCENE" --backend gl --gl-timing never
 expect 2 "bad --backend" "$BIN/glow-bench" "$T/c.glow" "$SCENE" --backend vulkan
 err_has "--backend must be cpu or gl"
 exit $fails

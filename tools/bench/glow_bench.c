@@ -35,7 +35,7 @@ typedef struct options {
     uint32_t frames, warmup, threads, luma, chroma, iterations;
     glow_host_kind host;
     glow_link_mode link_mode;
-    int json, quiet, no_probe_machine, gl;
+    int json, quiet, no_probe_machine, gl, gl_finish;
     uint32_t probe_count;
     float probes[MAX_PROBES][3];
 } options;
@@ -62,7 +62,9 @@ static void usage(FILE *f) {
             "  --no-machine    skip the STREAM-triad and FMA-peak probes\n"
             "  --backend gl    the GL 4.5 solver (glow_gl.h) on a headless context (EGL, else OSMesa; GLOW_GLCTX=egl|osmesa),\n"
             "                  surfels lit by the GPU shadow-map hook (glow_gl_lights.h); per-stage GPU times from timer\n"
-            "                  queries (--threads, --host and --link-mode do not apply)\n");
+            "                  queries (--threads, --host and --link-mode do not apply)\n"
+            "  --gl-timing finish  time GL stages with glFinish + the CPU clock (for llvmpipe, whose timestamps\n"
+            "                  are not ordered with compute work); default: timer queries\n");
 }
 
 static int parse_u32(const char *s, uint32_t *out) {
@@ -122,6 +124,13 @@ static int parse_args(int argc, char **argv, options *o) {
                 return 0;
             }
             o->gl = !strcmp(v, "gl");
+            ++i;
+        } else if (!strcmp(a, "--gl-timing")) {
+            if (!v || (strcmp(v, "finish") && strcmp(v, "queries"))) {
+                fprintf(stderr, "glow-bench: --gl-timing must be queries or finish\n");
+                return 0;
+            }
+            o->gl_finish = !strcmp(v, "finish");
             ++i;
         } else if (!strcmp(a, "--no-machine")) o->no_probe_machine = 1;
         else if (!strcmp(a, "--json")) o->json = 1;
@@ -249,7 +258,8 @@ int main(int argc, char **argv) {
         if ((r = glow_gl_lights_create(&ld, &gll)) != GLOW_OK) goto done;
         if ((r = glow_gl_lights_set(gll, scene.lights, scene.light_count, scene.environment)) != GLOW_OK) goto done;
         glow_gl_desc gd = {.system = sys, .get_proc_address = glow_glctx_get_proc_address(glc),
-                           .hook_glsl = glow_gl_lights_hook_source(gll), .label = o.bake, .logger = logger};
+                           .hook_glsl = glow_gl_lights_hook_source(gll), .label = o.bake, .logger = logger,
+                           .flags = o.gl_finish ? GLOW_GL_FLAG_FINISH_TIMERS : 0u};
         if ((r = glow_gl_system_create(&gd, &gls)) != GLOW_OK) goto done;
         lights = calloc(scene.light_count ? scene.light_count : 1u, sizeof *lights);
         if (!lights) goto done;
@@ -379,8 +389,8 @@ int main(int argc, char **argv) {
                o.scene, o.host == GLOW_HOST_KIND_EXACT ? "exact" : "shadow-map", threads, n);
 #ifdef GLOW_BENCH_HAVE_GL
         if (o.gl)
-            printf(" \"backend\": \"gl\", \"renderer\": \"%s\", \"gpu_memory_bytes\": %llu,\n", gl_renderer,
-                   (unsigned long long)st.memory_bytes);
+            printf(" \"backend\": \"gl\", \"renderer\": \"%s\", \"gl_timing\": \"%s\", \"gpu_memory_bytes\": %llu,\n",
+                   gl_renderer, o.gl_finish ? "finish" : "queries", (unsigned long long)st.memory_bytes);
         else
 #endif
         printf(" \"backend\": \"cpu\", \"link_mode\": \"%s\", \"kernel\": \"%s\", \"system_memory_bytes\": %llu,\n",
@@ -410,8 +420,8 @@ int main(int argc, char **argv) {
                out->sh_bands_chroma, threads, o.host == GLOW_HOST_KIND_EXACT ? "exact" : "shadow-map");
 #ifdef GLOW_BENCH_HAVE_GL
         if (o.gl)
-            printf("backend gl: %s, GPU memory %.1f MiB (GPU times from timer queries)\n", gl_renderer,
-                   (double)st.memory_bytes / (1024.0 * 1024.0));
+            printf("backend gl: %s, GPU memory %.1f MiB (GPU times from %s)\n", gl_renderer,
+                   (double)st.memory_bytes / (1024.0 * 1024.0), o.gl_finish ? "glFinish + CPU clock" : "timer queries");
         else
 #endif
         printf("links %s, kernel %s, system memory %.1f MiB\n", link_mode_name(st.link_mode),

@@ -74,6 +74,10 @@ typedef glow_gl_proc (*glow_gl_loader)(const char *name);
 
 #define GLOW_GL_FLAG_NO_TIMERS 1u  /* no GL timer queries (stats report 0 ms) */
 #define GLOW_GL_FLAG_CHECK_HOOK 2u /* read the hook's NaN counter back every update (a sync; for debugging) */
+#define GLOW_GL_FLAG_FINISH_TIMERS 4u /* time stages by glFinish + the CPU clock instead of timer queries: for
+                                         drivers whose timestamps are not ordered with compute work (Mesa's
+                                         llvmpipe resolves them on its rasteriser thread, so the split between
+                                         stages is wrong there); adds a full sync per stage */
 
 typedef struct glow_gl_desc {
     glow_system *system;             /* required, borrowed: the CPU system of the same bake (must outlive) */

@@ -14,6 +14,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "glow/glow_gl.h"
 #include "glow/glow_glfns.h"
@@ -46,6 +47,7 @@ struct glow_gl_system {
     GLuint grid_tex, grid_mask_tex, lm_tex, lm_valid_tex;
     int own_grid, own_lm;
     GLuint queries[T_COUNT];
+    double cpu_ts[T_COUNT]; /* GLOW_GL_FLAG_FINISH_TIMERS */
     int queries_pending;
     uint32_t pull_dispatches;
     glow_gl_outputs out;
@@ -470,7 +472,7 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
         s->out.lightmap_texture = s->lm_tex;
         s->out.lightmap_valid_texture = s->lm_valid_tex;
     }
-    if (!(s->flags & GLOW_GL_FLAG_NO_TIMERS)) gl->CreateQueries(GL_TIMESTAMP, T_COUNT, s->queries);
+    if (!(s->flags & (GLOW_GL_FLAG_NO_TIMERS | GLOW_GL_FLAG_FINISH_TIMERS))) gl->CreateQueries(GL_TIMESTAMP, T_COUNT, s->queries);
     GLenum e = gl->GetError();
     if (e != GL_NO_ERROR) {
         LOG_ERR(s, GLOW_ERROR_UNSUPPORTED, "GL error 0x%x while creating buffers/textures (%.1f MB)", e,
@@ -507,7 +509,14 @@ static void dispatch(glow_gl_system *s, uint32_t groups) {
 }
 
 static void stamp(glow_gl_system *s, int q) {
-    if (s->queries[0]) s->gl.QueryCounter(s->queries[q], GL_TIMESTAMP);
+    if (s->flags & GLOW_GL_FLAG_FINISH_TIMERS) {
+        s->gl.Finish();
+        struct timespec ts;
+        clock_gettime(CLOCK_MONOTONIC, &ts);
+        s->cpu_ts[q] = (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
+    } else if (s->queries[0]) {
+        s->gl.QueryCounter(s->queries[q], GL_TIMESTAMP);
+    }
 }
 
 static void bind(glow_gl_system *s, int binding, int b) { s->gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, (GLuint)binding, s->buf[b]); }
@@ -638,10 +647,14 @@ glow_result glow_gl_system_get_stats(glow_gl_system *s, glow_gl_stats *out) {
     if (!s || !out) return GLOW_ERROR_INVALID_ARGUMENT;
     memset(out, 0, sizeof *out);
     glow_glfns *gl = &s->gl;
-    if (s->queries_pending) {
+    if (s->queries_pending || ((s->flags & GLOW_GL_FLAG_FINISH_TIMERS) && s->updates)) {
         GLuint64 ts[T_COUNT];
-        for (int q = 0; q < T_COUNT; ++q) gl->GetQueryObjectui64v(s->queries[q], GL_QUERY_RESULT, &ts[q]);
-        const double ms = 1e-6;
+        double ms = 1e-6;
+        if (s->flags & GLOW_GL_FLAG_FINISH_TIMERS) {
+            for (int q = 0; q < T_COUNT; ++q) ts[q] = (GLuint64)((s->cpu_ts[q] - s->cpu_ts[T_BEGIN]) * 1e6);
+        } else {
+            for (int q = 0; q < T_COUNT; ++q) gl->GetQueryObjectui64v(s->queries[q], GL_QUERY_RESULT, &ts[q]);
+        }
         out->host_ms = (double)(ts[T_DIRECT] - ts[T_BEGIN]) * ms;
         out->surfel_lighting_ms = (double)(ts[T_FLUX] - ts[T_BEGIN]) * ms;
         out->pull_ms = (double)(ts[T_PULL] - ts[T_FLUX]) * ms;
