@@ -14,6 +14,7 @@ PKGS=(
   libglfw3-dev libosmesa6-dev libegl-dev libgl-dev libcglm-dev   # integration (later issues)
   libopenexr-dev glslang-tools gnuplot-nox                       # evaluation, shaders, charts
   python3              # tools/glow-eval (the sweep driver) and its CLI test
+  xvfb xauth           # the GL samples' window path in ctest (xvfb-run: GLFW + GLX on llvmpipe)
 )
 missing=()
 for p in "${PKGS[@]}"; do
