@@ -229,6 +229,41 @@ static void test_sampling(void **state) {
     assert_true(worst[1] <= 1e-4 * scale[1]);
     free(coeffs);
     free(sh);
+    /* host-owned output textures: a second GL system writing into textures the host made gives the same texels */
+    {
+        GLuint host_grid, host_lm;
+        gl.CreateTextures(GL_TEXTURE_3D, 1, &host_grid);
+        gl.TextureStorage3D(host_grid, 1, GL_RGBA32F, (GLsizei)go->grid_dims[0], (GLsizei)go->grid_dims[1],
+                            (GLsizei)(go->grid_dims[2] * go->planes));
+        gl.CreateTextures(GL_TEXTURE_2D_ARRAY, 1, &host_lm);
+        gl.TextureStorage3D(host_lm, 1, GL_RGBA32F, (GLsizei)go->lightmap_width, (GLsizei)go->lightmap_height, (GLsizei)go->planes);
+        glow_gl_system *gs2;
+        assert_int_equal(glow_gl_system_create(&(glow_gl_desc){.system = sys, .get_proc_address = glow_glctx_get_proc_address(g_ctx),
+                                                               .grid_texture = host_grid, .lightmap_texture = host_lm},
+                                               &gs2),
+                         GLOW_OK);
+        const glow_gl_outputs *o2 = glow_gl_system_outputs(gs2);
+        assert_int_equal(o2->grid_texture, host_grid);
+        assert_int_equal(o2->lightmap_texture, host_lm);
+        for (int u = 0; u < 3; ++u) assert_int_equal(glow_gl_system_update(gs2, NULL), GLOW_OK);
+        const size_t gbytes = (size_t)go->grid_dims[0] * go->grid_dims[1] * go->grid_dims[2] * go->planes * 16u;
+        const size_t lbytes = (size_t)go->lightmap_width * go->lightmap_height * go->planes * 16u;
+        float *a = malloc(gbytes), *b = malloc(gbytes), *c = malloc(lbytes), *d = malloc(lbytes);
+        gl.GetTextureImage(go->grid_texture, 0, GL_RGBA, GL_FLOAT, (GLsizei)gbytes, a);
+        gl.GetTextureImage(host_grid, 0, GL_RGBA, GL_FLOAT, (GLsizei)gbytes, b);
+        gl.GetTextureImage(go->lightmap_texture, 0, GL_RGBA, GL_FLOAT, (GLsizei)lbytes, c);
+        gl.GetTextureImage(host_lm, 0, GL_RGBA, GL_FLOAT, (GLsizei)lbytes, d);
+        assert_memory_equal(a, b, gbytes);
+        assert_memory_equal(c, d, lbytes);
+        double sum = 0.0;
+        for (size_t i = 0; i < lbytes / 4; ++i) sum += fabs(d[i]);
+        assert_true(sum > 0.0); /* written, not left at zero */
+        printf("  host-owned textures: grid %zu and lightmap %zu bytes identical to Glow's own\n", gbytes, lbytes);
+        free(a), free(b), free(c), free(d);
+        glow_gl_system_destroy(gs2);
+        GLuint tex[2] = {host_grid, host_lm};
+        gl.DeleteTextures(2, tex); /* Glow did not delete them: still valid names until here */
+    }
     GLuint bufs[3] = {bp, bu, br};
     gl.DeleteBuffers(3, bufs);
     gl.DeleteProgram(p);
