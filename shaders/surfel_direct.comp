@@ -15,6 +15,11 @@ layout(std430, binding = GLOW_BINDING_SURFEL_MAT) readonly buffer GlowSurfelMat 
 layout(std430, binding = GLOW_BINDING_DIRECT) writeonly buffer GlowDirect { vec4 glow_direct[]; };
 layout(std430, binding = GLOW_BINDING_STATUS) buffer GlowStatus { glow_gl_status glow_status; };
 
+/* The surfel being lit, in the bake's surfel order, for hooks that read per-surfel data (e.g. precomputed
+ * sky visibility: glow_gl_lights). Hooks test GLOW_SURFEL_INDEX_AVAILABLE, which other stages lack. */
+#define GLOW_SURFEL_INDEX_AVAILABLE 1
+uint glow_surfel_index = 0u;
+
 /* ---- host hook ---- */
 GLOW_HOST_HOOK_SOURCE
 /* ---- end of host hook ---- */
@@ -26,6 +31,7 @@ void main() {
     uint i = glow_global_index(GLOW_SURFEL_GROUP);
     if (i >= glow_p.surfel_count) return;
     glow_gl_surfel_geom g = glow_geom[i];
+    glow_surfel_index = i;
     vec3 e = glow_host_surfel_irradiance(g.position_area.xyz, g.normal.xyz, glow_mat[i].material);
     if (any(isnan(e)) || any(isinf(e))) {
         atomicAdd(glow_status.nonfinite, 1u);

@@ -377,7 +377,7 @@ static void irradiance_at(const glow_host *h, const float p[3], const float n[3]
 }
 
 /* The sky term env · π · S at p, n (S cached per surfel, or traced). */
-static void irradiance_sky(const glow_host *h, const float p[3], const float n[3], uint32_t surfel, float out[3]) {
+static float sky_S(const glow_host *h, const float p[3], const float n[3], uint32_t surfel) {
     /* S: the cached value (supplied, or traced by an earlier call) wins; else trace it (TRACED) and
      * cache it when this is a surfel; else 1 (UNSHADOWED). Two workers racing on one surfel would
      * both store the same deterministic value; the relaxed atomics keep that well-defined. */
@@ -395,7 +395,24 @@ static void irradiance_sky(const glow_host *h, const float p[3], const float n[3
             atomic_store_explicit(&h->sky_cache[surfel], bits, memory_order_relaxed);
         }
     }
+    return S;
+}
+
+static void irradiance_sky(const glow_host *h, const float p[3], const float n[3], uint32_t surfel, float out[3]) {
+    const float S = sky_S(h, p, n, surfel);
     for (int c = 0; c < 3; ++c) out[c] = h->env[c] * (float)HOST_PI * S;
+}
+
+glow_result glow_host_sky_visibility(glow_host *h, const glow_surfel_view *v, float *out, uint32_t count) {
+    if (!h || !v || !out || !v->positions || !v->normals) return GLOW_ERROR_INVALID_ARGUMENT;
+    if (count != h->surfel_count || v->count != h->surfel_count) {
+        HOST_FAIL(&h->logger, GLOW_ERROR_INVALID_ARGUMENT,
+                  "glow_host_sky_visibility: %u values / %u surfels given, the bake has %u surfels", count, v->count,
+                  h->surfel_count);
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    for (uint32_t i = 0; i < count; ++i) out[i] = sky_S(h, v->positions + 4 * (size_t)i, v->normals + 4 * (size_t)i, i);
+    return GLOW_OK;
 }
 
 /* The exact kind's hook path: the shadow rays of 16 consecutive surfels go to Embree as one

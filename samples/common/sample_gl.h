@@ -179,6 +179,7 @@ typedef struct sample_gl {
     GLuint prog_scene, prog_points, prog_lines;
     GLuint vao_scene, vbo_scene, vao_sphere, vbo_sphere, ibo_sphere, vao_points, vbo_points[5], vao_lines, vbo_lines;
     GLuint ssbo_materials, query[2], sampler;
+    GLuint sky_tex;             /* R32F lightmap-space sky visibility for the screen (0 = none: S = 1) */
     uint32_t vertex_count, sphere_index_count, material_count, surfel_count;
     float scene_size, bounds_min[3], bounds_max[3];
     float *material_base;   /* [M][6] the bake's albedo, emission */
@@ -255,8 +256,12 @@ static const char sample_gl__scene_fs[] =
     "uniform vec3 u_object_albedo, u_grid_origin;\n"
     "uniform float u_grid_spacing;\n"
     "uniform uvec3 u_grid_dims;\n"
+    "layout(binding = 4) uniform sampler2D u_sky;\n"
+    "uniform int u_has_sky;\n"
     "in vec3 v_pos;\nin vec3 v_nrm;\nin vec2 v_uv;\nflat in uint v_mat;\n"
     "void main() {\n"
+    /* the sky's visible fraction at this pixel, for the light hook's sky term (GLOW_GL_LIGHTS_PIXEL_SKY) */
+    "    if (u_has_sky != 0 && u_object == 0) sample_pixel_sky = textureLod(u_sky, v_uv, 0.0).r;\n"
     "    vec3 n = normalize(v_nrm);\n"
     "    if (!gl_FrontFacing) n = -n;\n"
     "    vec3 albedo = u_object != 0 ? u_object_albedo : sample_mat[v_mat].albedo.rgb;\n"
@@ -358,7 +363,8 @@ static inline GLuint sample_gl__program(sample_gl *r, const char *vs_src, const 
     char prelude[256];
     snprintf(prelude, sizeof prelude,
              "#version 450 core\n#define GLOW_SH_BANDS_LUMA %u\n#define GLOW_SH_BANDS_CHROMA %u\n"
-             "#define SAMPLE_GL_MATERIAL_BINDING %d\n",
+             "#define SAMPLE_GL_MATERIAL_BINDING %d\n"
+             "#define GLOW_GL_LIGHTS_PIXEL_SKY sample_pixel_sky\nfloat sample_pixel_sky = 1.0;\n",
              r->out->sh_bands_luma, r->out->sh_bands_chroma, SAMPLE_GL_MATERIAL_BINDING);
     const char *fs_parts[] = {prelude, glow_gl_shading_source(), "\n#line 1 1\n", hook, "\n#line 1 2\n",
                               sample_gl__common_glsl, "\n#line 1 3\n",
@@ -584,11 +590,52 @@ static inline void sample_gl_destroy(sample_gl *r) {
         if (vaos[i]) gl->DeleteVertexArrays(1, &vaos[i]);
     if (r->query[0]) gl->DeleteQueries(2, r->query);
     if (r->sampler) gl->DeleteSamplers(1, &r->sampler);
+    if (r->sky_tex) gl->DeleteTextures(1, &r->sky_tex);
     free(r->material_base);
     free(r->staging);
     free(r->node_parent);
     free(r->node_level);
     memset(r, 0, sizeof *r);
+}
+
+/* The sky's visible fraction S per surfel (glow_host_sky_visibility) turned into a lightmap-space texture
+ * for the screen: each texel gets the mean S of the surfels that feed its cache (glow_solver_tables.feedback),
+ * texels without a cache the mean of all; linear filtering. 0 on success. */
+static inline int sample_gl_set_sky_visibility(sample_gl *r, const float *S, uint32_t count) {
+    const glow_cache_outputs *co = glow_system_outputs(r->system);
+    glow_solver_tables t;
+    glow_system_get_solver_tables(r->system, &t);
+    if (!co->lightmap_map || count != t.surfel_count) return 0; /* no lightmap: the screen keeps S = 1 */
+    const uint32_t W = co->lightmap_width, H = co->lightmap_height, C = t.cache_count;
+    double *sum = calloc((size_t)C + 1, sizeof *sum);
+    uint32_t *cnt = calloc((size_t)C + 1, sizeof *cnt);
+    float *tex = malloc((size_t)W * H * sizeof *tex);
+    if (!sum || !cnt || !tex) {
+        free(sum), free(cnt), free(tex);
+        return sample_gl__fail(r, "out of memory for the sky texture");
+    }
+    double all = 0.0;
+    for (uint32_t i = 0; i < count; i++) {
+        const uint32_t c = t.feedback[i] < C ? t.feedback[i] : C;
+        sum[c] += S[i], cnt[c]++, all += S[i];
+    }
+    const float mean = count ? (float)(all / count) : 1.0f;
+    for (size_t i = 0; i < (size_t)W * H; i++) {
+        const uint32_t c = co->lightmap_map[i];
+        tex[i] = c < C && cnt[c] ? (float)(sum[c] / cnt[c]) : mean;
+    }
+    glow_glfns *gl = &r->gl;
+    if (!r->sky_tex) {
+        gl->CreateTextures(GL_TEXTURE_2D, 1, &r->sky_tex);
+        gl->TextureStorage2D(r->sky_tex, 1, GL_R32F, (GLsizei)W, (GLsizei)H);
+        gl->TextureParameteri(r->sky_tex, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+        gl->TextureParameteri(r->sky_tex, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+        gl->TextureParameteri(r->sky_tex, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+        gl->TextureParameteri(r->sky_tex, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    }
+    gl->TextureSubImage2D(r->sky_tex, 0, 0, 0, (GLsizei)W, (GLsizei)H, GL_RED, GL_FLOAT, tex);
+    free(sum), free(cnt), free(tex);
+    return 0;
 }
 
 /* Loads the GL functions, compiles the programs, uploads the bake's triangles and surfels and creates
@@ -840,6 +887,8 @@ static inline int sample_gl_draw(sample_gl *r, const sample_gl_frame *f) {
     gl->BindTextureUnit(1, o->grid_mask_texture);
     gl->BindTextureUnit(2, o->lightmap_texture);
     gl->BindTextureUnit(3, o->lightmap_valid_texture);
+    gl->BindTextureUnit(4, r->sky_tex);
+    gl->BindSampler(4, 0);
     for (GLuint u = 0; u < 4; u++) gl->BindSampler(u, r->sampler); /* NEAREST: see sample_gl_create */
 
     GLuint p = r->prog_scene;
@@ -848,6 +897,7 @@ static inline int sample_gl_draw(sample_gl *r, const sample_gl_frame *f) {
     gl->Uniform1i(gl->GetUniformLocation(p, "u_indirect"), f->indirect ? 1 : 0);
     gl->Uniform1i(gl->GetUniformLocation(p, "u_has_grid"), o->grid_texture != 0);
     gl->Uniform1i(gl->GetUniformLocation(p, "u_has_lightmap"), o->lightmap_texture != 0);
+    gl->Uniform1i(gl->GetUniformLocation(p, "u_has_sky"), r->sky_tex ? 1 : 0);
     gl->Uniform3fv(gl->GetUniformLocation(p, "u_grid_origin"), 1, o->grid_origin);
     gl->Uniform1f(gl->GetUniformLocation(p, "u_grid_spacing"), o->grid_spacing);
     gl->Uniform3ui(gl->GetUniformLocation(p, "u_grid_dims"), o->grid_dims[0], o->grid_dims[1], o->grid_dims[2]);
@@ -951,6 +1001,7 @@ static inline int sample_gl_read(sample_gl *r, int index, void *out) {
 
 #include <glow/glow_gl_lights.h>
 #include <glow/glow_glctx.h>
+#include <glow/glow_host.h>
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
 
@@ -1214,6 +1265,29 @@ static inline int sample_app_init(sample_app *a, int argc, char **argv, const ch
         fprintf(stderr, "%s: renderer: %s\n", a->name, a->r.error);
         sample_app_destroy(a);
         return 1;
+    }
+    { /* the sky's visible fraction per surfel, traced once on the CPU (glow_host, Embree) as the CPU host does: for
+       * the GPU hook (Glow's surfels) and, through a lightmap-space texture, for the screen; without it the sky
+       * would light arcades and room interiors as if they were open (S = 1) */
+        struct timespec t0, t1;
+        clock_gettime(CLOCK_MONOTONIC, &t0);
+        glow_host *sky_host = NULL;
+        glow_surfel_view sv;
+        glow_system_get_surfels(a->sys, &sv);
+        float *S = malloc(((size_t)sv.count + 1) * sizeof *S);
+        glow_result sr = S ? glow_host_create(&(glow_host_desc){.kind = GLOW_HOST_KIND_EXACT, .bake = a->bake, .logger = lg}, &sky_host)
+                           : GLOW_ERROR_OUT_OF_MEMORY;
+        if (sr == GLOW_OK) sr = glow_host_sky_visibility(sky_host, &sv, S, sv.count);
+        if (sr == GLOW_OK) sr = glow_gl_lights_set_sky_visibility(a->lights, S, sv.count);
+        if (sr == GLOW_OK && sample_gl_set_sky_visibility(&a->r, S, sv.count) != 0) sr = GLOW_ERROR_UNSUPPORTED;
+        glow_host_destroy(sky_host);
+        free(S);
+        clock_gettime(CLOCK_MONOTONIC, &t1);
+        if (sr != GLOW_OK)
+            fprintf(stderr, "%s: sky visibility not traced (%s): the sky lights unshadowed\n", a->name, glow_result_string(sr));
+        else
+            printf("sky visibility: %u surfels traced in %.0f ms\n", sv.count,
+                   (double)(t1.tv_sec - t0.tv_sec) * 1e3 + (double)(t1.tv_nsec - t0.tv_nsec) * 1e-6);
     }
     glow_solver_tables t;
     glow_system_get_solver_tables(a->sys, &t);

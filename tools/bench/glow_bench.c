@@ -257,6 +257,21 @@ int main(int argc, char **argv) {
         glow_gl_lights_desc ld = {.loader = glow_glctx_get_proc_address(glc), .bake = bake, .logger = logger};
         if ((r = glow_gl_lights_create(&ld, &gll)) != GLOW_OK) goto done;
         if ((r = glow_gl_lights_set(gll, scene.lights, scene.light_count, scene.environment)) != GLOW_OK) goto done;
+        if (scene.environment[0] > 0.0f || scene.environment[1] > 0.0f || scene.environment[2] > 0.0f) {
+            /* the sky as the CPU hosts light it: each surfel's traced visibility S (glow_host), on the GPU too */
+            glow_host_desc skd = glow_host_desc_from_scene(&scene, bake, GLOW_HOST_KIND_EXACT);
+            skd.logger = logger;
+            glow_surfel_view sv;
+            glow_system_get_surfels(sys, &sv);
+            float *S = malloc((size_t)sv.count * sizeof *S);
+            if (!S) goto done;
+            if ((r = glow_host_create(&skd, &host)) == GLOW_OK && (r = glow_host_sky_visibility(host, &sv, S, sv.count)) == GLOW_OK)
+                r = glow_gl_lights_set_sky_visibility(gll, S, sv.count);
+            free(S);
+            glow_host_destroy(host);
+            host = NULL;
+            if (r != GLOW_OK) goto done;
+        }
         glow_gl_desc gd = {.system = sys, .get_proc_address = glow_glctx_get_proc_address(glc),
                            .hook_glsl = glow_gl_lights_hook_source(gll), .label = o.bake, .logger = logger,
                            .flags = o.gl_finish ? GLOW_GL_FLAG_FINISH_TIMERS : 0u};

@@ -29,7 +29,10 @@
  * with `#line 1 1` so compile errors name source string 1 and the hook's own lines. It may declare
  * uniforms, samplers and buffers: Glow's kernels use no texture units and SSBO/UBO bindings below
  * GLOW_BINDING_HOST_FIRST (8) only; bind the hook's textures and buffers before each update, and set
- * its plain uniforms on glow_gl_outputs.hook_program. NaN/Inf values are stored as 0 and counted
+ * its plain uniforms on glow_gl_outputs.hook_program. Inside Glow's kernel GLOW_SURFEL_INDEX_AVAILABLE is
+ * defined and `uint glow_surfel_index` holds the surfel being lit (the bake's order, as
+ * glow_system_get_surfels), so a hook can read per-surfel data of its own (glow_gl_lights: sky
+ * visibility); a hook shared with fragment shaders guards that with #ifdef. NaN/Inf values are stored as 0 and counted
  * (glow_gl_stats.hook_nonfinite), negatives clamped to 0 and counted: a bad hook never poisons the
  * caches. With GLOW_GL_FLAG_CHECK_HOOK the update reads the counters back at once (a GPU sync) and
  * returns GLOW_ERROR_HOST_CALLBACK, keeping the previous outputs, like the CPU update.

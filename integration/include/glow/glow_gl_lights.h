@@ -13,9 +13,10 @@
  *     #define GLOW_HOST_SURFEL_IRRADIANCE_DEFINED
  *     vec3 glow_host_surfel_irradiance(vec3 position, vec3 normal, uint material);
  * returning the DIRECT IRRADIANCE E (W/m², linear RGB) at `position` (m) for the unit front normal
- * `normal`, exactly glow_host.h's contract (THE CONTRACT) with the shadow-map visibility and the sky
- * unshadowed (S = 1, as GLOW_HOST_SKY_UNSHADOWED):
- *     E = Σ_lights V_i · power_i · f_i  +  environment · π
+ * `normal`, exactly glow_host.h's contract (THE CONTRACT) with the shadow-map visibility and the sky's
+ * S per surfel from glow_gl_lights_set_sky_visibility (the CPU host's traced values), else 1 (unshadowed,
+ * as GLOW_HOST_SKY_UNSHADOWED):
+ *     E = Σ_lights V_i · power_i · f_i  +  environment · π · S
  * `material` is not used. The text is valid in a `#version 450 core` compute shader (Glow splices
  * it after its own declarations) and in a fragment shader (no derivatives, no implicit-LOD
  * sampling, no compute built-ins). Its global names all start with glow_gl_lights / GLOW_GL_LIGHTS
@@ -161,6 +162,20 @@ GLOW_API const char *glow_gl_lights_hook_source(const glow_gl_lights *lights);
 /** Binds the light block to ubo_binding and the two map arrays to texture_unit and texture_unit + 1
  * (with sampler object 0). \returns GLOW_ERROR_INVALID_ARGUMENT for NULL. \since 0.1 */
 GLOW_API glow_result glow_gl_lights_bind(const glow_gl_lights *lights);
+
+/**
+ * Per-surfel sky visibility S in [0, 1] (the cosine-weighted visible fraction of the sky, glow_host.h's S;
+ * glow_host_sky_visibility computes the CPU host's values) for the hook's sky term environment · π · S.
+ * Read inside Glow's surfel kernel, where GLOW_SURFEL_INDEX_AVAILABLE gives the surfel (count must be the
+ * bake's surfel_count). Elsewhere — a fragment shader — the hook uses the expression GLOW_GL_LIGHTS_PIXEL_SKY
+ * when the including shader #defines it before the hook text (for example S looked up in a texture at the
+ * pixel), else 1. NULL returns to the unshadowed sky. Bound by glow_gl_lights_bind as an SSBO at ubo_binding
+ * (the SSBO and UBO binding points are separate). Persists across set().
+ * 
+eturns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT (NULL object, count 0 with values, a value outside [0,1]:
+ * nothing changes); GLOW_ERROR_OUT_OF_MEMORY. \since 0.1
+ */
+GLOW_API glow_result glow_gl_lights_set_sky_visibility(glow_gl_lights *lights, const float *visibility, uint32_t count);
 
 typedef struct glow_gl_lights_stats {
     uint32_t light_count;       /* lights of the last successful set() */

@@ -46,7 +46,7 @@ typedef struct ubo_map {
 typedef struct ubo_head {
     float environment[4]; /* rgb · π */
     float shadow[4];      /* depth_bias, slope_bias, normal_offset, unused */
-    int32_t counts[4];    /* lights, PCF radius, unused, unused */
+    int32_t counts[4];    /* lights, PCF radius, per-surfel sky values (0 = none), unused */
 } ubo_head;
 
 _Static_assert(sizeof(ubo_light) == 64, "std140 light");
@@ -66,6 +66,8 @@ struct glow_gl_lights {
     uint32_t tri_count;
     float bmin[3], bmax[3], diag;
     GLuint vbo, vao, prog, fbo, ubo;
+    GLuint sky;             /* SSBO float[sky_count]: per-surfel sky visibility (0 = none) */
+    uint32_t sky_count;
     GLuint tex[2];          /* [0] sun / spot maps (sm_size), [1] cube faces (cube_size) */
     uint32_t tex_layers[2]; /* layers allocated; 0 = a 1 x 1 x 1 placeholder */
     GLint loc_origin, loc_ax, loc_ay, loc_az, loc_proj, loc_depth;
@@ -491,6 +493,7 @@ void glow_gl_lights_destroy(glow_gl_lights *g) {
     if (gl->DeleteBuffers) { /* NULL when the loader failed: nothing was created */
         if (g->vbo) gl->DeleteBuffers(1, &g->vbo);
         if (g->ubo) gl->DeleteBuffers(1, &g->ubo);
+        if (g->sky) gl->DeleteBuffers(1, &g->sky);
         if (g->vao) gl->DeleteVertexArrays(1, &g->vao);
         if (g->fbo) gl->DeleteFramebuffers(1, &g->fbo);
         if (g->prog) gl->DeleteProgram(g->prog);
@@ -692,6 +695,7 @@ glow_result glow_gl_lights_set(glow_gl_lights *g, const glow_scene_light *lights
     memcpy(head, g->staging, sizeof *head); /* shadow settings */
     for (int c = 0; c < 3; ++c) head->environment[c] = environment ? environment[c] * (float)GLL_PI : 0.0f;
     head->counts[0] = (int32_t)count;
+    head->counts[2] = (int32_t)g->sky_count; /* set_sky_visibility persists across set() */
 
     uint32_t margin = (uint32_t)g->pcf_radius + 2, nmaps = 0, layers[2] = {0, 0};
     float near_z = 1e-3f * g->diag;
@@ -799,10 +803,48 @@ glow_result glow_gl_lights_bind(const glow_gl_lights *g) {
     if (!g) return GLOW_ERROR_INVALID_ARGUMENT;
     const glow_glfns *gl = &g->gl;
     gl->BindBufferBase(GL_UNIFORM_BUFFER, g->ubo_binding, g->ubo);
+    if (g->sky) gl->BindBufferBase(GL_SHADER_STORAGE_BUFFER, g->ubo_binding, g->sky);
     gl->BindTextureUnit(g->unit_maps, g->tex[0]);
     gl->BindTextureUnit(g->unit_cube, g->tex[1]);
     gl->BindSampler(g->unit_maps, 0);
     gl->BindSampler(g->unit_cube, 0);
+    return GLOW_OK;
+}
+
+glow_result glow_gl_lights_set_sky_visibility(glow_gl_lights *g, const float *visibility, uint32_t count) {
+    if (!g || (visibility && count == 0)) return GLOW_ERROR_INVALID_ARGUMENT;
+    const glow_glfns *gl = &g->gl;
+    if (visibility) {
+        for (uint32_t i = 0; i < count; ++i)
+            if (!(visibility[i] >= 0.0f && visibility[i] <= 1.0f))
+                return GLL_FAIL(&g->logger, GLOW_ERROR_INVALID_ARGUMENT, "sky visibility[%u] (%g) is outside [0, 1]", i,
+                                (double)visibility[i]);
+        if (g->sky && g->sky_count != count) {
+            gl->DeleteBuffers(1, &g->sky);
+            g->sky = 0;
+        }
+        if (!g->sky) {
+            gl->CreateBuffers(1, &g->sky);
+            gl->NamedBufferStorage(g->sky, (GLsizeiptr)count * 4, visibility, GL_DYNAMIC_STORAGE_BIT);
+        } else {
+            gl->NamedBufferSubData(g->sky, 0, (GLsizeiptr)count * 4, visibility);
+        }
+        GLenum e = gl->GetError();
+        if (e != GL_NO_ERROR) {
+            if (g->sky) gl->DeleteBuffers(1, &g->sky);
+            g->sky = 0;
+            g->sky_count = 0;
+            return GLL_FAIL(&g->logger, e == GL_OUT_OF_MEMORY ? GLOW_ERROR_OUT_OF_MEMORY : GLOW_ERROR_UNSUPPORTED,
+                            "sky visibility buffer of %u values: GL error 0x%04x", count, e);
+        }
+        g->sky_count = count;
+    } else {
+        if (g->sky) gl->DeleteBuffers(1, &g->sky);
+        g->sky = 0;
+        g->sky_count = 0;
+    }
+    const int32_t n = (int32_t)g->sky_count;
+    gl->NamedBufferSubData(g->ubo, (GLintptr)offsetof(ubo_head, counts) + 2 * (GLintptr)sizeof(int32_t), sizeof n, &n);
     return GLOW_OK;
 }
 

@@ -27,10 +27,15 @@ struct glow_gl_lights_map {
 layout(std140, binding = GLOW_GL_LIGHTS_UBO_BINDING) uniform glow_gl_lights_block {
     vec4 environment; // rgb: sky radiance * pi (W/m^2); w: unused
     vec4 shadow;      // x: depth_bias, y: slope_bias, z: normal_offset (texels); w: unused
-    ivec4 counts;     // x: lights; y: PCF radius; z, w: unused
+    ivec4 counts;     // x: lights; y: PCF radius; z: per-surfel sky visibility values (0 = none); w: unused
     glow_gl_lights_light lights[GLOW_GL_LIGHTS_LIGHTS];
     glow_gl_lights_map maps[GLOW_GL_LIGHTS_MAPS];
 } glow_gl_lights;
+
+#ifdef GLOW_SURFEL_INDEX_AVAILABLE
+// Per-surfel sky visibility S (glow_gl_lights_set_sky_visibility), read inside Glow's surfel kernel.
+layout(std430, binding = GLOW_GL_LIGHTS_UBO_BINDING) readonly buffer glow_gl_lights_sky_block { float glow_gl_lights_sky[]; };
+#endif
 
 layout(binding = GLOW_GL_LIGHTS_MAP_UNIT) uniform sampler2DArray glow_gl_lights_maps;
 layout(binding = GLOW_GL_LIGHTS_CUBE_UNIT) uniform sampler2DArray glow_gl_lights_cube_faces;
@@ -87,8 +92,22 @@ float glow_gl_lights_visibility(int mi, vec3 p, vec3 n, vec3 l) {
     return float(lit) / float(taps);
 }
 
+// The sky's share: S at this surfel (Glow's kernel, when S was set), or GLOW_GL_LIGHTS_PIXEL_SKY (an
+// expression the including shader may define, e.g. S looked up at the pixel), else 1 (unshadowed).
+float glow_gl_lights_sky_visibility() {
+#if defined(GLOW_SURFEL_INDEX_AVAILABLE)
+    if (uint(glow_gl_lights.counts.z) > glow_surfel_index) return glow_gl_lights_sky[glow_surfel_index];
+    return 1.0;
+#elif defined(GLOW_GL_LIGHTS_PIXEL_SKY)
+    return GLOW_GL_LIGHTS_PIXEL_SKY;
+#else
+    return 1.0;
+#endif
+}
+
 vec3 glow_host_surfel_irradiance(vec3 position, vec3 normal, uint material) {
     vec3 e = glow_gl_lights.environment.rgb;
+    if (e.r > 0.0 || e.g > 0.0 || e.b > 0.0) e *= glow_gl_lights_sky_visibility();
     int count = glow_gl_lights.counts.x;
     for (int i = 0; i < count; ++i) {
         vec3 power = glow_gl_lights.lights[i].power.rgb;
