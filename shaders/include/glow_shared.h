@@ -11,6 +11,7 @@
  *   surfel_direct     SURFEL_GEOM, DIRECT (w), STATUS (rw)                       params
  *   surfel_flux       SURFEL_MAT, DIRECT, FEEDBACK_W, CACHE_SH, NODES, FLUX (w) params
  *   pull              NODES, FLUX (rw)                          uniform uvec2 glow_level (first, count)
+ *   pull_tail         NODES, FLUX (rw), LEVELS                  uniform uvec2 glow_tail (first level, end)
  *   cache_light       LINKS, FLUX, CACHE_SH (w)                                  params
  *   outputs           OUTPUT_PAIRS, CACHE_SH; images 0 grid, 1 lightmap          params
  */
@@ -41,6 +42,7 @@ typedef struct glow_vec4 { float x, y, z, w; } glow_vec4;
 #define GLOW_BINDING_FLUX 6         /* vec4[N]: flux Y Co Cg (W), w = 1/(π area): radiance = xyz * w */
 #define GLOW_BINDING_LINKS 7        /* uint[]: the bake's link blocks (32 uints = 16 links each) */
 #define GLOW_BINDING_OUTPUT_PAIRS 7 /* outputs only: uvec2[grid_used + lightmap_used] (cell/texel, cache) */
+#define GLOW_BINDING_LEVELS 7       /* pull_tail only: uint[level_count + 1] level starts */
 #define GLOW_BINDING_HOST_FIRST 8   /* first SSBO/UBO binding the host hook may use */
 /* UBO binding of glow_gl_params */
 #define GLOW_BINDING_PARAMS 0
@@ -51,6 +53,7 @@ typedef struct glow_vec4 { float x, y, z, w; } glow_vec4;
 /* workgroup sizes (the kernels #error without them; the backend defines them from here) */
 #define GLOW_SURFEL_GROUP 64
 #define GLOW_PULL_GROUP 64
+#define GLOW_PULL_TAIL_MAX 256 /* levels of at most this many nodes (and all above them) go to pull_tail */
 #define GLOW_CACHE_GROUP 64   /* one workgroup per cache, threads across its links */
 #define GLOW_OUTPUT_GROUP 64
 #define GLOW_REDUCE_CHUNK 32  /* coefficients reduced per shared-memory pass */

@@ -28,9 +28,10 @@
 extern const char glow__shading_glsl[];
 extern const struct { const char *name, *source; } glow__kernels[];
 
-enum { K_DIRECT, K_FLUX, K_PULL, K_CACHE, K_OUTPUT, K_COUNT };
-static const char *const kernel_names[K_COUNT] = {"surfel_direct", "surfel_flux", "pull", "cache_light", "outputs"};
-enum { B_GEOM, B_MAT, B_DIRECT, B_FBW, B_CACHE, B_NODES, B_FLUX, B_LINKS, B_PAIRS, B_STATUS, B_PARAMS, B_COUNT };
+enum { K_DIRECT, K_FLUX, K_PULL, K_PULL_TAIL, K_CACHE, K_OUTPUT, K_COUNT };
+static const char *const kernel_names[K_COUNT] = {"surfel_direct", "surfel_flux", "pull", "pull_tail", "cache_light",
+                                                  "outputs"};
+enum { B_GEOM, B_MAT, B_DIRECT, B_FBW, B_CACHE, B_NODES, B_FLUX, B_LINKS, B_PAIRS, B_STATUS, B_PARAMS, B_LEVELS, B_COUNT };
 enum { T_BEGIN, T_DIRECT, T_FLUX, T_PULL, T_CACHE, T_OUTPUT, T_COUNT };
 
 struct glow_gl_system {
@@ -42,7 +43,8 @@ struct glow_gl_system {
     glow_solver_tables t;
     uint32_t S, N, C, levels, planes;
     GLuint prog[K_COUNT];
-    GLint level_loc;
+    GLint level_loc, tail_loc;
+    uint32_t tail_level; /* levels [tail_level, levels) run in one pull_tail dispatch */
     GLuint buf[B_COUNT];
     GLuint grid_tex, grid_mask_tex, lm_tex, lm_valid_tex;
     int own_grid, own_lm;
@@ -316,6 +318,11 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
         }
     }
     s->level_loc = gl->GetUniformLocation(s->prog[K_PULL], "glow_level");
+    s->tail_loc = gl->GetUniformLocation(s->prog[K_PULL_TAIL], "glow_tail");
+    /* the narrow top: the lowest level from which every level up has at most GLOW_PULL_TAIL_MAX nodes */
+    s->tail_level = s->levels;
+    while (s->tail_level > 1 && t->level_starts[s->tail_level] - t->level_starts[s->tail_level - 1] <= GLOW_PULL_TAIL_MAX)
+        s->tail_level--;
 
     /* host staging */
     s->mat_staging = malloc((size_t)(s->S ? s->S : 1u) * sizeof *s->mat_staging);
@@ -363,6 +370,7 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
     s->buf[B_PAIRS] = make_buffer(s, pairs_n * 8u, pairs, 0);
     s->buf[B_STATUS] = make_buffer(s, sizeof(glow_gl_status), NULL, dyn);
     s->buf[B_PARAMS] = make_buffer(s, sizeof(glow_gl_params), NULL, dyn);
+    s->buf[B_LEVELS] = make_buffer(s, ((size_t)s->levels + 1u) * 4u, t->level_starts, 0);
     free(geom), free(nodes), free(pairs);
     const float zero = 0.0f;
     gl->ClearNamedBufferData(s->buf[B_DIRECT], GL_R32F, GL_RED, GL_FLOAT, &zero);
@@ -605,12 +613,20 @@ glow_result glow_gl_system_update(glow_gl_system *s, const glow_update_desc *des
         dispatch(s, sgroups);
         gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
         if (it == 0) stamp(s, T_FLUX);
-        /* 3. pull, one dispatch per level */
+        /* 3. pull: one dispatch per wide level, then the narrow top in one workgroup */
         gl->UseProgram(s->prog[K_PULL]);
-        for (uint32_t lv = 1; lv < s->levels; ++lv) {
+        for (uint32_t lv = 1; lv < s->tail_level; ++lv) {
             const uint32_t first = t->level_starts[lv], count = t->level_starts[lv + 1] - first;
             gl->Uniform2ui(s->level_loc, first, count);
             dispatch(s, (count + GLOW_PULL_GROUP - 1u) / GLOW_PULL_GROUP);
+            gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+            s->pull_dispatches++;
+        }
+        if (s->tail_level < s->levels) {
+            gl->UseProgram(s->prog[K_PULL_TAIL]);
+            bind(s, GLOW_BINDING_LEVELS, B_LEVELS);
+            gl->Uniform2ui(s->tail_loc, s->tail_level > 1 ? s->tail_level : 1u, s->levels);
+            gl->DispatchCompute(1, 1, 1);
             gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
             s->pull_dispatches++;
         }
