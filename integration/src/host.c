@@ -16,6 +16,7 @@
 
 #include "glow/glow_host.h"
 #include "shadow_map.h"
+#include "host_math.h"
 
 #define HOST_PI 3.14159265358979323846
 #define SKY_UNSET 0xFFFFFFFFu
@@ -70,26 +71,7 @@ static glow_result logf_(const glow_logger *lg, glow_log_level level, glow_resul
 }
 #define HOST_FAIL(lg, code, ...) logf_((lg), GLOW_LOG_ERROR, (code), __VA_ARGS__)
 
-static float dot3(const float a[3], const float b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
-static bool normalize3(const float in[3], float out[3]) {
-    double len = sqrt((double)in[0] * in[0] + (double)in[1] * in[1] + (double)in[2] * in[2]);
-    if (!(len > 1e-12) || !isfinite(len)) return false;
-    for (int i = 0; i < 3; ++i) out[i] = (float)(in[i] / len);
-    return true;
-}
-
-static void onb(const float z[3], float x[3], float y[3]) {
-    float sign = copysignf(1.0f, z[2]);
-    float a = -1.0f / (sign + z[2]);
-    float b = z[0] * z[1] * a;
-    x[0] = 1.0f + sign * z[0] * z[0] * a;
-    x[1] = sign * b;
-    x[2] = -sign * z[0];
-    y[0] = b;
-    y[1] = sign + z[1] * z[1] * a;
-    y[2] = -z[1];
-}
 
 static double now_ms(void) {
     struct timespec ts;
@@ -162,13 +144,13 @@ static void closest_on_tri(const float p[3], const float a[3], const float b[3],
         ac[i] = c[i] - a[i];
         ap[i] = p[i] - a[i];
     }
-    float d1 = dot3(ab, ap), d2 = dot3(ac, ap);
+    float d1 = glow__dot3(ab, ap), d2 = glow__dot3(ac, ap);
     if (d1 <= 0.0f && d2 <= 0.0f) {
         memcpy(out, a, 12);
         return;
     }
     float bp[3] = {p[0] - b[0], p[1] - b[1], p[2] - b[2]};
-    float d3 = dot3(ab, bp), d4 = dot3(ac, bp);
+    float d3 = glow__dot3(ab, bp), d4 = glow__dot3(ac, bp);
     if (d3 >= 0.0f && d4 <= d3) {
         memcpy(out, b, 12);
         return;
@@ -180,7 +162,7 @@ static void closest_on_tri(const float p[3], const float a[3], const float b[3],
         return;
     }
     float cp[3] = {p[0] - c[0], p[1] - c[1], p[2] - c[2]};
-    float d5 = dot3(ab, cp), d6 = dot3(ac, cp);
+    float d5 = glow__dot3(ab, cp), d6 = glow__dot3(ac, cp);
     if (d6 >= 0.0f && d5 <= d6) {
         memcpy(out, c, 12);
         return;
@@ -215,11 +197,11 @@ static bool own_cb(struct RTCPointQueryFunctionArguments *args) {
     const float *t = q->h->tris + 9 * (size_t)args->primID;
     float e1[3] = {t[3] - t[0], t[4] - t[1], t[5] - t[2]}, e2[3] = {t[6] - t[0], t[7] - t[1], t[8] - t[2]};
     float ng[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
-    float len = sqrtf(dot3(ng, ng));
-    if (!(len > 0.0f) || dot3(ng, q->n) < 0.9f * len) return false;
+    float len = sqrtf(glow__dot3(ng, ng));
+    if (!(len > 0.0f) || glow__dot3(ng, q->n) < 0.9f * len) return false;
     float c[3];
     closest_on_tri(q->p, t, t + 3, t + 6, c);
-    float d[3] = {c[0] - q->p[0], c[1] - q->p[1], c[2] - q->p[2]}, d2 = dot3(d, d);
+    float d[3] = {c[0] - q->p[0], c[1] - q->p[1], c[2] - q->p[2]}, d2 = glow__dot3(d, d);
     if (d2 >= q->best_d2) return false;
     q->best = args->primID;
     q->best_d2 = d2;
@@ -250,9 +232,9 @@ static void safe_origin(const glow_host *h, const float p[3], const float n[3], 
     const float *t = h->tris + 9 * (size_t)q.best;
     float v[3];
     for (int i = 0; i < 3; ++i) v[i] = (t[i] + t[3 + i] + t[6 + i]) * (1.0f / 3.0f) - p[i];
-    float vn = dot3(v, n);
+    float vn = glow__dot3(v, n);
     for (int i = 0; i < 3; ++i) v[i] -= vn * n[i];
-    float len = sqrtf(dot3(v, v));
+    float len = sqrtf(glow__dot3(v, v));
     if (!(len > 1e-12f)) return;
     float step = fminf(h->eps, 0.5f * len) / len;
     for (int i = 0; i < 3; ++i) o[i] += step * v[i];
@@ -288,19 +270,19 @@ static float light_term(const host_light *hl, const float p[3], const float n[3]
     if (L->type == GLOW_SCENE_LIGHT_SUN) {
         for (int i = 0; i < 3; ++i) l[i] = -L->direction[i];
         *dist = INFINITY;
-        return fmaxf(dot3(n, l), 0.0f);
+        return fmaxf(glow__dot3(n, l), 0.0f);
     }
     float d[3] = {L->position[0] - p[0], L->position[1] - p[1], L->position[2] - p[2]};
-    float d2 = dot3(d, d);
+    float d2 = glow__dot3(d, d);
     if (!(d2 > 1e-20f)) return 0.0f;
     float dl = sqrtf(d2);
     for (int i = 0; i < 3; ++i) l[i] = d[i] / dl;
     *dist = dl;
-    float c = dot3(n, l);
+    float c = glow__dot3(n, l);
     if (!(c > 0.0f)) return 0.0f;
     float f = c / d2;
     if (L->type == GLOW_SCENE_LIGHT_SPOT) {
-        float cos_theta = -dot3(l, L->direction); /* angle between the axis and p - x_light */
+        float cos_theta = -glow__dot3(l, L->direction); /* angle between the axis and p - x_light */
         float t;
         if (hl->cos_inner > hl->cos_outer) {
             t = (cos_theta - hl->cos_outer) / (hl->cos_inner - hl->cos_outer);
@@ -320,7 +302,7 @@ static float visibility(const glow_host *h, const host_light *hl, const float p[
     if (h->kind == GLOW_HOST_KIND_EXACT) {
         if (hl->l.type == GLOW_SCENE_LIGHT_SUN) return occluded(h, o, l, INFINITY) ? 0.0f : 1.0f;
         float v[3] = {hl->l.position[0] - o[0], hl->l.position[1] - o[1], hl->l.position[2] - o[2]};
-        float dl = sqrtf(dot3(v, v)), tfar = dl - h->eps; /* stop short of geometry at the light itself */
+        float dl = sqrtf(glow__dot3(v, v)), tfar = dl - h->eps; /* stop short of geometry at the light itself */
         if (!(tfar > 0.0f)) return 1.0f;
         for (int i = 0; i < 3; ++i) v[i] /= dl;
         return occluded(h, o, v, tfar) ? 0.0f : 1.0f;
@@ -337,7 +319,7 @@ static float visibility(const glow_host *h, const host_light *hl, const float p[
 /* Cosine-weighted visible fraction of the sky over n, traced. */
 static float trace_sky(const glow_host *h, const float o[3], const float n[3]) {
     float tx[3], ty[3];
-    onb(n, tx, ty);
+    glow__onb(n, tx, ty);
     uint32_t open = 0;
     for (uint32_t k = 0; k < h->sky_rays; ++k) {
         const float *s = h->sky_dirs + 3 * (size_t)k;
@@ -458,7 +440,7 @@ static void light_packet(const glow_host *h, const glow_surfel_batch *batch, uin
             float d[3] = {l[0], l[1], l[2]}, tfar = INFINITY;
             if (hl->l.type != GLOW_SCENE_LIGHT_SUN) { /* as visibility(): from o, stopping eps short */
                 float v[3] = {hl->l.position[0] - o[k][0], hl->l.position[1] - o[k][1], hl->l.position[2] - o[k][2]};
-                float dl = sqrtf(dot3(v, v));
+                float dl = sqrtf(glow__dot3(v, v));
                 tfar = dl - h->eps;
                 if (!(tfar > 0.0f)) continue; /* V = 1: f[k] stays, the ray stays invalid */
                 for (int c = 0; c < 3; ++c) d[c] = v[c] / dl;
@@ -561,7 +543,7 @@ static glow_result prepare_light(const glow_host *h, const glow_scene_light *in,
     if (r != GLOW_OK) return HOST_FAIL(&h->logger, r, "%s", msg);
     memset(out, 0, sizeof *out);
     out->l = *in;
-    if (in->type != GLOW_SCENE_LIGHT_POINT) normalize3(in->direction, out->l.direction);
+    if (in->type != GLOW_SCENE_LIGHT_POINT) glow__normalize3(in->direction, out->l.direction);
     if (in->type == GLOW_SCENE_LIGHT_SPOT) {
         out->cos_outer = cosf(in->outer_deg * (float)(HOST_PI / 180.0));
         out->cos_inner = cosf(in->inner_deg * (float)(HOST_PI / 180.0));
@@ -772,7 +754,7 @@ glow_result glow_host_create(const glow_host_desc *desc, glow_host **out_host) {
         }
     }
     float ext[3] = {h->bmax[0] - h->bmin[0], h->bmax[1] - h->bmin[1], h->bmax[2] - h->bmin[2]};
-    h->diag = sqrtf(dot3(ext, ext));
+    h->diag = sqrtf(glow__dot3(ext, ext));
     if (!(h->diag > 0.0f)) h->diag = 1.0f;
     h->eps = 1e-4f * h->diag;
     make_sky_dirs(h->sky_dirs, h->sky_rays);
@@ -816,7 +798,7 @@ glow_result glow_host_irradiance(const glow_host *host, const float position[3],
     if (out_rgb) out_rgb[0] = out_rgb[1] = out_rgb[2] = 0.0f;
     if (!host || !position || !normal || !out_rgb) return GLOW_ERROR_INVALID_ARGUMENT;
     float n[3];
-    if (!isfinite(position[0]) || !isfinite(position[1]) || !isfinite(position[2]) || !normalize3(normal, n))
+    if (!isfinite(position[0]) || !isfinite(position[1]) || !isfinite(position[2]) || !glow__normalize3(normal, n))
         return HOST_FAIL(&host->logger, GLOW_ERROR_INVALID_ARGUMENT, "irradiance: non-finite position or bad normal");
     irradiance_at(host, position, n, UINT32_MAX, out_rgb);
     return GLOW_OK;

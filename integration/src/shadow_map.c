@@ -2,25 +2,13 @@
  * sampling, near-plane clipping for perspective maps and perspective-correct depth (1/z interpolated
  * in screen space, z in view space). */
 #include "shadow_map.h"
+#include "host_math.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-static float dot3(const float a[3], const float b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
-/* Orthonormal basis (x, y) around unit z (Duff et al. 2017, "Building an orthonormal basis, revisited"). */
-static void onb(const float z[3], float x[3], float y[3]) {
-    float sign = copysignf(1.0f, z[2]);
-    float a = -1.0f / (sign + z[2]);
-    float b = z[0] * z[1] * a;
-    x[0] = 1.0f + sign * z[0] * z[0] * a;
-    x[1] = sign * b;
-    x[2] = -sign * z[0];
-    y[0] = b;
-    y[1] = sign + z[1] * z[1] * a;
-    y[2] = -z[1];
-}
 
 void glow__dm_setup_ortho(glow__depth_map *m, const float dir[3], const float bmin[3], const float bmax[3], uint32_t res,
                           uint32_t margin) {
@@ -30,13 +18,13 @@ void glow__dm_setup_ortho(glow__depth_map *m, const float dir[3], const float bm
     m->depth = keep;
     m->res = keep_res;
     memcpy(m->az, dir, sizeof m->az);
-    onb(m->az, m->ax, m->ay);
+    glow__onb(m->az, m->ax, m->ay);
     for (int i = 0; i < 3; ++i) m->origin[i] = 0.5f * (bmin[i] + bmax[i]);
     float xlo = INFINITY, xhi = -INFINITY, ylo = INFINITY, yhi = -INFINITY;
     for (int c = 0; c < 8; ++c) {
         float p[3] = {(c & 1 ? bmax[0] : bmin[0]) - m->origin[0], (c & 2 ? bmax[1] : bmin[1]) - m->origin[1],
                       (c & 4 ? bmax[2] : bmin[2]) - m->origin[2]};
-        float x = dot3(p, m->ax), y = dot3(p, m->ay);
+        float x = glow__dot3(p, m->ax), y = glow__dot3(p, m->ay);
         xlo = fminf(xlo, x);
         xhi = fmaxf(xhi, x);
         ylo = fminf(ylo, y);
@@ -61,7 +49,7 @@ void glow__dm_setup_persp(glow__depth_map *m, const float eye[3], const float ax
     m->res = keep_res;
     memcpy(m->origin, eye, sizeof m->origin);
     memcpy(m->az, axis, sizeof m->az);
-    onb(m->az, m->ax, m->ay);
+    glow__onb(m->az, m->ax, m->ay);
     uint32_t inner = res > 2 * margin + 1 ? res - 2 * margin : 1;
     float s = tan_half * (float)res / (float)inner;
     m->inv_s = 1.0f / s;
@@ -128,9 +116,9 @@ static void raster_tri(glow__depth_map *m, const svert *a, const svert *b, const
 
 static void view(const glow__depth_map *m, const float p[3], float out[3]) {
     float q[3] = {p[0] - m->origin[0], p[1] - m->origin[1], p[2] - m->origin[2]};
-    out[0] = dot3(q, m->ax);
-    out[1] = dot3(q, m->ay);
-    out[2] = dot3(q, m->az);
+    out[0] = glow__dot3(q, m->ax);
+    out[1] = glow__dot3(q, m->ay);
+    out[2] = glow__dot3(q, m->az);
 }
 
 static svert project(const glow__depth_map *m, const float v[3]) {
@@ -202,7 +190,7 @@ float glow__dm_visibility(const glow__depth_map *m, const float p[3], const floa
     for (int i = 0; i < 3; ++i) q[i] = p[i] + n[i] * sp->normal_offset * texel;
     view(m, q, v);
     if (m->persp && !(v[2] > m->near_z)) return 1.0f;
-    float c = fminf(fmaxf(dot3(n, l), 1e-4f), 1.0f);
+    float c = fminf(fmaxf(glow__dot3(n, l), 1e-4f), 1.0f);
     float tan_t = fminf(sqrtf(fmaxf(1.0f - c * c, 0.0f)) / c, 10.0f);
     float bias = texel * (sp->depth_bias + sp->slope_bias * tan_t);
     svert s = project(m, v);

@@ -17,6 +17,7 @@
 
 #include "glow/glow_gl_lights.h"
 #include "glow/glow_glfns.h"
+#include "../host_math.h" /* the software maps' basis: the texel grids must coincide */
 
 #define GLL_PI 3.14159265358979323846
 #define SPOT_MAX_SINGLE_MAP_DEG 60.0f /* as glow_host: wider spots get a cube */
@@ -112,28 +113,7 @@ static double now_ms(void) {
     return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
 }
 
-static float dot3(const float a[3], const float b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
-static bool normalize3(const float in[3], float out[3]) {
-    double len = sqrt((double)in[0] * in[0] + (double)in[1] * in[1] + (double)in[2] * in[2]);
-    if (!(len > 1e-12) || !isfinite(len)) return false;
-    for (int i = 0; i < 3; ++i) out[i] = (float)(in[i] / len);
-    return true;
-}
-
-/* Orthonormal basis (x, y) around unit z: shadow_map.c's (Duff et al. 2017), so the maps' texel grids
- * are the software host's. */
-static void onb(const float z[3], float x[3], float y[3]) {
-    float sign = copysignf(1.0f, z[2]);
-    float a = -1.0f / (sign + z[2]);
-    float b = z[0] * z[1] * a;
-    x[0] = 1.0f + sign * z[0] * z[0] * a;
-    x[1] = sign * b;
-    x[2] = -sign * z[0];
-    y[0] = b;
-    y[1] = sign + z[1] * z[1] * a;
-    y[2] = -z[1];
-}
 
 /* GL errors raised since the last call, folded into one code (OUT_OF_MEMORY wins). */
 static GLenum drain_errors(const glow_glfns *gl) {
@@ -154,13 +134,13 @@ static void setup_ortho(map_setup *m, const float dir[3], const float bmin[3], c
                         uint32_t margin) {
     memset(m, 0, sizeof *m);
     memcpy(m->az, dir, sizeof m->az);
-    onb(m->az, m->ax, m->ay);
+    glow__onb(m->az, m->ax, m->ay);
     for (int i = 0; i < 3; ++i) m->origin[i] = 0.5f * (bmin[i] + bmax[i]);
     float xlo = INFINITY, xhi = -INFINITY, ylo = INFINITY, yhi = -INFINITY, zlo = INFINITY, zhi = -INFINITY;
     for (int c = 0; c < 8; ++c) {
         float p[3] = {(c & 1 ? bmax[0] : bmin[0]) - m->origin[0], (c & 2 ? bmax[1] : bmin[1]) - m->origin[1],
                       (c & 4 ? bmax[2] : bmin[2]) - m->origin[2]};
-        float x = dot3(p, m->ax), y = dot3(p, m->ay), z = dot3(p, m->az);
+        float x = glow__dot3(p, m->ax), y = glow__dot3(p, m->ay), z = glow__dot3(p, m->az);
         xlo = fminf(xlo, x);
         xhi = fmaxf(xhi, x);
         ylo = fminf(ylo, y);
@@ -186,7 +166,7 @@ static void setup_persp(map_setup *m, const float eye[3], const float axis[3], f
     memset(m, 0, sizeof *m);
     memcpy(m->origin, eye, sizeof m->origin);
     memcpy(m->az, axis, sizeof m->az);
-    onb(m->az, m->ax, m->ay);
+    glow__onb(m->az, m->ax, m->ay);
     uint32_t inner = res > 2 * margin + 1 ? res - 2 * margin : 1;
     float s = tan_half * (float)res / (float)inner;
     m->inv_s = 1.0f / s;
@@ -197,7 +177,7 @@ static void setup_persp(map_setup *m, const float eye[3], const float axis[3], f
     for (int c = 0; c < 8; ++c) {
         float p[3] = {(c & 1 ? bmax[0] : bmin[0]) - eye[0], (c & 2 ? bmax[1] : bmin[1]) - eye[1],
                       (c & 4 ? bmax[2] : bmin[2]) - eye[2]};
-        far_z = fmaxf(far_z, dot3(p, m->az));
+        far_z = fmaxf(far_z, glow__dot3(p, m->az));
     }
     far_z = fmaxf(far_z * 1.01f + near_z, 2.0f * near_z);
     m->depth_lo = 0.0f;
@@ -467,7 +447,7 @@ static glow_result upload_geometry(glow_gl_lights *g, const glow_bake *bake) {
         }
     }
     float ext[3] = {g->bmax[0] - g->bmin[0], g->bmax[1] - g->bmin[1], g->bmax[2] - g->bmin[2]};
-    g->diag = sqrtf(dot3(ext, ext));
+    g->diag = sqrtf(glow__dot3(ext, ext));
     if (!(g->diag > 0.0f)) g->diag = 1.0f;
 
     const glow_glfns *gl = &g->gl;
@@ -711,7 +691,7 @@ glow_result glow_gl_lights_set(glow_gl_lights *g, const glow_scene_light *lights
         }
         ubo_light *u = &ul[i];
         float dir[3] = {0.0f, 0.0f, 0.0f};
-        if (L->type != GLOW_SCENE_LIGHT_POINT) normalize3(L->direction, dir);
+        if (L->type != GLOW_SCENE_LIGHT_POINT) glow__normalize3(L->direction, dir);
         memcpy(u->position, L->position, 12);
         memcpy(u->direction, dir, 12);
         memcpy(u->power, L->type == GLOW_SCENE_LIGHT_SUN ? L->irradiance : L->intensity, 12);
