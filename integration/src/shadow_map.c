@@ -20,17 +20,22 @@ void glow__dm_setup_ortho(glow__depth_map *m, const float dir[3], const float bm
     memcpy(m->az, dir, sizeof m->az);
     glow__onb(m->az, m->ax, m->ay);
     for (int i = 0; i < 3; ++i) m->origin[i] = 0.5f * (bmin[i] + bmax[i]);
-    float xlo = INFINITY, xhi = -INFINITY, ylo = INFINITY, yhi = -INFINITY;
+    float xlo = INFINITY, xhi = -INFINITY, ylo = INFINITY, yhi = -INFINITY, zlo = INFINITY, zhi = -INFINITY;
     for (int c = 0; c < 8; ++c) {
         float p[3] = {(c & 1 ? bmax[0] : bmin[0]) - m->origin[0], (c & 2 ? bmax[1] : bmin[1]) - m->origin[1],
                       (c & 4 ? bmax[2] : bmin[2]) - m->origin[2]};
-        float x = glow__dot3(p, m->ax), y = glow__dot3(p, m->ay);
+        float x = glow__dot3(p, m->ax), y = glow__dot3(p, m->ay), z = glow__dot3(p, m->az);
         xlo = fminf(xlo, x);
         xhi = fmaxf(xhi, x);
         ylo = fminf(ylo, y);
         yhi = fmaxf(yhi, y);
+        zlo = fminf(zlo, z);
+        zhi = fmaxf(zhi, z);
     }
     float extent = fmaxf(fmaxf(xhi - xlo, yhi - ylo), 1e-6f);
+    m->box_z[0] = zlo;
+    m->box_z[1] = zhi;
+    m->extent = extent;
     uint32_t inner = res > 2 * margin + 1 ? res - 2 * margin : 1;
     m->texel = extent / (float)inner;
     m->off_x = 0.5f * (xlo + xhi) - 0.5f * (float)res * m->texel;

@@ -18,6 +18,8 @@ typedef struct glow__depth_map {
     float off_x, off_y;      /* ortho: view-plane coordinates of texel corner (0, 0) */
     float texel;             /* ortho: texel size in m; persp: texel size at z = 1 */
     float near_z;            /* persp: near plane (m); geometry closer is clipped away */
+    float box_z[2];          /* ortho: view-axis distance of the box's nearest and farthest corner */
+    float extent;            /* ortho: the box's larger side across the view axis (m) */
     uint32_t res;
     float *depth;            /* res*res, row-major, +INF = empty */
 } glow__depth_map;

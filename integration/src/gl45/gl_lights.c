@@ -17,7 +17,8 @@
 
 #include "glow/glow_gl_lights.h"
 #include "glow/glow_glfns.h"
-#include "../host_math.h" /* the software maps' basis: the texel grids must coincide */
+#include "../host_math.h"
+#include "../shadow_map.h" /* the software maps' placement: the texel grids must coincide */
 
 #define GLL_PI 3.14159265358979323846
 #define SPOT_MAX_SINGLE_MAP_DEG 60.0f /* as glow_host: wider spots get a cube */
@@ -79,7 +80,7 @@ struct glow_gl_lights {
     double set_ms;
 };
 
-/* One depth map's placement (mirrors glow__depth_map of shadow_map.h) and where it lives. */
+/* One depth map's placement (glow__depth_map's, from shadow_map.c) and where it lives. */
 typedef struct map_setup {
     bool persp;
     float origin[3], ax[3], ay[3], az[3];
@@ -128,51 +129,38 @@ static GLenum drain_errors(const glow_glfns *gl) {
 
 /* ------------------------------------------------------------------------------ map placement */
 
-/* shadow_map.c's glow__dm_setup_ortho, plus the depth range: the box's extent along the view axis
- * with 1 % to spare. */
-static void setup_ortho(map_setup *m, const float dir[3], const float bmin[3], const float bmax[3], uint32_t res,
-                        uint32_t margin) {
+/* The software maps' placement (shadow_map.c: the same axes, texel grid, margins and near plane, by
+ * construction), plus where a stored depth in [0, 1] lies along the view axis. */
+static void from_depth_map(map_setup *m, const glow__depth_map *dm) {
     memset(m, 0, sizeof *m);
-    memcpy(m->az, dir, sizeof m->az);
-    glow__onb(m->az, m->ax, m->ay);
-    for (int i = 0; i < 3; ++i) m->origin[i] = 0.5f * (bmin[i] + bmax[i]);
-    float xlo = INFINITY, xhi = -INFINITY, ylo = INFINITY, yhi = -INFINITY, zlo = INFINITY, zhi = -INFINITY;
-    for (int c = 0; c < 8; ++c) {
-        float p[3] = {(c & 1 ? bmax[0] : bmin[0]) - m->origin[0], (c & 2 ? bmax[1] : bmin[1]) - m->origin[1],
-                      (c & 4 ? bmax[2] : bmin[2]) - m->origin[2]};
-        float x = glow__dot3(p, m->ax), y = glow__dot3(p, m->ay), z = glow__dot3(p, m->az);
-        xlo = fminf(xlo, x);
-        xhi = fmaxf(xhi, x);
-        ylo = fminf(ylo, y);
-        yhi = fmaxf(yhi, y);
-        zlo = fminf(zlo, z);
-        zhi = fmaxf(zhi, z);
-    }
-    float extent = fmaxf(fmaxf(xhi - xlo, yhi - ylo), 1e-6f);
-    uint32_t inner = res > 2 * margin + 1 ? res - 2 * margin : 1;
-    m->texel = extent / (float)inner;
-    m->off_x = 0.5f * (xlo + xhi) - 0.5f * (float)res * m->texel;
-    m->off_y = 0.5f * (ylo + yhi) - 0.5f * (float)res * m->texel;
-    float pad = 0.01f * (zhi - zlo) + 1e-6f * extent + 1e-30f;
-    m->depth_lo = zlo - pad;
-    m->depth_range = (zhi + pad) - m->depth_lo;
-    m->res = res;
+    m->persp = dm->persp;
+    memcpy(m->origin, dm->origin, sizeof m->origin);
+    memcpy(m->ax, dm->ax, sizeof m->ax);
+    memcpy(m->ay, dm->ay, sizeof m->ay);
+    memcpy(m->az, dm->az, sizeof m->az);
+    m->inv_s = dm->inv_s, m->off_x = dm->off_x, m->off_y = dm->off_y;
+    m->texel = dm->texel, m->near_z = dm->near_z, m->res = dm->res;
 }
 
-/* shadow_map.c's glow__dm_setup_persp; depth range [0, far], far = the farthest box corner along the
- * view axis (geometry beyond it cannot exist). */
+/* Orthographic: the depth range is the box's extent along the view axis with 1 % to spare. */
+static void setup_ortho(map_setup *m, const float dir[3], const float bmin[3], const float bmax[3], uint32_t res,
+                        uint32_t margin) {
+    glow__depth_map dm = {0};
+    glow__dm_setup_ortho(&dm, dir, bmin, bmax, res, margin);
+    from_depth_map(m, &dm);
+    const float zlo = dm.box_z[0], zhi = dm.box_z[1];
+    float pad = 0.01f * (zhi - zlo) + 1e-6f * dm.extent + 1e-30f;
+    m->depth_lo = zlo - pad;
+    m->depth_range = (zhi + pad) - m->depth_lo;
+}
+
+/* Perspective: depth range [0, far], far = the farthest box corner along the view axis (geometry beyond
+ * it cannot exist). */
 static void setup_persp(map_setup *m, const float eye[3], const float axis[3], float tan_half, uint32_t res,
                         uint32_t margin, float near_z, const float bmin[3], const float bmax[3]) {
-    memset(m, 0, sizeof *m);
-    memcpy(m->origin, eye, sizeof m->origin);
-    memcpy(m->az, axis, sizeof m->az);
-    glow__onb(m->az, m->ax, m->ay);
-    uint32_t inner = res > 2 * margin + 1 ? res - 2 * margin : 1;
-    float s = tan_half * (float)res / (float)inner;
-    m->inv_s = 1.0f / s;
-    m->texel = 2.0f * s / (float)res;
-    m->near_z = near_z;
-    m->persp = true;
+    glow__depth_map dm = {0};
+    glow__dm_setup_persp(&dm, eye, axis, tan_half, res, margin, near_z);
+    from_depth_map(m, &dm);
     float far_z = 0.0f;
     for (int c = 0; c < 8; ++c) {
         float p[3] = {(c & 1 ? bmax[0] : bmin[0]) - eye[0], (c & 2 ? bmax[1] : bmin[1]) - eye[1],
@@ -182,7 +170,6 @@ static void setup_persp(map_setup *m, const float eye[3], const float axis[3], f
     far_z = fmaxf(far_z * 1.01f + near_z, 2.0f * near_z);
     m->depth_lo = 0.0f;
     m->depth_range = far_z;
-    m->res = res;
 }
 
 /* ---------------------------------------------------------------------------------- shaders */
