@@ -64,15 +64,10 @@
 #include <stdint.h>
 
 #include "glow/glow.h"
+#include "glow/glow_gl_loader.h"
 
 #ifdef __cplusplus
 extern "C" {
-#endif
-
-#ifndef GLOW_GL_LOADER_DEFINED
-#define GLOW_GL_LOADER_DEFINED
-typedef void (*glow_gl_proc)(void);
-typedef glow_gl_proc (*glow_gl_loader)(const char *name);
 #endif
 
 #define GLOW_GL_FLAG_NO_TIMERS 1u  /* no GL timer queries (stats report 0 ms) */

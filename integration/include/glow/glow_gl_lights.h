@@ -83,18 +83,11 @@
 #include <stdint.h>
 
 #include "glow/glow.h"
+#include "glow/glow_gl_loader.h"
 #include "glow/glow_scene.h"
 
 #ifdef __cplusplus
 extern "C" {
-#endif
-
-#ifndef GLOW_GL_LOADER_DEFINED
-#define GLOW_GL_LOADER_DEFINED
-/* A GL entry point, and a function returning one by name (eglGetProcAddress, OSMesaGetProcAddress,
- * glfwGetProcAddress, glow_glctx_get_proc_address have this shape). Also declared by glow_gl.h. */
-typedef void (*glow_gl_proc)(void);
-typedef glow_gl_proc (*glow_gl_loader)(const char *name);
 #endif
 
 #define GLOW_GL_LIGHTS_MAX_LIGHTS 16u /* the largest max_lights: the uniform block stays under 16 KiB */

@@ -39,17 +39,10 @@
 #include <stdint.h>
 
 #include "glow/glow.h"
+#include "glow/glow_gl_loader.h"
 
 #ifdef __cplusplus
 extern "C" {
-#endif
-
-#ifndef GLOW_GL_LOADER_DEFINED
-#define GLOW_GL_LOADER_DEFINED
-/* A GL entry point, and a function returning one by name (eglGetProcAddress, OSMesaGetProcAddress,
- * glfwGetProcAddress have this shape). Also declared by glow_gl.h. */
-typedef void (*glow_gl_proc)(void);
-typedef glow_gl_proc (*glow_gl_loader)(const char *name);
 #endif
 
 typedef enum glow_glctx_kind {

@@ -20,14 +20,10 @@
 #include <stddef.h>
 #include <GL/glcorearb.h>
 
+#include "glow/glow_gl_loader.h"
+
 #ifdef __cplusplus
 extern "C" {
-#endif
-
-#ifndef GLOW_GL_LOADER_DEFINED
-#define GLOW_GL_LOADER_DEFINED
-typedef void (*glow_gl_proc)(void);
-typedef glow_gl_proc (*glow_gl_loader)(const char *name);
 #endif
 
 /* X(type, name): the function gl<name>, of pointer type <type> (glcorearb.h). */
