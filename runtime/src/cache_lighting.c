@@ -28,12 +28,31 @@
 #pragma GCC diagnostic ignored "-Wpsabi"
 #endif
 
-#define GATHER3_PLAIN(a, idx, y, co, cg)                                                                  \
+#define GATHER3_PLAIN(a, node, y, co, cg)                                                                 \
     do {                                                                                                    \
+        const VU idx = (node) * ((a)->rad_stride ? (a)->rad_stride : 1u);                                   \
         (y) = GATHER((a)->rad_y, (idx));                                                                    \
         (co) = GATHER((a)->rad_co, (idx));                                                                  \
         (cg) = GATHER((a)->rad_cg, (idx));                                                                  \
     } while (0)
+
+/* The kernel sums R k̃_l ỹ_lm (sh_kernel.h's scaled basis and the scaled cone factors of
+ * cache_kernel.inc); this is the constant per output coefficient that makes it R k_l y_lm:
+ * y_lm / ỹ_lm times t_l = k_l / k̃_l (t_0 = 2π, t_l = 2π σ(l, 1) / (l (l + 1))). Luma² then Co
+ * chroma², Cg chroma², as in cache_sh. */
+#define GLOW__TWO_PI 6.283185307179586476925
+static void glow__cl_coeff_scale(uint32_t L, uint32_t C, float *scale) {
+    for (uint32_t i = 0; i < 3u * GLOW__MAX_BANDS * GLOW__MAX_BANDS + 16u; ++i) scale[i] = 0.0f;
+    double t[GLOW__MAX_BANDS];
+    for (uint32_t l = 0; l < L; ++l)
+        t[l] = l == 0 ? GLOW__TWO_PI : GLOW__TWO_PI * glow__sh_sigma(l, 1) / ((double)l * (double)(l + 1u));
+    for (uint32_t l = 0; l < L; ++l)
+        for (uint32_t k = l * l; k < (l + 1) * (l + 1); ++k) {
+            const float v = (float)(glow__sh_scaled_factor(k) * t[l]);
+            scale[k] = v;
+            if (l < C) scale[L * L + k] = scale[L * L + C * C + k] = v;
+        }
+}
 
 /* ------------------------------------------------------------------------------ portable */
 static inline glow__v8u load_u32_generic(const uint32_t *p) {
@@ -80,8 +99,10 @@ static inline glow__v8f sqrt8_generic(glow__v8f x) {
 #define VU glow__v8u
 #define VI glow__v8i
 #define LANES 8
-#define SH_EVAL glow__sh_eval_v8
-#define REDUCE(v) reduce8(v)
+#define SH_EVAL glow__sh_eval_scaled_v8
+#define SH_EVAL_U glow__sh_eval_scaled_v8_unrolled
+#define REDUCE_STORE(acc, n, scale, out) \
+    for (uint32_t i_ = 0; i_ < (n); ++i_) (out)[i_] = reduce8((acc)[i_]) * (scale)[i_]
 #define KFN(name) name##_generic
 #define KATTR
 #define LOAD_U32(p) load_u32_generic(p)
@@ -99,12 +120,13 @@ static inline glow__v8f sqrt8_generic(glow__v8f x) {
 #undef GATHER
 #undef GATHER3
 #undef RSQRT
-#undef REDUCE
+#undef REDUCE_STORE
 #undef VF
 #undef VU
 #undef VI
 #undef LANES
 #undef SH_EVAL
+#undef SH_EVAL_U
 
 /* ------------------------------------------------------------------------------ AVX2 */
 /* GCC only: the ISA-specific builds rely on GCC's target pragmas and cpu-feature names (clang gets the
@@ -116,8 +138,10 @@ static inline glow__v8f sqrt8_generic(glow__v8f x) {
 #define VU glow__v8u
 #define VI glow__v8i
 #define LANES 8
-#define SH_EVAL glow__sh_eval_v8
-#define REDUCE(v) reduce8(v)
+#define SH_EVAL glow__sh_eval_scaled_v8
+#define SH_EVAL_U glow__sh_eval_scaled_v8_unrolled
+#define REDUCE_STORE(acc, n, scale, out) \
+    for (uint32_t i_ = 0; i_ < (n); ++i_) (out)[i_] = reduce8((acc)[i_]) * (scale)[i_]
 #define KFN(name) name##_avx2
 #define KATTR __attribute__((target("avx2,fma,f16c")))
 #define LOAD_U32(p) ((glow__v8u)_mm256_loadu_si256((const __m256i *)(const void *)(p)))
@@ -144,18 +168,19 @@ static inline glow__v8f rsqrt_avx2(glow__v8f x) {
 #undef GATHER
 #undef GATHER3
 #undef RSQRT
-#undef REDUCE
+#undef REDUCE_STORE
 #undef VF
 #undef VU
 #undef VI
 #undef LANES
 #undef SH_EVAL
+#undef SH_EVAL_U
 
 /* AVX-512: a whole 16-link block per step, and 32 vector registers, so the luma² + 2 chroma²
  * accumulators of l = 3 stay in registers instead of spilling (the AVX2 build's main cost). */
 #pragma GCC push_options
 #pragma GCC target("avx512f,fma,f16c")
-GLOW__SH_EVAL_DEFINE(glow__sh_eval_v16, glow__v16f)
+GLOW__SH_EVAL_SCALED_DEFINE(glow__sh_eval_scaled_v16, glow__v16f)
 static inline glow__v16f rsqrt_avx512(glow__v16f x) {
     glow__v16f y = (glow__v16f)_mm512_rsqrt14_ps((__m512)x);
     return y * (1.5f - 0.5f * x * y * y);
@@ -164,8 +189,40 @@ static inline glow__v16f rsqrt_avx512(glow__v16f x) {
 #define VU glow__v16u
 #define VI glow__v16i
 #define LANES 16
-#define SH_EVAL glow__sh_eval_v16
-#define REDUCE(v) reduce16(v)
+#define SH_EVAL glow__sh_eval_scaled_v16
+#define SH_EVAL_U glow__sh_eval_scaled_v16_unrolled
+/* 16 accumulators at a time: three rounds of two shuffles and an add halve the vector count
+ * (128-bit blocks, then within them), the fourth leaves the 16 sums in one vector: 45 operations
+ * per 16 sums instead of 8 per sum. The inputs are taken in the order that puts the sums in
+ * natural order (lane 4k + e is the sum of the vector fed as v[k + 4e]). */
+static inline __attribute__((always_inline)) void reduce_store16(const glow__v16f *acc, uint32_t n, const float *scale,
+                                                                float *out) {
+#pragma GCC unroll 16
+    for (uint32_t g = 0; g < n; g += 16u) {
+        __m512 v[16];
+#pragma GCC unroll 16
+        for (uint32_t j = 0; j < 16u; ++j) {
+            const uint32_t i = g + 4u * (j % 4u) + j / 4u;
+            v[j] = i < n ? (__m512)acc[i] : _mm512_setzero_ps();
+        }
+        __m512 w[8], z[4], r[2];
+#pragma GCC unroll 8
+        for (uint32_t i = 0; i < 8u; ++i)
+            w[i] = _mm512_add_ps(_mm512_shuffle_f32x4(v[2 * i], v[2 * i + 1], 0x44),
+                                 _mm512_shuffle_f32x4(v[2 * i], v[2 * i + 1], 0xEE));
+#pragma GCC unroll 4
+        for (uint32_t i = 0; i < 4u; ++i)
+            z[i] = _mm512_add_ps(_mm512_shuffle_f32x4(w[2 * i], w[2 * i + 1], 0x88),
+                                 _mm512_shuffle_f32x4(w[2 * i], w[2 * i + 1], 0xDD));
+#pragma GCC unroll 2
+        for (uint32_t i = 0; i < 2u; ++i)
+            r[i] = _mm512_add_ps(_mm512_unpacklo_ps(z[2 * i], z[2 * i + 1]), _mm512_unpackhi_ps(z[2 * i], z[2 * i + 1]));
+        const __m512 f = _mm512_add_ps(_mm512_shuffle_ps(r[0], r[1], 0x44), _mm512_shuffle_ps(r[0], r[1], 0xEE));
+        const uint32_t m = n - g < 16u ? n - g : 16u;
+        _mm512_mask_storeu_ps(out + g, (__mmask16)((1u << m) - 1u), _mm512_mul_ps(f, _mm512_loadu_ps(scale + g)));
+    }
+}
+#define REDUCE_STORE(acc, n, scale, out) reduce_store16((acc), (n), (scale), (out))
 #define KFN(name) name##_avx512
 #define KATTR __attribute__((target("avx512f,fma,f16c")))
 #define LOAD_U32(p) ((glow__v16u)_mm512_loadu_si512((const void *)(p)))
@@ -175,9 +232,10 @@ static inline glow__v16f rsqrt_avx512(glow__v16f x) {
 /* With the system's interleaved node radiance (Y Co Cg pad per node, 16 bytes) a lane's three
  * values are two adjacent qwords: four 8-lane qword gathers (32 element loads) and three two-source
  * permutes replace three 16-lane dword gathers (48 element loads). Same floats, same results. */
-static inline __attribute__((always_inline)) void gather3_avx512(const glow__cl_args *a, glow__v16u idx, glow__v16f *y,
+static inline __attribute__((always_inline)) void gather3_avx512(const glow__cl_args *a, glow__v16u node, glow__v16f *y,
                                                                  glow__v16f *co, glow__v16f *cg) {
     if (a->rad_stride == 4u && a->rad_co == a->rad_y + 1 && a->rad_cg == a->rad_y + 2) {
+        const glow__v16u idx = node << 2;
         const __m256i lo = _mm512_castsi512_si256((__m512i)idx), hi = _mm512_extracti64x4_epi64((__m512i)idx, 1);
         const float *b = a->rad_y;
         const __m512i g0 = _mm512_i32gather_epi64(lo, (const void *)b, 4), g1 = _mm512_i32gather_epi64(hi, (const void *)b, 4);
@@ -189,6 +247,7 @@ static inline __attribute__((always_inline)) void gather3_avx512(const glow__cl_
         *co = (glow__v16f)_mm512_permutex2var_ps(_mm512_castsi512_ps(g0), odd, _mm512_castsi512_ps(g1));
         *cg = (glow__v16f)_mm512_permutex2var_ps(_mm512_castsi512_ps(g2), even, _mm512_castsi512_ps(g3));
     } else {
+        const glow__v16u idx = node * (a->rad_stride ? a->rad_stride : 1u);
         *y = GATHER(a->rad_y, idx);
         *co = GATHER(a->rad_co, idx);
         *cg = GATHER(a->rad_cg, idx);

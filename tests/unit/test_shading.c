@@ -254,6 +254,30 @@ static void test_sh_closed_forms(void **state) {
     }
 }
 
+/* The cache-lighting kernel's scaled basis (sh_kernel.h): factor(k) ỹ_k must be y_k for every
+ * band up to 8, and the factors must not be trivial (ỹ_k = y_k would pass the first check). */
+static void test_sh_scaled_basis(void **state) {
+    (void)state;
+    double worst = 0.0;
+    for (int i = 0; i < 500; ++i) {
+        float d[3], y[64];
+        rnd_dir(d);
+        glow_sh_eval(8, d, y);
+        glow__v8f x = {d[0]}, yy = {d[1]}, z = {d[2]}, ys[64];
+        glow__sh_eval_scaled_v8_unrolled(8, &x, &yy, &z, ys);
+        for (uint32_t k = 0; k < 64; ++k) {
+            const double v = glow__sh_scaled_factor(k) * ys[k][0];
+            worst = fmax(worst, fabs(v - y[k]));
+            if (fabs(v - y[k]) > 2e-6) fail_msg("scaled y_%u(%g, %g, %g) = %.8f, expected %.8f", k, d[0], d[1], d[2], v, y[k]);
+        }
+        glow__sh_eval_scaled_v8(5, &x, &yy, &z, ys); /* run-time band count: same values */
+        for (uint32_t k = 0; k < 25; ++k) assert_true(fabs(glow__sh_scaled_factor(k) * ys[k][0] - y[k]) <= 2e-6);
+    }
+    print_message("scaled basis: worst |factor ỹ - y| %.2e over 500 directions, l < 8\n", worst);
+    assert_true(fabs(glow__sh_scaled_factor(6) - 0.25 * sqrt(5.0 / M_PI) * 3.0) < 1e-6); /* y_20 = K (3z²-1)/2 = 3K (z² - 1/3)/2 */
+    assert_true(fabs(glow__sh_scaled_factor(3) - sqrt(3.0 / (4.0 * M_PI))) < 1e-6);      /* ỹ_11 = x */
+}
+
 /* ------------------------------------------------------------------------------ cone factors */
 /* By Funk-Hecke, ∫_{ω·a >= x} y_lm(ω) dω = λ_l y_lm(a) with λ_l = 2π ∫_x^1 P_l(t) dt, which is
  * what glow_sh_cone_factor(l, x) must return (DESIGN §3: k_0 = 2π(1-x), k_l = 2π/(2l+1)
@@ -896,7 +920,7 @@ static void test_kernels(void **state) {
 
 int main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_ycocg),          cmocka_unit_test(test_sh_orthonormal), cmocka_unit_test(test_sh_closed_forms),
+        cmocka_unit_test(test_ycocg),          cmocka_unit_test(test_sh_orthonormal), cmocka_unit_test(test_sh_closed_forms), cmocka_unit_test(test_sh_scaled_basis),
         cmocka_unit_test(test_cone_factor),    cmocka_unit_test(test_sh_projection),  cmocka_unit_test(test_lobe_factor),
         cmocka_unit_test(test_sh_window),      cmocka_unit_test(test_shade_uniform),  cmocka_unit_test(test_shade_linear),   cmocka_unit_test(test_shade_cone),
         cmocka_unit_test(test_sample_grid),    cmocka_unit_test(test_sample_lightmap), cmocka_unit_test(test_kernels),
