@@ -261,6 +261,63 @@ static inline __attribute__((always_inline)) void gather3_avx512(const glow__cl_
 #define GLOW__HAVE_AVX512_KERNEL 1
 #endif
 
+/* ------------------------------------------------------------------------------ output planes */
+/* dst[t] = map[t] == empty ? 0 : sh[map[t] * nc + k] for t < n: a whole plane in order, the empty
+ * texels included (they are a few percent of a lightmap), so the stores stream and the loads are
+ * masked gathers with many in flight. Same values as writing only the non-empty entries. */
+static void write_plane_generic(float *dst, const uint32_t *map, size_t n, const float *sh, uint32_t nc, uint32_t k) {
+    for (size_t t = 0; t < n; ++t) dst[t] = map[t] == GLOW__CL_EMPTY ? 0.0f : sh[(size_t)map[t] * nc + k];
+}
+#ifdef GLOW__HAVE_AVX512_KERNEL
+__attribute__((target("avx512f"))) static void write_plane_avx512(float *dst, const uint32_t *map, size_t n, const float *sh,
+                                                                  uint32_t nc, uint32_t k) {
+    const __m512i vnc = _mm512_set1_epi32((int)nc), vk = _mm512_set1_epi32((int)k), empty = _mm512_set1_epi32(-1);
+    size_t t = 0;
+    for (; t + 16u <= n; t += 16u) {
+        const __m512i m = _mm512_loadu_si512((const void *)(map + t));
+        const __mmask16 used = _mm512_cmpneq_epi32_mask(m, empty);
+        const __m512i idx = _mm512_add_epi32(_mm512_mullo_epi32(m, vnc), vk);
+        _mm512_storeu_ps(dst + t, _mm512_mask_i32gather_ps(_mm512_setzero_ps(), used, idx, sh, 4));
+    }
+    write_plane_generic(dst + t, map + t, n - t, sh, nc, k);
+}
+#endif
+#ifdef GLOW__HAVE_AVX2_KERNEL
+__attribute__((target("avx2"))) static void write_plane_avx2(float *dst, const uint32_t *map, size_t n, const float *sh,
+                                                             uint32_t nc, uint32_t k) {
+    const __m256i vnc = _mm256_set1_epi32((int)nc), vk = _mm256_set1_epi32((int)k), empty = _mm256_set1_epi32(-1);
+    size_t t = 0;
+    for (; t + 8u <= n; t += 8u) {
+        const __m256i m = _mm256_loadu_si256((const __m256i *)(const void *)(map + t));
+        const __m256 used = _mm256_castsi256_ps(_mm256_xor_si256(_mm256_cmpeq_epi32(m, empty), empty));
+        const __m256i idx = _mm256_add_epi32(_mm256_mullo_epi32(m, vnc), vk);
+        _mm256_storeu_ps(dst + t, _mm256_mask_i32gather_ps(_mm256_setzero_ps(), sh, idx, used, 4));
+    }
+    write_plane_generic(dst + t, map + t, n - t, sh, nc, k);
+}
+#endif
+
+void glow__cl_write_plane(glow__cl_isa isa, float *dst, const uint32_t *map, size_t n, const float *sh, uint32_t cache_count,
+                          uint32_t nc, uint32_t k) {
+    const bool fits = (uint64_t)cache_count * nc < 0x7FFFFFFFu; /* gather indices are int32 */
+#ifdef GLOW__HAVE_AVX512_KERNEL
+    if (isa == GLOW__CL_AVX512 && fits) {
+        write_plane_avx512(dst, map, n, sh, nc, k);
+        return;
+    }
+#endif
+#ifdef GLOW__HAVE_AVX2_KERNEL
+    if ((isa == GLOW__CL_AVX2 || isa == GLOW__CL_AVX512) && fits) {
+        write_plane_avx2(dst, map, n, sh, nc, k);
+        return;
+    }
+#endif
+    (void)isa;
+    (void)fits;
+    (void)cache_count;
+    write_plane_generic(dst, map, n, sh, nc, k);
+}
+
 static int has_avx2(void) {
 #ifdef GLOW__HAVE_AVX2_KERNEL
     __builtin_cpu_init();
