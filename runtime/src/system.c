@@ -36,7 +36,7 @@
 
 #define PI_F 3.14159265358979323846f
 #define SURFEL_CHUNK 2048u
-#define NODE_CHUNK 8192u
+#define NODE_CHUNK 2048u
 #define CACHE_CHUNK 16u
 #define MAX_ITERATIONS 64u
 #define ALBEDO_MAX 0.999f
@@ -199,16 +199,22 @@ static void task_flux(void *data, uint32_t k, uint32_t worker) {
 
 static void pull_range(glow_system *s, uint32_t first, uint32_t end) {
     const size_t N = s->N;
-    float *f = s->flux, *r = s->rad;
+    float *restrict fy = s->flux, *restrict fco = s->flux + N, *restrict fcg = s->flux + 2 * N;
+    float *restrict r = s->rad;
+    const glow_bake_node *restrict nodes = s->nodes;
+    const float *restrict inv_pi_area = s->inv_pi_area;
     for (uint32_t n = first; n < end; ++n) {
-        const uint32_t a = s->nodes[n].child[0], b = s->nodes[n].child[1];
-        const float ipa = s->inv_pi_area[n];
-        for (size_t c = 0; c < 3; ++c) {
-            const size_t p = c * N;
-            f[p + n] = f[p + a] + f[p + b];
-            r[4 * (size_t)n + c] = f[p + n] * ipa;
-        }
-        r[4 * (size_t)n + 3] = 0.0f;
+        const uint32_t a = nodes[n].child[0], b = nodes[n].child[1];
+        const float ipa = inv_pi_area[n];
+        const float y = fy[a] + fy[b], co = fco[a] + fco[b], cg = fcg[a] + fcg[b];
+        fy[n] = y;
+        fco[n] = co;
+        fcg[n] = cg;
+        float *restrict rn = r + 4 * (size_t)n;
+        rn[0] = y * ipa;
+        rn[1] = co * ipa;
+        rn[2] = cg * ipa;
+        rn[3] = 0.0f;
     }
 }
 
