@@ -41,8 +41,8 @@
  * y_lm / ỹ_lm times t_l = k_l / k̃_l (t_0 = 2π, t_l = 2π σ(l, 1) / (l (l + 1))). Luma² then Co
  * chroma², Cg chroma², as in cache_sh. */
 #define GLOW__TWO_PI 6.283185307179586476925
-static void glow__cl_coeff_scale(uint32_t L, uint32_t C, float *scale) {
-    for (uint32_t i = 0; i < 3u * GLOW__MAX_BANDS * GLOW__MAX_BANDS + 16u; ++i) scale[i] = 0.0f;
+void glow__cl_coeff_scale(uint32_t L, uint32_t C, float *scale) {
+    for (uint32_t i = 0; i < GLOW__CL_SCALE_FLOATS; ++i) scale[i] = 0.0f;
     double t[GLOW__MAX_BANDS];
     for (uint32_t l = 0; l < L; ++l)
         t[l] = l == 0 ? GLOW__TWO_PI : GLOW__TWO_PI * glow__sh_sigma(l, 1) / ((double)l * (double)(l + 1u));

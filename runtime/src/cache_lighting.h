@@ -24,9 +24,17 @@ typedef struct glow__cl_args {
     const unsigned char *xblocks;
     size_t xblock_size; /* bytes per expanded block; 0 = glow__cl_xblock_size(luma). The bake's full-SH
                            links (SHLK, same layout with the bake's sh_bands² rows) pass their own */
+    const float *coeff_scale; /* compact links: glow__cl_coeff_scale(luma, chroma) computed once by
+                                 the caller, or NULL (computed per call) */
     float xscale;       /* expanded links only: every cache coefficient times this (SHLK: the bake's
                            factor_scale, with rad_* the node flux); 0 = 1 */
 } glow__cl_args;
+
+/* The compact kernel sums R k~_l y~_lm (sh_kernel.h's scaled basis, cache_kernel.inc's scaled cone
+ * factors); scale[i] is the constant that makes output coefficient i sum R k_l y_lm: luma², then Co
+ * and Cg chroma², zero-padded to GLOW__CL_SCALE_FLOATS. */
+#define GLOW__CL_SCALE_FLOATS (3u * 64u + 16u)
+void glow__cl_coeff_scale(uint32_t luma, uint32_t chroma, float *scale);
 
 static inline size_t glow__cl_xblock_size(uint32_t luma) { return (size_t)64u + (size_t)32u * luma * luma; }
 

@@ -92,6 +92,7 @@ struct glow_system {
     /* per-stage task arguments */
     uint32_t pull_first, pull_count;
     uint64_t emission_revision, direct_revision;
+    float cl_scale[GLOW__CL_SCALE_FLOATS]; /* glow__cl_coeff_scale(luma, chroma) */
 };
 
 /* ------------------------------------------------------------------------------------------ */
@@ -243,6 +244,7 @@ static void task_caches(void *data, uint32_t k, uint32_t worker) {
                        .isa = s->isa,
                        .xblocks = s->xlinks,
                        .xblock_size = s->xlink_size,
+                       .coeff_scale = s->cl_scale,
                        .xscale = s->xscale};
     uint32_t first = k * CACHE_CHUNK, count = s->C - first < CACHE_CHUNK ? s->C - first : CACHE_CHUNK;
     glow__cl_light_caches(&a, first, count);
@@ -419,6 +421,7 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     s->nbatches = div_up(s->S, batch);
     s->luma = luma;
     s->chroma = chroma;
+    glow__cl_coeff_scale(luma, chroma, s->cl_scale);
     s->coeffs = luma * luma + 2 * chroma * chroma;
     s->fbk = luma * luma;
     s->isa = glow__cl_best_isa();
