@@ -181,11 +181,28 @@ static double now_ms(void) {
     return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
 }
 
-/* FLOPs the cache-lighting kernel spends per link (cache_kernel.inc), counted per operation:
- * decode + normalise 21, Legendre 4 per band, cone factors 2 per band, SH basis ~4 per coefficient,
- * band weights luma + 2 chroma, accumulation 2 per coefficient (an FMA = 2). */
+/* FLOPs the cache-lighting kernel spends per link (cache_kernel.inc, sh_kernel.h's scaled basis),
+ * counted per floating-point operation of the source (an FMA = 2): octahedral decode 5 (the fold;
+ * the scale by 4095 is integer work), normalise 14 (length², rsqrt + one Newton step, 3 scales),
+ * cone factors 3 + 1 for l = 2 + 3 per band above, the scaled basis (sh_eval_scaled_flops), band
+ * weights (luma, plus 2 per chroma band, from l = 1; l = 0 multiplies straight into its sums),
+ * accumulation 2 per coefficient. l = 3/3: 93 (the kernel before 2026-11-22 took 138). */
+static double sh_eval_scaled_flops(uint32_t L) {
+    double f = 0.0;
+    for (uint32_t m = 0; m < L; ++m) {
+        if (m >= 2) f += 6.0; /* (c, s) <- (c x - s y, s x + c y) */
+        for (uint32_t l = m + 1; l < L; ++l) {
+            if (l == m + 2) f += 2.0;      /* z q - beta: one FMA */
+            else if (l > m + 2) f += 3.0;  /* z q - beta q': mul + FMA */
+            if (m > 0) f += 2.0;           /* q c, q s */
+        }
+    }
+    return f;
+}
 static double flops_per_link(uint32_t L, uint32_t C) {
-    return 21.0 + 7.0 * L + 4.0 * L * L + 2.0 * C + 2.0 * (L * L + 2.0 * C * C);
+    const double cone = 3.0 + (L >= 3 ? 1.0 + 3.0 * (L - 3) : 0.0);
+    const double weights = (L - 1.0) + 2.0 * (C - 1.0);
+    return 5.0 + 14.0 + cone + sh_eval_scaled_flops(L) + weights + 2.0 * (L * L + 2.0 * C * C);
 }
 
 /* the light path: frame f of n */
