@@ -1,0 +1,54 @@
+#!/bin/bash
+# Paired A/B of cache-lighting kernel versions in one process (tools/bench/kernel_ab.c says why).
+#
+#   tools/kernel_ab.sh BUILD_DIR BAKE REV [REV...] [-- ITERS THREADS LUMA CHROMA]
+#
+# REV is a git revision, or "worktree" for the files on disk. Each version's runtime/src/
+# cache_lighting.{c,h}, cache_kernel.inc and sh_kernel.h are compiled in their own translation unit
+# with renamed symbols; BUILD_DIR's libglow_runtime.a supplies the bake loader. Example:
+#   tools/kernel_ab.sh build /tmp/glow-bench/sponza-moderate.glow HEAD~1 worktree -- 200 2
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+build=$(cd "$1" && pwd); bake=$2; shift 2
+revs=(); while [ $# -gt 0 ] && [ "$1" != "--" ]; do revs+=("$1"); shift; done
+[ $# -gt 0 ] && shift
+[ ${#revs[@]} -ge 1 ] || { echo "kernel_ab.sh: no revisions" >&2; exit 2; }
+lib=$build/lib/libglow_runtime.a
+[ -f "$lib" ] || { echo "kernel_ab.sh: $lib not found (build first)" >&2; exit 2; }
+tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
+cc=${CC:-cc}
+flags=(-O2 -std=c11 -I"$root/runtime/include" -I"$root/runtime/src")
+# a sanitizer build's library needs the same runtime in the harness
+nm "$lib" > "$tmp/nm.txt" 2>/dev/null || true
+if grep -q "__asan_" "$tmp/nm.txt"; then flags+=(-fsanitize=address,undefined); fi
+objs=(); vlist=""
+for i in "${!revs[@]}"; do
+  d=$tmp/v$i; mkdir -p "$d"
+  for f in cache_lighting.c cache_lighting.h cache_kernel.inc sh_kernel.h; do
+    if [ "${revs[$i]}" = worktree ]; then cp "$root/runtime/src/$f" "$d/$f"
+    else git -C "$root" show "${revs[$i]}:runtime/src/$f" > "$d/$f"; fi
+  done
+  cat > "$d/variant.c" <<EOT
+#define glow__cl_light_caches V${i}_light
+#define glow__cl_best_isa V${i}_best
+#define glow__cl_isa_supported V${i}_supported
+#define glow__cl_isa_name V${i}_name
+#define glow__cl_expand V${i}_expand
+#define glow__cl_coeff_scale V${i}_coeff_scale
+#define glow__cl_write_plane V${i}_write_plane
+#include "cache_lighting.c"
+/* args built here, with this version's header (the struct changed between versions) */
+void V${i}_run(const glow_bake_link_block *blocks, uint32_t bpc, const float *rad, uint32_t L, uint32_t C, float *out,
+               uint32_t first, uint32_t count) {
+    glow__cl_args a = {.blocks = blocks, .blocks_per_cache = bpc, .rad_y = rad, .rad_co = rad + 1, .rad_cg = rad + 2,
+                       .rad_stride = 4, .luma = L, .chroma = C, .coeffs = L * L + 2 * C * C, .cache_sh = out,
+                       .isa = V${i}_best()};
+    V${i}_light(&a, first, count);
+}
+EOT
+  "$cc" "${flags[@]}" -ffp-contract=fast -Wno-psabi -c "$d/variant.c" -o "$d/variant.o"
+  objs+=("$d/variant.o"); vlist="$vlist X($i)"
+  echo "version $i: ${revs[$i]}"
+done
+"$cc" "${flags[@]}" "-DVLIST=$vlist" "$root/tools/bench/kernel_ab.c" "${objs[@]}" "$lib" -lm -lpthread -o "$tmp/kernel_ab"
+"$tmp/kernel_ab" "$bake" "$@"
