@@ -2,7 +2,9 @@
  * cache_light.comp — PIC step 4: every cache sums its links into SH of incident radiance with runtime
  * projection (PIC 4.6), as runtime/src/cache_lighting.c does:
  *     L_lm += R[node] · k_l(1 - omc) · y_lm(dir),   R = flux · 1/(π area) (YCoCg)
- * for l < luma (Y) and l < chroma (Co, Cg); k_0 = 2π omc, k_l = 2π/(2l+1) (P_(l-1)(x) - P_(l+1)(x)).
+ * for l < luma (Y) and l < chroma (Co, Cg); k_0 = 2π omc, k_l = 2π/(2l+1) (P_(l-1)(x) - P_(l+1)(x)),
+ * evaluated as 2π/(l(l+1)) (1 - x²) P_l'(x) with 1 - x² = omc (2 - omc), as the CPU kernel does: no
+ * cancellation for narrow cones (x near 1).
  * One workgroup per cache; its GLOW_CACHE_GROUP invocations take links j = lid, lid + group, ...;
  * the partial sums are reduced through shared memory GLOW_REDUCE_CHUNK coefficients at a time, each
  * coefficient by one invocation in a fixed order (deterministic). Link block layout: glow.h
@@ -42,14 +44,16 @@ void main() {
         vec3 R = f.xyz * f.w;
         float y[GLOW_L2];
         glow_sh_eval(GLOW_LUMA_BANDS, d, y);
-        float x = 1.0 - omc;
-        float P[GLOW_LUMA_BANDS + 2];
-        P[0] = 1.0;
-        P[1] = x;
-        for (int l = 1; l <= GLOW_LUMA_BANDS; ++l)
-            P[l + 1] = (float(2 * l + 1) * x * P[l] - float(l) * P[l - 1]) * (1.0 / float(l + 1));
+        float x = 1.0 - omc, g = omc * (2.0 - omc);
+        float dp = 0.0, p = 1.0; /* P'_(l-1)(x), P'_l(x) */
         for (int l = 0; l < GLOW_LUMA_BANDS; ++l) {
-            float k = l == 0 ? omc * float(2.0 * GLOW_PI) : (P[l - 1] - P[l + 1]) * float(2.0 * GLOW_PI / (2.0 * l + 1.0));
+            float k = omc * float(2.0 * GLOW_PI);
+            if (l > 0) {
+                k = float(2.0 * GLOW_PI) / float(l * (l + 1)) * g * p;
+                float pn = (float(2 * l + 1) * x * p - float(l + 1) * dp) / float(l);
+                dp = p;
+                p = pn;
+            }
             vec3 w = R * k;
             for (int i = l * l; i < (l + 1) * (l + 1); ++i) acc[i] += w.x * y[i];
             if (l < GLOW_CHROMA_BANDS)
