@@ -777,6 +777,39 @@ static void test_sample_lightmap(void **state) {
 /* Both builds of the cache-lighting kernel on a real (small) bake's links with random node
  * radiances, against each other and against the links re-summed in double here:
  *     L_lm = Σ_j R[node_j] k_l(1 - omc_j) y_lm(dir_j). */
+/* Output planes (glow__cl_write_plane): every ISA build this CPU runs gives exactly cache_sh's value
+ * for mapped texels and 0 for empty ones, with plane lengths that leave vector tails and a
+ * destination that is not 64-byte aligned. */
+static void test_write_plane(void **state) {
+    (void)state;
+    enum { WC = 301, WNC = 27, WN = 1000 + 13 };
+    float *sh = malloc((size_t)WC * WNC * sizeof *sh), *dst = malloc((WN + 1) * sizeof *dst);
+    uint32_t *map = malloc(WN * sizeof *map);
+    assert_true(sh && dst && map);
+    for (size_t i = 0; i < (size_t)WC * WNC; ++i) sh[i] = (float)(rnd() * 10.0 - 3.0);
+    for (uint32_t t = 0; t < WN; ++t) map[t] = rnd() < 0.1 ? 0xFFFFFFFFu : (uint32_t)(rnd() * WC) % WC;
+    map[WN - 1] = 0xFFFFFFFFu;
+    map[WN - 2] = WC - 1; /* the last row, in the scalar tail */
+    const glow__cl_isa isas[] = {GLOW__CL_GENERIC, GLOW__CL_AVX2, GLOW__CL_AVX512};
+    for (size_t ii = 0; ii < 3; ++ii) {
+        if (!glow__cl_isa_supported(isas[ii])) continue;
+        for (uint32_t k = 0; k < WNC; k += 13)
+            for (size_t n = WN - 17; n <= WN; n += 8) {
+                for (size_t t = 0; t <= WN; ++t) dst[t] = -777.0f;
+                glow__cl_write_plane(isas[ii], dst + 1, map, n, sh, WC, WNC, k); /* dst + 1: unaligned */
+                assert_true(dst[0] == -777.0f);
+                for (size_t t = 0; t < n; ++t) {
+                    const float want = map[t] == 0xFFFFFFFFu ? 0.0f : sh[(size_t)map[t] * WNC + k];
+                    if (dst[1 + t] != want)
+                        fail_msg("write_plane %s k %u n %zu texel %zu: %g, want %g", glow__cl_isa_name(isas[ii]), k, n, t,
+                                 (double)dst[1 + t], (double)want);
+                }
+                for (size_t t = n + 1; t <= WN; ++t) assert_true(dst[t] == -777.0f); /* nothing past n */
+            }
+    }
+    free(sh), free(dst), free(map);
+}
+
 static void test_kernels(void **state) {
     (void)state;
     char path[256];
@@ -923,7 +956,7 @@ int main(void) {
         cmocka_unit_test(test_ycocg),          cmocka_unit_test(test_sh_orthonormal), cmocka_unit_test(test_sh_closed_forms), cmocka_unit_test(test_sh_scaled_basis),
         cmocka_unit_test(test_cone_factor),    cmocka_unit_test(test_sh_projection),  cmocka_unit_test(test_lobe_factor),
         cmocka_unit_test(test_sh_window),      cmocka_unit_test(test_shade_uniform),  cmocka_unit_test(test_shade_linear),   cmocka_unit_test(test_shade_cone),
-        cmocka_unit_test(test_sample_grid),    cmocka_unit_test(test_sample_lightmap), cmocka_unit_test(test_kernels),
+        cmocka_unit_test(test_sample_grid),    cmocka_unit_test(test_sample_lightmap), cmocka_unit_test(test_kernels), cmocka_unit_test(test_write_plane),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
