@@ -4,15 +4,17 @@
  * where R is the node's radiance in YCoCg (flux / (π area), converted once per node, never per link).
  *
  * Layout (DESIGN §5): the bake's links come in SoA blocks of 16 (bake_format.h), so the kernel works
- * on 8 lanes at a time *across links*, with no per-link branch: decode node, 12-bit octahedral
- * direction and half-float cone, gather the three node radiances, evaluate P_l and y_lm on vectors,
- * and accumulate luma² + 2·chroma² coefficients per lane; each cache reduces its lanes once, in a
- * fixed order, so the result does not depend on which worker ran it.
+ * on 8 or 16 lanes at a time *across links*, with no per-link branch: decode node, 12-bit octahedral
+ * direction and half-float cone, gather the three node radiances, evaluate the scaled cone factors
+ * k~_l and the scaled basis y~_lm (sh_kernel.h) on vectors, and accumulate luma² + 2·chroma²
+ * coefficients per lane; each cache reduces its lanes once, in a fixed order, so the result does not
+ * depend on which worker ran it, and multiplies each sum by its constant (glow__cl_coeff_scale).
  *
- * Two builds of the same source (cache_kernel.inc): AVX2+FMA+F16C (hardware gathers and half
- * conversion) and a portable one; chosen once at run time with __builtin_cpu_supports. The band
- * count is a compile-time constant in each (switch over 1..8) so the SH recurrences unroll. This
- * file is compiled with -ffp-contract=fast (CMake) so a*b+c becomes FMA where the target has it. */
+ * Three builds of the same source (cache_kernel.inc): AVX-512F, AVX2+FMA+F16C (hardware gathers and
+ * half conversion) and a portable one; chosen once at run time with __builtin_cpu_supports. The band
+ * counts are compile-time constants in the common instantiations so the band loops unroll (by
+ * pragma: GCC -O2 does not). This file is compiled with -ffp-contract=fast (CMake) so a*b+c becomes
+ * FMA where the target has it. Also here: the output-plane writer (glow__cl_write_plane). */
 #include <math.h>
 #include <string.h>
 
