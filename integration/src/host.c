@@ -17,6 +17,7 @@
 #include "glow/glow_host.h"
 #include "shadow_map.h"
 #include "host_math.h"
+#include "host_log.h"
 
 #define HOST_PI 3.14159265358979323846
 #define SKY_UNSET 0xFFFFFFFFu
@@ -54,30 +55,10 @@ struct glow_host {
 
 /* ------------------------------------------------------------------------------ helpers */
 
-#if defined(__GNUC__)
-__attribute__((format(printf, 4, 5)))
-#endif
-static glow_result logf_(const glow_logger *lg, glow_log_level level, glow_result code, const char *fmt, ...) {
-    if (lg && lg->log) {
-        char text[768];
-        int n = snprintf(text, sizeof text, "glow_host: ");
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(text + n, sizeof text - (size_t)n, fmt, ap);
-        va_end(ap);
-        lg->log(lg->user, level, code, text, __FILE__, __LINE__);
-    }
-    return code;
-}
+/* logf_(logger, level, code, fmt, ...): host_log.h with this file's prefix and the caller's line */
+#define logf_(lg, level, code, ...) glow__host_log((lg), "glow_host: ", (level), (code), __FILE__, __LINE__, __VA_ARGS__)
 #define HOST_FAIL(lg, code, ...) logf_((lg), GLOW_LOG_ERROR, (code), __VA_ARGS__)
-
-
-
-static double now_ms(void) {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
-}
+#define now_ms glow__host_now_ms
 
 static const float *power_of(const glow_scene_light *l) {
     return l->type == GLOW_SCENE_LIGHT_SUN ? l->irradiance : l->intensity;

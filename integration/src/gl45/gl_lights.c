@@ -18,6 +18,7 @@
 #include "glow/glow_gl_lights.h"
 #include "glow/glow_glfns.h"
 #include "../host_math.h"
+#include "../host_log.h"
 #include "../shadow_map.h" /* the software maps' placement: the texel grids must coincide */
 
 #define GLL_PI 3.14159265358979323846
@@ -91,29 +92,11 @@ typedef struct map_setup {
 
 /* ------------------------------------------------------------------------------------ helpers */
 
-#if defined(__GNUC__)
-__attribute__((format(printf, 4, 5)))
-#endif
-static glow_result logf_(const glow_logger *lg, glow_log_level level, glow_result code, const char *fmt, ...) {
-    if (lg && lg->log) {
-        char text[4096];
-        int n = snprintf(text, sizeof text, "glow_gl_lights: ");
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(text + n, sizeof text - (size_t)n, fmt, ap);
-        va_end(ap);
-        lg->log(lg->user, level, code, text, __FILE__, __LINE__);
-    }
-    return code;
-}
+/* logf_(logger, level, code, fmt, ...): host_log.h with this file's prefix and the caller's line */
+#define logf_(lg, level, code, ...) glow__host_log((lg), "glow_gl_lights: ", (level), (code), __FILE__, __LINE__, __VA_ARGS__)
 #define GLL_FAIL(lg, code, ...) logf_((lg), GLOW_LOG_ERROR, (code), __VA_ARGS__)
 
-static double now_ms(void) {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
-}
-
+#define now_ms glow__host_now_ms
 
 
 /* GL errors raised since the last call, folded into one code (OUT_OF_MEMORY wins). */
