@@ -1,6 +1,9 @@
-/* test_image_io.c — glow_eval's EXR and PNG files: bit-exact float round trip, reading layouts
- * written here directly with OpenEXR's C core (half, RGBA, Y-only, tiled, offset data window),
- * error paths (missing, garbage, truncated, unwritable) and the PATH.tmp + rename discipline. */
+/* test_image_io.c — glow_eval's EXR and PNG files: bit-exact float round trip (noisy, incompressible
+ * and smooth content, heights that end in a partial 16-line ZIP chunk, and chunks whose deflate
+ * stream is exactly as long as the raw chunk: OpenEXR 3.1 kept those, readers took them for raw
+ * floats), reading layouts written here directly with OpenEXR's C core (half, RGBA, Y-only, tiled,
+ * offset data window), error paths (missing, garbage, truncated, unwritable) and the PATH.tmp +
+ * rename discipline. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -199,6 +202,206 @@ static void test_exr_roundtrip_bit_exact(void **state) {
     glow_eval_image_free(&small);
     remove(keep);
     glow_eval_image_free(&img);
+}
+
+/* ---- ZIP chunks: noisy, incompressible and smooth content, partial last chunks ---- */
+
+static uint64_t xs_state;
+static uint32_t xs32(void) { /* xorshift64*: every bit random (an LCG's low bits are not) */
+    xs_state ^= xs_state >> 12;
+    xs_state ^= xs_state << 25;
+    xs_state ^= xs_state >> 27;
+    return (uint32_t)((xs_state * 0x2545F4914F6CDD1Dull) >> 32);
+}
+
+enum { FILL_SMOOTH, FILL_NOISE, FILL_BITS, FILL_RENDER };
+
+/* n floats: a smooth ramp (compresses well), uniform noise in [0, 1) (barely compresses), random
+ * finite bit patterns of any sign and exponent (does not compress: stored raw), or a path tracer's
+ * indirect image (a smooth mean times heavy-tailed noise, many exact zeros). */
+static void fill(float *dst, size_t n, int kind) {
+    for (size_t i = 0; i < n; i++) {
+        uint32_t u = xs32();
+        switch (kind) {
+            case FILL_SMOOTH: dst[i] = 0.25f + 1e-4f * (float)(i % 997) + 1e-7f * (float)i; break;
+            case FILL_NOISE: dst[i] = (float)(u >> 8) * 0x1p-24f; break;
+            case FILL_BITS:
+                u &= 0xbfffffffu; /* exponent below 128: finite */
+                memcpy(&dst[i], &u, 4);
+                break;
+            default: {
+                float x = (float)(u >> 8) * 0x1p-24f;
+                dst[i] = x < 0.3f ? 0.0f : 0.05f * (1.0f + 0.5f * sinf((float)i * 1e-3f)) / (1.0001f - x);
+            }
+        }
+    }
+}
+
+static void roundtrip_exact(const glow_eval_image *img, const char *path) {
+    char msg[512] = "";
+    glow_eval_image back;
+    assert_int_equal(glow_eval_write_exr(img, path, msg, sizeof msg), GLOW_OK);
+    assert_int_equal(glow_eval_read_exr(path, &back, msg, sizeof msg), GLOW_OK);
+    assert_int_equal(back.width, img->width);
+    assert_int_equal(back.height, img->height);
+    size_t n = (size_t)img->width * img->height * 3, bad = 0, first = 0;
+    for (size_t i = 0; i < n; i++)
+        if (memcmp(&back.rgb[i], &img->rgb[i], 4) != 0 && bad++ == 0) first = i;
+    if (bad)
+        fail_msg("%ux%u: %zu of %zu floats differ after the round trip, the first at row %zu (%g read, %g written)",
+                 img->width, img->height, bad, n, first / 3 / img->width, (double)back.rgb[first],
+                 (double)img->rgb[first]);
+    glow_eval_image_free(&back);
+}
+
+static void test_exr_roundtrip_chunks(void **state) {
+    (void)state;
+    static const uint32_t sizes[][2] = {{320, 180}, {320, 17}, {320, 33}, {64, 64}, {320, 16}, {1, 17}, {3, 1}};
+    char path[256];
+    snprintf(path, sizeof path, "%s", tmp_name("chunks.exr"));
+    xs_state = 0x9E3779B97F4A7C15ull;
+    for (size_t s = 0; s < sizeof sizes / sizeof sizes[0]; s++)
+        for (int kind = FILL_SMOOTH; kind <= FILL_RENDER; kind++) {
+            glow_eval_image img;
+            assert_int_equal(glow_eval_image_alloc(&img, sizes[s][0], sizes[s][1]), GLOW_OK);
+            fill(img.rgb, (size_t)img.width * img.height * 3, kind);
+            roundtrip_exact(&img, path);
+            /* smooth rows with one noisy chunk in the middle, and the other way round */
+            if (img.height > 16) {
+                const uint32_t lines = img.height - 16 < 16 ? img.height - 16 : 16;
+                fill(img.rgb + (size_t)16 * img.width * 3, (size_t)img.width * 3 * lines,
+                     kind == FILL_SMOOTH ? FILL_BITS : FILL_SMOOTH);
+                roundtrip_exact(&img, path);
+            }
+            glow_eval_image_free(&img);
+        }
+    assert_no_tmp(path);
+    remove(path);
+}
+
+/* ---- chunks whose deflate stream is exactly as long as the raw chunk ----
+ * OpenEXR 3.1's ZIP encoder stores a chunk raw only when its deflate stream is longer than the raw
+ * chunk; a stream of exactly the raw size was written as it is, and every reader takes a chunk of raw
+ * size for raw floats (NaN and ±3e38 in glow-render's indirect images). probe_chunk() runs the
+ * library's own encoder on one chunk's rows, with glow_eval's settings (float R, G, B, ZIP level 4)
+ * and a write step that writes nothing, and says what the library would have stored. */
+
+enum { PROBE_SMALLER, PROBE_RAW, PROBE_RAW_SIZE_STREAM };
+
+static exr_result_t probe_write(exr_encode_pipeline_t *enc) {
+    int *verdict = enc->encoding_user_data;
+    if (enc->compressed_bytes < enc->packed_bytes) *verdict = PROBE_SMALLER;
+    else if (enc->compressed_buffer == enc->packed_buffer ||
+             memcmp(enc->compressed_buffer, enc->packed_buffer, (size_t)enc->packed_bytes) == 0)
+        *verdict = PROBE_RAW;
+    else *verdict = PROBE_RAW_SIZE_STREAM;
+    return EXR_ERR_SUCCESS;
+}
+
+/* rows: w x lines interleaved RGB floats (lines <= 16), probed as an image of their own: its one chunk
+ * packs the same bytes, so compresses the same, as those rows do inside a larger image. */
+static int probe_chunk(const char *path, const float *rows, int w, int lines) {
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    init.error_handler_fn = quiet_handler;
+    exr_context_t ctx = NULL;
+    assert_int_equal(exr_start_write(&ctx, path, EXR_WRITE_FILE_DIRECTLY, &init), EXR_ERR_SUCCESS);
+    assert_int_equal(exr_add_part(ctx, NULL, EXR_STORAGE_SCANLINE, NULL), EXR_ERR_SUCCESS);
+    assert_int_equal(exr_initialize_required_attr_simple(ctx, 0, w, lines, EXR_COMPRESSION_ZIP), EXR_ERR_SUCCESS);
+    static const char *const names[3] = {"R", "G", "B"};
+    for (int c = 0; c < 3; c++)
+        assert_int_equal(exr_add_channel(ctx, 0, names[c], EXR_PIXEL_FLOAT, EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1),
+                         EXR_ERR_SUCCESS);
+    assert_int_equal(exr_set_zip_compression_level(ctx, 0, 4), EXR_ERR_SUCCESS);
+    assert_int_equal(exr_write_header(ctx), EXR_ERR_SUCCESS);
+    exr_chunk_info_t cinfo;
+    assert_int_equal(exr_write_scanline_chunk_info(ctx, 0, 0, &cinfo), EXR_ERR_SUCCESS);
+    exr_encode_pipeline_t enc;
+    memset(&enc, 0, sizeof enc);
+    assert_int_equal(exr_encoding_initialize(ctx, 0, &cinfo, &enc), EXR_ERR_SUCCESS);
+    for (int c = 0; c < enc.channel_count; c++) {
+        exr_coding_channel_info_t *ch = &enc.channels[c];
+        int k = ch->channel_name[0] == 'R' ? 0 : ch->channel_name[0] == 'G' ? 1 : 2;
+        ch->user_pixel_stride = 12;
+        ch->user_line_stride = 12 * w;
+        ch->user_data_type = EXR_PIXEL_FLOAT;
+        ch->user_bytes_per_element = 4;
+        ch->encode_from_ptr = (const uint8_t *)(rows + k);
+    }
+    assert_int_equal(exr_encoding_choose_default_routines(ctx, 0, &enc), EXR_ERR_SUCCESS);
+    int verdict = -1;
+    enc.encoding_user_data = &verdict;
+    enc.write_fn = probe_write;
+    assert_int_equal(exr_encoding_run(ctx, 0, &enc), EXR_ERR_SUCCESS);
+    exr_encoding_destroy(ctx, &enc);
+    exr_finish(&ctx); /* no chunk written: the file is incomplete, and removed */
+    remove(path);
+    assert_int_not_equal(verdict, -1);
+    return verdict;
+}
+
+/* Rows [y0, y0 + lines) of img: noise whose deflate stream the library makes exactly as long as the
+ * raw chunk. Mantissa noise (20 random bits: compresses a little) with a fraction p of random bit
+ * patterns (incompressible); p walks up while the stream is shorter than the chunk, down while the
+ * library stores it raw. Returns whether the case was reached (1 to 3 % of the tries near the edge). */
+static int fill_raw_size_stream(glow_eval_image *img, uint32_t y0, int lines, const char *probe_path) {
+    float *rows = img->rgb + (size_t)y0 * img->width * 3;
+    const size_t n = (size_t)img->width * 3 * (size_t)lines;
+    double p = 0.8;
+    for (int tries = 0; tries < 4000; tries++) {
+        for (size_t i = 0; i < n; i++) {
+            uint32_t u = 0x3f800000u | (xs32() & 0xffu);
+            if ((double)(xs32() >> 8) * 0x1p-24 < p) u = xs32() & 0xbfffffffu;
+            memcpy(&rows[i], &u, 4);
+        }
+        int v = probe_chunk(probe_path, rows, (int)img->width, lines);
+        if (v == PROBE_RAW_SIZE_STREAM) return 1;
+        p += v == PROBE_SMALLER ? 0.004 : -0.004;
+        if (p < 0.0) p = 0.0;
+        if (p > 1.0) p = 1.0;
+    }
+    return 0;
+}
+
+/* The chunk of img that holds row y, as written: 1 when stored at its raw size. */
+static int chunk_stored_raw(const char *path, int y) {
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    init.error_handler_fn = quiet_handler;
+    exr_context_t ctx = NULL;
+    assert_int_equal(exr_start_read(&ctx, path, &init), EXR_ERR_SUCCESS);
+    exr_chunk_info_t cinfo;
+    assert_int_equal(exr_read_scanline_chunk_info(ctx, 0, y, &cinfo), EXR_ERR_SUCCESS);
+    exr_finish(&ctx);
+    return cinfo.packed_size == cinfo.unpacked_size;
+}
+
+static void test_exr_raw_size_deflate_stream(void **state) {
+    (void)state;
+    int maj = 0, min = 0, patch = 0;
+    exr_get_library_version(&maj, &min, &patch, NULL);
+    /* the last, partial chunk of 320 x 180 (rows 176-179: glow-render's held-out scenes), of 320 x 17
+     * and 320 x 33, and a full chunk inside 64 x 64 (rows 32-47: glow-render's Cornell box, seed 2) */
+    static const uint32_t cases[][3] = {{320, 180, 176}, {320, 17, 16}, {320, 33, 32}, {64, 64, 32}};
+    char path[256], probe[256];
+    snprintf(path, sizeof path, "%s", tmp_name("rawsize.exr"));
+    snprintf(probe, sizeof probe, "%s", tmp_name("probe.exr"));
+    xs_state = 0xD1B54A32D192ED03ull;
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        glow_eval_image img;
+        assert_int_equal(glow_eval_image_alloc(&img, cases[c][0], cases[c][1]), GLOW_OK);
+        fill(img.rgb, (size_t)img.width * img.height * 3, FILL_RENDER);
+        const uint32_t y0 = cases[c][2];
+        const int lines = (int)(img.height - y0 < 16 ? img.height - y0 : 16);
+        int reached = fill_raw_size_stream(&img, y0, lines, probe);
+        if (maj == 3 && min == 1) /* the library this was found with: the case must be exercised */
+            assert_true(reached);
+        else if (!reached)
+            print_message("OpenEXR %d.%d.%d never kept a deflate stream of raw size for %ux%u (fixed library?)\n",
+                          maj, min, patch, img.width, img.height);
+        roundtrip_exact(&img, path);
+        if (reached) assert_true(chunk_stored_raw(path, (int)y0)); /* stored raw, as the format requires */
+        glow_eval_image_free(&img);
+    }
+    remove(path);
 }
 
 static void check_planes(const glow_eval_image *img, int w, int h, const float *r, const float *g, const float *b) {
@@ -402,6 +605,7 @@ int main(void) {
         cmocka_unit_test(test_exr_roundtrip_bit_exact), cmocka_unit_test(test_exr_read_layouts),
         cmocka_unit_test(test_exr_missing_file),        cmocka_unit_test(test_exr_garbage_and_truncated),
         cmocka_unit_test(test_exr_write_errors),        cmocka_unit_test(test_png_values),
+        cmocka_unit_test(test_exr_roundtrip_chunks),    cmocka_unit_test(test_exr_raw_size_deflate_stream),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -130,6 +130,32 @@ static exr_context_initializer_t exr_quiet_init(void) {
     return init;
 }
 
+/* OpenEXR's chunk-size convention: a chunk stored at exactly its unpacked size holds raw pixel data,
+ * and every reader (OpenEXR's own, glow_eval_read_exr) takes it as uncompressed. OpenEXR 3.1's ZIP
+ * encoder (internal_zip.c, apply_zip_impl) falls back to raw data only when the deflate stream is
+ * LONGER than the packed chunk (`compbufsz > packed_bytes`; newer upstream code tests >=), so a stream of
+ * exactly the packed size is written as it is and read back as raw floats: NaN, ±3e38 and garbage in
+ * one whole chunk (16 rows, or the last partial chunk's rows). Data that barely compresses (the noisy
+ * indirect image of a path tracer) hits that in a few percent of its chunks, the same ones every time
+ * for the same pixels. This wraps the library's compress step and stores the packed (raw) chunk
+ * whenever compression did not make it smaller, as the format requires. */
+typedef struct exr_zip_guard {
+    exr_result_t (*compress)(exr_encode_pipeline_t *enc); /* the library's compress_fn */
+} exr_zip_guard;
+
+static exr_result_t exr_compress_or_store_raw(exr_encode_pipeline_t *enc) {
+    const exr_zip_guard *g = enc->encoding_user_data;
+    exr_result_t rv = g->compress(enc);
+    if (rv != EXR_ERR_SUCCESS) return rv;
+    if (enc->compressed_bytes >= enc->packed_bytes && enc->compressed_buffer != enc->packed_buffer) {
+        if (!enc->compressed_buffer || !enc->packed_buffer || enc->compressed_alloc_size < enc->packed_bytes)
+            return EXR_ERR_INVALID_ARGUMENT;
+        memcpy(enc->compressed_buffer, enc->packed_buffer, (size_t)enc->packed_bytes);
+        enc->compressed_bytes = (size_t)enc->packed_bytes;
+    }
+    return EXR_ERR_SUCCESS;
+}
+
 static glow_result exr_write_body(exr_context_t ctx, const glow_eval_image *img) {
     exr_result_t rv = exr_add_part(ctx, NULL, EXR_STORAGE_SCANLINE, NULL);
     if (rv == EXR_ERR_SUCCESS)
@@ -168,6 +194,11 @@ static glow_result exr_write_body(exr_context_t ctx, const glow_eval_image *img)
             ch->encode_from_ptr = (const uint8_t *)(row + k);
         }
         rv = exr_encoding_choose_default_routines(ctx, 0, &enc);
+        exr_zip_guard guard = {enc.compress_fn};
+        if (rv == EXR_ERR_SUCCESS && enc.compress_fn) {
+            enc.encoding_user_data = &guard;
+            enc.compress_fn = exr_compress_or_store_raw;
+        }
         if (rv == EXR_ERR_SUCCESS) rv = exr_encoding_run(ctx, 0, &enc);
         exr_encoding_destroy(ctx, &enc);
         if (rv != EXR_ERR_SUCCESS) return rv == EXR_ERR_OUT_OF_MEMORY ? GLOW_ERROR_OUT_OF_MEMORY : GLOW_ERROR_IO;
