@@ -224,6 +224,11 @@ int main(int argc, char **argv) {
         glow_render_scene_destroy(scene);
         return 1;
     }
+    if (res.nonfinite_samples)
+        fprintf(stderr,
+                "glow-render: warning: %llu samples had a NaN or infinite radiance and were left out of their pixels "
+                "(a bug: please report it with the scene, size, spp and seed)\n",
+                (unsigned long long)res.nonfinite_samples);
     if (!o.quiet) {
         glow_render_scene_info info;
         glow_render_scene_get_info(scene, &info);

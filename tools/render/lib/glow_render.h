@@ -110,6 +110,9 @@ typedef struct glow_render_result {
     uint64_t rays;            /* Embree queries: camera, bounce and shadow rays */
     double mrays_per_s;
     double mean_final[3], mean_direct[3], mean_indirect[3];
+    uint64_t nonfinite_samples; /* samples whose direct or indirect radiance was NaN or infinite: left out
+                                   of their pixel (counted as 0) so that one cannot poison an image.
+                                   0 unless something is wrong; glow-render warns when it is not */
     /* glow view only */
     double solve_seconds;     /* bake load, host, system, updates */
     uint64_t lightmap_lookups, grid_lookups, missed_lookups; /* first hits (per sample) */

@@ -100,7 +100,7 @@ typedef struct glow_view {
 } glow_view;
 
 typedef struct worker_stats {
-    uint64_t rays, lm, grid, missed;
+    uint64_t rays, lm, grid, missed, nonfinite;
 } worker_stats;
 
 typedef struct render_ctx {
@@ -438,6 +438,11 @@ static void *worker(void *p) {
             for (uint32_t n = 0; n < c->spp; ++n) {
                 float d[3] = {0, 0, 0}, ind[3] = {0, 0, 0};
                 sample(c, x, y, &rd, &rp, coeffs, ws, d, ind);
+                if (!(isfinite(d[0]) && isfinite(d[1]) && isfinite(d[2]) && isfinite(ind[0]) && isfinite(ind[1]) &&
+                      isfinite(ind[2]))) { /* a bug upstream: counted and reported, kept out of the pixel */
+                    ws->nonfinite++;
+                    continue;
+                }
                 for (int k = 0; k < 3; ++k) {
                     sd[k] += d[k];
                     si[k] += ind[k];
@@ -584,6 +589,7 @@ static glow_result render(const glow_render_scene *sc, const glow_render_setting
         out->lightmap_lookups += c.ws[i].lm;
         out->grid_lookups += c.ws[i].grid;
         out->missed_lookups += c.ws[i].missed;
+        out->nonfinite_samples += c.ws[i].nonfinite;
     }
     out->mrays_per_s = out->seconds > 0.0 ? (double)out->rays / out->seconds * 1e-6 : 0.0;
     image_mean(&out->final, out->mean_final);
