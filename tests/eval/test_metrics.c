@@ -1,5 +1,6 @@
-/* test_metrics.c — glow_eval's metrics against hand-computed values, closed forms and an
- * independent brute-force SSIM (direct clipped 11 x 11 window per pixel). */
+/* test_metrics.c — glow_eval's metrics against hand-computed values, closed forms and independent
+ * brute-force versions (SSIM: direct clipped 11 x 11 window per pixel; block error: per-block loops).
+ * FLIP has its own file, test_flip.c. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -290,6 +291,176 @@ static void test_ssim_monotonic_and_symmetric(void **state) {
     glow_eval_image_free(&b);
 }
 
+/* ---- block error and mean ratio ---- */
+
+/* Block error per glow_eval.h, written directly: for each block the means of its unmasked pixels,
+ * weighted by their count. */
+static double block_error_brute(const glow_eval_image *t, const glow_eval_image *r, const uint8_t *mask, uint32_t b) {
+    double num = 0, den = 0;
+    for (uint32_t by = 0; by < r->height; by += b)
+        for (uint32_t bx = 0; bx < r->width; bx += b) {
+            double st[3] = {0, 0, 0}, sr[3] = {0, 0, 0}, n = 0;
+            for (uint32_t y = by; y < by + b && y < r->height; y++)
+                for (uint32_t x = bx; x < bx + b && x < r->width; x++) {
+                    size_t i = (size_t)y * r->width + x;
+                    if (mask && !mask[i]) continue;
+                    for (int c = 0; c < 3; c++) st[c] += t->rgb[3 * i + c], sr[c] += r->rgb[3 * i + c];
+                    n++;
+                }
+            if (n == 0) continue;
+            for (int c = 0; c < 3; c++) {
+                num += n * (st[c] / n - sr[c] / n) * (st[c] / n - sr[c] / n);
+                den += n * (sr[c] / n) * (sr[c] / n);
+            }
+        }
+    return sqrt(num / den);
+}
+
+static void test_block_error_hand(void **state) {
+    (void)state;
+    /* 3 x 3 grey images; test = ref + delta:
+     *   ref  1 2 3     delta  +1 -1 +2
+     *        3 4 5            +1 +1  0
+     *        6 7 8             0 +3 -4
+     * 2 x 2 blocks: A (4 px) ref mean 2.5, delta mean 0.5; B (right column, 2 px) 4, 1;
+     * C (bottom row, 2 px) 6.5, 1.5; D (corner, 1 px) 8, -4. Per channel
+     *   Σ n (ΔT)² = 4·0.25 + 2·1 + 2·2.25 + 16 = 23.5,  Σ n R² = 4·6.25 + 2·16 + 2·42.25 + 64 = 205.5. */
+    glow_eval_image ref = make_image(3, 3), test = make_image(3, 3);
+    const float r[9] = {1, 2, 3, 3, 4, 5, 6, 7, 8}, d[9] = {1, -1, 2, 1, 1, 0, 0, 3, -4};
+    for (int i = 0; i < 9; i++)
+        for (int c = 0; c < 3; c++) ref.rgb[3 * i + c] = r[i], test.rgb[3 * i + c] = r[i] + d[i];
+    assert_near(glow_eval_block_error(&test, &ref, NULL, 2), sqrt(23.5 / 205.5), 1e-12);
+    /* One block (3 x 3, or any larger size: a single partial block): ref mean 39/9, delta mean 3/9:
+     * (1/3) / (13/3) = 1/13. */
+    assert_near(glow_eval_block_error(&test, &ref, NULL, 3), 1.0 / 13.0, 1e-12);
+    assert_near(glow_eval_block_error(&test, &ref, NULL, 100), 1.0 / 13.0, 1e-12);
+    /* 1 x 1 blocks are rel_rmse: Σ δ² = 33, Σ r² = 213. */
+    assert_near(glow_eval_block_error(&test, &ref, NULL, 1), sqrt(33.0 / 213.0), 1e-12);
+    assert_near(glow_eval_block_error(&test, &ref, NULL, 1), glow_eval_rel_rmse(&test, &ref, NULL), 1e-12);
+    /* Mask out (0,0) and the corner (2,2): A keeps 3 px (ref 2,3,4 mean 3; delta -1,+1,+1 mean 1/3),
+     * D is skipped: Σ n ΔT² = 3/9 + 2 + 4.5, Σ n R² = 27 + 32 + 84.5. */
+    const uint8_t mask[9] = {0, 1, 1, 1, 1, 1, 1, 1, 0};
+    assert_near(glow_eval_block_error(&test, &ref, mask, 2), sqrt((1.0 / 3 + 6.5) / 143.5), 1e-12);
+    /* Mean ratio: Σ test / Σ ref = 42 / 39; with the mask 36 / 30. */
+    assert_near(glow_eval_mean_ratio(&test, &ref, NULL), 42.0 / 39.0, 1e-12);
+    assert_near(glow_eval_mean_ratio(&test, &ref, mask), 1.2, 1e-12);
+    /* Block size 0 = the default 8: one partial block here. */
+    assert_near(glow_eval_block_error(&test, &ref, NULL, 0), 1.0 / 13.0, 1e-12);
+    /* Channels count separately: a colour error that cancels in the grey sum still counts. */
+    memcpy(test.rgb, ref.rgb, sizeof(float) * 27);
+    for (int i = 0; i < 9; i++) test.rgb[3 * i] += 1.0f, test.rgb[3 * i + 2] -= 1.0f;
+    /* one block, per channel R mean error 1, G 0, B -1: sqrt(9 (1 + 1) / (9 · 3 (39/9)²)). */
+    assert_near(glow_eval_block_error(&test, &ref, NULL, 3), sqrt(2.0 / (3.0 * (39.0 / 9) * (39.0 / 9))), 1e-12);
+    assert_near(glow_eval_mean_ratio(&test, &ref, NULL), 1.0, 1e-12);
+    glow_eval_image_free(&ref);
+    glow_eval_image_free(&test);
+}
+
+static void test_block_error_offset_scale_noise(void **state) {
+    (void)state;
+    /* 20 x 13 in 8 x 8 blocks: 3 x 2 blocks, the last column 4 wide and the last row 5 high. */
+    const uint32_t W = 20, H = 13;
+    glow_eval_image ref = make_image(W, H), test = make_image(W, H);
+    /* A uniform offset d on a constant reference r: every block mean is off by d: d / r. */
+    fill_grey(&ref, 0.5f);
+    fill_grey(&test, 0.5f + 0.0625f);
+    assert_near(glow_eval_block_error(&test, &ref, NULL, 8), 0.125, 1e-12);
+    assert_near(glow_eval_mean_ratio(&test, &ref, NULL), 1.125, 1e-12);
+    /* On a pattern: d over the pixel-weighted RMS of the reference's block means. */
+    fill_pattern(&ref);
+    const float d = 0.03f;
+    for (size_t i = 0; i < (size_t)W * H * 3; i++) test.rgb[i] = ref.rgb[i] + d;
+    double rms = 0, n = 0;
+    for (uint32_t by = 0; by < H; by += 8)
+        for (uint32_t bx = 0; bx < W; bx += 8) {
+            uint32_t bw = bx + 8 <= W ? 8 : W - bx, bh = by + 8 <= H ? 8 : H - by;
+            for (int c = 0; c < 3; c++) {
+                double s = 0;
+                for (uint32_t y = by; y < by + bh; y++)
+                    for (uint32_t x = bx; x < bx + bw; x++) s += ref.rgb[((size_t)y * W + x) * 3 + c];
+                rms += (double)bw * bh * (s / (bw * bh)) * (s / (bw * bh));
+                n += (double)bw * bh;
+            }
+        }
+    rms = sqrt(rms / n);
+    assert_near(glow_eval_block_error(&test, &ref, NULL, 8), d / rms, 1e-6 * d / rms);
+    double sum_r = 0, sum_t = 0;
+    for (size_t i = 0; i < (size_t)W * H * 3; i++) sum_r += ref.rgb[i], sum_t += test.rgb[i];
+    assert_near(glow_eval_mean_ratio(&test, &ref, NULL), sum_t / sum_r, 1e-12);
+    /* A uniform scale (1 + k): |k| at every block size. */
+    for (size_t i = 0; i < (size_t)W * H * 3; i++) test.rgb[i] = (float)((double)ref.rgb[i] * 0.9);
+    for (uint32_t b = 1; b <= 32; b *= 2) assert_near(glow_eval_block_error(&test, &ref, NULL, b), 0.1, 1e-6);
+    assert_near(glow_eval_mean_ratio(&test, &ref, NULL), 0.9, 1e-6);
+    glow_eval_image_free(&ref);
+    glow_eval_image_free(&test);
+    /* Noise that averages out within each 8 x 8 block (a ±e checkerboard) does not count; the
+     * per-pixel rel_rmse sees it. */
+    glow_eval_image r2 = make_image(16, 24), t2 = make_image(16, 24);
+    fill_grey(&r2, 0.25f);
+    for (uint32_t y = 0; y < 24; y++)
+        for (uint32_t x = 0; x < 16; x++)
+            for (int c = 0; c < 3; c++) t2.rgb[((size_t)y * 16 + x) * 3 + c] = ((x + y) % 2) ? 0.3125f : 0.1875f;
+    assert_true(glow_eval_block_error(&t2, &r2, NULL, 8) == 0.0);
+    assert_near(glow_eval_rel_rmse(&t2, &r2, NULL), 0.25, 1e-12);
+    assert_near(glow_eval_mean_ratio(&t2, &r2, NULL), 1.0, 1e-12);
+    glow_eval_image_free(&r2);
+    glow_eval_image_free(&t2);
+}
+
+static void test_block_error_brute_force(void **state) {
+    (void)state;
+    const uint32_t sizes[][2] = {{37, 21}, {8, 8}, {1, 19}, {9, 1}};
+    const uint32_t blocks[] = {1, 2, 3, 8, 16, 40};
+    for (size_t s = 0; s < sizeof sizes / sizeof sizes[0]; s++) {
+        uint32_t W = sizes[s][0], H = sizes[s][1];
+        glow_eval_image ref = make_image(W, H), test = make_image(W, H);
+        fill_pattern(&ref);
+        lcg_state = 40 + (uint32_t)s;
+        for (size_t i = 0; i < (size_t)W * H * 3; i++) test.rgb[i] = ref.rgb[i] * (float)(0.7 + 0.6 * lcg01());
+        uint8_t *mask = malloc((size_t)W * H);
+        assert_non_null(mask);
+        for (size_t i = 0; i < (size_t)W * H; i++) mask[i] = (uint8_t)(lcg01() < 0.7);
+        mask[0] = 1;
+        for (size_t k = 0; k < sizeof blocks / sizeof blocks[0]; k++) {
+            uint32_t b = blocks[k];
+            assert_near(glow_eval_block_error(&test, &ref, NULL, b), block_error_brute(&test, &ref, NULL, b), 1e-12);
+            assert_near(glow_eval_block_error(&test, &ref, mask, b), block_error_brute(&test, &ref, mask, b), 1e-12);
+        }
+        assert_near(glow_eval_block_error(&test, &ref, mask, 1), glow_eval_rel_rmse(&test, &ref, mask), 1e-12);
+        free(mask);
+        glow_eval_image_free(&ref);
+        glow_eval_image_free(&test);
+    }
+}
+
+static void test_block_error_edge_cases(void **state) {
+    (void)state;
+    glow_eval_image a = make_image(5, 4), b = make_image(5, 4), z = make_image(5, 4), w = make_image(4, 5);
+    fill_grey(&a, 0.5f);
+    fill_grey(&b, 0.25f);
+    /* Black reference: 0 when the test is black too, else +inf; mean ratio 1 or ±inf. */
+    assert_true(glow_eval_block_error(&z, &z, NULL, 8) == 0.0);
+    assert_true(isinf(glow_eval_block_error(&a, &z, NULL, 8)));
+    assert_true(glow_eval_mean_ratio(&z, &z, NULL) == 1.0);
+    assert_true(isinf(glow_eval_mean_ratio(&a, &z, NULL)) && glow_eval_mean_ratio(&a, &z, NULL) > 0);
+    fill_grey(&b, -0.25f);
+    assert_true(isinf(glow_eval_mean_ratio(&b, &z, NULL)) && glow_eval_mean_ratio(&b, &z, NULL) < 0);
+    /* NAN: size mismatch, NULL, non-finite pixels, a mask leaving nothing. */
+    assert_true(isnan(glow_eval_block_error(&a, &w, NULL, 8)));
+    assert_true(isnan(glow_eval_mean_ratio(&a, &w, NULL)));
+    assert_true(isnan(glow_eval_block_error(NULL, &a, NULL, 8)));
+    uint8_t none[20] = {0};
+    assert_true(isnan(glow_eval_block_error(&a, &b, none, 8)));
+    assert_true(isnan(glow_eval_mean_ratio(&a, &b, none)));
+    b.rgb[4] = NAN;
+    assert_true(isnan(glow_eval_block_error(&a, &b, NULL, 8)));
+    assert_true(isnan(glow_eval_mean_ratio(&b, &a, NULL)));
+    glow_eval_image_free(&a);
+    glow_eval_image_free(&b);
+    glow_eval_image_free(&z);
+    glow_eval_image_free(&w);
+}
+
 /* ---- masks ---- */
 
 static void test_mask_excludes_pixels(void **state) {
@@ -318,6 +489,8 @@ static void test_mask_excludes_pixels(void **state) {
     assert_true(m0.rmse_display == m1.rmse_display);
     assert_true(m0.psnr_db == m1.psnr_db);
     assert_true(m0.ssim == m1.ssim);
+    assert_true(m0.block_error == m1.block_error);
+    assert_true(m0.mean_ratio == m1.mean_ratio);
     for (int c = 0; c < 3; c++) {
         assert_true(m0.mean_test[c] == m1.mean_test[c]);
         assert_true(m0.mean_ref[c] == m1.mean_ref[c]);
@@ -361,6 +534,10 @@ static void test_compare_consistent(void **state) {
     assert_true(m.rel_rmse == glow_eval_rel_rmse(&test, &ref, NULL));
     assert_true(m.psnr_db == glow_eval_psnr(&test, &ref, NULL, 0.8f));
     assert_true(m.ssim == glow_eval_ssim(&test, &ref, NULL, 0.8f));
+    assert_true(m.block_error == glow_eval_block_error(&test, &ref, NULL, 8));
+    assert_int_equal(m.block_size, 8);
+    assert_true(m.mean_ratio == glow_eval_mean_ratio(&test, &ref, NULL));
+    assert_true(m.block_error > 0 && m.block_error < m.rel_rmse); /* the noise averages out in blocks */
     assert_near(m.psnr_db, 20 * log10(1 / m.rmse_display), 1e-9);
     assert_int_equal(m.pixels, 33 * 21);
     for (int c = 0; c < 3; c++) {
@@ -431,6 +608,10 @@ int main(void) {
         cmocka_unit_test(test_ssim_identity_and_constant),
         cmocka_unit_test(test_ssim_matches_brute_force),
         cmocka_unit_test(test_ssim_monotonic_and_symmetric),
+        cmocka_unit_test(test_block_error_hand),
+        cmocka_unit_test(test_block_error_offset_scale_noise),
+        cmocka_unit_test(test_block_error_brute_force),
+        cmocka_unit_test(test_block_error_edge_cases),
         cmocka_unit_test(test_mask_excludes_pixels),
         cmocka_unit_test(test_compare_consistent),
         cmocka_unit_test(test_invalid_arguments),

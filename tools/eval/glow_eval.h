@@ -1,8 +1,9 @@
 /*
  * glow_eval.h — the evaluation library shared by glow-render, glow-eval and their tests: linear HDR
  * images, their files (OpenEXR through OpenEXR's C core library, PNG through stb_image_write) and
- * the error metrics Glow is judged by. Tool code (tools/eval/, target glow_eval), not part of the
- * runtime: it allocates with malloc and does no threading of its own.
+ * the error metrics Glow is judged by (relative RMSE, PSNR, SSIM, block error, mean ratio).
+ * Tool code (tools/eval/, target glow_eval), not part of the runtime: it allocates with malloc and
+ * does no threading of its own.
  *
  * IMAGES: glow_eval_image is linear RGB float, row-major, top row first (as image files store it),
  * 3 floats per pixel. Radiance in W/(m²·sr) when it comes from glow-render.
@@ -20,9 +21,27 @@
  *                          window σ = 1.5, K1 = 0.01, K2 = 0.03, L = 1; windows are clipped at the image
  *                          border (weights renormalised), every pixel is a window centre.
  *
+ *   block_error(b)       = the relative RMS error of the b x b block means (b = 8 by default): the
+ *                          image is cut into blocks from the top-left corner; blocks at the right and
+ *                          bottom border keep the pixels they have (partial blocks, e.g. 320 x 180 in
+ *                          8 x 8 gives 40 x 23 blocks, the last row 4 pixels high). For block B with
+ *                          n_B unmasked pixels and channel c, T_Bc and R_Bc are the means of the test
+ *                          and reference over those pixels (blocks with n_B = 0 are skipped), and
+ *                            block_error = sqrt( Σ_B n_B Σ_c (T_Bc - R_Bc)² / Σ_B n_B Σ_c R_Bc² ),
+ *                          sums over blocks and the 3 channels: the RMS over blocks of the block-mean
+ *                          error divided by the RMS of the reference's block means, each block weighted
+ *                          by its pixel count (all weights are equal when every block is full and
+ *                          unmasked; a 1 x 1 block gives rel_rmse). Per-pixel noise that averages out
+ *                          within a block does not count, a bias shared by a block's pixels does:
+ *                          test = ref + d everywhere gives d / (the n_B-weighted RMS of the R_Bc);
+ *                          test = ref (1 + k) gives |k|.
+ *   mean_ratio           = Σ test / Σ ref over every unmasked pixel and all 3 channels (the ratio of
+ *                          the mean (R + G + B) / 3; 1 = the same total energy).
+ *
  *   Edge cases: sums are in double and display() is evaluated in double (x · exposure clamped, then
- *   the curve), glow_eval_srgb_encode returns that rounded to float. rel_rmse of a reference that
- *   is 0 everywhere (in the mask) is 0 when the test is too, else +INFINITY.
+ *   the curve), glow_eval_srgb_encode returns that rounded to float. rel_rmse and block_error of a
+ *   reference that is 0 everywhere (in the mask) are 0 when the test is too, else +INFINITY;
+ *   mean_ratio of a reference summing to 0 is 1 when the test sums to 0 too, else ±INFINITY.
  *
  * NON-FINITE PIXELS (NaN, ±Inf) anywhere in either image — masked or not, since SSIM windows read
  * masked pixels — are an error: glow_eval_compare returns GLOW_ERROR_INVALID_ARGUMENT with e.g.
@@ -84,7 +103,12 @@ typedef struct glow_eval_metrics {
     double mean_ref[3];  /* mean reference radiance per channel (masked) */
     double mean_test[3]; /* mean test radiance per channel (masked) */
     uint64_t pixels;     /* pixels compared (mask != 0) */
+    double block_error;  /* relative RMS error of the block_size x block_size block means */
+    uint32_t block_size; /* GLOW_EVAL_BLOCK_SIZE in glow_eval_compare */
+    double mean_ratio;   /* Σ test / Σ ref over the unmasked pixels and channels */
 } glow_eval_metrics;
+
+#define GLOW_EVAL_BLOCK_SIZE 8u /* block_error's default block: 8 x 8 pixels */
 
 /* Compares `test` with `ref` (same size). mask: optional width*height bytes, 0 = leave the pixel out
  * (of every metric; SSIM windows still read masked pixels, only their centres are skipped). */
@@ -95,6 +119,10 @@ glow_result glow_eval_compare(const glow_eval_image *test, const glow_eval_image
 double glow_eval_rel_rmse(const glow_eval_image *test, const glow_eval_image *ref, const uint8_t *mask);
 double glow_eval_psnr(const glow_eval_image *test, const glow_eval_image *ref, const uint8_t *mask, float exposure);
 double glow_eval_ssim(const glow_eval_image *test, const glow_eval_image *ref, const uint8_t *mask, float exposure);
+/* block_size 0 means GLOW_EVAL_BLOCK_SIZE; a block larger than the image is one (partial) block. */
+double glow_eval_block_error(const glow_eval_image *test, const glow_eval_image *ref, const uint8_t *mask,
+                             uint32_t block_size);
+double glow_eval_mean_ratio(const glow_eval_image *test, const glow_eval_image *ref, const uint8_t *mask);
 
 #ifdef __cplusplus
 }

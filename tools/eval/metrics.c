@@ -1,4 +1,5 @@
-/* metrics.c — the error metrics of glow_eval.h (relative HDR RMSE, display RMSE / PSNR, SSIM).
+/* metrics.c — the error metrics of glow_eval.h (relative HDR RMSE, display RMSE / PSNR, SSIM, block
+ * error of block means, mean ratio; FLIP is in flip.c).
  * Sums in double. Non-finite pixels anywhere in either image make the individual metric functions
  * return NAN and glow_eval_compare fail with GLOW_ERROR_INVALID_ARGUMENT naming the first one. */
 #include <math.h>
@@ -172,6 +173,57 @@ static glow_result ssim_compute(const glow_eval_image *test, const glow_eval_ima
     return GLOW_OK;
 }
 
+/* Block error (see glow_eval.h): one row of blocks at a time, per block column the test and
+ * reference sums of each channel and the unmasked pixel count. Memory O(width / block). Returns
+ * GLOW_ERROR_OUT_OF_MEMORY or GLOW_OK; *out is NAN when no pixel is unmasked. */
+static glow_result block_error_compute(const glow_eval_image *test, const glow_eval_image *ref, const uint8_t *mask,
+                                       uint32_t bs, double *out) {
+    enum { S = 7 }; /* test RGB, reference RGB, count */
+    const uint32_t W = test->width, H = test->height;
+    const size_t nbx = ((size_t)W + bs - 1) / bs;
+    double *acc = malloc(sizeof(double) * S * nbx);
+    if (!acc) return GLOW_ERROR_OUT_OF_MEMORY;
+    double num = 0.0, den = 0.0;
+    uint64_t pixels = 0;
+    for (uint32_t y0 = 0; y0 < H; y0 += bs) {
+        memset(acc, 0, sizeof(double) * S * nbx);
+        uint32_t y1 = H - y0 < bs ? H : y0 + bs;
+        for (uint32_t y = y0; y < y1; y++)
+            for (uint32_t x = 0; x < W; x++) {
+                size_t i = (size_t)y * W + x;
+                if (mask && !mask[i]) continue;
+                double *a = acc + S * (size_t)(x / bs);
+                for (int c = 0; c < 3; c++) {
+                    a[c] += test->rgb[3 * i + c];
+                    a[3 + c] += ref->rgb[3 * i + c];
+                }
+                a[6] += 1.0;
+            }
+        for (size_t b = 0; b < nbx; b++) {
+            const double *a = acc + S * b, n = a[6];
+            if (n == 0.0) continue;
+            for (int c = 0; c < 3; c++) {
+                double t = a[c] / n, r = a[3 + c] / n;
+                num += n * (t - r) * (t - r);
+                den += n * r * r;
+            }
+            pixels += (uint64_t)n;
+        }
+    }
+    free(acc);
+    if (pixels == 0) *out = NAN;
+    else if (den == 0.0) *out = num == 0.0 ? 0.0 : INFINITY;
+    else *out = sqrt(num / den);
+    return GLOW_OK;
+}
+
+static double mean_ratio_of(const sums *s) {
+    if (s->pixels == 0) return NAN;
+    double t = s->test[0] + s->test[1] + s->test[2], r = s->ref[0] + s->ref[1] + s->ref[2];
+    if (r == 0.0) return t == 0.0 ? 1.0 : t > 0.0 ? INFINITY : -INFINITY;
+    return t / r;
+}
+
 /* Shared argument checks of the individual metric functions. */
 static int metric_args_ok(const glow_eval_image *test, const glow_eval_image *ref) {
     return image_ok(test) && image_ok(ref) && same_size(test, ref) && first_nonfinite(test) == SIZE_MAX &&
@@ -197,6 +249,21 @@ double glow_eval_ssim(const glow_eval_image *test, const glow_eval_image *ref, c
     double v = NAN;
     if (ssim_compute(test, ref, mask, (double)exposure, &v) != GLOW_OK) return NAN;
     return v;
+}
+
+double glow_eval_block_error(const glow_eval_image *test, const glow_eval_image *ref, const uint8_t *mask,
+                             uint32_t block_size) {
+    if (!metric_args_ok(test, ref)) return NAN;
+    double v = NAN;
+    if (block_error_compute(test, ref, mask, block_size ? block_size : GLOW_EVAL_BLOCK_SIZE, &v) != GLOW_OK) return NAN;
+    return v;
+}
+
+double glow_eval_mean_ratio(const glow_eval_image *test, const glow_eval_image *ref, const uint8_t *mask) {
+    if (!metric_args_ok(test, ref)) return NAN;
+    sums s;
+    accumulate(test, ref, mask, 1.0, 0, &s);
+    return mean_ratio_of(&s);
 }
 
 glow_result glow_eval_compare(const glow_eval_image *test, const glow_eval_image *ref, const uint8_t *mask,
@@ -234,8 +301,9 @@ glow_result glow_eval_compare(const glow_eval_image *test, const glow_eval_image
         set_message(message, message_size, "compare: the mask leaves no pixel to compare");
         return GLOW_ERROR_INVALID_ARGUMENT;
     }
-    double ssim = NAN;
-    if (ssim_compute(test, ref, mask, (double)exposure, &ssim) != GLOW_OK) {
+    double ssim = NAN, block = NAN;
+    if (ssim_compute(test, ref, mask, (double)exposure, &ssim) != GLOW_OK ||
+        block_error_compute(test, ref, mask, GLOW_EVAL_BLOCK_SIZE, &block) != GLOW_OK) {
         set_message(message, message_size, "compare: out of memory");
         return GLOW_ERROR_OUT_OF_MEMORY;
     }
@@ -248,5 +316,8 @@ glow_result glow_eval_compare(const glow_eval_image *test, const glow_eval_image
         out->mean_test[c] = s.test[c] / (double)s.pixels;
     }
     out->pixels = s.pixels;
+    out->block_error = block;
+    out->block_size = GLOW_EVAL_BLOCK_SIZE;
+    out->mean_ratio = mean_ratio_of(&s);
     return GLOW_OK;
 }
