@@ -1,7 +1,7 @@
 /*
  * glow_eval.h — the evaluation library shared by glow-render, glow-eval and their tests: linear HDR
  * images, their files (OpenEXR through OpenEXR's C core library, PNG through stb_image_write) and
- * the error metrics Glow is judged by (relative RMSE, PSNR, SSIM, block error, mean ratio).
+ * the error metrics Glow is judged by (relative RMSE, PSNR, SSIM, block error, mean ratio, FLIP).
  * Tool code (tools/eval/, target glow_eval), not part of the runtime: it allocates with malloc and
  * does no threading of its own.
  *
@@ -37,11 +37,34 @@
  *                          test = ref (1 + k) gives |k|.
  *   mean_ratio           = Σ test / Σ ref over every unmasked pixel and all 3 channels (the ratio of
  *                          the mean (R + G + B) / 3; 1 = the same total energy).
+ *   flip                 = mean HDR-FLIP (Andersson et al. 2020/2021), see FLIP below; computed by
+ *                          glow_eval_flip, not by glow_eval_compare (one LDR-FLIP per exposure, 20-30
+ *                          ms each at 320 x 180 on the VM of docs/results.md: 0.26 s for 14).
  *
  *   Edge cases: sums are in double and display() is evaluated in double (x · exposure clamped, then
  *   the curve), glow_eval_srgb_encode returns that rounded to float. rel_rmse and block_error of a
  *   reference that is 0 everywhere (in the mask) are 0 when the test is too, else +INFINITY;
  *   mean_ratio of a reference summing to 0 is 1 when the test sums to 0 too, else ±INFINITY.
+ *
+ * FLIP (tools/eval/flip.c; constants from the papers and NVlabs/flip, cited there):
+ *   LDR-FLIP of two linear-RGB images clamped to [0,1]: both go to the YCxCz opponent space; each
+ *   channel is filtered with its contrast sensitivity filter (Gaussians sized from the pixels per
+ *   degree, ppd; default 67.02 = a 3840-pixel, 0.7 m wide monitor seen from 0.7 m); back to linear
+ *   RGB clamped to [0,1]; to Hunt-adjusted CIELAB; HyAB distance ^ 0.7, remapped to [0,1] with
+ *   p_c = 0.4, p_t = 0.95 and c_max = the green-blue distance (the largest); the feature difference
+ *   ΔE_f (edges and points of the achromatic channel, Gaussian derivatives of σ = 0.041 ppd pixels,
+ *   ^ 0.5); per pixel FLIP = ΔE_c ^ (1 - ΔE_f), in [0,1]; 0 for identical images. Borders are
+ *   clamped to the edge (as the reference implementation).
+ *   HDR-FLIP: exposures c_i evenly spaced from c_start = log2(x_max / Y_max) to c_stop =
+ *   log2(x_max / Y_median) of the reference's luminance Y = 0.2126 R + 0.7152 G + 0.0722 B (over the
+ *   unmasked pixels, negatives as 0; median = the sorted element at index n/2), x_max = 2.1189 the
+ *   ACES input that maps to 0.85; n = max(2, ceil(c_stop - c_start)) exposures (1 when c_start =
+ *   c_stop); both images × 2^c_i, negatives as 0, ACES filmic tone mapping (Narkowicz's fit with the
+ *   0.6 pre-exposure folded in), clamped, LDR-FLIP; the per-pixel maximum over the exposures. The
+ *   reported value is the mean over the unmasked pixels (filters still read masked pixels).
+ *   Choices where the reference implementation is undefined: a black reference gives c_start =
+ *   c_stop = 0 (as its Python version); a reference with more than half its pixels black (median 0)
+ *   uses the median of its non-zero luminances for c_stop (the reference would give +inf).
  *
  * NON-FINITE PIXELS (NaN, ±Inf) anywhere in either image — masked or not, since SSIM windows read
  * masked pixels — are an error: glow_eval_compare returns GLOW_ERROR_INVALID_ARGUMENT with e.g.
@@ -123,6 +146,58 @@ double glow_eval_ssim(const glow_eval_image *test, const glow_eval_image *ref, c
 double glow_eval_block_error(const glow_eval_image *test, const glow_eval_image *ref, const uint8_t *mask,
                              uint32_t block_size);
 double glow_eval_mean_ratio(const glow_eval_image *test, const glow_eval_image *ref, const uint8_t *mask);
+
+/* ---- FLIP (see FLIP above) ---- */
+
+typedef struct glow_eval_flip_params {
+    double ppd;             /* pixels per degree; 0 = glow_eval_flip_ppd(0.7, 3840, 0.7) = 67.02 */
+    int ldr;                /* nonzero: LDR-FLIP of the images as linear RGB clamped to [0,1] (no exposures) */
+    int fixed_exposures;    /* nonzero: use start/stop_exposure instead of deriving them from the reference */
+    double start_exposure;  /* log2 of the exposure factor, start <= stop */
+    double stop_exposure;
+    int num_exposures;      /* 0 = max(2, ceil(stop - start)) (1 when start == stop); 1 = start only; <= 1024 */
+} glow_eval_flip_params;
+
+typedef struct glow_eval_flip_result {
+    double mean;            /* mean FLIP over the unmasked pixels, in [0,1] */
+    double max;             /* largest per-pixel FLIP over the unmasked pixels */
+    double ppd;             /* pixels per degree used */
+    double start_exposure;  /* HDR: the exposure range and count used (0, 0, 0 for LDR) */
+    double stop_exposure;
+    int num_exposures;
+    uint64_t pixels;        /* unmasked pixels */
+} glow_eval_flip_result;
+
+/* HDR-FLIP (or LDR-FLIP with params->ldr) of `test` against `ref` (same size; params NULL =
+ * defaults). out_map: optional width*height floats receiving the per-pixel FLIP (top row first).
+ * Errors as glow_eval_compare (size mismatch, non-finite pixels, empty mask, bad parameters:
+ * INVALID_ARGUMENT; OUT_OF_MEMORY). Single-threaded; separable filters, 21 + 19 taps at 67 ppd. */
+glow_result glow_eval_flip(const glow_eval_image *test, const glow_eval_image *ref, const uint8_t *mask,
+                           const glow_eval_flip_params *params, float *out_map, glow_eval_flip_result *out,
+                           char *message, size_t message_size);
+/* Mean HDR-FLIP with the default parameters, NAN on an error. */
+double glow_eval_hdr_flip(const glow_eval_image *test, const glow_eval_image *ref, const uint8_t *mask);
+/* Pixels per degree of a monitor resolution_x pixels and monitor_width_m wide seen from distance_m. */
+double glow_eval_flip_ppd(double distance_m, double resolution_x, double monitor_width_m);
+/* HDR-FLIP's tone mapper: ACES filmic fit of x >= 0 (negatives as 0), clamped to [0,1]. */
+double glow_eval_flip_aces(double x);
+
+/* FLIP's 1D filters, for tests and documentation: writes the 2r+1 weights of `kind` at `ppd` when
+ * capacity >= 2r+1, and returns the radius r (-1 on bad arguments). The 2D filters are their outer
+ * products: CSF_A (achromatic, Y) and CSF_RG (red-green, Cx) sum to 1; the blue-yellow filter (Cz)
+ * is BY1 ⊗ BY1 + BY2 ⊗ BY2 (sums to 1); FEATURE_GAUSS sums to 1; FEATURE_EDGE (1st derivative) and
+ * FEATURE_POINT (2nd derivative) have positive weights summing to 1 and negative ones to -1, the 2D
+ * detectors being EDGE ⊗ GAUSS and POINT ⊗ GAUSS and their transposes. */
+typedef enum glow_eval_flip_kernel_kind {
+    GLOW_EVAL_FLIP_KERNEL_CSF_A = 1,
+    GLOW_EVAL_FLIP_KERNEL_CSF_RG,
+    GLOW_EVAL_FLIP_KERNEL_CSF_BY1,
+    GLOW_EVAL_FLIP_KERNEL_CSF_BY2,
+    GLOW_EVAL_FLIP_KERNEL_FEATURE_GAUSS,
+    GLOW_EVAL_FLIP_KERNEL_FEATURE_EDGE,
+    GLOW_EVAL_FLIP_KERNEL_FEATURE_POINT
+} glow_eval_flip_kernel_kind;
+int glow_eval_flip_kernel(glow_eval_flip_kernel_kind kind, double ppd, float *weights, size_t capacity);
 
 #ifdef __cplusplus
 }
