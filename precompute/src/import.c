@@ -196,37 +196,43 @@ glow_result glow__scene_finalize(glow__scene *s, glow__log *log) {
     uint8_t *drop = calloc(n ? n : 1, 1); /* 0 keep, 1 non-finite, 2 degenerate, 3 duplicate */
     if (!drop) goto oom;
 
-    /* bounds of the finite triangles: the degenerate threshold is relative to the scene size */
-    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    /* A triangle is degenerate when it is so relative to its own size, never because it is small in
+     * scene units: the held-out office (modelled in ~3 mm units) lost 68,617 of its 331,179 triangles
+     * to the old test (area below 1e-12 of the squared scene diagonal). Reasons, counted apart:
+     * repeated corners (two corners the same point), and collinear corners (height below 2^-20 of the
+     * longest edge, where float corners no longer define a plane). The area is computed in double
+     * from the float corners, so the test itself is exact to ~1e-16 of the edge lengths. */
     uint32_t first_nonfinite = 0;
     for (uint32_t t = 0; t < n; t++) {
         const float (*p)[3] = s->pos + 3 * (size_t)t;
         if (!finite3(p[0]) || !finite3(p[1]) || !finite3(p[2])) {
             if (!s->skipped_nonfinite++) first_nonfinite = s->tri_source[t];
             drop[t] = 1;
-            continue;
         }
-        for (int i = 0; i < 3; i++)
-            for (int k = 0; k < 3; k++) {
-                if (p[i][k] < lo[k]) lo[k] = p[i][k];
-                if (p[i][k] > hi[k]) hi[k] = p[i][k];
-            }
     }
-    double diag2 = 0.0;
-    if (lo[0] <= hi[0])
-        for (int k = 0; k < 3; k++) diag2 += (hi[k] - lo[k]) * (hi[k] - lo[k]);
-    const double min_area = 1e-12 * diag2;
-
     for (uint32_t t = 0; t < n; t++) {
         if (drop[t]) continue;
         const float (*p)[3] = s->pos + 3 * (size_t)t;
+        double lmax2 = 0.0;
+        bool repeated = false;
+        for (int i = 0; i < 3; i++) {
+            const float *a = p[i], *b = p[(i + 1) % 3];
+            double d2 = 0.0;
+            for (int k = 0; k < 3; k++) d2 += ((double)b[k] - a[k]) * ((double)b[k] - a[k]);
+            repeated |= d2 == 0.0;
+            lmax2 = d2 > lmax2 ? d2 : lmax2;
+        }
         double nn[3];
-        double area = 0.5 * tri_area2(p[0], p[1], p[2], nn);
-        if (!(area > min_area)) { /* also catches repeated corners (area exactly 0) */
+        const double area2 = tri_area2(p[0], p[1], p[2], nn); /* twice the area = longest edge x height */
+        if (repeated) {
             drop[t] = 2;
-            s->skipped_degenerate++;
+            s->skipped_repeated++;
+        } else if (!(area2 > 0x1p-20 * lmax2)) {
+            drop[t] = 2;
+            s->skipped_collinear++;
         }
     }
+    s->skipped_degenerate = s->skipped_repeated + s->skipped_collinear;
 
     /* coincident duplicates: open-addressing hash over the sorted corner bit patterns; the
      * first triangle in order is kept, so the result does not depend on anything but the input */
@@ -280,8 +286,8 @@ glow_result glow__scene_finalize(glow__scene *s, glow__log *log) {
         glow__warnf(log, "%s: %u triangles with a non-finite (NaN/Inf) vertex skipped (first: triangle %u)", s->source,
                     s->skipped_nonfinite, first_nonfinite);
     if (s->skipped_degenerate)
-        glow__warnf(log, "%s: %u degenerate (zero-area or repeated-vertex) triangles skipped", s->source,
-                    s->skipped_degenerate);
+        glow__warnf(log, "%s: %u degenerate triangles skipped (%u with repeated corners, %u with collinear corners)",
+                    s->source, s->skipped_degenerate, s->skipped_repeated, s->skipped_collinear);
 
     /* compact every per-triangle and per-corner array in place */
     uint32_t kept = 0;

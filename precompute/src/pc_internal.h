@@ -80,7 +80,9 @@ typedef struct glow__scene {
     double area;              /* sum of triangle areas */
     /* import statistics */
     uint32_t source_tri_count;
-    uint32_t skipped_degenerate;  /* zero area or repeated index */
+    uint32_t skipped_degenerate;  /* skipped_repeated + skipped_collinear */
+    uint32_t skipped_repeated;    /* two corners at the same point (or a repeated index) */
+    uint32_t skipped_collinear;   /* height below 2^-20 of the longest edge (import.c) */
     uint32_t skipped_nonfinite;   /* NaN/Inf in a vertex */
     uint32_t skipped_duplicate;   /* coincident duplicate faces (same three positions) */
     uint32_t textures_missing;

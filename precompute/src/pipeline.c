@@ -347,6 +347,8 @@ glow_result glow_pc_bake(const char *scene_path, const char *out_path, const glo
     stats->textures = scene.texture_count;
     stats->textures_missing = scene.textures_missing;
     stats->skipped_degenerate = scene.skipped_degenerate;
+    stats->skipped_repeated = scene.skipped_repeated;
+    stats->skipped_collinear = scene.skipped_collinear;
     stats->skipped_duplicate = scene.skipped_duplicate;
     stats->skipped_nonfinite = scene.skipped_nonfinite;
     stats->scene_area = scene.area;

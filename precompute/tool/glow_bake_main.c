@@ -178,10 +178,10 @@ static void print_summary(const char *scene, const char *out, const glow_pc_stat
                    glow_pc_stage_name((uint32_t)i), s->stage_seconds[i], s->stage_peak_rss[i]);
         printf("\n  ],\n");
         printf("  \"scene_stats\": {\"source_triangles\": %u, \"triangles\": %u, \"skipped_degenerate\": %u, "
-               "\"skipped_duplicate\": %u, \"skipped_nonfinite\": %u, \"materials\": %u, \"textures\": %u, "
+               "\"skipped_repeated\": %u, \"skipped_collinear\": %u, \"skipped_duplicate\": %u, \"skipped_nonfinite\": %u, \"materials\": %u, \"textures\": %u, "
                "\"textures_missing\": %u, \"area\": %.6g},\n",
-               s->source_triangles, s->triangles, s->skipped_degenerate, s->skipped_duplicate, s->skipped_nonfinite,
-               s->materials, s->textures, s->textures_missing, s->scene_area);
+               s->source_triangles, s->triangles, s->skipped_degenerate, s->skipped_repeated, s->skipped_collinear,
+               s->skipped_duplicate, s->skipped_nonfinite, s->materials, s->textures, s->textures_missing, s->scene_area);
         printf("  \"surfels\": %u,\n  \"nodes\": %u,\n  \"levels\": %u,\n", s->surfels, s->nodes, s->levels);
         printf("  \"caches\": {\"total\": %u, \"grid\": %u, \"grid_dims\": [%u, %u, %u], \"grid_spacing\": %.6g, "
                "\"grid_inside_rejected\": %u, \"lightmap\": %u, \"lightmap_size\": [%u, %u], \"texel_density\": %.6g, "
@@ -201,10 +201,11 @@ static void print_summary(const char *scene, const char *out, const glow_pc_stat
         return;
     }
     printf("glow-bake: %s -> %s\n", scene, out);
-    printf("  scene     %u triangles kept of %u (skipped: %u degenerate, %u duplicate, %u non-finite), "
+    printf("  scene     %u triangles kept of %u (skipped: %u degenerate [%u repeated corners, %u collinear], "
+           "%u duplicate, %u non-finite), "
            "%u materials, %u textures (%u missing), area %.6g\n",
-           s->triangles, s->source_triangles, s->skipped_degenerate, s->skipped_duplicate, s->skipped_nonfinite,
-           s->materials, s->textures, s->textures_missing, s->scene_area);
+           s->triangles, s->source_triangles, s->skipped_degenerate, s->skipped_repeated, s->skipped_collinear,
+           s->skipped_duplicate, s->skipped_nonfinite, s->materials, s->textures, s->textures_missing, s->scene_area);
     printf("  surfels   %u   nodes %u   levels %u\n", s->surfels, s->nodes, s->levels);
     printf("  caches    %u = grid %u (%ux%ux%u, spacing %.4g, %u inside solids) + lightmap %u (%ux%u, %.4g texels/unit, "
            "%u charts, %u invalid texels)\n",

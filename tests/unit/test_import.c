@@ -473,6 +473,50 @@ static void test_finalize_cleaning(void **state) {
     glow__scene_free(&s);
 }
 
+/* Degenerate means degenerate relative to the triangle's own size, never small in scene units: a
+ * 1 km scene holding 0.2 mm triangles (the held-out office, in ~3 mm units, lost 21 % of its triangles
+ * to a threshold relative to the scene diagonal) keeps them; collinear and repeated corners are
+ * counted apart, whatever their size. */
+static void test_finalize_small_triangles(void **state) {
+    (void)state;
+    capture c;
+    glow__log log = make_log(&c);
+    glow__scene s;
+    memset(&s, 0, sizeof s);
+    snprintf(s.source, sizeof s.source, "tiny");
+    const uint32_t n = 7;
+    s.tri_count = n;
+    s.pos = calloc(3 * n, sizeof *s.pos);
+    s.tri_material = calloc(n, sizeof *s.tri_material);
+    s.materials = calloc(1, sizeof *s.materials);
+    s.material_count = 1;
+    s.materials[0].texture = -1;
+    set3(s.materials[0].albedo, 0.5f, 0.5f, 0.5f);
+    const float tris[7][3][3] = {
+        {{0, 0, 0}, {1000, 0, 0}, {0, 1000, 0}},            /* 0 big: sets a 1.4 km diagonal */
+        {{500, 500, 7}, {500.0002f, 500, 7}, {500, 500.0002f, 7}}, /* 1 a 0.2 mm triangle far from the origin */
+        {{1, 1, 1}, {1.000001f, 1, 1}, {1, 1.000001f, 1}},  /* 2 a 1 µm triangle (area 5e-13, 2.5e-19 of diag²) */
+        {{0, 0, 5}, {1, 0, 5}, {2, 0, 5}},                  /* 3 collinear, 2 m long */
+        {{0, 0, 6}, {1e-3f, 0, 6}, {2e-3f, 1e-12f, 6}},      /* 4 collinear within 2^-20 of its size */
+        {{3, 3, 3}, {3, 3, 3}, {4, 3, 3}},                  /* 5 repeated corner */
+        {{0, 0, 9}, {1e-3f, 0, 9}, {0, 1e-3f, 9}},          /* 6 a 1 mm triangle */
+    };
+    for (uint32_t t = 0; t < n; t++)
+        for (int i = 0; i < 3; i++) memcpy(s.pos[3 * t + i], tris[t][i], sizeof(float[3]));
+    assert_int_equal(glow__scene_finalize(&s, &log), GLOW_OK);
+    assert_int_equal(s.source_tri_count, n);
+    assert_int_equal(s.tri_count, 4);
+    assert_int_equal(s.skipped_degenerate, 3);
+    assert_int_equal(s.skipped_repeated, 1);
+    assert_int_equal(s.skipped_collinear, 2);
+    assert_int_equal(s.tri_source[0], 0);
+    assert_int_equal(s.tri_source[1], 1);
+    assert_int_equal(s.tri_source[2], 2);
+    assert_int_equal(s.tri_source[3], 6);
+    assert_true(has(&c, "3 degenerate triangles skipped (1 with repeated corners, 2 with collinear corners)"));
+    glow__scene_free(&s);
+}
+
 /* A scene of 262,144 triangles (a 256 x 512 grid of quads) cleans in well under a second, and a
  * second copy of every face is found. */
 static void test_finalize_large(void **state) {
@@ -883,11 +927,14 @@ static void test_sponza(void **state) {
     assert_int_equal(r, GLOW_OK);
     check_clean(&s);
     /* README: 66,450 triangles, 6 zero-area ones, no normals, 20 materials all with map_Kd
-     * (12 distinct diffuse maps), every texture name resolves case-insensitively */
+     * (12 distinct diffuse maps), every texture name resolves case-insensitively. A seventh is
+     * collinear: triangle 12272 is 1.3 m long and 0.5 µm high (3.7e-7 of its length, below the float
+     * spacing of its 10 m coordinates). */
     assert_int_equal(s.source_tri_count, 66450);
-    assert_int_equal(s.skipped_degenerate, 6);
+    assert_int_equal(s.skipped_degenerate, 7);
+    assert_int_equal(s.skipped_collinear, 7);
     assert_int_equal(s.skipped_nonfinite, 0);
-    assert_int_equal(s.tri_count, 66450 - 6 - s.skipped_duplicate);
+    assert_int_equal(s.tri_count, 66450 - 7 - s.skipped_duplicate);
     assert_true(s.normals_generated);
     assert_non_null(s.uv0);
     assert_null(s.uv1);
@@ -922,6 +969,7 @@ int main(void) {
         cmocka_unit_test(test_builtin_unknown),
         cmocka_unit_test(test_finalize_cleaning),
         cmocka_unit_test(test_finalize_large),
+        cmocka_unit_test(test_finalize_small_triangles),
         cmocka_unit_test(test_bad_inputs),
         cmocka_unit_test(test_unreadable),
         cmocka_unit_test(test_degenerate_obj),

@@ -70,6 +70,9 @@ typedef struct glow_pc_stats {
     /* counts */
     uint32_t source_triangles, triangles, materials, textures, textures_missing;
     uint32_t skipped_degenerate, skipped_duplicate, skipped_nonfinite;
+    uint32_t skipped_repeated, skipped_collinear; /* the degenerate ones by reason (sum: skipped_degenerate):
+                                                     repeated corners; corners collinear relative to the
+                                                     triangle's own size (never: small in scene units) */
     uint32_t nodes, levels;
     uint32_t grid_dims[3], grid_caches, grid_inside;
     uint32_t lightmap_width, lightmap_height, lightmap_caches, lightmap_invalid, charts;
