@@ -68,6 +68,11 @@ expect 0 "stability: flicker" "$BIN/glow-stability" flicker "$T/cornell.glow" "$
 expect 0 "stability: jumps" "$BIN/glow-stability" jumps "$T/cornell.glow" "$SCN/cornell-builtin-spot.json" --pairs 20 --samples 16
 grep -q "largest jump" "$T/out" && pass "  jumps reported" || fail "  jumps output"
 
+expect 0 "stability: audit" "$BIN/glow-stability" audit "$T/cornell.glow" "$SCENE" --probes 64 --samples 256 --json --csv "$T/audit.csv"
+python3 -c "import json,sys; r=json.load(open(sys.argv[1])); c=r['converged']; sys.exit(0 if 0.85 < c['mean_ratio'] < 1.15 and c['caches_rated'] > 0 and sum(r['visible_solid_angle_hist_2pi_eighths']) == 64 else 1)" "$T/out" \
+  && pass "  audit: converged caches within 15 % of the reference on average, histogram of 64 caches" || fail "  audit JSON wrong"
+[ "$(wc -l < "$T/audit.csv")" = 65 ] && pass "  audit CSV: header + 64 caches" || fail "  audit CSV"
+
 # --- glow-eval quick (two settings of one parameter)
 expect 0 "glow-eval quick" python3 "$ROOT/tools/glow-eval" sweep "$SCENE" --out "$T/eval" --quick --params chroma --bin "$BIN" \
   --width 24 --height 24 --ref-spp 8 --frames 3

@@ -27,6 +27,16 @@
  * shares its random numbers). Reports the largest and 99th-percentile jumps relative to the mean
  * irradiance, Glow against the reference.
  *
+ * Audit (where the indirect energy goes): P lightmap caches, spread over the cache list; at each, Glow's
+ * irradiance along the cache normal against the reference's (glow_render_irradiance, S paths), twice:
+ * single bounce (Glow: one update without feedback; reference: paths of one reflection, max depth 3)
+ * and converged (multi-bounce against full paths). Reports Glow / reference of the summed irradiance,
+ * the relative RMS error over caches, the per-cache ratio's 5th/50th/95th percentiles and the caches
+ * off by more than 1.5x either way, and a histogram of the caches' visible solid angle (Σ over
+ * their links). The cache gather alone: no lightmap interpolation, no camera. The single-bounce pass
+ * matches only for scenes lit by host lights: with emissive surfaces the reference's paths also
+ * count the emitters' light after one reflection, which Glow's caches receive one update later.
+ *
  * Exit 0, 1 on a failure (the message names the file), 2 bad usage. */
 #include <math.h>
 #include <stdio.h>
@@ -37,6 +47,7 @@
 #include "glow/glow_host.h"
 #include "glow/glow_scene.h"
 #include "glow_render.h"
+#include "bake/bake_format.h" /* link blocks (audit) */
 #include "runtime_internal.h" /* the bake's cache normals (glow__bake_caches); a tool of this repository */
 
 #define PI_D 3.14159265358979323846
@@ -46,6 +57,7 @@ static int usage(FILE *f) {
                "       glow-stability flicker BAKE SCENE.json [--frames N] [--iterations K] [--probes P] [--samples S]\n"
                "                              [--csv FILE]\n"
                "       glow-stability jumps   BAKE SCENE.json [--pairs P] [--samples S] [--csv FILE]\n"
+               "       glow-stability audit   BAKE SCENE.json [--probes P] [--samples S] [--csv FILE] [--json]\n"
                "Share of negative radiance in Glow's converged caches for SH bands 2..L, with and without\n"
                "the Lanczos window (glow_sh_window_factor); see docs/results.md.\n");
     return f == stdout ? 0 : 2;
@@ -475,9 +487,142 @@ done:
     return rc;
 }
 
+/* ------------------------------------------------------------------ audit: where the indirect energy goes */
+typedef struct audit_row {
+    double g, r; /* luma irradiance: Glow, reference */
+} audit_row;
+
+static int cmp_ratio(const void *a, const void *b) {
+    const double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* Per lightmap cache, Glow's irradiance against the reference's at the cache (position and normal),
+ * single bounce (Glow without feedback against paths of one reflection) and converged (multi-bounce
+ * against full paths): the gather through the links and the cut, without the lightmap's interpolation
+ * and the camera. Also each cache's visible solid angle (Σ over its links, from the bake) as a
+ * histogram: what the cut covers. */
+static int audit(const char *bake_path, const char *scene_path, uint32_t nprobes, uint32_t samples, const char *csv_path,
+                 int json) {
+    session s;
+    int rc = 1;
+    float *pts = NULL, *er1 = NULL, *erc = NULL, *eg1 = NULL, *egc = NULL;
+    double *ratio = NULL;
+    uint32_t *pick = NULL;
+    FILE *csv = NULL;
+    if (!session_open(&s, bake_path, scene_path, 64)) goto done;
+    const uint32_t lm = s.info.lightmap_cache_count, first = s.info.grid_cache_count;
+    if (nprobes > lm) nprobes = lm;
+    if (nprobes == 0) {
+        fprintf(stderr, "glow-stability: %s: the bake has no lightmap caches to audit\n", bake_path);
+        goto done;
+    }
+    pts = malloc(sizeof(float) * 6 * nprobes);
+    er1 = malloc(sizeof(float) * 3 * nprobes);
+    erc = malloc(sizeof(float) * 3 * nprobes);
+    eg1 = malloc(sizeof(float) * 3 * nprobes);
+    egc = malloc(sizeof(float) * 3 * nprobes);
+    ratio = malloc(sizeof(double) * 2 * nprobes);
+    pick = malloc(sizeof(uint32_t) * nprobes);
+    if (!pts || !er1 || !erc || !eg1 || !egc || !ratio || !pick) goto done;
+    for (uint32_t i = 0; i < nprobes; ++i) {
+        pick[i] = first + (uint32_t)((uint64_t)i * lm / nprobes);
+        cache_point(&s, pick[i], pts + 6 * i);
+    }
+    /* Glow converged (session_open ran 3 x 64 feedback iterations), then single bounce: no feedback */
+    for (uint32_t i = 0; i < nprobes; ++i) glow_irradiance(&s, pick[i], egc + 3 * i);
+    glow_system_set_params(s.sys, &(glow_system_params){.bounce_intensity = 0.0f, .emission_scale = s.scene.emission_scale,
+                                                        .bounce_iterations = 1});
+    if (glow_system_update(s.sys, NULL) != GLOW_OK) goto done;
+    for (uint32_t i = 0; i < nprobes; ++i) glow_irradiance(&s, pick[i], eg1 + 3 * i);
+    char msg[512];
+    glow_render_settings st1 = {.seed = 3, .max_depth = 3}, stc = {.seed = 3};
+    if (glow_render_irradiance(s.rs, NULL, 0, &st1, pts, nprobes, samples, 0, er1, NULL, msg, sizeof msg) != GLOW_OK ||
+        glow_render_irradiance(s.rs, NULL, 0, &stc, pts, nprobes, samples, 0, erc, NULL, msg, sizeof msg) != GLOW_OK) {
+        fprintf(stderr, "glow-stability: %s\n", msg);
+        goto done;
+    }
+    if (csv_path && !(csv = fopen(csv_path, "w"))) {
+        fprintf(stderr, "glow-stability: %s: cannot write\n", csv_path);
+        goto done;
+    }
+    if (csv) fprintf(csv, "cache,x,y,z,nx,ny,nz,glow_1b,ref_1b,glow,ref\n");
+    const char *names[2] = {"single_bounce", "converged"};
+    const float *G[2] = {eg1, egc}, *R[2] = {er1, erc};
+    if (json) printf("{\"scene\": \"%s\", \"bake\": \"%s\", \"probes\": %u, \"samples\": %u", scene_path, bake_path, nprobes, samples);
+    for (int pass = 0; pass < 2; ++pass) {
+        double sg = 0, sr = 0, se2 = 0, sr2 = 0, mean_r = 0;
+        for (uint32_t i = 0; i < nprobes; ++i) mean_r += luma(R[pass] + 3 * i);
+        mean_r /= nprobes;
+        uint32_t nr = 0, bright = 0, dark = 0;
+        for (uint32_t i = 0; i < nprobes; ++i) {
+            const double g = luma(G[pass] + 3 * i), r = luma(R[pass] + 3 * i);
+            sg += g;
+            sr += r;
+            se2 += (g - r) * (g - r);
+            sr2 += r * r;
+            /* ratios only where the reference is not noise-dominated (above 5 % of the mean) */
+            if (r > 0.05 * mean_r) {
+                ratio[nr++] = g / r;
+                bright += g > 1.5 * r;
+                dark += g < r / 1.5;
+            }
+        }
+        qsort(ratio, nr, sizeof *ratio, cmp_ratio);
+        const double q05 = nr ? ratio[(size_t)(0.05 * (nr - 1))] : NAN, q50 = nr ? ratio[nr / 2] : NAN,
+                     q95 = nr ? ratio[(size_t)(0.95 * (nr - 1))] : NAN;
+        if (json)
+            printf(",\n \"%s\": {\"mean_ratio\": %.5f, \"rel_rms_error\": %.5f, \"ratio_p05\": %.4f, \"ratio_median\": %.4f, "
+                   "\"ratio_p95\": %.4f, \"caches_rated\": %u, \"over_1_5x\": %u, \"under_1_5x\": %u}",
+                   names[pass], sg / sr, sqrt(se2 / sr2), q05, q50, q95, nr, bright, dark);
+        else
+            printf("audit %-13s Glow/reference mean %.4f, rel. RMS error %.4f; per cache (%u with ref > 5%% of the mean): "
+                   "p05 %.3f median %.3f p95 %.3f, %u above 1.5x, %u below 1/1.5x\n",
+                   names[pass], sg / sr, sqrt(se2 / sr2), nr, q05, q50, q95, bright, dark);
+    }
+    /* visible solid angle of each cache, from its decoded links */
+    {
+        uint32_t hist[9] = {0};
+        const uint32_t bpc = (s.info.links_per_cache + GLOW_LINK_BLOCK - 1) / GLOW_LINK_BLOCK;
+        const glow_bake_link_block *blocks = glow__bake_link_blocks(s.bake);
+        for (uint32_t i = 0; i < nprobes; ++i) {
+            double om = 0; /* unused lanes hold 0 */
+            for (uint32_t j = 0; blocks && j < bpc * GLOW_LINK_BLOCK; ++j)
+                om += 2.0 * PI_D * glow__half_to_float(blocks[(size_t)pick[i] * bpc + j / GLOW_LINK_BLOCK].one_minus_cos[j % GLOW_LINK_BLOCK]);
+            int b = (int)(om / (2.0 * PI_D) * 8.0);
+            hist[b < 0 ? 0 : b > 8 ? 8 : b]++;
+        }
+        if (json) {
+            printf(",\n \"visible_solid_angle_hist_2pi_eighths\": [");
+            for (int b = 0; b < 9; ++b) printf("%s%u", b ? ", " : "", hist[b]);
+            printf("]\n}\n");
+        } else {
+            printf("audit visible solid angle of the caches' links (x 2 pi sr, in eighths; the last bin: >= 1):");
+            for (int b = 0; b < 9; ++b) printf(" %u", hist[b]);
+            printf("\n");
+        }
+    }
+    for (uint32_t i = 0; csv && i < nprobes; ++i)
+        fprintf(csv, "%u,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g\n", pick[i], pts[6 * i], pts[6 * i + 1], pts[6 * i + 2], pts[6 * i + 3],
+                pts[6 * i + 4], pts[6 * i + 5], luma(eg1 + 3 * i), luma(er1 + 3 * i), luma(egc + 3 * i), luma(erc + 3 * i));
+    rc = 0;
+done:
+    if (csv) fclose(csv);
+    free(pts);
+    free(er1);
+    free(erc);
+    free(eg1);
+    free(egc);
+    free(ratio);
+    free(pick);
+    session_free(&s);
+    return rc;
+}
+
 int main(int argc, char **argv) {
     if (argc >= 2 && (!strcmp(argv[1], "-h") || !strcmp(argv[1], "--help"))) return usage(stdout);
-    if (argc < 4 || (strcmp(argv[1], "ringing") && strcmp(argv[1], "flicker") && strcmp(argv[1], "jumps")))
+    if (argc < 4 || (strcmp(argv[1], "ringing") && strcmp(argv[1], "flicker") && strcmp(argv[1], "jumps") &&
+                      strcmp(argv[1], "audit")))
         return usage(stderr);
     uint32_t lmax = GLOW_MAX_SH_BANDS, ndirs = 256, frames = 240, iterations = 1, probes = 96, samples = 1024, pairs = 3000;
     const char *csv = NULL;
@@ -511,6 +656,7 @@ int main(int argc, char **argv) {
         return 2;
     }
     if (!strcmp(argv[1], "ringing")) return ringing(argv[2], argv[3], lmax, ndirs, json);
+    if (!strcmp(argv[1], "audit")) return audit(argv[2], argv[3], probes, samples, csv, json);
     if (!strcmp(argv[1], "flicker")) return flicker(argv[2], argv[3], frames, iterations, probes, samples, csv);
     return jumps(argv[2], argv[3], pairs, samples, csv);
 }
