@@ -67,6 +67,7 @@ typedef struct link_job {
     float **omega;                   /* [workers][node_count] */
     float **dirsum;                  /* [workers][node_count*3] */
     float **kappa;                   /* [workers][node_count]: Σ ω_i K_L(d_i·n), lightmap caches */
+    float **prio;                    /* [workers][node_count]: split priority of the nodes pushed (cut_priority) */
     uint32_t **heap;                 /* [workers][node_count] */
     double *visible_total;           /* per cache, summed in cache order afterwards */
     float *norm_scale;               /* per cache: the normalisation factor applied (0 = none) */
@@ -76,29 +77,29 @@ typedef struct link_job {
     void *progress_user;
 } link_job;
 
-/* max-heap on omega, ties broken by the smaller node index, so the cut is deterministic */
-static bool heap_less(const float *omega, uint32_t a, uint32_t b) {
-    if (omega[a] != omega[b]) return omega[a] < omega[b];
+/* max-heap on the split priority, ties broken by the smaller node index, so the cut is deterministic */
+static bool heap_less(const float *prio, uint32_t a, uint32_t b) {
+    if (prio[a] != prio[b]) return prio[a] < prio[b];
     return a > b;
 }
-static void heap_push(uint32_t *heap, uint32_t *n, const float *omega, uint32_t v) {
+static void heap_push(uint32_t *heap, uint32_t *n, const float *prio, uint32_t v) {
     uint32_t i = (*n)++;
     heap[i] = v;
     while (i > 0) {
         uint32_t p = (i - 1) / 2;
-        if (!heap_less(omega, heap[p], heap[i])) break;
+        if (!heap_less(prio, heap[p], heap[i])) break;
         uint32_t t = heap[p]; heap[p] = heap[i]; heap[i] = t;
         i = p;
     }
 }
-static uint32_t heap_pop(uint32_t *heap, uint32_t *n, const float *omega) {
+static uint32_t heap_pop(uint32_t *heap, uint32_t *n, const float *prio) {
     uint32_t top = heap[0];
     heap[0] = heap[--(*n)];
     uint32_t i = 0;
     for (;;) {
         uint32_t l = 2 * i + 1, r = l + 1, m = i;
-        if (l < *n && heap_less(omega, heap[m], heap[l])) m = l;
-        if (r < *n && heap_less(omega, heap[m], heap[r])) m = r;
+        if (l < *n && heap_less(prio, heap[m], heap[l])) m = l;
+        if (r < *n && heap_less(prio, heap[m], heap[r])) m = r;
         if (m == i) break;
         uint32_t t = heap[m]; heap[m] = heap[i]; heap[i] = t;
         i = m;
@@ -243,6 +244,47 @@ static uint32_t near_field(const link_job *job, const glow__cache *cache, float 
     return front_hits;
 }
 
+/* A node one of whose children is invisible from the cache links exactly what its visible child
+ * links, less the invisible child's flux that the node's mean radiosity would dilute it with: descend
+ * to the smallest subtree that holds all the node's visible leaves. Free: the cut keeps its size. */
+static uint32_t cut_descend(const link_job *job, const float *omega, uint32_t v) {
+    if (!job->settings->cut_error) return v; /* the published cut, as it was */
+    const glow__hierarchy *h = job->h;
+    for (;;) {
+        const glow__node *nd = &h->nodes[v];
+        if (nd->child[0] == GLOW_NODE_NONE) return v;
+        const bool a = omega[nd->child[0]] > 0.0f, b = omega[nd->child[1]] > 0.0f;
+        if (a && b) return v;
+        v = a ? nd->child[0] : nd->child[1];
+    }
+}
+
+/* Split priority of a cut node v: a bound on the error its link can make, in units of
+ * (visible solid angle x radiosity contrast). The link applies the node's mean radiosity, i.e. weight
+ * 1/n to each of its n leaves, where the exact gather weights leaf i by ω_i/ω_v (hidden leaves by 0).
+ * The gather error is Σ_i (ω_i/ω_v − 1/n) B_i, at most ω_v · D_v · (B_max − B_min) with D_v the total
+ * variation distance ½ Σ_i |ω_i/ω_v − 1/n| between the two weightings: D_v is at least the node's
+ * hidden fraction (the cause of the energy loss and of contact leaks, docs/linker.md) and also counts
+ * visible leaves seen at very different solid angles. A node that is fully and evenly visible still
+ * errs in direction (one cone for a spread of directions): its spread 1 − |Σ ω_i d_i| / ω_v, which is
+ * (1 − cos α)/2 for a cap of half-angle α, so for such nodes the order is that of the solid angle, the
+ * published priority (PIC 4.5). */
+static float cut_priority(const link_job *job, const float *omega, const float *dirsum, uint32_t v) {
+    const float om = omega[v];
+    if (!job->settings->cut_error || !(om > 0.0f)) return om; /* the published priority (PIC 4.5) */
+    const float *ds = &dirsum[3 * v];
+    float spread = 1.0f - sqrtf(glow__dot(ds, ds)) / om;
+    spread = spread < 0.0f ? 0.0f : spread;
+    const uint32_t a = job->leaf_first[v], b = job->leaf_end[v];
+    double tv = 0.0;
+    if (b - a > 1) {
+        const double inv_om = 1.0 / om, inv_n = 1.0 / (double)(b - a);
+        for (uint32_t i = a; i < b; ++i) tv += fabs(omega[i] * inv_om - inv_n);
+        tv *= 0.5;
+    }
+    return om * (float)(tv + spread);
+}
+
 static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
     const glow__hierarchy *h = job->h;
     const glow__surfels *S = job->surfels;
@@ -384,23 +426,32 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
         if (hemi) kappa[v] = kappa[a] + kappa[b];
     }
 
-    /* 3. cut refinement. The heap holds the current cut; split the most important internal node. */
+    /* 3. cut refinement. The heap holds the current cut; split the node of highest priority. */
     uint32_t nl = set->links_per_cache;
     uint32_t hn = 0, leaves_in_cut = 0;
     uint32_t root = h->node_count - 1;
-    if (omega[root] > 0.0f) heap_push(heap, &hn, omega, root);
+    float *prio = job->prio[worker];
+    if (omega[root] > 0.0f) {
+        root = cut_descend(job, omega, root);
+        prio[root] = cut_priority(job, omega, dirsum, root);
+        heap_push(heap, &hn, prio, root);
+    }
     /* Leaves cannot be split: they move from the heap to `leafcut`. The heap never holds more
      * than nl + 1 nodes (each split adds at most one to the cut, which stops at nl). */
     uint32_t *leafcut = heap + nl + 2;
     while (hn > 0 && hn + leaves_in_cut < nl) {
-        uint32_t v = heap_pop(heap, &hn, omega);
+        uint32_t v = heap_pop(heap, &hn, prio);
         const glow__node *nd = &h->nodes[v];
         if (nd->child[0] == GLOW_NODE_NONE) {
             leafcut[leaves_in_cut++] = v;
             continue;
         }
         for (int c = 0; c < 2; ++c)
-            if (omega[nd->child[c]] > 0.0f) heap_push(heap, &hn, omega, nd->child[c]);
+            if (omega[nd->child[c]] > 0.0f) {
+                uint32_t u = cut_descend(job, omega, nd->child[c]);
+                prio[u] = cut_priority(job, omega, dirsum, u);
+                heap_push(heap, &hn, prio, u);
+            }
     }
     /* Cut = heap contents + leafcut. Sort by node index for a stable, cache-friendly order. */
     uint32_t cut_n = 0;
@@ -501,21 +552,23 @@ glow_result glow__links_build(const glow__scene *scene, const glow__rt *rt, cons
     job.omega = calloc(job.workers, sizeof *job.omega);
     job.dirsum = calloc(job.workers, sizeof *job.dirsum);
     job.kappa = calloc(job.workers, sizeof *job.kappa);
+    job.prio = calloc(job.workers, sizeof *job.prio);
     job.heap = calloc(job.workers, sizeof *job.heap);
     job.visible_total = calloc((size_t)caches->count + 1, sizeof(double));
     job.norm_scale = calloc((size_t)caches->count + 1, sizeof(float));
     job.norm_clamped = calloc((size_t)caches->count + 1, 1);
     job.leaf_first = malloc((size_t)h->node_count * sizeof(uint32_t));
     job.leaf_end = malloc((size_t)h->node_count * sizeof(uint32_t));
-    bool ok = out->links && (!settings->full_sh || out->sh) && job.omega && job.dirsum && job.kappa && job.heap &&
+    bool ok = out->links && (!settings->full_sh || out->sh) && job.omega && job.dirsum && job.kappa && job.prio && job.heap &&
               job.visible_total && job.norm_scale && job.norm_clamped && job.leaf_first && job.leaf_end;
     for (uint32_t w = 0; ok && w < job.workers; ++w) {
         job.omega[w] = malloc((size_t)h->node_count * sizeof(float));
         job.dirsum[w] = malloc((size_t)h->node_count * 3 * sizeof(float));
         job.kappa[w] = malloc((size_t)h->node_count * sizeof(float));
+        job.prio[w] = malloc((size_t)h->node_count * sizeof(float));
         /* heap (nl + 2) + leaf cut (nl) + sorted cut (<= nl + 2) */
         job.heap[w] = malloc(((size_t)3u * nl + 8u) * sizeof(uint32_t));
-        ok = job.omega[w] && job.dirsum[w] && job.kappa[w] && job.heap[w];
+        ok = job.omega[w] && job.dirsum[w] && job.kappa[w] && job.prio[w] && job.heap[w];
     }
     glow_result res = GLOW_OK;
     if (!ok) {
@@ -594,11 +647,13 @@ done:
         if (job.omega) free(job.omega[w]);
         if (job.dirsum) free(job.dirsum[w]);
         if (job.kappa) free(job.kappa[w]);
+        if (job.prio) free(job.prio[w]);
         if (job.heap) free(job.heap[w]);
     }
     free(job.omega);
     free(job.dirsum);
     free(job.kappa);
+    free(job.prio);
     free(job.heap);
     free(job.visible_total);
     free(job.norm_scale);

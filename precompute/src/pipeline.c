@@ -415,7 +415,7 @@ glow_result glow_pc_bake(const char *scene_path, const char *out_path, const glo
     STAGE_BEGIN(ST_LINKS);
     glow__link_settings slink = {.links_per_cache = set.links, .sh_bands = set.bands, .full_sh = set.sh_links,
                                  .rays_per_surfel = set.rays_per_surfel, .seed = set.seed,
-                                 .no_normalize = set.no_link_normalize};
+                                 .no_normalize = set.no_link_normalize, .cut_error = set.cut_error};
     res = glow__links_build(&scene, rt, &surfels, &hier, &caches, &slink, pool, &log, stage_progress, &pc, &links);
     STAGE_END(ST_LINKS);
     if (res != GLOW_OK) goto done;

@@ -44,6 +44,9 @@ static const char *usage_text =
     "  --seed S               sampling seed (default 0); same input and seed give the same bytes\n"
     "  --sh-links             also store full-SH links (PIC Eq. 2) next to runtime-projection links\n"
     "  --rays N               visibility rays per (cache, surfel) pair (default 1)\n"
+    "  --cut solid-angle|error  how each cache's cut is refined: solid-angle (default) splits the\n"
+    "                         largest visible solid angle first (PIC 4.5); error splits first the node\n"
+    "                         whose link can err most (partly visible nodes, uneven visibility)\n"
     "  --no-link-normalize    keep each cache's link solid angles as estimated (default: scaled to\n"
     "                         the ray-measured visible geometry, so no energy is lost per bounce)\n"
     "  --json                 print the summary (or --info) as JSON on stdout\n"
@@ -361,6 +364,11 @@ int main(int argc, char **argv) {
         } else if (!strcmp(a, "--rays")) {
             NEED_VALUE();
             if (!parse_u32(v, 1, 256, &s.rays_per_surfel)) return usage_error("--rays '%s': expected an integer in 1..256", v);
+        } else if (!strcmp(a, "--cut")) {
+            NEED_VALUE();
+            if (!strcmp(v, "solid-angle")) s.cut_error = false;
+            else if (!strcmp(v, "error")) s.cut_error = true;
+            else return usage_error("--cut '%s': expected error or solid-angle", v);
         } else if (!strcmp(a, "--no-link-normalize")) {
             s.no_link_normalize = true;
         } else if (!strcmp(a, "--sh-links")) {

@@ -5,6 +5,7 @@
 #include <stdint.h>
 #include <cmocka.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -125,14 +126,15 @@ static glow__caches two_caches(void) {
 
 static double link_omega(const glow__link *l) { return l->one_minus_cos * 2.0 * GLOW__PI; }
 
-static void test_cut_covers_visible_scene(void **state) {
-    (void)state;
+/* Both cuts (--cut solid-angle, the default, and --cut error) cover the visible scene. */
+static void cut_covers_visible_scene(bool cut_error) {
     world w;
     world_make(&w, "furnace", 4096, 2);
     glow__caches c = two_caches();
     const uint32_t nl = 64;
     /* the raw cut (no cone fit: it resizes lightmap cones on purpose, see test_cone_fit_response) */
-    glow__link_settings ls = {.links_per_cache = nl, .sh_bands = 3, .rays_per_surfel = 1, .no_cone_fit = true};
+    glow__link_settings ls = {.links_per_cache = nl, .sh_bands = 3, .rays_per_surfel = 1, .no_cone_fit = true,
+                              .cut_error = cut_error};
     glow__links L;
     assert_int_equal(glow__links_build(&w.scene, w.rt, &w.surfels, &w.h, &c, &ls, w.pool, &w.log, NULL, NULL, &L),
                      GLOW_OK);
@@ -164,6 +166,68 @@ static void test_cut_covers_visible_scene(void **state) {
         fail_msg("cut total %g vs leaf total %g", leaf_total, L.visible_solid_angle_total);
     glow__links_free(&L);
     free(c.caches);
+    world_free(&w);
+}
+static void test_cut_covers_visible_scene(void **state) {
+    (void)state;
+    cut_covers_visible_scene(false);
+    cut_covers_visible_scene(true);
+}
+
+/* --cut error (links.c cut_priority, cut_descend): from a room of the two-rooms scene its cut differs
+ * from the solid-angle cut at equal coverage and is the same for any thread count. Printed, not
+ * asserted: how many links hold surfels of the hidden room. With this test's plain HAC hierarchy
+ * (glow__hierarchy_build, without the pipeline's visibility term) both cuts link such mixed nodes
+ * (14 and 19 of 96): the error bound does not single them out at this budget, one reason the cut
+ * stays opt-in (docs/linker.md, "The cut"). */
+static void test_cut_error(void **state) {
+    (void)state;
+    const uint32_t nl = 48;
+    glow__links L[3];
+    uint32_t mixed[3] = {0, 0, 0};
+    world w;
+    for (int k = 0; k < 3; ++k) {
+        world_make(&w, "two-rooms", 4096, k == 2 ? 1 : 2);
+        glow__caches c = caches_alloc(2);
+        c.caches[0] = (glow__cache){.pos = {-2.0f, 1.25f, 0.1f}, .kind = GLOW_CACHE_KIND_GRID};
+        c.caches[1] = (glow__cache){.pos = {-1.0f, 0.001f, 0.5f}, .nrm = {0, 1, 0}, .kind = GLOW_CACHE_KIND_LIGHTMAP};
+        glow__link_settings ls = {.links_per_cache = nl, .sh_bands = 3, .rays_per_surfel = 1, .no_cone_fit = true,
+                                  .cut_error = k > 0};
+        assert_int_equal(glow__links_build(&w.scene, w.rt, &w.surfels, &w.h, &c, &ls, w.pool, &w.log, NULL, NULL, &L[k]),
+                         GLOW_OK);
+        for (uint32_t j = 0; j < 2 * nl; ++j) {
+            const glow__link *l = &L[k].links[j];
+            if (l->factor == 0.0f) continue;
+            /* every surfel under a linked node lies in room A (x < 0) */
+            uint32_t stack[64], sp = 0;
+            stack[sp++] = l->node;
+            while (sp) {
+                uint32_t v = stack[--sp];
+                if (v < w.h.leaf_count) {
+                    if (!(w.surfels.s[v].pos[0] < 0.05f)) {
+                        mixed[k]++;
+                        break;
+                    }
+                } else if (sp + 2 <= 64) {
+                    stack[sp++] = w.h.nodes[v].child[0];
+                    stack[sp++] = w.h.nodes[v].child[1];
+                }
+            }
+        }
+        free(c.caches);
+        if (k < 2) world_free(&w);
+    }
+    printf("links holding room-B surfels: solid-angle cut %u, error cut %u\n", mixed[0], mixed[1]);
+    assert_int_equal(mixed[1], mixed[2]);
+    double tot[2] = {0, 0};
+    uint32_t differ = 0;
+    for (int k = 0; k < 2; ++k)
+        for (uint32_t j = 0; j < 2 * nl; ++j) tot[k] += L[k].links[j].factor != 0.0f ? link_omega(&L[k].links[j]) : 0.0;
+    for (uint32_t j = 0; j < 2 * nl; ++j) differ += L[0].links[j].node != L[1].links[j].node;
+    if (fabs(tot[0] - tot[1]) > 1e-3 * tot[0]) fail_msg("coverage: solid-angle cut %g sr, error cut %g sr", tot[0], tot[1]);
+    assert_true(differ > 0);
+    assert_memory_equal(L[1].links, L[2].links, (size_t)2 * nl * sizeof *L[1].links);
+    for (int k = 0; k < 3; ++k) glow__links_free(&L[k]);
     world_free(&w);
 }
 
@@ -468,6 +532,7 @@ int main(void) {
         cmocka_unit_test(test_sh_orthonormal),
         cmocka_unit_test(test_cone_factors_quadrature),
         cmocka_unit_test(test_cut_covers_visible_scene),
+        cmocka_unit_test(test_cut_error),
         cmocka_unit_test(test_cut_refines_to_leaves),
         cmocka_unit_test(test_visibility_blocks_other_room),
         cmocka_unit_test(test_full_sh_matches_runtime_dc),

@@ -58,6 +58,10 @@ typedef struct glow_pc_settings {
     bool no_link_normalize;   /* false (default): scale each cache's link solid angles to the
                                  ray-measured visible geometry (energy-conserving); true: leave the
                                  disc/near-field estimates as they are (--no-link-normalize) */
+    bool cut_error;           /* false (default): refine each cache's cut by visible solid angle, as PIC 4.5;
+                                 true: by a bound on each link's error, which splits partly visible nodes
+                                 first and links a node's visible subtree (--cut error; docs/linker.md,
+                                 "The cut": measured, not yet better on the whole) */
 } glow_pc_settings;
 
 typedef struct glow_pc_stats {
