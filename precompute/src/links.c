@@ -248,7 +248,7 @@ static uint32_t near_field(const link_job *job, const glow__cache *cache, float 
  * links, less the invisible child's flux that the node's mean radiosity would dilute it with: descend
  * to the smallest subtree that holds all the node's visible leaves. Free: the cut keeps its size. */
 static uint32_t cut_descend(const link_job *job, const float *omega, uint32_t v) {
-    if (!job->settings->cut_error) return v; /* the published cut, as it was */
+    if (!job->settings->cut_error) return v; /* the published cut */
     const glow__hierarchy *h = job->h;
     for (;;) {
         const glow__node *nd = &h->nodes[v];
@@ -468,6 +468,41 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
             cut[j] = t;
         }
 
+    /* Audit (settings->audit_radiance, glow-bake --audit-radiance): with one radiance per surfel from any
+     * lighting, the gather as the exact sum over the visible leaves against the gather through the cut:
+     * a node's link applies the mean over all its leaves, where the exact sum weighs each visible leaf by
+     * its own solid angle; the difference is the error of the cut alone (PIC's Fig. 9c bleeding, the
+     * energy of partly visible nodes). Lightmap caches weigh by the diffuse response (the leaves' ω K_L),
+     * grid caches by the solid angle. Also the visible part's mean (the same cut, each node's radiance
+     * averaged over its visible leaves only, ω-weighted): what a link could give at best. */
+    if (set->audit_radiance) {
+        const float *B = set->audit_radiance;
+        const float *wt = hemi ? kappa : omega;
+        double exact = 0.0, linked = 0.0, linked_vis = 0.0, fvis = 0.0, om = 0.0;
+        for (uint32_t i = 0; i < n; ++i) exact += (double)wt[i] * B[i];
+        for (uint32_t j = 0; j < cut_n; ++j) {
+            const uint32_t v = cut[j], a = job->leaf_first[v], b = job->leaf_end[v];
+            double sum = 0.0, sum_vis = 0.0, w_vis = 0.0, n_vis = 0.0;
+            for (uint32_t i = a; i < b; ++i) {
+                sum += B[i];
+                if (omega[i] > 0.0f) {
+                    sum_vis += (double)omega[i] * B[i];
+                    w_vis += omega[i];
+                    n_vis += 1.0;
+                }
+            }
+            linked += wt[v] * sum / (b - a);
+            linked_vis += w_vis > 0.0 ? wt[v] * sum_vis / w_vis : 0.0;
+            fvis += omega[v] * n_vis / (b - a);
+            om += omega[v];
+        }
+        float *row = job->out->audit + (size_t)ci * GLOW__AUDIT_FIELDS;
+        row[0] = (float)exact;
+        row[1] = (float)linked;
+        row[2] = (float)linked_vis;
+        row[3] = om > 0.0 ? (float)(fvis / om) : 1.0f;
+        row[4] = (float)om;
+    }
     /* 4. links */
     const uint32_t bands = job->out->sh_bands;
     const uint32_t nc = bands * bands;
@@ -543,6 +578,7 @@ glow_result glow__links_build(const glow__scene *scene, const glow__rt *rt, cons
     out->per_cache = nl;
     out->sh_bands = settings->sh_bands;
     out->links = calloc((size_t)caches->count * nl + 1, sizeof *out->links);
+    if (settings->audit_radiance) out->audit = calloc((size_t)caches->count * GLOW__AUDIT_FIELDS + 1, sizeof(float));
     if (settings->full_sh)
         out->sh = calloc((size_t)caches->count * nl * settings->sh_bands * settings->sh_bands + 1, sizeof(float));
     link_job job = {.scene = scene, .rt = rt, .surfels = surfels, .h = h, .caches = caches, .settings = settings,
@@ -559,7 +595,7 @@ glow_result glow__links_build(const glow__scene *scene, const glow__rt *rt, cons
     job.norm_clamped = calloc((size_t)caches->count + 1, 1);
     job.leaf_first = malloc((size_t)h->node_count * sizeof(uint32_t));
     job.leaf_end = malloc((size_t)h->node_count * sizeof(uint32_t));
-    bool ok = out->links && (!settings->full_sh || out->sh) && job.omega && job.dirsum && job.kappa && job.prio && job.heap &&
+    bool ok = out->links && (!settings->full_sh || out->sh) && (!settings->audit_radiance || out->audit) && job.omega && job.dirsum && job.kappa && job.prio && job.heap &&
               job.visible_total && job.norm_scale && job.norm_clamped && job.leaf_first && job.leaf_end;
     for (uint32_t w = 0; ok && w < job.workers; ++w) {
         job.omega[w] = malloc((size_t)h->node_count * sizeof(float));
@@ -668,5 +704,6 @@ void glow__links_free(glow__links *l) {
     if (!l) return;
     free(l->links);
     free(l->sh);
+    free(l->audit);
     memset(l, 0, sizeof *l);
 }

@@ -245,6 +245,8 @@ typedef struct glow__link_settings {
     bool no_cone_fit;          /* keep lightmap links' solid angles (tests of the raw cut); default: fit */
     bool cut_error;            /* false (default): split by visible solid angle (PIC 4.5); true: links.c
                                   cut_priority and cut_descend (--cut error) */
+    const float *audit_radiance; /* optional [surfel count]: a radiance per surfel (any lighting); the
+                                    links then also fill glow__links.audit (links.c, "Audit") */
 } glow__link_settings;
 
 typedef struct glow__link {
@@ -260,7 +262,12 @@ typedef struct glow__links {
     float *sh;                /* full-SH: [cache_count * per_cache * bands²] or NULL */
     uint32_t sh_bands;
     double visible_solid_angle_total;  /* sum over caches of visible solid angle (diagnostic) */
+    /* with audit_radiance: per cache [GLOW__AUDIT_FIELDS] = the exact gather through the visible leaves,
+     * the gather through the cut, the gather through the cut with each node's visible part's mean, the
+     * linked nodes' visible fraction (ω-weighted), the visible solid angle */
+    float *audit;
 } glow__links;
+enum { GLOW__AUDIT_FIELDS = 5 };
 
 typedef void (*glow__progress_fn)(void *user, double fraction);
 glow_result glow__links_build(const glow__scene *scene, const glow__rt *rt, const glow__surfels *surfels,

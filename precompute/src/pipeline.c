@@ -295,6 +295,89 @@ static void log_adapter(void *user, glow_log_level level, const char *msg) {
     if (s->log) s->log(s->log_user, level, msg);
 }
 
+/* --audit-radiance: one little-endian float32 per surfel, in the bake's surfel order (what
+ * glow-stability audit --radiance-out writes for a bake of the same scene and settings). */
+static glow_result read_audit_radiance(const char *path, uint32_t count, glow__log *log, float **out) {
+    FILE *f = fopen(path, "rb");
+    if (!f) {
+        glow__errorf(log, "%s: cannot open the audit radiance file", path);
+        return GLOW_ERROR_IO;
+    }
+    float *b = malloc(((size_t)count + 1) * sizeof *b);
+    size_t got = b ? fread(b, sizeof *b, (size_t)count + 1, f) : 0;
+    fclose(f);
+    if (!b) {
+        glow__errorf(log, "%s: out of memory", path);
+        return GLOW_ERROR_OUT_OF_MEMORY;
+    }
+    if (got != count) {
+        glow__errorf(log, "%s: holds %s%zu radiances, the bake has %u surfels (baked with other settings?)", path,
+                     got > count ? "more than " : "", got > count ? (size_t)count : got, count);
+        free(b);
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    for (uint32_t i = 0; i < count; ++i)
+        if (!isfinite(b[i]) || b[i] < 0.0f) {
+            glow__errorf(log, "%s: radiance %u is %g (must be finite and >= 0)", path, i, (double)b[i]);
+            free(b);
+            return GLOW_ERROR_INVALID_ARGUMENT;
+        }
+    *out = b;
+    return GLOW_OK;
+}
+
+static int cmp_float(const void *a, const void *b) {
+    const float x = *(const float *)a, y = *(const float *)b;
+    return (x > y) - (x < y);
+}
+
+/* The audit's summary (log) and per-cache CSV. Caches whose exact gather is below 5 % of the mean are
+ * left out of the ratio percentiles (their ratios are noise of near-black values). */
+static void report_audit(const glow__caches *c, const glow__links *l, FILE *csv, const char *csv_path, glow__log *log) {
+    double exact = 0, linked = 0, vis = 0, e2 = 0, r2 = 0, fsum = 0, fw = 0;
+    for (uint32_t i = 0; i < c->count; ++i) {
+        const float *a = l->audit + (size_t)i * GLOW__AUDIT_FIELDS;
+        exact += a[0];
+        linked += a[1];
+        vis += a[2];
+        e2 += ((double)a[1] - a[0]) * ((double)a[1] - a[0]);
+        r2 += (double)a[0] * a[0];
+        fsum += (double)a[3] * a[4];
+        fw += a[4];
+    }
+    const double mean = c->count ? exact / c->count : 0.0;
+    float *ratio = malloc(((size_t)c->count + 1) * sizeof *ratio);
+    uint32_t nr = 0, bright = 0, dark = 0;
+    for (uint32_t i = 0; ratio && i < c->count; ++i) {
+        const float *a = l->audit + (size_t)i * GLOW__AUDIT_FIELDS;
+        if (!(a[0] > 0.05 * mean)) continue;
+        ratio[nr] = a[1] / a[0];
+        bright += ratio[nr] > 1.5f;
+        dark += ratio[nr] < 1.0f / 1.5f;
+        nr++;
+    }
+    if (ratio && nr) {
+        qsort(ratio, nr, sizeof *ratio, cmp_float);
+        glow__infof(log,
+                    "links audit: gather through the cut / exact %.4f (with visible-part means %.4f), rel. RMS error %.4f; "
+                    "per cache (%u rated) p05 %.3f median %.3f p95 %.3f, %u above 1.5x, %u below 1/1.5x; linked nodes "
+                    "%.1f %% visible (solid-angle weighted)",
+                    exact > 0 ? linked / exact : 0.0, exact > 0 ? vis / exact : 0.0, r2 > 0 ? sqrt(e2 / r2) : 0.0, nr,
+                    (double)ratio[(size_t)(0.05 * (nr - 1))], (double)ratio[nr / 2], (double)ratio[(size_t)(0.95 * (nr - 1))],
+                    bright, dark, fw > 0 ? 100.0 * fsum / fw : 100.0);
+    }
+    free(ratio);
+    if (!csv) return;
+    fprintf(csv, "cache,kind,x,y,z,nx,ny,nz,visible_solid_angle,visible_fraction,exact,link,link_visible_mean\n");
+    for (uint32_t i = 0; i < c->count; ++i) {
+        const glow__cache *k = &c->caches[i];
+        const float *a = l->audit + (size_t)i * GLOW__AUDIT_FIELDS;
+        fprintf(csv, "%u,%s,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g\n", i, k->kind == GLOW_CACHE_KIND_LIGHTMAP ? "lightmap" : "grid",
+                k->pos[0], k->pos[1], k->pos[2], k->nrm[0], k->nrm[1], k->nrm[2], a[4], a[3], a[0], a[1], a[2]);
+    }
+    if (ferror(csv)) glow__warnf(log, "%s: writing the audit CSV failed", csv_path);
+}
+
 glow_result glow_pc_bake(const char *scene_path, const char *out_path, const glow_pc_settings *settings_in,
                          glow_pc_stats *stats) {
     glow_pc_stats local_stats;
@@ -324,6 +407,12 @@ glow_result glow_pc_bake(const char *scene_path, const char *out_path, const glo
     uint8_t *gvis = NULL; /* GVIS, until serialise takes it */
     glow__links links = {0};
     sections ss = {0};
+    float *audit_radiance = NULL;
+    FILE *audit_csv = NULL; /* opened first: a bad path fails before the work */
+    if (set.audit_csv && !(audit_csv = fopen(set.audit_csv, "w"))) {
+        glow__errorf(&log, "%s: cannot write the audit CSV", set.audit_csv);
+        return GLOW_ERROR_IO;
+    }
     glow__pool *pool = glow__pool_create(set.threads);
     if (!pool) {
         glow__errorf(&log, "cannot start %u threads", set.threads);
@@ -412,13 +501,19 @@ glow_result glow_pc_bake(const char *scene_path, const char *out_path, const glo
             goto done;
         }
     }
+    if (set.audit_radiance) {
+        res = read_audit_radiance(set.audit_radiance, surfels.count, &log, &audit_radiance);
+        if (res != GLOW_OK) goto done;
+    }
     STAGE_BEGIN(ST_LINKS);
     glow__link_settings slink = {.links_per_cache = set.links, .sh_bands = set.bands, .full_sh = set.sh_links,
                                  .rays_per_surfel = set.rays_per_surfel, .seed = set.seed,
-                                 .no_normalize = set.no_link_normalize, .cut_error = set.cut_error};
+                                 .no_normalize = set.no_link_normalize, .cut_error = set.cut_error,
+                                 .audit_radiance = audit_radiance};
     res = glow__links_build(&scene, rt, &surfels, &hier, &caches, &slink, pool, &log, stage_progress, &pc, &links);
     STAGE_END(ST_LINKS);
     if (res != GLOW_OK) goto done;
+    if (links.audit) report_audit(&caches, &links, audit_csv, set.audit_csv, &log);
     stats->links = (uint64_t)caches.count * set.links;
     stats->links_per_cache = set.links;
     stats->bands = set.bands;
@@ -441,6 +536,11 @@ glow_result glow_pc_bake(const char *scene_path, const char *out_path, const glo
 #undef STAGE_BEGIN
 #undef STAGE_END
 done:
+    free(audit_radiance);
+    if (audit_csv) {
+        fclose(audit_csv);
+        if (res != GLOW_OK) remove(set.audit_csv);
+    }
     free(gvis);
     for (uint32_t i = 0; i < ss.n; ++i) free(ss.owned[i]);
     glow__links_free(&links);

@@ -44,9 +44,14 @@ static const char *usage_text =
     "  --seed S               sampling seed (default 0); same input and seed give the same bytes\n"
     "  --sh-links             also store full-SH links (PIC Eq. 2) next to runtime-projection links\n"
     "  --rays N               visibility rays per (cache, surfel) pair (default 1)\n"
-    "  --cut solid-angle|error  how each cache's cut is refined: solid-angle (default) splits the\n"
-    "                         largest visible solid angle first (PIC 4.5); error splits first the node\n"
-    "                         whose link can err most (partly visible nodes, uneven visibility)\n"
+    "  --cut solid-angle|error  how each cache's cut is refined: solid-angle (default) splits the largest\n"
+    "                         visible solid angle first (PIC 4.5); error splits first the node whose link\n"
+    "                         can err most (partly visible nodes, uneven visibility) and links a node's\n"
+    "                         visible subtree (see --audit-radiance)\n"
+    "  --audit-radiance FILE  audit the cuts under a lighting: FILE holds one float32 radiance per surfel\n"
+    "                         (glow-stability audit --radiance-out, for a bake with the same settings);\n"
+    "                         logs each cut's gather against the exact gather through visible surfels\n"
+    "  --audit-csv FILE       with --audit-radiance: the per-cache figures as CSV\n"
     "  --no-link-normalize    keep each cache's link solid angles as estimated (default: scaled to\n"
     "                         the ray-measured visible geometry, so no energy is lost per bounce)\n"
     "  --json                 print the summary (or --info) as JSON on stdout\n"
@@ -369,6 +374,12 @@ int main(int argc, char **argv) {
             if (!strcmp(v, "solid-angle")) s.cut_error = false;
             else if (!strcmp(v, "error")) s.cut_error = true;
             else return usage_error("--cut '%s': expected error or solid-angle", v);
+        } else if (!strcmp(a, "--audit-radiance")) {
+            NEED_VALUE();
+            s.audit_radiance = v;
+        } else if (!strcmp(a, "--audit-csv")) {
+            NEED_VALUE();
+            s.audit_csv = v;
         } else if (!strcmp(a, "--no-link-normalize")) {
             s.no_link_normalize = true;
         } else if (!strcmp(a, "--sh-links")) {
@@ -390,6 +401,7 @@ int main(int argc, char **argv) {
         return run_info(info, json);
     }
     if (!scene) return usage_error("no scene given");
+    if (s.audit_csv && !s.audit_radiance) return usage_error("--audit-csv needs --audit-radiance");
     if (!out) return usage_error("no output file given (-o OUT.glow)");
     char msg[512];
     if (glow_pc_settings_validate(&s, msg, sizeof msg) != GLOW_OK) return usage_error("%s", msg);

@@ -60,8 +60,14 @@ typedef struct glow_pc_settings {
                                  disc/near-field estimates as they are (--no-link-normalize) */
     bool cut_error;           /* false (default): refine each cache's cut by visible solid angle, as PIC 4.5;
                                  true: by a bound on each link's error, which splits partly visible nodes
-                                 first and links a node's visible subtree (--cut error; docs/linker.md,
-                                 "The cut": measured, not yet better on the whole) */
+                                 first and links a node's visible subtree (--cut error). Per cache it is
+                                 closer to the exact gather; on Sponza's image it is not yet better
+                                 (docs/linker.md, "The cut") */
+    const char *audit_radiance; /* optional: a file of one float32 radiance per surfel (any lighting;
+                                   glow-stability audit --radiance-out); the linker then compares each
+                                   cache's gather through its cut with the exact gather through its
+                                   visible surfels and logs the summary (--audit-radiance) */
+    const char *audit_csv;      /* optional, with audit_radiance: the per-cache figures as CSV (--audit-csv) */
 } glow_pc_settings;
 
 typedef struct glow_pc_stats {
