@@ -73,6 +73,30 @@ python3 -c "import json,sys; r=json.load(open(sys.argv[1])); c=r['converged']; s
   && pass "  audit: converged caches within 15 % of the reference on average, histogram of 64 caches" || fail "  audit JSON wrong"
 [ "$(wc -l < "$T/audit.csv")" = 65 ] && pass "  audit CSV: header + 64 caches" || fail "  audit CSV"
 
+# --- the cut's share of the gather error: surfel radiance from glow-stability, audit in glow-bake
+expect 0 "stability: audit writes the surfels' radiance" "$BIN/glow-stability" audit "$T/cornell.glow" "$SCN/cornell-builtin-point.json" \
+  --probes 16 --samples 16 --radiance-out "$T/radiance.bin"
+[ "$(stat -c %s "$T/radiance.bin")" = $((8192 * 4)) ] && pass "  one float per surfel (8192 at low)" || fail "  radiance file size"
+expect 0 "bake: --audit-radiance" "$BIN/glow-bake" builtin:cornell -o "$T/audited.glow" --quality low --audit-radiance "$T/radiance.bin" --audit-csv "$T/cut.csv"
+err_has "links audit: gather through the cut / exact"
+python3 - "$T/cut.csv" "$T/audited.glow" "$T/cornell.glow" <<'PY' && pass "  audit CSV: every cache, exact gathers > 0, the bake unchanged by the audit" || fail "  audit CSV"
+import csv, sys
+rows = list(csv.DictReader(open(sys.argv[1])))
+assert len(rows) > 1000, len(rows)
+assert sum(float(r["exact"]) > 0 for r in rows) > 0.9 * len(rows)
+assert all(0 <= float(r["visible_fraction"]) <= 1.0001 for r in rows)
+assert open(sys.argv[2], "rb").read() == open(sys.argv[3], "rb").read()
+PY
+expect 2 "bake: --audit-csv alone" "$BIN/glow-bake" builtin:cornell -o "$T/x.glow" --audit-csv "$T/cut.csv"
+expect 1 "bake: missing radiance file" "$BIN/glow-bake" builtin:cornell -o "$T/x.glow" --quality low --audit-radiance "$T/none.bin"
+err_has "none.bin"
+head -c 100 "$T/radiance.bin" > "$T/short.bin"
+expect 1 "bake: radiance of another bake" "$BIN/glow-bake" builtin:cornell -o "$T/x.glow" --quality low --audit-radiance "$T/short.bin"
+err_has "8192 surfels"
+expect 1 "bake: unwritable audit CSV fails first" "$BIN/glow-bake" builtin:cornell -o "$T/x.glow" --quality low \
+  --audit-radiance "$T/radiance.bin" --audit-csv "$T/no/such/dir/cut.csv"
+[ -e "$T/x.glow" ] && fail "  a bake was written" || pass "  no bake written"
+
 # --- glow-eval quick (two settings of one parameter)
 expect 0 "glow-eval quick" python3 "$ROOT/tools/glow-eval" sweep "$SCENE" --out "$T/eval" --quick --params chroma --bin "$BIN" \
   --width 24 --height 24 --ref-spp 8 --frames 3

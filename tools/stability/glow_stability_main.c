@@ -37,6 +37,11 @@
  * matches only for scenes lit by host lights: with emissive surfaces the reference's paths also
  * count the emitters' light after one reflection, which Glow's caches receive one update later.
  *
+ * Also the same at area-uniform points (the bake's surfels: Glow's feedback irradiance for the next
+ * bounce), and with --radiance-out FILE the surfels' single-bounce radiance (luma, float32, surfel
+ * order) for glow-bake --audit-radiance, which splits the gather error into the cut's share and the
+ * rest (docs/results.md).
+ *
  * Exit 0, 1 on a failure (the message names the file), 2 bad usage. */
 #include <math.h>
 #include <stdio.h>
@@ -58,6 +63,7 @@ static int usage(FILE *f) {
                "                              [--csv FILE]\n"
                "       glow-stability jumps   BAKE SCENE.json [--pairs P] [--samples S] [--csv FILE]\n"
                "       glow-stability audit   BAKE SCENE.json [--probes P] [--samples S] [--csv FILE] [--json]\n"
+               "                              [--radiance-out FILE]\n"
                "Share of negative radiance in Glow's converged caches for SH bands 2..L, with and without\n"
                "the Lanczos window (glow_sh_window_factor); see docs/results.md.\n");
     return f == stdout ? 0 : 2;
@@ -503,7 +509,7 @@ static int cmp_ratio(const void *a, const void *b) {
  * and the camera. Also each cache's visible solid angle (Σ over its links, from the bake) as a
  * histogram: what the cut covers. */
 static int audit(const char *bake_path, const char *scene_path, uint32_t nprobes, uint32_t samples, const char *csv_path,
-                 int json) {
+                 const char *radiance_out, int json) {
     session s;
     int rc = 1;
     float *pts = NULL, *er1 = NULL, *erc = NULL, *eg1 = NULL, *egc = NULL;
@@ -535,6 +541,26 @@ static int audit(const char *bake_path, const char *scene_path, uint32_t nprobes
                                                         .bounce_iterations = 1});
     if (glow_system_update(s.sys, NULL) != GLOW_OK) goto done;
     for (uint32_t i = 0; i < nprobes; ++i) glow_irradiance(&s, pick[i], eg1 + 3 * i);
+    if (radiance_out) { /* the surfels' single-bounce radiance (luma), for glow-bake --audit-radiance */
+        glow_solver_tables t;
+        FILE *f = glow_system_get_solver_tables(s.sys, &t) == GLOW_OK ? fopen(radiance_out, "wb") : NULL;
+        int wok = f != NULL;
+        for (uint32_t i = 0; wok && i < t.surfel_count; ++i) {
+            float b[3];
+            for (int k = 0; k < 3; ++k)
+                b[k] = t.albedo[3 * i + k] * t.material_albedo_scale[3 * t.materials[i] + k] * t.direct_irradiance[3 * i + k] /
+                           (float)PI_D +
+                       t.emission[3 * i + k] * t.material_emission_scale[3 * t.materials[i] + k] * s.scene.emission_scale;
+            const float l = luma(b);
+            wok = fwrite(&l, sizeof l, 1, f) == 1;
+        }
+        if (f && fclose(f) != 0) wok = 0;
+        if (!wok) {
+            fprintf(stderr, "glow-stability: %s: cannot write the surfel radiance\n", radiance_out);
+            if (f) remove(radiance_out);
+            goto done;
+        }
+    }
     char msg[512];
     glow_render_settings st1 = {.seed = 3, .max_depth = 3}, stc = {.seed = 3};
     if (glow_render_irradiance(s.rs, NULL, 0, &st1, pts, nprobes, samples, 0, er1, NULL, msg, sizeof msg) != GLOW_OK ||
@@ -579,6 +605,85 @@ static int audit(const char *bake_path, const char *scene_path, uint32_t nprobes
             printf("audit %-13s Glow/reference mean %.4f, rel. RMS error %.4f; per cache (%u with ref > 5%% of the mean): "
                    "p05 %.3f median %.3f p95 %.3f, %u above 1.5x, %u below 1/1.5x\n",
                    names[pass], sg / sr, sqrt(se2 / sr2), nr, q05, q50, q95, bright, dark);
+    }
+    /* Area-uniform points: the bake's surfels (equal areas), each with the irradiance Glow gives it for
+     * the next bounce (its feedback cache along the surfel's normal) against the reference's at the
+     * surfel. Unlike the caches above (one per texel, however little surface a texel covers), this
+     * weighs the scene by area, as the camera and the multi-bounce feedback do; where the two audits
+     * disagree, the loss lies between the caches and the surfaces that read them. */
+    {
+        const glow_bake_surfel *sf = glow__bake_surfels(s.bake);
+        const uint32_t ns = s.info.surfel_count, np = nprobes < ns ? nprobes : ns;
+        float *sp = malloc(sizeof(float) * 6 * np), *sr = malloc(sizeof(float) * 3 * np);
+        double sg = 0, srr = 0, se2 = 0, sr2 = 0;
+        int ok = sp && sr && sf;
+        const glow_cache_outputs *o = glow_system_outputs(s.sys);
+        const float lift = 1e-4f * sqrtf((s.info.bounds_max[0] - s.info.bounds_min[0]) * (s.info.bounds_max[0] - s.info.bounds_min[0]) +
+                                         (s.info.bounds_max[1] - s.info.bounds_min[1]) * (s.info.bounds_max[1] - s.info.bounds_min[1]) +
+                                         (s.info.bounds_max[2] - s.info.bounds_min[2]) * (s.info.bounds_max[2] - s.info.bounds_min[2]));
+        for (uint32_t i = 0; ok && i < np; ++i) {
+            const glow_bake_surfel *u = &sf[(uint64_t)i * ns / np];
+            for (int k = 0; k < 3; ++k) {
+                sp[6 * i + k] = u->position[k] + lift * u->normal[k];
+                sp[6 * i + 3 + k] = u->normal[k];
+            }
+        }
+        /* single bounce first (the system is in that state from above), then converged again */
+        float *sr1 = malloc(sizeof(float) * 3 * np), *sg1 = malloc(sizeof(float) * 3 * np);
+        ok = ok && sr1 && sg1;
+        const glow_bake_surfel *base = sf;
+        for (uint32_t i = 0; ok && i < np; ++i) {
+            const glow_bake_surfel *u = &base[(uint64_t)i * ns / np];
+            glow_shade_sh(o->cache_sh + (size_t)u->feedback * o->coeff_count, o->sh_bands_luma, o->sh_bands_chroma, u->normal,
+                          1.0f, sg1 + 3 * i);
+            for (int k = 0; k < 3; ++k) sg1[3 * i + k] *= (float)PI_D;
+        }
+        ok = ok && glow_render_irradiance(s.rs, NULL, 0, &st1, sp, np, samples, 0, sr1, NULL, msg, sizeof msg) == GLOW_OK;
+        glow_system_set_params(s.sys, &(glow_system_params){.bounce_intensity = 1.0f, .emission_scale = s.scene.emission_scale,
+                                                            .bounce_iterations = 64});
+        for (int u = 0; ok && u < 3; ++u) ok = glow_system_update(s.sys, NULL) == GLOW_OK;
+        ok = ok && glow_render_irradiance(s.rs, NULL, 0, &stc, sp, np, samples, 0, sr, NULL, msg, sizeof msg) == GLOW_OK;
+        FILE *scsv = NULL;
+        if (ok && csv_path) {
+            char name[1024];
+            snprintf(name, sizeof name, "%s.surfels.csv", csv_path);
+            if (!(scsv = fopen(name, "w"))) fprintf(stderr, "glow-stability: %s: cannot write\n", name);
+            else fprintf(scsv, "surfel,x,y,z,nx,ny,nz,feedback_cache,glow_1b,ref_1b,glow,ref\n");
+        }
+        double sg1s = 0, sr1s = 0;
+        for (uint32_t i = 0; ok && i < np; ++i) {
+            const glow_bake_surfel *u = &sf[(uint64_t)i * ns / np];
+            float e[3];
+            glow_shade_sh(o->cache_sh + (size_t)u->feedback * o->coeff_count, o->sh_bands_luma, o->sh_bands_chroma, u->normal,
+                          1.0f, e);
+            for (int k = 0; k < 3; ++k) e[k] *= (float)PI_D;
+            const double g = luma(e), r = luma(sr + 3 * i);
+            sg1s += luma(sg1 + 3 * i);
+            sr1s += luma(sr1 + 3 * i);
+            if (scsv)
+                fprintf(scsv, "%u,%g,%g,%g,%g,%g,%g,%u,%g,%g,%g,%g\n", (uint32_t)((uint64_t)i * ns / np), u->position[0],
+                        u->position[1], u->position[2], u->normal[0], u->normal[1], u->normal[2], u->feedback,
+                        luma(sg1 + 3 * i), luma(sr1 + 3 * i), g, r);
+            sg += g;
+            srr += r;
+            se2 += (g - r) * (g - r);
+            sr2 += r * r;
+        }
+        free(sr1);
+        free(sg1);
+        if (ok && json)
+            printf(",\n \"surfels\": {\"single_bounce_mean_ratio\": %.5f, \"mean_ratio\": %.5f, \"rel_rms_error\": %.5f, "
+                   "\"points\": %u}", sg1s / sr1s, sg / srr, sqrt(se2 / sr2), np);
+        else if (ok)
+            printf("audit surfels (area-uniform, %u): Glow's feedback irradiance / reference: single bounce %.4f, converged %.4f "
+                   "(rel. RMS error %.4f)\n", np, sg1s / sr1s, sg / srr, sqrt(se2 / sr2));
+        if (scsv) fclose(scsv);
+        free(sp);
+        free(sr);
+        if (!ok) {
+            fprintf(stderr, "glow-stability: %s: surfel audit failed\n", bake_path);
+            goto done;
+        }
     }
     /* visible solid angle of each cache, from its decoded links */
     {
@@ -625,7 +730,7 @@ int main(int argc, char **argv) {
                       strcmp(argv[1], "audit")))
         return usage(stderr);
     uint32_t lmax = GLOW_MAX_SH_BANDS, ndirs = 256, frames = 240, iterations = 1, probes = 96, samples = 1024, pairs = 3000;
-    const char *csv = NULL;
+    const char *csv = NULL, *radiance_out = NULL;
     int json = 0;
     for (int i = 4; i < argc; ++i) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
@@ -636,6 +741,9 @@ int main(int argc, char **argv) {
             json = 1;
         } else if (!strcmp(a, "--csv") && v) {
             csv = v;
+            ++i;
+        } else if (!strcmp(a, "--radiance-out") && v) {
+            radiance_out = v;
             ++i;
         } else if (dst && v) {
             char *end = NULL;
@@ -656,7 +764,7 @@ int main(int argc, char **argv) {
         return 2;
     }
     if (!strcmp(argv[1], "ringing")) return ringing(argv[2], argv[3], lmax, ndirs, json);
-    if (!strcmp(argv[1], "audit")) return audit(argv[2], argv[3], probes, samples, csv, json);
+    if (!strcmp(argv[1], "audit")) return audit(argv[2], argv[3], probes, samples, csv, radiance_out, json);
     if (!strcmp(argv[1], "flicker")) return flicker(argv[2], argv[3], frames, iterations, probes, samples, csv);
     return jumps(argv[2], argv[3], pairs, samples, csv);
 }
