@@ -1,4 +1,5 @@
-/* builtin.c — procedural test scenes ("builtin:cornell", "builtin:furnace", "builtin:two-rooms").
+/* builtin.c — procedural test scenes ("builtin:cornell", "builtin:furnace", "builtin:two-rooms",
+ * "builtin:pillar-hall", "builtin:pillar-court").
  *
  * Metres, +Y up, counter-clockwise front faces (geometric normal (p1-p0)x(p2-p0)). Room walls face
  * into the rooms, solid blocks face outwards. Every quad is two triangles (p0,p1,p2), (p0,p2,p3).
@@ -212,6 +213,55 @@ static void build_two_rooms(builder *b, glow__material *m) {
     add_box(b, &rb);
 }
 
+/* A hall with a row of pillars down its middle and a bench standing on its floor: the failures of
+ * real architecture in miniature (issue 13). Lit from one side (scenes/pillar-hall.json: a point
+ * light near the -z wall), every cache on the far side sees pillars whose lit and unlit faces the
+ * hierarchy may cluster together (partly visible nodes), and the bench's foot and the pillars' feet
+ * meet the floor (contact leaks). "pillar-court" is the same without its ceiling: an open shell lit
+ * by a sun and sky (scenes/pillar-court.json), where the hidden side of a node is the sunlit outside.
+ * The hall is 12 x 3.5 x 6 m; five 0.5 m pillars 3.3 m tall (clear of the ceiling: no coplanar
+ * faces); a 0.8 x 0.45 x 0.8 m bench. */
+static void build_pillars(builder *b, glow__material *m, bool ceiling) {
+    set_material(&m[0], "wall", 0.7f, 0.7f, 0.7f, 0, 0, 0);
+    set_material(&m[1], "floor", 0.6f, 0.55f, 0.5f, 0, 0, 0);
+    set_material(&m[2], "pillar", 0.75f, 0.72f, 0.68f, 0, 0, 0);
+    set_material(&m[3], "bench", 0.5f, 0.3f, 0.2f, 0, 0, 0);
+    static const float xs[7] = {-6.0f, -4.0f, -2.0f, 0.0f, 2.0f, 4.0f, 6.0f}, ys[3] = {0.0f, 1.75f, 3.5f};
+    static const float zs[5] = {-3.0f, -1.5f, 0.0f, 1.5f, 3.0f};
+    if (ceiling) {
+        box_desc hall = {.splits = {xs, ys, zs}, .n = {7, 3, 5}, .inward = true, .face_mat = {0, 0, 1, 0, 0, 0}, .light_face = -1};
+        add_box(b, &hall);
+    } else { /* the box without its +y face: walls and floor of an open court */
+        for (int axis = 0; axis < 3; axis++) {
+            const int ua = (axis + 1) % 3, va = (axis + 2) % 3;
+            const float *sp[3] = {xs, ys, zs};
+            const uint32_t n[3] = {7, 3, 5};
+            for (int side = 0; side < 2; side++) {
+                if (axis == 1 && side == 1) continue;
+                const float coord = sp[axis][side ? n[axis] - 1 : 0];
+                float facing[3] = {0.0f, 0.0f, 0.0f};
+                facing[axis] = side ? -1.0f : 1.0f;
+                for (uint32_t i = 0; i + 1 < n[ua]; i++)
+                    for (uint32_t j = 0; j + 1 < n[va]; j++) {
+                        float p[4][3];
+                        const float uu[4] = {sp[ua][i], sp[ua][i + 1], sp[ua][i + 1], sp[ua][i]};
+                        const float vv[4] = {sp[va][j], sp[va][j], sp[va][j + 1], sp[va][j + 1]};
+                        for (int k = 0; k < 4; k++) {
+                            p[k][axis] = coord;
+                            p[k][ua] = uu[k];
+                            p[k][va] = vv[k];
+                        }
+                        add_quad_facing(b, p[0], p[1], p[2], p[3], facing, axis == 1 ? 1u : 0u);
+                    }
+            }
+        }
+    }
+    for (int k = -2; k <= 2; k++) add_block(b, 2.0f * (float)k, 0.0f, 0.25f, 3.3f, 0.0f, 2);
+    add_block(b, -3.0f, 1.8f, 0.4f, 0.45f, 0.0f, 3);
+}
+static void build_pillar_hall(builder *b, glow__material *m) { build_pillars(b, m, true); }
+static void build_pillar_court(builder *b, glow__material *m) { build_pillars(b, m, false); }
+
 glow_result glow__scene_builtin(const char *name, glow__log *log, glow__scene *out) {
     if (!out) return GLOW_ERROR_INVALID_ARGUMENT;
     memset(out, 0, sizeof *out);
@@ -227,9 +277,15 @@ glow_result glow__scene_builtin(const char *name, glow__log *log, glow__scene *o
     } else if (strcmp(name, "two-rooms") == 0) {
         material_count = 2;
         build = build_two_rooms;
+    } else if (strcmp(name, "pillar-hall") == 0) {
+        material_count = 4;
+        build = build_pillar_hall;
+    } else if (strcmp(name, "pillar-court") == 0) {
+        material_count = 4;
+        build = build_pillar_court;
     } else {
-        glow__errorf(log, "builtin:%s: unknown built-in scene (valid: builtin:cornell, builtin:furnace, builtin:two-rooms)",
-                     name);
+        glow__errorf(log, "builtin:%s: unknown built-in scene (valid: builtin:cornell, builtin:furnace, builtin:two-rooms, "
+                     "builtin:pillar-hall, builtin:pillar-court)", name);
         return GLOW_ERROR_UNSUPPORTED;
     }
     snprintf(out->source, sizeof out->source, "builtin:%s", name);

@@ -361,6 +361,46 @@ static void test_builtin_two_rooms(void **state) {
     glow__scene_free(&s);
 }
 
+/* The miniature of issue 13's failures: a closed 12 x 3.5 x 6 m hall (270 m²), five 0.5 m pillars
+ * 3.3 m tall (5 x (4 x 0.5 x 3.3 + 0.25)), a 0.8 x 0.45 x 0.8 m bench (4 x 0.8 x 0.45 + 0.64); the
+ * court is the hall without its 72 m² ceiling (an open shell). Every face of the hall looks into it
+ * (the pillars' and the bench's faces out of their solids), and the hall's own shell is closed. */
+static void test_builtin_pillars(void **state) {
+    (void)state;
+    capture c;
+    glow__log log = make_log(&c);
+    glow__scene s;
+    const double solids = 5 * (4 * 0.5 * 3.3 + 0.25) + (4 * 0.8 * 0.45 + 0.64);
+    assert_int_equal(glow__scene_builtin("pillar-hall", &log, &s), GLOW_OK);
+    check_clean(&s);
+    assert_int_equal(s.skipped_degenerate + s.skipped_duplicate, 0);
+    assert_true(fabs(s.area - (270.0 + solids)) < 1e-3);
+    assert_true(s.bounds_min[1] == 0.0f && s.bounds_max[1] == 3.5f);
+    uint32_t bad, boundary, boundary_y0;
+    edge_stats(&s, 0, 1, &bad, &boundary, &boundary_y0); /* walls, ceiling and floor: closed */
+    assert_int_equal(bad, 0);
+    for (uint32_t t = 0; t < s.tri_count; t++) {
+        double c3[3];
+        centroid(&s, t, c3);
+        const float *n = s.nrm[3 * t];
+        if (s.tri_material[t] <= 1) { /* the shell looks in */
+            double in[3] = {-c3[0], 1.75 - c3[1], -c3[2]};
+            assert_true(n[0] * in[0] + n[1] * in[1] + n[2] * in[2] > 0.0);
+        }
+    }
+    glow__scene_free(&s);
+    assert_int_equal(glow__scene_builtin("pillar-court", &log, &s), GLOW_OK);
+    check_clean(&s);
+    assert_true(fabs(s.area - (270.0 - 72.0 + solids)) < 1e-3);
+    for (uint32_t t = 0; t < s.tri_count; t++) {
+        double c3[3];
+        centroid(&s, t, c3);
+        assert_true(c3[1] < 3.5); /* no ceiling */
+    }
+    assert_int_equal(c.errors, 0);
+    glow__scene_free(&s);
+}
+
 static void test_builtin_unknown(void **state) {
     (void)state;
     capture c;
@@ -368,7 +408,8 @@ static void test_builtin_unknown(void **state) {
     glow__scene s;
     assert_int_equal(glow__scene_load("builtin:sponza", &log, &s), GLOW_ERROR_UNSUPPORTED);
     assert_true(has(&c, "builtin:sponza"));
-    assert_true(has(&c, "cornell") && has(&c, "furnace") && has(&c, "two-rooms"));
+    assert_true(has(&c, "cornell") && has(&c, "furnace") && has(&c, "two-rooms") && has(&c, "pillar-hall") &&
+                has(&c, "pillar-court"));
     assert_int_equal(c.errors, 1);
     assert_null(s.pos);
     assert_int_equal(glow__scene_builtin("", &log, &s), GLOW_ERROR_UNSUPPORTED);
@@ -966,6 +1007,7 @@ int main(void) {
         cmocka_unit_test(test_builtin_cornell),
         cmocka_unit_test(test_builtin_furnace),
         cmocka_unit_test(test_builtin_two_rooms),
+        cmocka_unit_test(test_builtin_pillars),
         cmocka_unit_test(test_builtin_unknown),
         cmocka_unit_test(test_finalize_cleaning),
         cmocka_unit_test(test_finalize_large),
