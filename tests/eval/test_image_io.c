@@ -1,9 +1,10 @@
-/* test_image_io.c — glow_eval's EXR and PNG files: bit-exact float round trip (noisy, incompressible
+/* test_image_io.c — glow_eval's EXR, PFM and PNG files: bit-exact float round trip (noisy, incompressible
  * and smooth content, heights that end in a partial 16-line ZIP chunk, and chunks whose deflate
  * stream is exactly as long as the raw chunk: OpenEXR 3.1 kept those, readers took them for raw
  * floats), reading layouts written here directly with OpenEXR's C core (half, RGBA, Y-only, tiled,
  * offset data window), error paths (missing, garbage, truncated, unwritable) and the PATH.tmp +
- * rename discipline. */
+ * rename discipline; PFM reading (both byte orders, RGB and grey, orientation, bad headers, huge
+ * sizes, zero scale, truncation) and glow_eval_read_image's choice between the two formats. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -600,12 +601,221 @@ static void test_png_values(void **state) {
     glow_eval_image_free(&img);
 }
 
+/* ---- PFM ---- */
+
+/* Writes `header` then n floats in the given byte order (written byte by byte, so the test does not
+ * depend on the host's order either). */
+static void write_pfm_raw(const char *path, const char *header, const float *v, size_t n, int little) {
+    FILE *f = fopen(path, "wb");
+    assert_non_null(f);
+    assert_int_equal(fwrite(header, 1, strlen(header), f), strlen(header));
+    for (size_t i = 0; i < n; i++) {
+        uint32_t u;
+        memcpy(&u, &v[i], 4);
+        unsigned char b[4];
+        for (int k = 0; k < 4; k++) b[little ? k : 3 - k] = (unsigned char)(u >> (8 * k));
+        assert_int_equal(fwrite(b, 1, 4, f), 4);
+    }
+    fclose(f);
+}
+
+static int same_float(float a, float b) { return memcmp(&a, &b, sizeof a) == 0; } /* NaN too */
+
+static void test_pfm_roundtrip(void **state) {
+    (void)state;
+    char path[256];
+    snprintf(path, sizeof path, "%s", tmp_name("rt.pfm"));
+    enum { W = 5, H = 3 };
+    float file[W * H * 3]; /* file order: bottom row first */
+    lcg_state = 11;
+    for (int i = 0; i < W * H * 3; i++) file[i] = (float)((int)(lcg() >> 20) - 2048) / 64.0f;
+    file[4] = NAN; /* kept as they are: the metrics report them */
+    file[9] = INFINITY;
+    file[20] = -0.0f;
+    static const char *const rgb_headers[2] = {"PF\n5 3\n1.0\n", "PF\n5 3\n-1.0\n"};
+    static const char *const grey_headers[2] = {"Pf 5\t3\r2.5\n", "Pf\n5 3\n-1\n"}; /* any whitespace */
+    for (int grey = 0; grey < 2; grey++)
+        for (int little = 0; little < 2; little++) {
+            const char *header = grey ? grey_headers[little] : rgb_headers[little];
+            const int ch = grey ? 1 : 3;
+            write_pfm_raw(path, header, file, (size_t)W * H * ch, little);
+            for (int via_image = 0; via_image < 2; via_image++) {
+                glow_eval_image img;
+                char msg[512] = "";
+                glow_result r = via_image ? glow_eval_read_image(path, &img, msg, sizeof msg)
+                                          : glow_eval_read_pfm(path, &img, msg, sizeof msg);
+                if (r != GLOW_OK) print_error("%s\n", msg);
+                assert_int_equal(r, GLOW_OK);
+                assert_int_equal(img.width, W);
+                assert_int_equal(img.height, H);
+                /* The image's top row is the file's last row. */
+                for (int y = 0; y < H; y++)
+                    for (int x = 0; x < W; x++)
+                        for (int c = 0; c < 3; c++) {
+                            float want = file[((size_t)(H - 1 - y) * W + x) * ch + (grey ? 0 : c)];
+                            assert_true(same_float(img.rgb[((size_t)y * W + x) * 3 + c], want));
+                        }
+                if (!grey) {
+                    assert_true(same_float(img.rgb[0], file[(size_t)(H - 1) * W * 3])); /* top-left = last row */
+                    assert_true(isnan(img.rgb[((size_t)(H - 1) * W + 1) * 3 + 1]));    /* file[4]: bottom row */
+                }
+                glow_eval_image_free(&img);
+            }
+        }
+    /* Bytes after the pixels are ignored. */
+    float extra[W * H * 3 + 2];
+    memcpy(extra, file, sizeof file);
+    extra[W * H * 3] = extra[W * H * 3 + 1] = 7.0f;
+    write_pfm_raw(path, "PF\n5 3\n-1.0\n", extra, (size_t)W * H * 3 + 2, 1);
+    glow_eval_image img;
+    assert_int_equal(glow_eval_read_pfm(path, &img, NULL, 0), GLOW_OK);
+    assert_true(same_float(img.rgb[0], file[(size_t)(H - 1) * W * 3]));
+    glow_eval_image_free(&img);
+    remove(path);
+}
+
+/* Expects `header` + n little-endian floats to fail to read as PFM with `code` and a message naming
+ * the file and containing `text`. */
+static void expect_pfm_error(const char *path, const char *header, size_t n, glow_result code, const char *text) {
+    float *v = calloc(n + 1, sizeof(float));
+    assert_non_null(v);
+    write_pfm_raw(path, header, v, n, 1);
+    free(v);
+    glow_eval_image img = {7, 7, (float *)&img};
+    char msg[512] = "";
+    glow_result r = glow_eval_read_pfm(path, &img, msg, sizeof msg);
+    if (r != code || !strstr(msg, text)) print_error("header %s: %d '%s'\n", header, (int)r, msg);
+    assert_int_equal(r, code);
+    assert_null(img.rgb);
+    assert_int_equal(img.width, 0);
+    assert_int_equal(img.height, 0);
+    assert_non_null(strstr(msg, path));
+    assert_non_null(strstr(msg, text));
+}
+
+static void test_pfm_bad_input(void **state) {
+    (void)state;
+    char path[256];
+    snprintf(path, sizeof path, "%s", tmp_name("bad.pfm"));
+    /* Bad headers. */
+    expect_pfm_error(path, "P6\n4 4\n255\n", 48, GLOW_ERROR_CORRUPT_DATA, "not a PFM file");
+    expect_pfm_error(path, "PFM\n4 4\n-1\n", 48, GLOW_ERROR_CORRUPT_DATA, "not a PFM file");
+    expect_pfm_error(path, "", 0, GLOW_ERROR_CORRUPT_DATA, "not a PFM file");
+    expect_pfm_error(path, "PF\n", 0, GLOW_ERROR_CORRUPT_DATA, "bad PFM header (no width)");
+    expect_pfm_error(path, "PF\n4", 0, GLOW_ERROR_CORRUPT_DATA, "bad PFM header (no height)");
+    expect_pfm_error(path, "PF\n4 4\n", 0, GLOW_ERROR_CORRUPT_DATA, "bad PFM header (no scale)");
+    expect_pfm_error(path, "PF\n-4 4\n-1\n", 48, GLOW_ERROR_CORRUPT_DATA, "not two positive whole numbers");
+    expect_pfm_error(path, "PF\n4x 4\n-1\n", 48, GLOW_ERROR_CORRUPT_DATA, "not two positive whole numbers");
+    expect_pfm_error(path, "PF\n4 0\n-1\n", 48, GLOW_ERROR_CORRUPT_DATA, "not two positive whole numbers");
+    expect_pfm_error(path, "PF\n4 4\nabc\n", 48, GLOW_ERROR_CORRUPT_DATA, "scale 'abc'");
+    expect_pfm_error(path, "PF\n4 4\n-1x\n", 48, GLOW_ERROR_CORRUPT_DATA, "scale '-1x'");
+    expect_pfm_error(path, "PF\n4 4\n1234567890123456789012345678901234567890123456789012345678901234567890\n", 48,
+                     GLOW_ERROR_CORRUPT_DATA, "overlong scale");
+    /* Zero (or non-finite) scale: no byte order. */
+    expect_pfm_error(path, "PF\n4 4\n0.0\n", 48, GLOW_ERROR_CORRUPT_DATA, "scale '0.0'");
+    expect_pfm_error(path, "PF\n4 4\n-0\n", 48, GLOW_ERROR_CORRUPT_DATA, "scale '-0'");
+    expect_pfm_error(path, "PF\n4 4\nnan\n", 48, GLOW_ERROR_CORRUPT_DATA, "scale 'nan'");
+    /* Absurd sizes are refused before anything is allocated. */
+    expect_pfm_error(path, "PF\n100000 100000\n-1\n", 48, GLOW_ERROR_CORRUPT_DATA, "too large");
+    expect_pfm_error(path, "Pf\n8193 8192\n-1\n", 48, GLOW_ERROR_CORRUPT_DATA, "too large");
+    expect_pfm_error(path, "PF\n99999999999999999999999 1\n-1\n", 48, GLOW_ERROR_CORRUPT_DATA, "too large");
+    /* Truncated: no data, a short row, one float short; grey files need w*h floats. */
+    expect_pfm_error(path, "PF\n4 4\n-1", 0, GLOW_ERROR_CORRUPT_DATA, "truncated PFM");
+    expect_pfm_error(path, "PF\n4 4\n-1\n", 0, GLOW_ERROR_CORRUPT_DATA, "truncated PFM data (0 of 192 bytes");
+    expect_pfm_error(path, "PF\n4 4\n-1\n", 7, GLOW_ERROR_CORRUPT_DATA, "truncated PFM data (28 of 192 bytes");
+    expect_pfm_error(path, "PF\n4 4\n-1\n", 47, GLOW_ERROR_CORRUPT_DATA, "(188 of 192 bytes for 4x4 RGB)");
+    expect_pfm_error(path, "Pf\n4 4\n-1\n", 15, GLOW_ERROR_CORRUPT_DATA, "(60 of 64 bytes for 4x4 grey)");
+
+    /* A good file cut at every length is CORRUPT_DATA, never a crash. */
+    float v[2 * 3 * 3];
+    for (int i = 0; i < 18; i++) v[i] = (float)i;
+    write_pfm_raw(path, "PF\n2 3\n-1.0\n", v, 18, 1);
+    long size = 0;
+    unsigned char *data = slurp(path, &size);
+    assert_int_equal(size, 12 + 72);
+    for (long cut = 0; cut < size; cut++) {
+        spit(path, data, (size_t)cut);
+        glow_eval_image img;
+        char msg[512] = "";
+        assert_int_equal(glow_eval_read_pfm(path, &img, msg, sizeof msg), GLOW_ERROR_CORRUPT_DATA);
+        assert_null(img.rgb);
+        assert_non_null(strstr(msg, path));
+    }
+    free(data);
+    remove(path);
+
+    /* Missing file and NULL arguments. */
+    glow_eval_image img;
+    char msg[512] = "";
+    const char *missing = tmp_name("does_not_exist.pfm");
+    assert_int_equal(glow_eval_read_pfm(missing, &img, msg, sizeof msg), GLOW_ERROR_IO);
+    assert_null(img.rgb);
+    assert_non_null(strstr(msg, missing));
+    assert_non_null(strstr(msg, "cannot open"));
+    assert_int_equal(glow_eval_read_pfm(NULL, &img, msg, sizeof msg), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(glow_eval_read_pfm(missing, NULL, msg, sizeof msg), GLOW_ERROR_INVALID_ARGUMENT);
+    /* A folder opens but cannot be read: IO. */
+    assert_int_equal(glow_eval_read_pfm("/tmp", &img, msg, sizeof msg), GLOW_ERROR_IO);
+    assert_non_null(strstr(msg, "cannot read"));
+}
+
+static void test_read_image_dispatch(void **state) {
+    (void)state;
+    char exr[256], pfm[256], bad[256];
+    snprintf(exr, sizeof exr, "%s", tmp_name("any.exr"));
+    snprintf(pfm, sizeof pfm, "%s", tmp_name("any.pfm"));
+    snprintf(bad, sizeof bad, "%s", tmp_name("any.bin"));
+    glow_eval_image a, b;
+    char msg[512] = "";
+    assert_int_equal(glow_eval_image_alloc(&a, 3, 2), GLOW_OK);
+    for (int i = 0; i < 18; i++) a.rgb[i] = 0.25f * (float)i;
+    assert_int_equal(glow_eval_write_exr(&a, exr, msg, sizeof msg), GLOW_OK);
+    /* The same image as a big-endian PFM, rows flipped. */
+    float file[18];
+    for (int y = 0; y < 2; y++) memcpy(file + (size_t)(1 - y) * 9, a.rgb + (size_t)y * 9, 9 * sizeof(float));
+    write_pfm_raw(pfm, "PF\n3 2\n1\n", file, 18, 0);
+    const char *paths[2] = {exr, pfm};
+    for (int k = 0; k < 2; k++) {
+        assert_int_equal(glow_eval_read_image(paths[k], &b, msg, sizeof msg), GLOW_OK);
+        assert_int_equal(b.width, 3);
+        assert_int_equal(b.height, 2);
+        assert_memory_equal(b.rgb, a.rgb, 18 * sizeof(float));
+        glow_eval_image_free(&b);
+    }
+    /* Anything else, an empty file, a missing file. */
+    spit(bad, "P6\n3 2\n255\n", 11);
+    assert_int_equal(glow_eval_read_image(bad, &b, msg, sizeof msg), GLOW_ERROR_CORRUPT_DATA);
+    assert_null(b.rgb);
+    assert_non_null(strstr(msg, bad));
+    assert_non_null(strstr(msg, "not an OpenEXR or PFM file"));
+    spit(bad, "", 0);
+    assert_int_equal(glow_eval_read_image(bad, &b, msg, sizeof msg), GLOW_ERROR_CORRUPT_DATA);
+    assert_non_null(strstr(msg, "not an OpenEXR or PFM file"));
+    /* Errors of the chosen reader come through: a PF file cut short, an EXR magic with nothing after. */
+    spit(bad, "PF\n3 2\n-1\n\0\0", 12);
+    assert_int_equal(glow_eval_read_image(bad, &b, msg, sizeof msg), GLOW_ERROR_CORRUPT_DATA);
+    assert_non_null(strstr(msg, "truncated PFM data"));
+    spit(bad, "\x76\x2f\x31\x01", 4);
+    assert_int_equal(glow_eval_read_image(bad, &b, msg, sizeof msg), GLOW_ERROR_CORRUPT_DATA);
+    assert_non_null(strstr(msg, "OpenEXR"));
+    assert_null(b.rgb);
+    remove(bad);
+    assert_int_equal(glow_eval_read_image(bad, &b, msg, sizeof msg), GLOW_ERROR_IO);
+    assert_non_null(strstr(msg, "cannot open"));
+    assert_int_equal(glow_eval_read_image(NULL, &b, msg, sizeof msg), GLOW_ERROR_INVALID_ARGUMENT);
+    glow_eval_image_free(&a);
+    remove(exr);
+    remove(pfm);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_exr_roundtrip_bit_exact), cmocka_unit_test(test_exr_read_layouts),
         cmocka_unit_test(test_exr_missing_file),        cmocka_unit_test(test_exr_garbage_and_truncated),
         cmocka_unit_test(test_exr_write_errors),        cmocka_unit_test(test_png_values),
         cmocka_unit_test(test_exr_roundtrip_chunks),    cmocka_unit_test(test_exr_raw_size_deflate_stream),
+        cmocka_unit_test(test_pfm_roundtrip),           cmocka_unit_test(test_pfm_bad_input),
+        cmocka_unit_test(test_read_image_dispatch),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -111,6 +111,18 @@ glow_result glow_eval_write_exr(const glow_eval_image *img, const char *path, ch
  * of mip/rip maps; any data window origin (the image is the data window). CORRUPT_DATA for deep
  * parts, subsampled or uint colour channels, and more than 2^26 pixels. *out is zeroed on failure. */
 glow_result glow_eval_read_exr(const char *path, glow_eval_image *out, char *message, size_t message_size);
+/* Reads a PFM (Portable Float Map, the referee's format): "PF" (RGB) or "Pf" (grey: R = G = B), the
+ * width and height, a scale whose sign gives the byte order (negative: little-endian; its magnitude
+ * is ignored) and one whitespace byte, then float32 rows stored bottom row first (flipped here to top
+ * row first). Non-finite values are kept (the metrics report them); bytes after the pixels are
+ * ignored. IO for open/read failures; CORRUPT_DATA for a bad header (not PF/Pf, sizes that are not
+ * positive whole numbers, a zero or non-numeric scale), more than 2^26 pixels and truncated data,
+ * e.g. "x.pfm: truncated PFM data (100 of 1200 bytes for 10x10 RGB)". *out is zeroed on failure. */
+glow_result glow_eval_read_pfm(const char *path, glow_eval_image *out, char *message, size_t message_size);
+/* Reads an OpenEXR or a PFM file, chosen by its first bytes (EXR magic 76 2f 31 01, or "PF"/"Pf"):
+ * glow_eval_read_exr or glow_eval_read_pfm; anything else is CORRUPT_DATA "x: not an OpenEXR or PFM
+ * file". */
+glow_result glow_eval_read_image(const char *path, glow_eval_image *out, char *message, size_t message_size);
 /* Writes an 8-bit sRGB PNG of display(x) with the given exposure (see METRICS), round(255 · v). */
 glow_result glow_eval_write_png(const glow_eval_image *img, float exposure, const char *path, char *message,
                                 size_t message_size);

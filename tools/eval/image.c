@@ -1,6 +1,7 @@
 /* image.c — glow_eval images and their files: OpenEXR through OpenEXR's C core library
- * (OpenEXRCore), 8-bit sRGB PNG through stb_image_write (Debian's libstb carries the
- * implementation, so no STB_IMAGE_WRITE_IMPLEMENTATION here). Writers write PATH.tmp and rename
+ * (OpenEXRCore), PFM by hand (read only: the referee's renders, shared/referee/), 8-bit sRGB PNG
+ * through stb_image_write (Debian's libstb carries the implementation, so no
+ * STB_IMAGE_WRITE_IMPLEMENTATION here). Writers write PATH.tmp and rename
  * it over PATH, so a failure never leaves a half-written file under the final name. */
 #include <errno.h>
 #include <math.h>
@@ -8,6 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include <openexr.h>
 #include <stb/stb_image_write.h>
@@ -475,6 +477,197 @@ glow_result glow_eval_read_exr(const char *path, glow_eval_image *out, char *mes
     }
     tl_capture = NULL;
     return r;
+}
+
+/* ---------------------------------------------------------------------------------------------
+ * PFM (Portable Float Map): "PF" (RGB) or "Pf" (grey), whitespace, width, whitespace, height,
+ * whitespace, scale, ONE whitespace byte, then float32 pixels, bottom row first. The scale's sign is
+ * the byte order (negative: little-endian); its magnitude is ignored (Blender, the referee and most
+ * readers write and take 1). Bytes are assembled explicitly, so the host's byte order does not
+ * matter. Trailing bytes after the pixels are ignored. */
+
+#define PFM_MAX_TOKEN 63 /* longer header fields are not numbers a writer would produce */
+
+/* Reads the next whitespace-delimited token of at most PFM_MAX_TOKEN bytes into tok; *sep receives
+ * the byte that ended it (EOF at end of file). Returns 0 at end of file before a token, -1 when the
+ * token is too long, 1 on success. */
+static int pfm_token(FILE *f, char tok[PFM_MAX_TOKEN + 1], int *sep) {
+    int c;
+    do c = getc(f);
+    while (c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\v' || c == '\f');
+    if (c == EOF) return 0;
+    size_t n = 0;
+    while (c != EOF && c != ' ' && c != '\t' && c != '\n' && c != '\r' && c != '\v' && c != '\f') {
+        if (n == PFM_MAX_TOKEN) return -1;
+        tok[n++] = (char)c;
+        c = getc(f);
+    }
+    tok[n] = '\0';
+    *sep = c;
+    return 1;
+}
+
+/* A decimal whole number (digits only), saturating at 2^40; 0 when tok is not one. */
+static uint64_t pfm_dimension(const char *tok) {
+    uint64_t v = 0;
+    if (!*tok) return 0;
+    for (const char *p = tok; *p; p++) {
+        if (*p < '0' || *p > '9') return 0;
+        v = v * 10 + (uint64_t)(*p - '0');
+        if (v > ((uint64_t)1 << 40)) v = (uint64_t)1 << 40;
+    }
+    return v;
+}
+
+glow_result glow_eval_read_pfm(const char *path, glow_eval_image *out, char *message, size_t message_size) {
+    if (out) {
+        out->width = out->height = 0;
+        out->rgb = NULL;
+    }
+    if (!path || !out) {
+        set_message(message, message_size, "%s: NULL argument to glow_eval_read_pfm", path ? path : "(null)");
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    FILE *f = fopen(path, "rb");
+    if (!f) {
+        set_message(message, message_size, "%s: cannot open (%s)", path, strerror(errno));
+        return GLOW_ERROR_IO;
+    }
+    glow_result r = GLOW_OK;
+    unsigned char *row = NULL;
+    char tok[3][PFM_MAX_TOKEN + 1];
+    int sep = EOF, channels = 0;
+    int got = pfm_token(f, tok[0], &sep);
+    if (ferror(f)) goto read_error;
+    if (got == 1 && strcmp(tok[0], "PF") == 0) channels = 3;
+    else if (got == 1 && strcmp(tok[0], "Pf") == 0) channels = 1;
+    else {
+        set_message(message, message_size, "%s: not a PFM file (no \"PF\" or \"Pf\" header)", path);
+        r = GLOW_ERROR_CORRUPT_DATA;
+        goto done;
+    }
+    static const char *const field[3] = {"width", "height", "scale"};
+    for (int k = 0; k < 3; k++) {
+        got = pfm_token(f, tok[k], &sep);
+        if (ferror(f)) goto read_error;
+        if (got != 1) {
+            set_message(message, message_size, "%s: bad PFM header (%s %s)", path,
+                        got == 0 ? "no" : "overlong", field[k]);
+            r = GLOW_ERROR_CORRUPT_DATA;
+            goto done;
+        }
+    }
+    const uint64_t w64 = pfm_dimension(tok[0]), h64 = pfm_dimension(tok[1]);
+    if (w64 == 0 || h64 == 0) {
+        set_message(message, message_size, "%s: bad PFM header (size '%s' x '%s' is not two positive whole numbers)",
+                    path, tok[0], tok[1]);
+        r = GLOW_ERROR_CORRUPT_DATA;
+        goto done;
+    }
+    if (w64 > GLOW_EVAL_MAX_PIXELS || h64 > GLOW_EVAL_MAX_PIXELS || w64 * h64 > GLOW_EVAL_MAX_PIXELS) {
+        set_message(message, message_size, "%s: PFM image %sx%s is too large (more than %llu pixels)", path, tok[0],
+                    tok[1], (unsigned long long)GLOW_EVAL_MAX_PIXELS);
+        r = GLOW_ERROR_CORRUPT_DATA;
+        goto done;
+    }
+    const uint32_t w = (uint32_t)w64, h = (uint32_t)h64;
+    char *end = NULL;
+    const double scale = strtod(tok[2], &end);
+    if (!end || *end || !isfinite(scale) || scale == 0.0) {
+        set_message(message, message_size,
+                    "%s: bad PFM header (scale '%s': a non-zero number is needed, its sign gives the byte order)",
+                    path, tok[2]);
+        r = GLOW_ERROR_CORRUPT_DATA;
+        goto done;
+    }
+    if (sep == EOF) {
+        set_message(message, message_size, "%s: truncated PFM file (no pixel data after the header)", path);
+        r = GLOW_ERROR_CORRUPT_DATA;
+        goto done;
+    }
+    const int little = scale < 0.0;
+
+    /* Refuse a header promising more data than a regular file holds before allocating for it. */
+    const size_t row_bytes = (size_t)w * (size_t)channels * sizeof(float);
+    const uint64_t need = (uint64_t)row_bytes * h;
+    struct stat st;
+    long pos = ftell(f);
+    if (pos >= 0 && fstat(fileno(f), &st) == 0 && S_ISREG(st.st_mode) && (uint64_t)st.st_size >= (uint64_t)pos &&
+        (uint64_t)st.st_size - (uint64_t)pos < need) {
+        set_message(message, message_size, "%s: truncated PFM data (%llu of %llu bytes for %ux%u %s)", path,
+                    (unsigned long long)((uint64_t)st.st_size - (uint64_t)pos), (unsigned long long)need,
+                    (unsigned)w, (unsigned)h, channels == 3 ? "RGB" : "grey");
+        r = GLOW_ERROR_CORRUPT_DATA;
+        goto done;
+    }
+    row = malloc(row_bytes);
+    if (!row || glow_eval_image_alloc(out, w, h) != GLOW_OK) {
+        set_message(message, message_size, "%s: out of memory", path);
+        r = GLOW_ERROR_OUT_OF_MEMORY;
+        goto done;
+    }
+    for (uint32_t fy = 0; fy < h; fy++) { /* file row fy (0 = bottom) is image row h - 1 - fy */
+        size_t n = fread(row, 1, row_bytes, f);
+        if (n != row_bytes) {
+            if (ferror(f)) goto read_error;
+            set_message(message, message_size, "%s: truncated PFM data (%llu of %llu bytes for %ux%u %s)", path,
+                        (unsigned long long)((uint64_t)fy * row_bytes + n), (unsigned long long)need, (unsigned)w,
+                        (unsigned)h, channels == 3 ? "RGB" : "grey");
+            r = GLOW_ERROR_CORRUPT_DATA;
+            goto done;
+        }
+        float *dst = out->rgb + (size_t)(h - 1 - fy) * w * 3;
+        const unsigned char *b = row;
+        for (size_t i = 0; i < (size_t)w * (size_t)channels; i++, b += 4) {
+            uint32_t u = little ? (uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24
+                                : (uint32_t)b[3] | (uint32_t)b[2] << 8 | (uint32_t)b[1] << 16 | (uint32_t)b[0] << 24;
+            float v;
+            memcpy(&v, &u, sizeof v); /* non-finite values are kept: the metrics report them */
+            if (channels == 3) dst[i] = v;
+            else dst[3 * i] = dst[3 * i + 1] = dst[3 * i + 2] = v;
+        }
+    }
+    goto done;
+
+read_error:
+    set_message(message, message_size, "%s: cannot read (%s)", path, strerror(errno));
+    r = GLOW_ERROR_IO;
+done:
+    if (r != GLOW_OK) glow_eval_image_free(out);
+    free(row);
+    fclose(f);
+    return r;
+}
+
+glow_result glow_eval_read_image(const char *path, glow_eval_image *out, char *message, size_t message_size) {
+    if (out) {
+        out->width = out->height = 0;
+        out->rgb = NULL;
+    }
+    if (!path || !out) {
+        set_message(message, message_size, "%s: NULL argument to glow_eval_read_image", path ? path : "(null)");
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    FILE *f = fopen(path, "rb");
+    if (!f) {
+        set_message(message, message_size, "%s: cannot open (%s)", path, strerror(errno));
+        return GLOW_ERROR_IO;
+    }
+    unsigned char magic[4] = {0};
+    size_t got = fread(magic, 1, 4, f);
+    int read_error = ferror(f);
+    int e = errno;
+    fclose(f);
+    if (read_error) {
+        set_message(message, message_size, "%s: cannot read (%s)", path, strerror(e));
+        return GLOW_ERROR_IO;
+    }
+    if (got == 4 && magic[0] == 0x76 && magic[1] == 0x2f && magic[2] == 0x31 && magic[3] == 0x01)
+        return glow_eval_read_exr(path, out, message, message_size);
+    if (got >= 2 && magic[0] == 'P' && (magic[1] == 'F' || magic[1] == 'f'))
+        return glow_eval_read_pfm(path, out, message, message_size);
+    set_message(message, message_size, "%s: not an OpenEXR or PFM file", path);
+    return GLOW_ERROR_CORRUPT_DATA;
 }
 
 /* --------------------------------------------------------------------------------------------- */
