@@ -52,6 +52,97 @@ a=$(json_num "$T/full.json" psnr_db); b=$(json_num "$T/added.json" psnr_db)
 python3 -c "import sys; a,b=float(sys.argv[1]),float(sys.argv[2]); sys.exit(0 if abs(a-b) < 1e-3 and 10 < a < 90 else 1)" "$a" "$b" \
   && pass "  same PSNR both ways ($a dB)" || fail "  PSNR $a vs $b"
 
+# --- glow-compare: PFM inputs (the referee's format), --ref-add, --panels
+# PFMs written with Python's struct: a 32x32 grey constant (big-endian) and an RGB gradient in both byte orders.
+python3 - "$T" <<'PY'
+import struct, sys
+t = sys.argv[1]
+open(t + "/const.pfm", "wb").write(b"Pf\n32 32\n1.0\n" + struct.pack(">1024f", *([0.25] * 1024)))
+px = [float(x + 4 * y + c) / 8 for y in range(3) for x in range(4) for c in range(3)]  # bottom row first
+open(t + "/grad_le.pfm", "wb").write(b"PF\n4 3\n-1.0\n" + struct.pack("<36f", *px))
+open(t + "/grad_be.pfm", "wb").write(b"PF\n4 3\n1.0\n" + struct.pack(">36f", *[2 * v for v in px]))
+open(t + "/short.pfm", "wb").write(b"PF\n4 3\n-1.0\n" + struct.pack("<20f", *px[:20]))
+PY
+expect 0 "compare: EXR test, PFM reference" "$BIN/glow-compare" "$T/ref.exr" "$T/const.pfm" --json --no-flip
+python3 -c "import json,sys; m=json.load(open(sys.argv[1]))['mean_ref']; sys.exit(0 if m == [0.25, 0.25, 0.25] else 1)" "$T/out" \
+  && pass "  grey PFM read as R = G = B = 0.25" || fail "  PFM reference means wrong"
+expect 0 "compare: PFM against itself" "$BIN/glow-compare" "$T/grad_le.pfm" "$T/grad_le.pfm" --json
+[ "$(json_num "$T/out" rel_rmse)" = 0 ] && pass "  rel RMSE 0" || fail "  self rel RMSE not 0"
+expect 0 "compare: little- vs big-endian PFM (twice the values)" "$BIN/glow-compare" "$T/grad_be.pfm" "$T/grad_le.pfm" --json --no-flip
+[ "$(json_num "$T/out" mean_ratio)" = 2 ] && pass "  mean ratio 2" || fail "  mean ratio $(json_num "$T/out" mean_ratio), wanted 2"
+expect 1 "compare: truncated PFM" "$BIN/glow-compare" "$T/grad_le.pfm" "$T/short.pfm"; err_has "short.pfm"; err_has "truncated PFM"
+printf 'P6\n4 3\n255\n' > "$T/p6.pfm"
+expect 1 "compare: not a PFM" "$BIN/glow-compare" "$T/p6.pfm" "$T/grad_le.pfm"; err_has "p6.pfm: not an OpenEXR or PFM file"
+expect 1 "compare: --add of a truncated PFM" "$BIN/glow-compare" "$T/grad_le.pfm" "$T/grad_le.pfm" --add "$T/short.pfm"; err_has "short.pfm"
+expect 0 "compare: --ref-add doubles the reference" "$BIN/glow-compare" "$T/ref.exr" "$T/ref.exr" --ref-add "$T/ref.exr" --json --no-flip
+[ "$(json_num "$T/out" mean_ratio)" = 0.5 ] && pass "  mean ratio 0.5" || fail "  mean ratio $(json_num "$T/out" mean_ratio), wanted 0.5"
+expect 1 "compare: --ref-add of another size" "$BIN/glow-compare" "$T/ref.exr" "$T/ref.exr" --ref-add "$T/const.pfm" --ref-add "$T/grad_le.pfm"
+err_has "grad_le.pfm is 4x3 but"
+expect 1 "compare: --ref-add of a truncated PFM" "$BIN/glow-compare" "$T/ref.exr" "$T/ref.exr" --ref-add "$T/short.pfm"; err_has "short.pfm"
+expect 2 "compare: --ref-add without an image" "$BIN/glow-compare" "$T/ref.exr" "$T/ref.exr" --ref-add
+expect 2 "compare: --panel-exposure without --panels" "$BIN/glow-compare" "$T/ref.exr" "$T/ref.exr" --panel-exposure 2
+expect 2 "compare: bad --panel-exposure" "$BIN/glow-compare" "$T/ref.exr" "$T/ref.exr" --panels "$T/p.png" --panel-exposure 0
+expect 1 "compare: unwritable --panels" "$BIN/glow-compare" "$T/ref.exr" "$T/ref.exr" --panels "$T/no/such/dir/p.png"; err_has "p.png"
+expect 0 "compare: --panels, an image against itself" "$BIN/glow-compare" "$T/ref.exr" "$T/ref.exr" --panels "$T/self.png" --no-flip
+expect 0 "compare: --panels, test twice the reference" "$BIN/glow-compare" "$T/ref.exr" "$T/ref.exr" --add "$T/ref.exr" --panels "$T/bright.png" --no-flip
+expect 0 "compare: --panels, reference twice the test" "$BIN/glow-compare" "$T/ref.exr" "$T/ref.exr" --ref-add "$T/ref.exr" --panels "$T/dark.png" --block 4 --no-flip
+expect 0 "compare: --panels of PFMs, --panel-exposure" "$BIN/glow-compare" "$T/grad_be.pfm" "$T/grad_le.pfm" --panels "$T/grad.png" --panel-exposure 0.25 --no-flip
+# A stdlib PNG decoder (8-bit RGB, the 5 filters) checks the panels: 3W x H; TEST and REF as glow-render's
+# PNG at the same exposure; the error panel black for equal images, pure red (255) where the test is twice
+# the reference, blue round(255 * 0.5) = 128 where it is half, one colour per block.
+python3 - "$T" <<'PY' && pass "  panels: 3W x H, images as glow-render's PNG, error map red / blue / black by blocks" || fail "  panels wrong"
+import struct, sys, zlib
+t = sys.argv[1]
+def png(path):
+    d = open(path, "rb").read()
+    assert d[:8] == b"\x89PNG\r\n\x1a\n"
+    pos, idat = 8, b""
+    while pos < len(d):
+        n, kind = struct.unpack(">I4s", d[pos:pos + 8])
+        body = d[pos + 8:pos + 8 + n]
+        if kind == b"IHDR": w, h, depth, ctype = struct.unpack(">IIBB", body[:10])
+        if kind == b"IDAT": idat += body
+        pos += 12 + n
+    assert depth == 8 and ctype == 2, (depth, ctype)
+    raw, stride, rows, prev = zlib.decompress(idat), 3 * w, [], bytearray(3 * w)
+    for y in range(h):
+        f, line = raw[y * (stride + 1)], bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
+        for i in range(stride):
+            a = line[i - 3] if i >= 3 else 0
+            b, c = prev[i], prev[i - 3] if i >= 3 else 0
+            p = a + b - c
+            pr = a if abs(p - a) <= abs(p - b) and abs(p - a) <= abs(p - c) else b if abs(p - b) <= abs(p - c) else c
+            line[i] = (line[i] + [0, a, b, (a + b) // 2, pr][f]) & 255
+        rows.append(line)
+        prev = line
+    return w, h, rows
+W = 32
+ref_w, ref_h, ref = png(t + "/ref.png")
+for name, want in (("self", None), ("bright", (255, 0)), ("dark", (0, 128))):
+    w, h, rows = png(t + "/" + name + ".png")
+    assert (w, h) == (3 * W, W), (name, w, h)
+    for y in range(h):
+        if name != "dark": assert rows[y][3 * W:6 * W] == ref[y], (name, y, "REF panel")
+        if name != "bright": assert rows[y][:3 * W] == ref[y], (name, y, "TEST panel")
+    err = [[tuple(rows[y][3 * (2 * W + x):3 * (2 * W + x) + 3]) for x in range(W)] for y in range(h)]
+    if want is None:
+        assert all(p == (0, 0, 0) for r in err for p in r), name
+    else:
+        r_max, b_max = want
+        assert max(p[0] for r in err for p in r) == r_max and max(p[2] for r in err for p in r) == b_max, name
+        assert all(p[1] == 0 and (p[0] == 0 or p[2] == 0) for r in err for p in r), name
+        b = 8 if name == "bright" else 4
+        assert all(err[y][x] == err[y - y % b][x - x % b] for y in range(h) for x in range(W)), (name, "blocks")
+        assert sum(p != (0, 0, 0) for r in err for p in r) > W * W // 2, (name, "mostly coloured")
+w, h, rows = png(t + "/grad.png")
+assert (w, h) == (12, 3)
+# --panel-exposure 0.25: the test panel (twice the values) shows the reference's values at 0.5, top row first:
+# the top row is the file's last row (y = 2), pixel 0 R = (0 + 8 + 0) / 8 * 2 = 2 -> x 0.25 = 0.5 -> 188.
+assert rows[0][0] == 188, rows[0][:3]
+assert rows[0][4 * 3:4 * 3 + 3] == bytes([round(255 * ((1.055 * (v * 0.25) ** (1 / 2.4) - 0.055) if v * 0.25 > 0.0031308 else 12.92 * v * 0.25)) for v in (1.0, 1.125, 1.25)]), rows[0][12:15]
+assert all(rows[y][24:36:3] == bytes([255] * 4) for y in range(3)), "error panel red"
+PY
+
 # --- glow-stability: the three measurements at toy sizes (they must run and report; the figures are
 #     docs/results.md's, from full-size runs)
 SCN=$ROOT/scenes

@@ -1,10 +1,23 @@
 /* glow-compare — the error metrics of glow_eval.h on two image files, for scripts (glow-eval).
  *
- *   glow-compare TEST.exr REF.exr [--exposure E] [--add IMAGE.exr] [--block N] [--ppd P]
- *                [--flip-map OUT.exr] [--no-flip] [--json]
+ *   glow-compare TEST REF [--exposure E] [--add IMAGE] [--ref-add IMAGE] [--block N] [--ppd P]
+ *                [--flip-map OUT.exr] [--no-flip] [--panels OUT.png [--panel-exposure E]] [--json]
  *
+ * TEST, REF and the added images may each be OpenEXR or PFM (chosen by the file's magic bytes;
+ * PFM is what the independent referee, shared/referee/, writes).
  * --add adds IMAGE to TEST first (same size): glow-eval compares Glow's indirect-only view plus the
  * reference's direct image (which Glow's view reproduces to the bit) with the reference's final.
+ * --ref-add adds IMAGE to REF first (same size): the referee (Cycles) files light reflected once
+ * from an emitter as 'direct' where Glow files it as indirect, so for a scene lit by emissive
+ * meshes (the Cornell box) Glow's indirect compares with referee direct.pfm + indirect.pfm.
+ * --panels writes one PNG of three panels side by side, each W x H: TEST and REF shown as
+ * glow_eval_write_png shows them (x * E clamped, sRGB; E = --panel-exposure, default --exposure),
+ * then a signed error map of the N x N block means (the --block grid, partial blocks at the right
+ * and bottom): per block rel = (T - R) / max(R, 1e-3 * the mean reference luma over the image),
+ * T and R the block's mean test and reference luma 0.2126 R + 0.7152 G + 0.0722 B, clamped to
+ * [-1, 1] (where that denominator is not positive, a reference black or negative on the whole,
+ * rel = sign(T - R)); the block is filled red (test brighter) or blue (test darker) with sRGB value
+ * round(255 |rel|), black where they are equal.
  * Prints relative RMSE (HDR), display RMSE, PSNR and SSIM after `--exposure` (default 1) and sRGB
  * encoding, both images' mean radiance, the block error of N x N block means (default 8) and the
  * mean ratio, and mean HDR-FLIP (exposure range from REF, --ppd pixels per degree, default 67;
@@ -20,14 +33,20 @@
 #include "glow_eval.h"
 
 static int usage(FILE *f) {
-    fprintf(f, "usage: glow-compare TEST.exr REF.exr [--exposure E] [--add IMAGE.exr] [--block N] [--ppd P]\n"
-               "                    [--flip-map OUT.exr] [--no-flip] [--json]\n"
-               "Compares TEST with the reference REF: relative RMSE of the HDR values, RMSE and PSNR of\n"
-               "the display images (x * exposure, clamped, sRGB-encoded) and their mean SSIM, the block\n"
-               "error (relative RMS error of N x N block means, default 8), the mean ratio and the mean\n"
-               "HDR-FLIP (exposures from REF, P pixels per degree, default 67; --no-flip skips it).\n"
-               "--add IMAGE.exr adds IMAGE to TEST before comparing.\n"
-               "--flip-map OUT.exr writes the per-pixel HDR-FLIP as a grey EXR.\n");
+    fprintf(f, "usage: glow-compare TEST REF [--exposure E] [--add IMAGE] [--ref-add IMAGE] [--block N] [--ppd P]\n"
+               "                    [--flip-map OUT.exr] [--no-flip] [--panels OUT.png [--panel-exposure E]] [--json]\n"
+               "Compares TEST with the reference REF (each OpenEXR or PFM): relative RMSE of the HDR\n"
+               "values, RMSE and PSNR of the display images (x * exposure, clamped, sRGB-encoded) and their\n"
+               "mean SSIM, the block error (relative RMS error of N x N block means, default 8), the mean\n"
+               "ratio and the mean HDR-FLIP (exposures from REF, P pixels per degree, default 67;\n"
+               "--no-flip skips it).\n"
+               "--add IMAGE adds IMAGE to TEST before comparing; --ref-add IMAGE adds IMAGE to REF (e.g.\n"
+               "  the referee's direct.pfm to its indirect.pfm for a scene lit by emissive meshes).\n"
+               "--flip-map OUT.exr writes the per-pixel HDR-FLIP as a grey EXR.\n"
+               "--panels OUT.png writes TEST | REF | error side by side (3W x H): TEST and REF at exposure\n"
+               "  --panel-exposure E (default: --exposure) and sRGB; the error map of the N x N blocks'\n"
+               "  mean luma, (T - R) / max(R, 1e-3 mean luma of REF) clamped to [-1, 1], red where TEST\n"
+               "  is brighter, blue where darker, brightness |error| (black = equal).\n");
     return f == stdout ? 0 : 2;
 }
 
@@ -36,10 +55,85 @@ static void print_num(const char *key, double v, const char *sep) {
     else printf("\"%s\": %s%s", key, isnan(v) ? "null" : (v > 0 ? "1e999" : "-1e999"), sep);
 }
 
+/* Reads `path` and adds it to *dst (read from dst_path), same size. 0 on success, else prints why. */
+static int add_image(const char *path, glow_eval_image *dst, const char *dst_path) {
+    glow_eval_image extra = {0};
+    char msg[512];
+    if (glow_eval_read_image(path, &extra, msg, sizeof msg) != GLOW_OK) {
+        fprintf(stderr, "glow-compare: %s\n", msg);
+        return 1;
+    }
+    if (extra.width != dst->width || extra.height != dst->height) {
+        fprintf(stderr, "glow-compare: %s is %ux%u but %s is %ux%u\n", path, extra.width, extra.height, dst_path,
+                dst->width, dst->height);
+        glow_eval_image_free(&extra);
+        return 1;
+    }
+    for (size_t i = 0; i < (size_t)extra.width * extra.height * 3; ++i) dst->rgb[i] += extra.rgb[i];
+    glow_eval_image_free(&extra);
+    return 0;
+}
+
+static double luma(const float *p) { return 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]; }
+
+/* The inverse of the sRGB curve (IEC 61966-2-1), for v in [0, 1]. */
+static double srgb_decode(double v) { return v <= 0.04045 ? v / 12.92 : pow((v + 0.055) / 1.055, 2.4); }
+
+/* Writes TEST | REF | block error map (see the file comment) as one PNG through glow_eval_write_png:
+ * the error panel holds linear values that its display transform (x * exposure, sRGB, round(255 v))
+ * turns into exactly round(255 |rel|) in the red or blue channel. test and ref: same size, finite. */
+static glow_result write_panels(const glow_eval_image *test, const glow_eval_image *ref, uint32_t block,
+                                float exposure, const char *path, char *msg, size_t msg_size) {
+    const uint32_t W = ref->width, H = ref->height;
+    if (W > UINT32_MAX / 3) {
+        snprintf(msg, msg_size, "%s: image %ux%u is too wide for three panels", path, W, H);
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    glow_eval_image out = {0};
+    glow_result r = glow_eval_image_alloc(&out, 3 * W, H);
+    if (r != GLOW_OK) {
+        snprintf(msg, msg_size, "%s: out of memory", path);
+        return r;
+    }
+    double ref_sum = 0.0;
+    for (uint32_t y = 0; y < H; y++) {
+        const size_t src = (size_t)y * W * 3, dst = (size_t)y * 3 * W * 3;
+        memcpy(out.rgb + dst, test->rgb + src, (size_t)W * 3 * sizeof(float));
+        memcpy(out.rgb + dst + (size_t)W * 3, ref->rgb + src, (size_t)W * 3 * sizeof(float));
+        for (uint32_t x = 0; x < W; x++) ref_sum += luma(ref->rgb + src + 3 * (size_t)x);
+    }
+    const double floor_luma = 1e-3 * ref_sum / ((double)W * H);
+    for (uint32_t by = 0; by < H; by += block)
+        for (uint32_t bx = 0; bx < W; bx += block) {
+            const uint32_t ey = H - by < block ? H : by + block, ex = W - bx < block ? W : bx + block;
+            double t = 0.0, rf = 0.0;
+            for (uint32_t y = by; y < ey; y++)
+                for (uint32_t x = bx; x < ex; x++) {
+                    const size_t i = ((size_t)y * W + x) * 3;
+                    t += luma(test->rgb + i);
+                    rf += luma(ref->rgb + i);
+                }
+            const double n = (double)(ey - by) * (ex - bx), diff = (t - rf) / n, den = fmax(rf / n, floor_luma);
+            double rel = den > 0.0 ? diff / den : (diff > 0.0 ? 1.0 : diff < 0.0 ? -1.0 : 0.0);
+            rel = rel > 1.0 ? 1.0 : rel < -1.0 ? -1.0 : rel;
+            const float v = (float)(srgb_decode(round(255.0 * fabs(rel)) / 255.0) / exposure);
+            for (uint32_t y = by; y < ey; y++)
+                for (uint32_t x = bx; x < ex; x++) {
+                    float *p = out.rgb + ((size_t)y * 3 * W + 2 * (size_t)W + x) * 3;
+                    p[0] = rel > 0.0 ? v : 0.0f;
+                    p[1] = 0.0f;
+                    p[2] = rel < 0.0 ? v : 0.0f;
+                }
+        }
+    r = glow_eval_write_png(&out, exposure, path, msg, msg_size);
+    glow_eval_image_free(&out);
+    return r;
+}
+
 int main(int argc, char **argv) {
-    const char *paths[2] = {NULL, NULL}, *add = NULL, *flip_map = NULL;
+    const char *paths[2] = {NULL, NULL}, *add = NULL, *ref_add = NULL, *flip_map = NULL, *panels = NULL;
     int np = 0, json = 0, flip = 1;
-    float exposure = 1.0f;
+    float exposure = 1.0f, panel_exposure = 0.0f; /* 0: --exposure */
     unsigned long block = GLOW_EVAL_BLOCK_SIZE;
     double ppd = 0.0;
     for (int i = 1; i < argc; ++i) {
@@ -50,6 +144,20 @@ int main(int argc, char **argv) {
         } else if (!strcmp(a, "--add")) {
             if (i + 1 >= argc) return usage(stderr);
             add = argv[++i];
+        } else if (!strcmp(a, "--ref-add")) {
+            if (i + 1 >= argc) return usage(stderr);
+            ref_add = argv[++i];
+        } else if (!strcmp(a, "--panels")) {
+            if (i + 1 >= argc) return usage(stderr);
+            panels = argv[++i];
+        } else if (!strcmp(a, "--panel-exposure")) {
+            char *end = NULL;
+            if (i + 1 >= argc) return usage(stderr);
+            panel_exposure = strtof(argv[++i], &end);
+            if (!end || *end || !isfinite(panel_exposure) || panel_exposure <= 0.0f) {
+                fprintf(stderr, "glow-compare: --panel-exposure needs a positive number, got '%s'\n", argv[i]);
+                return 2;
+            }
         } else if (!strcmp(a, "--no-flip")) {
             flip = 0;
         } else if (!strcmp(a, "--flip-map")) {
@@ -93,32 +201,23 @@ int main(int argc, char **argv) {
         fprintf(stderr, "glow-compare: --flip-map and --no-flip exclude each other\n");
         return 2;
     }
+    if (panel_exposure > 0.0f && !panels) {
+        fprintf(stderr, "glow-compare: --panel-exposure needs --panels\n");
+        return 2;
+    }
+    if (panel_exposure <= 0.0f) panel_exposure = exposure;
     glow_eval_image img[2] = {{0}, {0}};
     char msg[512];
     for (int k = 0; k < 2; ++k)
-        if (glow_eval_read_exr(paths[k], &img[k], msg, sizeof msg) != GLOW_OK) {
+        if (glow_eval_read_image(paths[k], &img[k], msg, sizeof msg) != GLOW_OK) {
             fprintf(stderr, "glow-compare: %s\n", msg);
             glow_eval_image_free(&img[0]);
             return 1;
         }
-    if (add) {
-        glow_eval_image extra = {0};
-        if (glow_eval_read_exr(add, &extra, msg, sizeof msg) != GLOW_OK) {
-            fprintf(stderr, "glow-compare: %s\n", msg);
-            glow_eval_image_free(&img[0]);
-            glow_eval_image_free(&img[1]);
-            return 1;
-        }
-        if (extra.width != img[0].width || extra.height != img[0].height) {
-            fprintf(stderr, "glow-compare: %s is %ux%u but %s is %ux%u\n", add, extra.width, extra.height, paths[0],
-                    img[0].width, img[0].height);
-            glow_eval_image_free(&extra);
-            glow_eval_image_free(&img[0]);
-            glow_eval_image_free(&img[1]);
-            return 1;
-        }
-        for (size_t i = 0; i < (size_t)extra.width * extra.height * 3; ++i) img[0].rgb[i] += extra.rgb[i];
-        glow_eval_image_free(&extra);
+    if ((add && add_image(add, &img[0], paths[0])) || (ref_add && add_image(ref_add, &img[1], paths[1]))) {
+        glow_eval_image_free(&img[0]);
+        glow_eval_image_free(&img[1]);
+        return 1;
     }
     glow_eval_metrics m;
     glow_eval_flip_result fr = {0};
@@ -127,6 +226,13 @@ int main(int argc, char **argv) {
     if (r == GLOW_OK && block != m.block_size) {
         m.block_error = glow_eval_block_error(&img[0], &img[1], NULL, (uint32_t)block);
         m.block_size = (uint32_t)block;
+    }
+    if (r == GLOW_OK && panels && write_panels(&img[0], &img[1], (uint32_t)block, panel_exposure, panels, msg,
+                                               sizeof msg) != GLOW_OK) {
+        fprintf(stderr, "glow-compare: %s\n", msg);
+        glow_eval_image_free(&img[0]);
+        glow_eval_image_free(&img[1]);
+        return 1;
     }
     if (r == GLOW_OK && flip) {
         float *fm = NULL;
@@ -176,8 +282,8 @@ int main(int argc, char **argv) {
         printf("\"mean_test\": [%.9g, %.9g, %.9g], \"mean_ref\": [%.9g, %.9g, %.9g]}\n", m.mean_test[0], m.mean_test[1],
                m.mean_test[2], m.mean_ref[0], m.mean_ref[1], m.mean_ref[2]);
     } else {
-        printf("%s vs %s (exposure %g, %llu pixels)\n", paths[0], paths[1], (double)exposure,
-               (unsigned long long)m.pixels);
+        printf("%s%s%s vs %s%s%s (exposure %g, %llu pixels)\n", paths[0], add ? " + " : "", add ? add : "", paths[1],
+               ref_add ? " + " : "", ref_add ? ref_add : "", (double)exposure, (unsigned long long)m.pixels);
         printf("  relative RMSE (HDR)  %.4f\n  display RMSE         %.5f\n  PSNR                 %.2f dB\n"
                "  SSIM                 %.4f\n",
                m.rel_rmse, m.rmse_display, m.psnr_db, m.ssim);
