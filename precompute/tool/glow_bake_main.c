@@ -28,6 +28,8 @@ static const char *usage_text =
     "  builtin:cornell     Cornell box (closed), emissive ceiling light\n"
     "  builtin:furnace     closed box, uniform albedo 0.5, uniformly emissive walls\n"
     "  builtin:two-rooms   two closed rooms sharing one thin wall (light-leak tests)\n"
+    "  builtin:pillar-hall a hall with a row of pillars and a bench (partly visible nodes, contacts)\n"
+    "  builtin:pillar-court the same without its ceiling (an open shell)\n"
     "\n"
     "Options:\n"
     "  -o, --output FILE      bake file to write (required); written atomically\n"
