@@ -589,6 +589,7 @@ typedef struct lm_state {
     uint32_t *owner;
     float *dist;
     double (*ref)[2]; /* per texel: the centroid of its footprint (texel units), where its cache goes */
+    double footprint; /* Σ over covered texels of the surface area inside them (texel units) */
     uint32_t covered;
 } lm_state;
 
@@ -648,7 +649,9 @@ static glow_result lm_try(const glow__scene *scene, const glow__chart_set *cs, d
      * centre-nearest point lay on the chart's border, often a crease, whose irradiance is not the
      * texel's. Texels with no footprint area (slivers) keep their centre. */
     rasterise(n, (const float(*)[2])st->uv, st->w, st->h, NULL, st->owner, st->dist, foot);
+    st->footprint = 0.0;
     for (size_t i = 0; i < texels; ++i) {
+        st->footprint += foot[i][0] < 1.0 ? foot[i][0] : 1.0; /* overlapping charts' triangles count once */
         if (foot[i][0] > 0.0) {
             st->ref[i][0] = foot[i][1] / foot[i][0];
             st->ref[i][1] = foot[i][2] / foot[i][0];
@@ -846,6 +849,12 @@ glow_result glow__caches_build(const glow__scene *scene, const glow__rt *rt, con
         if (!dilate(out->lm_map, dims, eligible, (const int(*)[3])nb, nbn, UINT32_MAX)) goto oom;
         for (size_t i = 0; i < texels; ++i) eligible[i] = st.owner[i] == NONE;
         if (!dilate(out->lm_map, dims, eligible, (const int(*)[3])nb, nbn, LM_GUTTER_PASSES)) goto oom;
+        /* what the atlas holds besides caches: gutter copies and nothing */
+        for (size_t i = 0; i < texels; ++i) {
+            out->lm_unused += out->lm_map[i] == GLOW_MAP_EMPTY;
+            out->lm_gutter += out->lm_map[i] != GLOW_MAP_EMPTY && st.owner[i] == NONE;
+        }
+        out->lm_footprint = st.footprint;
         out->lm_uv = st.uv;
         st.uv = NULL;
     }
@@ -863,6 +872,15 @@ glow_result glow__caches_build(const glow__scene *scene, const glow__rt *rt, con
         glow__parallel_for(pool, surfels->count, 256, fb_range, &fj);
     }
 
+    if (out->lm_width)
+        glow__infof(log,
+                    "%s: lightmap budget: %u of %u atlas texels hold a cache (%.0f %% of their area is surface, the "
+                    "rest overhangs a chart's border), %u invalid (filled), %u gutter copies, %u unused (%.0f %%); "
+                    "%.3g units per texel",
+                    scene->source, out->lm_cache_count, out->lm_width * out->lm_height,
+                    st.covered ? 100.0 * out->lm_footprint / st.covered : 0.0, out->lm_invalid, out->lm_gutter,
+                    out->lm_unused, 100.0 * out->lm_unused / ((double)out->lm_width * out->lm_height),
+                    out->texel_density > 0.0f ? 1.0 / out->texel_density : 0.0);
     glow__infof(log,
                 "%s: caches: grid %ux%ux%u at %g: %u caches, %u inside geometry; lightmap %ux%u at %g texels/unit "
                 "(%u charts): %u caches, %u invalid texels",

@@ -210,6 +210,9 @@ typedef struct glow__caches {
     float texel_density;
     uint32_t *lm_map;         /* [w*h], same encoding as grid_map */
     uint32_t lm_invalid;      /* texels that saw back faces (filled from neighbours) */
+    uint32_t lm_gutter;       /* atlas texels outside every footprint that hold a copy (gutters) */
+    uint32_t lm_unused;       /* atlas texels that hold nothing */
+    double lm_footprint;      /* Σ over covered texels of the surface area inside them, in texels */
     float (*lm_uv)[2];        /* [3*tri_count] lightmap UV per triangle corner, in [0,1] */
     uint32_t chart_count;     /* 0 when the mesh's own second UV set was used */
     /* per surfel (in the hierarchy's surfel order): cache whose light it re-emits */

@@ -489,6 +489,12 @@ glow_result glow_pc_bake(const char *scene_path, const char *out_path, const glo
     stats->lightmap_height = caches.lm_height;
     stats->lightmap_caches = caches.lm_cache_count;
     stats->lightmap_invalid = caches.lm_invalid;
+    stats->lightmap_gutter = caches.lm_gutter;
+    stats->lightmap_unused = caches.lm_unused;
+    {
+        const uint64_t covered = (uint64_t)caches.lm_cache_count + caches.lm_invalid;
+        stats->lightmap_coverage = covered ? (float)(caches.lm_footprint / (double)covered) : 0.0f;
+    }
     stats->charts = caches.chart_count;
     stats->caches = caches.count;
 

@@ -43,6 +43,13 @@ expect 0 "--info --json" "$BIN" --info "$T/c1.glow" --json
 grep -q '"surfels": 1024' "$T/out" && pass "  info json" || fail "  info json"
 expect 0 "bake --json" "$BIN" builtin:cornell -o "$T/c2.glow" "${SMALL[@]}" --threads 3 --json
 grep -q '"bytes_per_link"' "$T/out" && grep -q '"stages"' "$T/out" && pass "  json summary" || fail "  json summary"
+python3 - "$T/out" <<'PY' && pass "  json: the lightmap budget adds up (caches + invalid + gutter + unused = atlas)" || fail "  json: lightmap budget"
+import json, sys
+c = json.load(open(sys.argv[1]))["caches"]
+w, h = c["lightmap_size"]
+assert c["lightmap"] + c["lightmap_invalid"] + c["lightmap_gutter"] + c["lightmap_unused"] == w * h, c
+assert 0.0 < c["lightmap_coverage"] <= 1.0, c
+PY
 if cmp -s "$T/c1.glow" "$T/c2.glow"; then pass "same bytes with 1 and 3 threads"; else fail "bake differs across thread counts"; fi
 expect 0 "bake other seed" "$BIN" builtin:cornell -o "$T/c3.glow" "${SMALL[@]}" --seed 7
 if cmp -s "$T/c1.glow" "$T/c3.glow"; then fail "seed has no effect"; else pass "seed changes the bake"; fi
