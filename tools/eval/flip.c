@@ -37,6 +37,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "eval_internal.h"
 #include "glow_eval.h"
 
 #define FLIP_PI 3.14159265358979323846
@@ -86,15 +87,7 @@ static const double ACES_K[6] = {0.6 * 0.6 * 2.51, 0.6 * 0.03, 0.0, 0.6 * 0.6 * 
  * t = 0.85 of the tone mapper's output, the stop exposure maps its median luminance there. */
 #define FLIP_T_EXPOSURE 0.85
 
-static void set_message(char *message, size_t message_size, const char *fmt, ...)
-    __attribute__((format(printf, 3, 4)));
-static void set_message(char *message, size_t message_size, const char *fmt, ...) {
-    if (!message || message_size == 0) return;
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(message, message_size, fmt, ap);
-    va_end(ap);
-}
+#define set_message glow__eval_set_message
 
 double glow_eval_flip_ppd(double distance_m, double resolution_x, double monitor_width_m) {
     /* FLIP.h calculatePPD: distance * (pixels / width) * pi / 180 (pixels per degree at the centre). */

@@ -14,21 +14,21 @@
 #include <openexr.h>
 #include <stb/stb_image_write.h>
 
+#include "eval_internal.h"
 #include "glow_eval.h"
 
 /* Refuse images with more pixels than this (8192 x 8192): 768 MiB of floats. A corrupt header
  * must not make the reader allocate gigabytes. */
 #define GLOW_EVAL_MAX_PIXELS ((uint64_t)1 << 26)
 
-static void set_message(char *message, size_t message_size, const char *fmt, ...)
-    __attribute__((format(printf, 3, 4)));
-static void set_message(char *message, size_t message_size, const char *fmt, ...) {
+void glow__eval_set_message(char *message, size_t message_size, const char *fmt, ...) {
     if (!message || message_size == 0) return;
     va_list ap;
     va_start(ap, fmt);
     vsnprintf(message, message_size, fmt, ap);
     va_end(ap);
 }
+#define set_message glow__eval_set_message
 
 glow_result glow_eval_image_alloc(glow_eval_image *img, uint32_t width, uint32_t height) {
     if (!img) return GLOW_ERROR_INVALID_ARGUMENT;
@@ -421,6 +421,23 @@ static glow_result exr_read_body(exr_context_t ctx, const char *path, glow_eval_
     return GLOW_OK;
 }
 
+/* The first (up to) 4 bytes of a file, with the reader's messages for a file that cannot be opened or read. */
+static glow_result read_magic(const char *path, unsigned char magic[4], size_t *got, char *message, size_t message_size) {
+    FILE *f = fopen(path, "rb");
+    if (!f) {
+        set_message(message, message_size, "%s: cannot open (%s)", path, strerror(errno));
+        return GLOW_ERROR_IO;
+    }
+    *got = fread(magic, 1, 4, f);
+    const int read_error = ferror(f), e = errno;
+    fclose(f);
+    if (read_error) {
+        set_message(message, message_size, "%s: cannot read (%s)", path, strerror(e));
+        return GLOW_ERROR_IO;
+    }
+    return GLOW_OK;
+}
+
 glow_result glow_eval_read_exr(const char *path, glow_eval_image *out, char *message, size_t message_size) {
     if (out) {
         out->width = out->height = 0;
@@ -431,20 +448,10 @@ glow_result glow_eval_read_exr(const char *path, glow_eval_image *out, char *mes
         return GLOW_ERROR_INVALID_ARGUMENT;
     }
     /* Open and check the magic number ourselves: clearer messages (errno) than the library's. */
-    FILE *f = fopen(path, "rb");
-    if (!f) {
-        set_message(message, message_size, "%s: cannot open (%s)", path, strerror(errno));
-        return GLOW_ERROR_IO;
-    }
     unsigned char magic[4] = {0};
-    size_t got = fread(magic, 1, 4, f);
-    int read_error = ferror(f);
-    int e = errno;
-    fclose(f);
-    if (read_error) {
-        set_message(message, message_size, "%s: cannot read (%s)", path, strerror(e));
-        return GLOW_ERROR_IO;
-    }
+    size_t got = 0;
+    glow_result mr = read_magic(path, magic, &got, message, message_size);
+    if (mr != GLOW_OK) return mr;
     if (got != 4 || magic[0] != 0x76 || magic[1] != 0x2f || magic[2] != 0x31 || magic[3] != 0x01) {
         set_message(message, message_size, "%s: not an OpenEXR file", path);
         return GLOW_ERROR_CORRUPT_DATA;
@@ -648,20 +655,10 @@ glow_result glow_eval_read_image(const char *path, glow_eval_image *out, char *m
         set_message(message, message_size, "%s: NULL argument to glow_eval_read_image", path ? path : "(null)");
         return GLOW_ERROR_INVALID_ARGUMENT;
     }
-    FILE *f = fopen(path, "rb");
-    if (!f) {
-        set_message(message, message_size, "%s: cannot open (%s)", path, strerror(errno));
-        return GLOW_ERROR_IO;
-    }
     unsigned char magic[4] = {0};
-    size_t got = fread(magic, 1, 4, f);
-    int read_error = ferror(f);
-    int e = errno;
-    fclose(f);
-    if (read_error) {
-        set_message(message, message_size, "%s: cannot read (%s)", path, strerror(e));
-        return GLOW_ERROR_IO;
-    }
+    size_t got = 0;
+    glow_result mr = read_magic(path, magic, &got, message, message_size);
+    if (mr != GLOW_OK) return mr;
     if (got == 4 && magic[0] == 0x76 && magic[1] == 0x2f && magic[2] == 0x31 && magic[3] == 0x01)
         return glow_eval_read_exr(path, out, message, message_size);
     if (got >= 2 && magic[0] == 'P' && (magic[1] == 'F' || magic[1] == 'f'))

@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "eval_internal.h"
 #include "glow_eval.h"
 
 #define SSIM_RADIUS 5 /* 11 x 11 window */
@@ -15,15 +16,7 @@
 #define SSIM_C1 (0.01 * 0.01) /* (K1 L)^2, L = 1 */
 #define SSIM_C2 (0.03 * 0.03) /* (K2 L)^2 */
 
-static void set_message(char *message, size_t message_size, const char *fmt, ...)
-    __attribute__((format(printf, 3, 4)));
-static void set_message(char *message, size_t message_size, const char *fmt, ...) {
-    if (!message || message_size == 0) return;
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(message, message_size, fmt, ap);
-    va_end(ap);
-}
+#define set_message glow__eval_set_message
 
 /* IEC 61966-2-1 encoding of a linear value clamped to [0,1] (NaN -> 0), in double. */
 static double encode_d(double x) {
