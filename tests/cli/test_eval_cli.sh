@@ -197,6 +197,11 @@ if command -v gnuplot >/dev/null; then
   [ -s "$T/eval/cornell-builtin_error_vs_time.png" ] && pass "  chart written" || fail "  chart missing"
 fi
 expect 2 "glow-eval: unknown parameter" python3 "$ROOT/tools/glow-eval" sweep "$SCENE" --out "$T/eval2" --params frob --bin "$BIN"
+head -1 "$T/eval/results.csv" | grep -q "block_error_indirect" && head -1 "$T/eval/results.csv" | grep -q "mean_ratio_indirect" \
+  && pass "  results.csv has the block error and mean ratio" || fail "  results.csv lacks block error / mean ratio"
+expect 2 "glow-eval: --referee without indirect.pfm" python3 "$ROOT/tools/glow-eval" sweep "$SCENE" --out "$T/eval3" --bin "$BIN" \
+  --referee "$T/no-referee"
+err_has "indirect.pfm"
 
 echo "$fails failure(s)"
 [ "$fails" = 0 ]
