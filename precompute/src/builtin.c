@@ -73,6 +73,7 @@ typedef struct box_desc {
     int light_face; /* -1 = none */
     float light_lo[2], light_hi[2];
     uint32_t light_mat;
+    uint32_t skip_faces; /* bit 2*axis + side: that face is left out (an open shell); 0 = a closed box */
 } box_desc;
 
 static void add_box(builder *b, const box_desc *d) {
@@ -81,6 +82,7 @@ static void add_box(builder *b, const box_desc *d) {
         int lo_a = ua < va ? ua : va, hi_a = ua < va ? va : ua; /* the face's axes in x, y, z order */
         for (int side = 0; side < 2; side++) {
             int face = 2 * axis + side;
+            if (d->skip_faces >> face & 1u) continue;
             float coord = d->splits[axis][side ? d->n[axis] - 1 : 0];
             float facing[3] = {0.0f, 0.0f, 0.0f};
             facing[axis] = (side ? 1.0f : -1.0f) * (d->inward ? -1.0f : 1.0f);
@@ -228,34 +230,13 @@ static void build_pillars(builder *b, glow__material *m, bool ceiling) {
     set_material(&m[3], "bench", 0.5f, 0.3f, 0.2f, 0, 0, 0);
     static const float xs[7] = {-6.0f, -4.0f, -2.0f, 0.0f, 2.0f, 4.0f, 6.0f}, ys[3] = {0.0f, 1.75f, 3.5f};
     static const float zs[5] = {-3.0f, -1.5f, 0.0f, 1.5f, 3.0f};
-    if (ceiling) {
-        box_desc hall = {.splits = {xs, ys, zs}, .n = {7, 3, 5}, .inward = true, .face_mat = {0, 0, 1, 0, 0, 0}, .light_face = -1};
-        add_box(b, &hall);
-    } else { /* the box without its +y face: walls and floor of an open court */
-        for (int axis = 0; axis < 3; axis++) {
-            const int ua = (axis + 1) % 3, va = (axis + 2) % 3;
-            const float *sp[3] = {xs, ys, zs};
-            const uint32_t n[3] = {7, 3, 5};
-            for (int side = 0; side < 2; side++) {
-                if (axis == 1 && side == 1) continue;
-                const float coord = sp[axis][side ? n[axis] - 1 : 0];
-                float facing[3] = {0.0f, 0.0f, 0.0f};
-                facing[axis] = side ? -1.0f : 1.0f;
-                for (uint32_t i = 0; i + 1 < n[ua]; i++)
-                    for (uint32_t j = 0; j + 1 < n[va]; j++) {
-                        float p[4][3];
-                        const float uu[4] = {sp[ua][i], sp[ua][i + 1], sp[ua][i + 1], sp[ua][i]};
-                        const float vv[4] = {sp[va][j], sp[va][j], sp[va][j + 1], sp[va][j + 1]};
-                        for (int k = 0; k < 4; k++) {
-                            p[k][axis] = coord;
-                            p[k][ua] = uu[k];
-                            p[k][va] = vv[k];
-                        }
-                        add_quad_facing(b, p[0], p[1], p[2], p[3], facing, axis == 1 ? 1u : 0u);
-                    }
-            }
-        }
-    }
+    box_desc hall = {.splits = {xs, ys, zs},
+                     .n = {7, 3, 5},
+                     .inward = true,
+                     .face_mat = {0, 0, 1, 0, 0, 0},
+                     .light_face = -1,
+                     .skip_faces = ceiling ? 0u : 1u << 3}; /* +y: the ceiling */
+    add_box(b, &hall);
     for (int k = -2; k <= 2; k++) add_block(b, 2.0f * (float)k, 0.0f, 0.25f, 3.3f, 0.0f, 2);
     add_block(b, -3.0f, 1.8f, 0.4f, 0.45f, 0.0f, 3);
 }

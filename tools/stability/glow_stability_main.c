@@ -273,6 +273,15 @@ static void glow_irradiance(const session *s, uint32_t c, float out[3]) {
     for (int k = 0; k < 3; ++k) out[k] *= (float)PI_D;
 }
 
+/* Glow's irradiance E (W/m², RGB) for surfel u's next bounce: π x its feedback cache, diffuse-shaded
+ * along the surfel's normal */
+static void surfel_irradiance(const session *s, const glow_bake_surfel *u, float out[3]) {
+    const glow_cache_outputs *o = glow_system_outputs(s->sys);
+    glow_shade_sh(o->cache_sh + (size_t)u->feedback * o->coeff_count, o->sh_bands_luma, o->sh_bands_chroma, u->normal, 1.0f,
+                  out);
+    for (int k = 0; k < 3; ++k) out[k] *= (float)PI_D;
+}
+
 static float luma(const float *rgb) { return 0.25f * rgb[0] + 0.5f * rgb[1] + 0.25f * rgb[2]; }
 
 static void cache_point(const session *s, uint32_t c, float *pt) {
@@ -512,7 +521,7 @@ static int audit(const char *bake_path, const char *scene_path, uint32_t nprobes
                  const char *radiance_out, int json) {
     session s;
     int rc = 1;
-    float *pts = NULL, *er1 = NULL, *erc = NULL, *eg1 = NULL, *egc = NULL;
+    float *pts = NULL, *er1 = NULL, *erc = NULL, *eg1 = NULL, *egc = NULL, *sg1 = NULL, *sgc = NULL;
     double *ratio = NULL;
     uint32_t *pick = NULL;
     FILE *csv = NULL;
@@ -530,17 +539,24 @@ static int audit(const char *bake_path, const char *scene_path, uint32_t nprobes
     egc = malloc(sizeof(float) * 3 * nprobes);
     ratio = malloc(sizeof(double) * 2 * nprobes);
     pick = malloc(sizeof(uint32_t) * nprobes);
-    if (!pts || !er1 || !erc || !eg1 || !egc || !ratio || !pick) goto done;
+    /* the area-uniform points (below): every (ns / np)-th surfel */
+    const glow_bake_surfel *sf = glow__bake_surfels(s.bake);
+    const uint32_t ns = s.info.surfel_count, np = nprobes < ns ? nprobes : ns;
+    sg1 = malloc(sizeof(float) * 3 * (np + 1));
+    sgc = malloc(sizeof(float) * 3 * (np + 1));
+    if (!pts || !er1 || !erc || !eg1 || !egc || !ratio || !pick || !sg1 || !sgc || !sf) goto done;
     for (uint32_t i = 0; i < nprobes; ++i) {
         pick[i] = first + (uint32_t)((uint64_t)i * lm / nprobes);
         cache_point(&s, pick[i], pts + 6 * i);
     }
     /* Glow converged (session_open ran 3 x 64 feedback iterations), then single bounce: no feedback */
     for (uint32_t i = 0; i < nprobes; ++i) glow_irradiance(&s, pick[i], egc + 3 * i);
+    for (uint32_t i = 0; i < np; ++i) surfel_irradiance(&s, &sf[(uint64_t)i * ns / np], sgc + 3 * i);
     glow_system_set_params(s.sys, &(glow_system_params){.bounce_intensity = 0.0f, .emission_scale = s.scene.emission_scale,
                                                         .bounce_iterations = 1});
     if (glow_system_update(s.sys, NULL) != GLOW_OK) goto done;
     for (uint32_t i = 0; i < nprobes; ++i) glow_irradiance(&s, pick[i], eg1 + 3 * i);
+    for (uint32_t i = 0; i < np; ++i) surfel_irradiance(&s, &sf[(uint64_t)i * ns / np], sg1 + 3 * i);
     if (radiance_out) { /* the surfels' single-bounce radiance (luma), for glow-bake --audit-radiance */
         glow_solver_tables t;
         FILE *f = glow_system_get_solver_tables(s.sys, &t) == GLOW_OK ? fopen(radiance_out, "wb") : NULL;
@@ -612,12 +628,9 @@ static int audit(const char *bake_path, const char *scene_path, uint32_t nprobes
      * weighs the scene by area, as the camera and the multi-bounce feedback do; where the two audits
      * disagree, the loss lies between the caches and the surfaces that read them. */
     {
-        const glow_bake_surfel *sf = glow__bake_surfels(s.bake);
-        const uint32_t ns = s.info.surfel_count, np = nprobes < ns ? nprobes : ns;
-        float *sp = malloc(sizeof(float) * 6 * np), *sr = malloc(sizeof(float) * 3 * np);
+        float *sp = malloc(sizeof(float) * 6 * np), *sr = malloc(sizeof(float) * 3 * np), *sr1 = malloc(sizeof(float) * 3 * np);
         double sg = 0, srr = 0, se2 = 0, sr2 = 0;
-        int ok = sp && sr && sf;
-        const glow_cache_outputs *o = glow_system_outputs(s.sys);
+        int ok = sp && sr && sr1;
         const float lift = 1e-4f * sqrtf((s.info.bounds_max[0] - s.info.bounds_min[0]) * (s.info.bounds_max[0] - s.info.bounds_min[0]) +
                                          (s.info.bounds_max[1] - s.info.bounds_min[1]) * (s.info.bounds_max[1] - s.info.bounds_min[1]) +
                                          (s.info.bounds_max[2] - s.info.bounds_min[2]) * (s.info.bounds_max[2] - s.info.bounds_min[2]));
@@ -628,20 +641,8 @@ static int audit(const char *bake_path, const char *scene_path, uint32_t nprobes
                 sp[6 * i + 3 + k] = u->normal[k];
             }
         }
-        /* single bounce first (the system is in that state from above), then converged again */
-        float *sr1 = malloc(sizeof(float) * 3 * np), *sg1 = malloc(sizeof(float) * 3 * np);
-        ok = ok && sr1 && sg1;
-        const glow_bake_surfel *base = sf;
-        for (uint32_t i = 0; ok && i < np; ++i) {
-            const glow_bake_surfel *u = &base[(uint64_t)i * ns / np];
-            glow_shade_sh(o->cache_sh + (size_t)u->feedback * o->coeff_count, o->sh_bands_luma, o->sh_bands_chroma, u->normal,
-                          1.0f, sg1 + 3 * i);
-            for (int k = 0; k < 3; ++k) sg1[3 * i + k] *= (float)PI_D;
-        }
+        /* Glow's values were read with the caches' (sg1, sgc); the reference's here */
         ok = ok && glow_render_irradiance(s.rs, NULL, 0, &st1, sp, np, samples, 0, sr1, NULL, msg, sizeof msg) == GLOW_OK;
-        glow_system_set_params(s.sys, &(glow_system_params){.bounce_intensity = 1.0f, .emission_scale = s.scene.emission_scale,
-                                                            .bounce_iterations = 64});
-        for (int u = 0; ok && u < 3; ++u) ok = glow_system_update(s.sys, NULL) == GLOW_OK;
         ok = ok && glow_render_irradiance(s.rs, NULL, 0, &stc, sp, np, samples, 0, sr, NULL, msg, sizeof msg) == GLOW_OK;
         FILE *scsv = NULL;
         if (ok && csv_path) {
@@ -653,11 +654,7 @@ static int audit(const char *bake_path, const char *scene_path, uint32_t nprobes
         double sg1s = 0, sr1s = 0;
         for (uint32_t i = 0; ok && i < np; ++i) {
             const glow_bake_surfel *u = &sf[(uint64_t)i * ns / np];
-            float e[3];
-            glow_shade_sh(o->cache_sh + (size_t)u->feedback * o->coeff_count, o->sh_bands_luma, o->sh_bands_chroma, u->normal,
-                          1.0f, e);
-            for (int k = 0; k < 3; ++k) e[k] *= (float)PI_D;
-            const double g = luma(e), r = luma(sr + 3 * i);
+            const double g = luma(sgc + 3 * i), r = luma(sr + 3 * i);
             sg1s += luma(sg1 + 3 * i);
             sr1s += luma(sr1 + 3 * i);
             if (scsv)
@@ -670,7 +667,6 @@ static int audit(const char *bake_path, const char *scene_path, uint32_t nprobes
             sr2 += r * r;
         }
         free(sr1);
-        free(sg1);
         if (ok && json)
             printf(",\n \"surfels\": {\"single_bounce_mean_ratio\": %.5f, \"mean_ratio\": %.5f, \"rel_rms_error\": %.5f, "
                    "\"points\": %u}", sg1s / sr1s, sg / srr, sqrt(se2 / sr2), np);
@@ -720,6 +716,8 @@ done:
     free(egc);
     free(ratio);
     free(pick);
+    free(sg1);
+    free(sgc);
     session_free(&s);
     return rc;
 }
