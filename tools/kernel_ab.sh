@@ -13,14 +13,28 @@ build=$(cd "$1" && pwd); bake=$2; shift 2
 revs=(); while [ $# -gt 0 ] && [ "$1" != "--" ]; do revs+=("$1"); shift; done
 [ $# -gt 0 ] && shift
 [ ${#revs[@]} -ge 1 ] || { echo "kernel_ab.sh: no revisions" >&2; exit 2; }
+# Arguments are checked before anything is compiled (each version takes seconds to build, a minute
+# under sanitizers); kernel_ab.c checks them again with the same limits.
+iters=${1:-200}; threads=${2:-1}; luma=${3:-3}; chroma=${4:-$luma}
+for v in "$iters" "$threads" "$luma" "$chroma"; do
+  [[ "$v" =~ ^[0-9]+$ ]] || { echo "kernel_ab.sh: '$v' is not a number (ITERS THREADS LUMA CHROMA)" >&2; exit 2; }
+done
+if [ "$iters" -lt 1 ] || [ "$iters" -gt 10000 ] || [ "$threads" -lt 1 ] || [ "$threads" -gt 64 ] ||
+   [ "$luma" -lt 1 ] || [ "$luma" -gt 8 ] || [ "$chroma" -lt 1 ] || [ "$chroma" -gt "$luma" ]; then
+  echo "kernel_ab.sh: ITERS 1..10000, THREADS 1..64, 1 <= CHROMA <= LUMA <= 8" >&2; exit 2
+fi
+[ -f "$bake" ] && [ -r "$bake" ] || { echo "kernel_ab.sh: cannot read bake $bake" >&2; exit 1; }
 lib=$build/lib/libglow_runtime.a
 [ -f "$lib" ] || { echo "kernel_ab.sh: $lib not found (build first)" >&2; exit 2; }
 tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
 cc=${CC:-cc}
 flags=(-O2 -std=c11 -I"$root/runtime/include" -I"$root/runtime/src")
-# a sanitizer build's library needs the same runtime in the harness
+# A sanitizer build's library needs the sanitizer runtime in the harness: only the link takes the
+# flags. The kernel versions are compiled as in a release build (they are what is timed);
+# instrumenting them made each version take over a minute to compile.
+link_flags=()
 nm "$lib" > "$tmp/nm.txt" 2>/dev/null || true
-if grep -q "__asan_" "$tmp/nm.txt"; then flags+=(-fsanitize=address,undefined); fi
+if grep -q "__asan_" "$tmp/nm.txt"; then link_flags+=(-fsanitize=address,undefined); fi
 objs=(); vlist=""
 for i in "${!revs[@]}"; do
   d=$tmp/v$i; mkdir -p "$d"
@@ -50,5 +64,6 @@ EOT
   objs+=("$d/variant.o"); vlist="$vlist X($i)"
   echo "version $i: ${revs[$i]}"
 done
-"$cc" "${flags[@]}" "-DVLIST=$vlist" "$root/tools/bench/kernel_ab.c" "${objs[@]}" "$lib" -lm -lpthread -o "$tmp/kernel_ab"
+"$cc" "${flags[@]}" "${link_flags[@]}" "-DVLIST=$vlist" "$root/tools/bench/kernel_ab.c" "${objs[@]}" "$lib" \
+  -lm -lpthread -o "$tmp/kernel_ab"
 "$tmp/kernel_ab" "$bake" "$@"

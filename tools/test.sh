@@ -1,29 +1,52 @@
 #!/usr/bin/env bash
-# The README's test command: installs dependencies, builds with warnings as errors, runs the
-# libFuzzer smoke on the bake reader, the test suite under ASan+UBSan, then the test suite on the
-# optimised build (its ctest summary is the last thing printed).
+# The README's test command: installs dependencies, builds with warnings as errors, runs the test
+# suite under ASan+UBSan, the libFuzzer smoke on the bake reader, then the test suite on the
+# optimised build. Every stage runs even when an earlier one failed (a red sanitizer pass must not
+# hide what the fuzzer or the release pass would say); the exit status is non-zero when any failed,
+# and the last lines name the stages that did.
 #   GLOW_FUZZ_SECONDS   fuzz smoke duration (default 30; 0 skips it)
 #   GLOW_SKIP_ASAN=1    skip the sanitizer pass
-set -euo pipefail
+set -uo pipefail
 cd "$(dirname "$0")/.."
-bash tools/setup.sh
+bash tools/setup.sh || { echo "test.sh: tools/setup.sh failed" >&2; exit 1; }
 jobs=$(nproc)
+failed=()
+
+stage() { # stage NAME COMMAND...: runs it, records a failure, never stops the script
+  local name=$1; shift
+  local t0=$SECONDS
+  if "$@"; then echo "== $name: passed ($((SECONDS - t0)) s)"
+  else echo "== $name: FAILED ($((SECONDS - t0)) s)"; failed+=("$name"); fi
+}
+
+asan_pass() {
+  cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DGLOW_SANITIZE=ON -DGLOW_WERROR=ON >/dev/null &&
+    cmake --build build-asan -j "$jobs" &&
+    ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+      ctest --test-dir build-asan --output-on-failure -j "$jobs" -LE slow
+}
+release_pass() {
+  cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DGLOW_WERROR=ON >/dev/null &&
+    cmake --build build -j "$jobs" &&
+    ctest --test-dir build --output-on-failure -j "$jobs"
+}
 
 if [ "${GLOW_SKIP_ASAN:-0}" != 1 ]; then
   echo "== build + tests under ASan/UBSan"
-  cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DGLOW_SANITIZE=ON -DGLOW_WERROR=ON >/dev/null
-  cmake --build build-asan -j "$jobs"
-  ASAN_OPTIONS=detect_leaks=1:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-    ctest --test-dir build-asan --output-on-failure -j "$jobs" -LE slow
+  stage "ASan/UBSan tests" asan_pass
 fi
 
 fuzz_s=${GLOW_FUZZ_SECONDS:-30}
 if [ "$fuzz_s" != 0 ]; then
   echo "== libFuzzer smoke on the bake reader (${fuzz_s} s)"
-  bash tools/fuzz-smoke.sh "$fuzz_s"
+  stage "fuzz smoke" bash tools/fuzz-smoke.sh "$fuzz_s"
 fi
 
 echo "== build (RelWithDebInfo, -Werror) + tests"
-cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DGLOW_WERROR=ON >/dev/null
-cmake --build build -j "$jobs"
-ctest --test-dir build --output-on-failure -j "$jobs"
+stage "release tests" release_pass
+
+if [ ${#failed[@]} -gt 0 ]; then
+  printf 'test.sh: FAILED: %s\n' "${failed[@]}" >&2
+  exit 1
+fi
+echo "test.sh: all stages passed"

@@ -16,6 +16,7 @@ expect 0 "worktree vs worktree, l = 3/2, 2 threads" bash "$AB" "$BUILD" "$T/corn
 grep -q "l = 3/2, 2 thread(s), 3 iterations" "$T/out" && pass "  header" || fail "  no header: $(head -3 "$T/out")"
 grep -q "^version 1: min .*max difference to version 0: 0.00e+00" "$T/out" && pass "  identical outputs" \
   || fail "  version 1 line: $(grep '^version 1: min' "$T/out")"
+expect 2 "iteration count not a number" bash "$AB" "$BUILD" "$T/cornell.glow" worktree -- x 1
 expect 2 "no revisions" bash "$AB" "$BUILD" "$T/cornell.glow"
 expect 2 "chroma above luma" bash "$AB" "$BUILD" "$T/cornell.glow" worktree -- 3 1 2 3
 expect 1 "missing bake" bash "$AB" "$BUILD" "$T/none.glow" worktree -- 1 1
