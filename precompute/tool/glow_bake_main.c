@@ -35,13 +35,17 @@ static const char *usage_text =
     "  -o, --output FILE      bake file to write (required); written atomically\n"
     "  --quality PRESET       low | moderate (default) | high\n"
     "                           low:      n_S=8192,   n_L=64,  l=3, ~2.5k caches\n"
-    "                           moderate: n_S=32768,  n_L=128, l=3, ~10k caches (PIC moderate)\n"
+    "                           moderate: n_S=32768,  n_L=64,  l=3, ~16k lightmap + ~2k grid caches\n"
+    "                                     (PIC's moderate: --links 128 --lightmap-caches 8000)\n"
     "                           high:     n_S=131072, n_L=254, l=4, ~10k caches (PIC high)\n"
     "  --surfels N            number of leaf surfels n_S (16..4194304)\n"
     "  --links N              links per cache n_L (1..4096)\n"
     "  --bands L              SH bands l (2..8; l*l coefficients)\n"
     "  --grid-spacing M       grid cache spacing in scene units (default: from the scene size)\n"
-    "  --texel-density D      lightmap texels per scene unit (default: from the scene area)\n"
+    "  --texel-density D      lightmap texels per scene unit (default: from the scene area and the\n"
+    "                         lightmap budget)\n"
+    "  --lightmap-caches N    the lightmap budget: texels that hold a cache (default: the preset's);\n"
+    "                         the density is chosen to land within 20 % of it\n"
     "  --threads N            worker threads (default: all CPUs); output is identical for any N\n"
     "  --seed S               sampling seed (default 0); same input and seed give the same bytes\n"
     "  --sh-links             also store full-SH links (PIC Eq. 2) next to runtime-projection links\n"
@@ -369,6 +373,10 @@ int main(int argc, char **argv) {
         } else if (!strcmp(a, "--texel-density")) {
             NEED_VALUE();
             if (!parse_pos_float(v, &s.texel_density)) return usage_error("--texel-density '%s': expected a positive number", v);
+        } else if (!strcmp(a, "--lightmap-caches")) {
+            NEED_VALUE();
+            if (!parse_u32(v, 1, 1u << 24, &s.lightmap_caches))
+                return usage_error("--lightmap-caches '%s': expected an integer in 1..16777216", v);
         } else if (!strcmp(a, "--threads")) {
             NEED_VALUE();
             if (!parse_u32(v, 1, 1024, &s.threads)) return usage_error("--threads '%s': expected an integer in 1..1024", v);

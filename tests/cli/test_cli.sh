@@ -22,6 +22,7 @@ expect 2 "bands 9" "$BIN" builtin:cornell -o "$T/a.glow" --bands 9; err_has "ban
 expect 2 "zero links" "$BIN" builtin:cornell -o "$T/a.glow" --links 0
 expect 2 "nan grid spacing" "$BIN" builtin:cornell -o "$T/a.glow" --grid-spacing nan
 expect 2 "negative texel density" "$BIN" builtin:cornell -o "$T/a.glow" --texel-density -1
+expect 2 "zero lightmap caches" "$BIN" builtin:cornell -o "$T/a.glow" --lightmap-caches 0; err_has "lightmap-caches"
 expect 2 "missing value" "$BIN" builtin:cornell -o
 expect 2 "no output" "$BIN" builtin:cornell
 no_file "$T/a.glow"
@@ -50,6 +51,18 @@ w, h = c["lightmap_size"]
 assert c["lightmap"] + c["lightmap_invalid"] + c["lightmap_gutter"] + c["lightmap_unused"] == w * h, c
 assert 0.0 < c["lightmap_coverage"] <= 1.0, c
 PY
+# the lightmap budget: without --texel-density the density is searched so that the texels holding
+# a cache land within 20 % of --lightmap-caches (two budgets 4x apart, so a fixed density fails one)
+for budget in 300 1200; do
+  expect 0 "bake --lightmap-caches $budget" "$BIN" builtin:cornell -o "$T/lb.glow" --surfels 1024 --links 32 -q --json \
+    --lightmap-caches "$budget"
+  python3 - "$T/out" "$budget" <<'PY' && pass "  lightmap caches within 20 % of $budget" || fail "  lightmap caches miss $budget"
+import json, sys
+n, want = json.load(open(sys.argv[1]))["caches"]["lightmap"], int(sys.argv[2])
+print("     lightmap caches", n)
+assert 0.8 * want <= n <= 1.2 * want, (n, want)
+PY
+done
 if cmp -s "$T/c1.glow" "$T/c2.glow"; then pass "same bytes with 1 and 3 threads"; else fail "bake differs across thread counts"; fi
 expect 0 "bake other seed" "$BIN" builtin:cornell -o "$T/c3.glow" "${SMALL[@]}" --seed 7
 if cmp -s "$T/c1.glow" "$T/c3.glow"; then fail "seed has no effect"; else pass "seed changes the bake"; fi

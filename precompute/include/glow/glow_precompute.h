@@ -26,7 +26,10 @@ extern "C" {
 typedef enum glow_pc_quality {
     GLOW_PC_QUALITY_DEFAULT = 0, /* = moderate */
     GLOW_PC_QUALITY_LOW,
-    GLOW_PC_QUALITY_MODERATE,    /* PIC: n_S = 32k, n_L = 128, l = 3, ~10k caches */
+    GLOW_PC_QUALITY_MODERATE,    /* n_S = 32k, n_L = 64, l = 3, ~16k lightmap caches; PIC's moderate has
+                                    n_L = 128 and ~10k caches (links = 128, lightmap_caches = 8000):
+                                    at the same link count the denser lightmap is more accurate
+                                    (docs/results.md, "More budget") */
     GLOW_PC_QUALITY_HIGH,        /* PIC: n_S = 128k, n_L = 254, l = 4, ~10k caches */
     GLOW_PC_QUALITY_FORCE_U32 = 0x7FFFFFFF
 } glow_pc_quality;
@@ -68,6 +71,10 @@ typedef struct glow_pc_settings {
                                    cache's gather through its cut with the exact gather through its
                                    visible surfels and logs the summary (--audit-radiance) */
     const char *audit_csv;      /* optional, with audit_radiance: the per-cache figures as CSV (--audit-csv) */
+    uint32_t lightmap_caches;   /* the lightmap's budget: how many texels hold a cache (each costs links
+                                   per cache x 8 bytes and a gather per update); the texel density is
+                                   searched to land within 20 % of it. 0 = preset; ignored when
+                                   texel_density is set (--lightmap-caches) */
 } glow_pc_settings;
 
 typedef struct glow_pc_stats {
