@@ -26,10 +26,7 @@ extern "C" {
 typedef enum glow_pc_quality {
     GLOW_PC_QUALITY_DEFAULT = 0, /* = moderate */
     GLOW_PC_QUALITY_LOW,
-    GLOW_PC_QUALITY_MODERATE,    /* n_S = 32k, n_L = 64, l = 3, ~16k lightmap caches; PIC's moderate has
-                                    n_L = 128 and ~10k caches (links = 128, lightmap_caches = 8000):
-                                    at the same link count the denser lightmap is more accurate
-                                    (docs/results.md, "More budget") */
+    GLOW_PC_QUALITY_MODERATE,    /* PIC: n_S = 32k, n_L = 128, l = 3, ~10k caches (8000 lightmap) */
     GLOW_PC_QUALITY_HIGH,        /* PIC: n_S = 128k, n_L = 254, l = 4, ~10k caches */
     GLOW_PC_QUALITY_FORCE_U32 = 0x7FFFFFFF
 } glow_pc_quality;
