@@ -348,8 +348,10 @@ static void test_plane_structure_and_compactness(void **state) {
     glow__surfels_free(&s);
 }
 
-/* Two parallel planes 1 mm apart with opposite normals (both sides of a thin wall): the normal term
- * keeps the sides apart until the clusters are large. */
+/* Two parallel planes 1 mm apart with opposite normals (both sides of a thin wall), without the
+ * visibility penalty: the normal term alone keeps the sides apart while the clusters are narrower
+ * than E·sqrt(2 Cn) = 0.14 of the unit square (Cn = 0.01); clusters of 1/64 of a side are 0.125
+ * wide. (With rays, glow__hierarchy_build_rt, the two sides never see each other and pay HAC_CV.) */
 static void test_thin_wall_keeps_sides_apart(void **state) {
     (void)state;
     const uint32_t side = 40, per = side * side, n = 2 * per;
@@ -371,7 +373,7 @@ static void test_thin_wall_keeps_sides_apart(void **state) {
     uint8_t *mask = calloc(h.node_count, 1);
     assert_non_null(mask);
     for (uint32_t i = 0; i < n; ++i) mask[i] = s.s[i].nrm[2] > 0.0f ? 2 : 1;
-    const float limit = (float)(0.125 * per) * s.area * 1.0001f;
+    const float limit = (float)(per / 64.0) * s.area * 1.0001f;
     uint32_t mixed_small = 0, checked = 0;
     float smallest_mixed = INFINITY;
     for (uint32_t i = n; i < h.node_count; ++i) {
@@ -380,14 +382,17 @@ static void test_thin_wall_keeps_sides_apart(void **state) {
         if (h.nodes[i].area <= limit) {
             ++checked;
             mixed_small += mask[i] == 3;
+            /* the balance term (a singleton joining a pair costs Cb/2 = 0.01, as much as half the
+             * normal term of opposite sides) may pair two leftover singletons across: never more */
+            if (mask[i] == 3) assert_true(h.nodes[i].area <= 2.0f * s.area * 1.0001f);
             /* pure clusters keep a unit normal pointing to their side */
             if (mask[i] != 3) assert_true(fabsf(fabsf(h.nodes[i].nrm[2]) - 1.0f) < 1e-5f);
         }
     }
-    print_message("thin wall: %u small clusters checked; smallest mixed cluster holds %.0f%% of one side\n",
-                  checked, 100.0 * smallest_mixed / (per * s.area));
-    assert_true(checked > n / 2);
-    assert_int_equal(mixed_small, 0);
+    print_message("thin wall: %u small clusters checked, %u mixed; smallest mixed cluster holds %.1f%% of one side\n",
+                  checked, mixed_small, 100.0 * smallest_mixed / (per * s.area));
+    assert_true(checked > n / 3);
+    assert_true(mixed_small * 100 <= checked);
     free(mask);
     glow__hierarchy_free(&h);
     glow__surfels_free(&orig);
@@ -410,7 +415,7 @@ static double pic_metric(const double xa[3], const double ma[3], double aa, cons
         d2 += (xa[k] - xb[k]) * (xa[k] - xb[k]);
         dot += ma[k] * mb[k];
     }
-    return d2 * inv_e2 + 0.1 * (1.0 - dot) + 0.02 * fabs(aa - ab) / (aa > ab ? aa : ab);
+    return d2 * inv_e2 + 0.01 * (1.0 - dot) + 0.02 * fabs(aa - ab) / (aa > ab ? aa : ab); /* HAC_CN, HAC_CB */
 }
 
 /* Sum over merges of the merge distance for the textbook greedy HAC (always the globally closest
