@@ -246,8 +246,8 @@ typedef struct glow__link_settings {
     uint32_t seed;
     bool no_normalize;        /* false (default): normalise each cache's leaf solid angles (links.c) */
     bool no_cone_fit;          /* keep lightmap links' solid angles (tests of the raw cut); default: fit */
-    bool cut_error;            /* false (default): split by visible solid angle (PIC 4.5); true: links.c
-                                  cut_priority and cut_descend (--cut error) */
+    bool cut_error;            /* false: split by visible solid angle (PIC 4.5, --cut solid-angle); true:
+                                  links.c cut_priority and cut_descend (--cut error, the pipeline's default) */
     const float *audit_radiance; /* optional [surfel count]: a radiance per surfel (any lighting); the
                                     links then also fill glow__links.audit (links.c, "Audit") */
 } glow__link_settings;

@@ -61,6 +61,7 @@ glow_result glow_pc_settings_validate(const glow_pc_settings *s, char *msg, size
     if (s->texel_density != 0.0f && !(isfinite(s->texel_density) && s->texel_density > 0.0f))
         BAD("--texel-density %g must be a positive finite number of texels per unit", (double)s->texel_density);
     if (s->threads > 1024) BAD("--threads %u is out of range (0..1024)", s->threads);
+    if (s->cut_error && s->cut_solid_angle) BAD("cut_error and cut_solid_angle are both set: pick one cut");
     if (s->lightmap_caches > (1u << 24)) BAD("--lightmap-caches %u is out of range (1..16777216)", s->lightmap_caches);
     if (s->rays_per_surfel > 256) BAD("rays per surfel %u is out of range (1..256)", s->rays_per_surfel);
     if (s->relax_iterations > 1000) BAD("relaxation iterations %u is out of range", s->relax_iterations);
@@ -519,7 +520,7 @@ glow_result glow_pc_bake(const char *scene_path, const char *out_path, const glo
     STAGE_BEGIN(ST_LINKS);
     glow__link_settings slink = {.links_per_cache = set.links, .sh_bands = set.bands, .full_sh = set.sh_links,
                                  .rays_per_surfel = set.rays_per_surfel, .seed = set.seed,
-                                 .no_normalize = set.no_link_normalize, .cut_error = set.cut_error,
+                                 .no_normalize = set.no_link_normalize, .cut_error = !set.cut_solid_angle,
                                  .audit_radiance = audit_radiance};
     res = glow__links_build(&scene, rt, &surfels, &hier, &caches, &slink, pool, &log, stage_progress, &pc, &links);
     STAGE_END(ST_LINKS);

@@ -49,10 +49,10 @@ static const char *usage_text =
     "  --seed S               sampling seed (default 0); same input and seed give the same bytes\n"
     "  --sh-links             also store full-SH links (PIC Eq. 2) next to runtime-projection links\n"
     "  --rays N               visibility rays per (cache, surfel) pair (default 1)\n"
-    "  --cut solid-angle|error  how each cache's cut is refined: solid-angle (default) splits the largest\n"
-    "                         visible solid angle first (PIC 4.5); error splits first the node whose link\n"
-    "                         can err most (partly visible nodes, uneven visibility) and links a node's\n"
-    "                         visible subtree (see --audit-radiance)\n"
+    "  --cut error|solid-angle  how each cache's cut is refined: error (default) splits first the node\n"
+    "                         whose link can err most (partly visible nodes, uneven visibility) and links\n"
+    "                         a node's visible subtree (see --audit-radiance); solid-angle splits the\n"
+    "                         largest visible solid angle first (PIC 4.5)\n"
     "  --audit-radiance FILE  audit the cuts under a lighting: FILE holds one float32 radiance per surfel\n"
     "                         (glow-stability audit --radiance-out, for a bake with the same settings);\n"
     "                         logs each cut's gather against the exact gather through visible surfels\n"
@@ -387,8 +387,8 @@ int main(int argc, char **argv) {
             if (!parse_u32(v, 1, 256, &s.rays_per_surfel)) return usage_error("--rays '%s': expected an integer in 1..256", v);
         } else if (!strcmp(a, "--cut")) {
             NEED_VALUE();
-            if (!strcmp(v, "solid-angle")) s.cut_error = false;
-            else if (!strcmp(v, "error")) s.cut_error = true;
+            if (!strcmp(v, "solid-angle")) s.cut_solid_angle = true;
+            else if (!strcmp(v, "error")) s.cut_solid_angle = false;
             else return usage_error("--cut '%s': expected error or solid-angle", v);
         } else if (!strcmp(a, "--audit-radiance")) {
             NEED_VALUE();

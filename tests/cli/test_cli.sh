@@ -64,6 +64,12 @@ assert 0.8 * want <= n <= 1.2 * want, (n, want)
 PY
 done
 if cmp -s "$T/c1.glow" "$T/c2.glow"; then pass "same bytes with 1 and 3 threads"; else fail "bake differs across thread counts"; fi
+# the error cut is the default; the published cut (PIC 4.5) stays selectable
+expect 0 "bake --cut error" "$BIN" builtin:cornell -o "$T/ce.glow" "${SMALL[@]}" --cut error
+cmp -s "$T/c1.glow" "$T/ce.glow" && pass "  the default cut is the error cut" || fail "  default differs from --cut error"
+expect 0 "bake --cut solid-angle" "$BIN" builtin:cornell -o "$T/cs.glow" "${SMALL[@]}" --cut solid-angle
+cmp -s "$T/c1.glow" "$T/cs.glow" && fail "  --cut solid-angle changes nothing" || pass "  --cut solid-angle gives other links"
+expect 2 "bad cut" "$BIN" builtin:cornell -o "$T/a.glow" --cut fast; err_has "cut"
 expect 0 "bake other seed" "$BIN" builtin:cornell -o "$T/c3.glow" "${SMALL[@]}" --seed 7
 if cmp -s "$T/c1.glow" "$T/c3.glow"; then fail "seed has no effect"; else pass "seed changes the bake"; fi
 

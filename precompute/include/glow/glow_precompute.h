@@ -58,16 +58,18 @@ typedef struct glow_pc_settings {
     bool no_link_normalize;   /* false (default): scale each cache's link solid angles to the
                                  ray-measured visible geometry (energy-conserving); true: leave the
                                  disc/near-field estimates as they are (--no-link-normalize) */
-    bool cut_error;           /* false (default): refine each cache's cut by visible solid angle, as PIC 4.5;
-                                 true: by a bound on each link's error, which splits partly visible nodes
-                                 first and links a node's visible subtree (--cut error). Per cache it is
-                                 closer to the exact gather; on Sponza's image it is not yet better
-                                 (docs/linker.md, "The cut") */
+    bool cut_error;           /* kept for source compatibility: the error cut is now the default (see
+                                 cut_solid_angle); true asks for it explicitly */
     const char *audit_radiance; /* optional: a file of one float32 radiance per surfel (any lighting;
                                    glow-stability audit --radiance-out); the linker then compares each
                                    cache's gather through its cut with the exact gather through its
                                    visible surfels and logs the summary (--audit-radiance) */
     const char *audit_csv;      /* optional, with audit_radiance: the per-cache figures as CSV (--audit-csv) */
+    bool cut_solid_angle;       /* false (default): refine each cache's cut by a bound on each link's
+                                   error, which splits partly visible nodes first and links a node's
+                                   visible subtree (--cut error); true: by visible solid angle, as PIC
+                                   4.5 (--cut solid-angle). Not both with cut_error (docs/linker.md,
+                                   "The cut and its audit") */
     uint32_t lightmap_caches;   /* the lightmap's budget: how many texels hold a cache (each costs links
                                    per cache x 8 bytes and a gather per update); the texel density is
                                    searched to land within 20 % of it. 0 = preset; ignored when
