@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 static uint64_t align_up(uint64_t v) { return (v + (GLOW_BAKE_ALIGN - 1u)) & ~(uint64_t)(GLOW_BAKE_ALIGN - 1u); }
@@ -92,6 +93,40 @@ static void sync_parent_dir(const char *path) {
     if (fd < 0) return;
     (void)fsync(fd);
     close(fd);
+}
+
+glow_result glow__bake_write_check(const char *path, const char *input, glow__log *log) {
+    if (!path || !*path) {
+        glow__errorf(log, "bake writer: no output path");
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    struct stat so, si;
+    if (input && stat(path, &so) == 0 && stat(input, &si) == 0 && so.st_dev == si.st_dev && so.st_ino == si.st_ino) {
+        glow__errorf(log, "%s: is the scene being baked; refusing to overwrite the input (choose another -o)", path);
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    if (stat(path, &so) == 0 && S_ISDIR(so.st_mode)) {
+        glow__errorf(log, "%s: is a directory, not a bake file", path);
+        return GLOW_ERROR_IO;
+    }
+    size_t tmp_len = strlen(path) + 40;
+    char *tmp = malloc(tmp_len);
+    if (!tmp) {
+        glow__errorf(log, "%s: out of memory", path);
+        return GLOW_ERROR_OUT_OF_MEMORY;
+    }
+    snprintf(tmp, tmp_len, "%s.tmp.%ld.check", path, (long)getpid());
+    int fd = open(tmp, O_WRONLY | O_CREAT | O_EXCL, 0644);
+    if (fd < 0) {
+        int err = errno;
+        glow__errorf(log, "%s: cannot be written (a temporary file beside it fails: %s)", path, strerror(err));
+        free(tmp);
+        return GLOW_ERROR_IO;
+    }
+    close(fd);
+    remove(tmp);
+    free(tmp);
+    return GLOW_OK;
 }
 
 glow_result glow__bake_write_file(const char *path, const glow__section_data *sections, uint32_t count,

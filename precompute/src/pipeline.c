@@ -415,6 +415,11 @@ glow_result glow_pc_bake(const char *scene_path, const char *out_path, const glo
     sections ss = {0};
     float *audit_radiance = NULL;
     FILE *audit_csv = NULL; /* opened first: a bad path fails before the work */
+    /* the output must be writable and must not be the input, checked before the work (D7, D8) */
+    if ((res = glow__bake_write_check(out_path, strncmp(scene_path, "builtin:", 8) ? scene_path : NULL, &log)) != GLOW_OK) {
+        snprintf(stats->error, sizeof stats->error, "%s", log.last_error);
+        return res;
+    }
     if (set.audit_csv && !(audit_csv = fopen(set.audit_csv, "w"))) {
         glow__errorf(&log, "%s: cannot write the audit CSV", set.audit_csv);
         return GLOW_ERROR_IO;

@@ -89,6 +89,21 @@ cp "$T/c1.glow" "$T/keep.glow"
 expect 1 "failed bake over existing file" "$BIN" "$T/nope.obj" -o "$T/keep.glow" -q
 cmp -s "$T/c1.glow" "$T/keep.glow" && pass "  existing file untouched" || fail "  existing file changed"
 
+# the output is checked before the work (issue 15 D7, D8): an unwritable folder fails before the
+# import stage starts, and the input mesh is never the output
+expect 1 "output folder missing" "$BIN" builtin:cornell -o "$T/no/such/dir/x.glow" --quality low
+err_has "cannot be written"
+grep -q "import" "$T/err" && fail "  a stage ran before the failure" || pass "  no stage ran"
+if [ -f "$SHARED/scenes/cornell-box/CornellBox-Original.obj" ]; then
+  cp "$SHARED/scenes/cornell-box/CornellBox-Original.obj" "$T/mesh.obj"
+  expect 1 "output is the input mesh" "$BIN" "$T/mesh.obj" -o "$T/mesh.obj" --quality low -q
+  err_has "refusing to overwrite the input"
+  cmp -s "$SHARED/scenes/cornell-box/CornellBox-Original.obj" "$T/mesh.obj" && pass "  input mesh untouched" \
+    || fail "  input mesh changed"
+fi
+expect 1 "output is a folder" "$BIN" builtin:cornell -o "$T" --quality low -q
+err_has "is a directory"
+
 # a killed bake leaves no bake file
 "$BIN" builtin:cornell -o "$T/killed.glow" --surfels 16384 --links 128 -q &
 pid=$!
