@@ -171,14 +171,19 @@ glow__taskpool *glow__ctx_start_pool(glow_context *ctx) {
 
 void glow_context_destroy(glow_context *context) {
     if (!context) return;
+    /* Refused, like glow_bake_destroy with live systems: freeing the context under a live bake or
+     * system made their next call a use-after-free (issue 15, D6). The context stays usable. */
+    uint64_t live = glow__ctx_live_allocations(context);
+    if (live != 0) {
+        GLOW__LOG_ERROR(context, GLOW_ERROR_INVALID_OPERATION,
+                        "glow_context_destroy: %llu allocation(s) still live (a bake or system was not destroyed); "
+                        "destroy them first (the context was not destroyed)",
+                        (unsigned long long)live);
+        return;
+    }
     glow__taskpool_destroy(context->pool);
     context->pool = NULL;
     pthread_mutex_destroy(&context->pool_mutex);
-    uint64_t live = glow__ctx_live_allocations(context);
-    if (live != 0)
-        GLOW__LOG_WARNING(context, GLOW_ERROR_INVALID_OPERATION,
-                          "glow_context_destroy: %llu allocation(s) still live (a bake or system was not destroyed)",
-                          (unsigned long long)live);
     glow_allocator a = context->allocator;
     if (a.free)
         a.free(a.user, context);

@@ -909,7 +909,7 @@ static void test_context_and_results(void **state) {
     assert_int_equal(ca.allocs, ca.frees);
     free(img);
 
-    /* a context with live allocations warns on destroy */
+    /* a context with live allocations refuses to be destroyed (logged as an error), then goes */
     glow_context *c2 = make_ctx(&log);
     void *leak = glow__ctx_alloc(c2, 100, 64);
     assert_non_null(leak);
@@ -918,11 +918,14 @@ static void test_context_and_results(void **state) {
     glow__ctx_free(c2, leak);
     leak = glow__ctx_alloc(c2, 1, 0);
     log.count = 0;
-    glow_context_destroy(c2); /* warns, does not free the block */
+    glow_context_destroy(c2); /* refused: the block is live */
     assert_int_equal(log.count, 1);
-    assert_int_equal(log.last_level, GLOW_LOG_WARNING);
+    assert_int_equal(log.last_level, GLOW_LOG_ERROR);
     assert_int_equal(log.last_code, GLOW_ERROR_INVALID_OPERATION);
-    free(leak);
+    glow__ctx_free(c2, leak); /* the context still works */
+    log.count = 0;
+    glow_context_destroy(c2);
+    assert_int_equal(log.count, 0);
 
     /* result strings name their code */
     static const struct { glow_result r; const char *name; } codes[] = {

@@ -1266,6 +1266,28 @@ static void run_furnace(furnace_result *fr) {
  * grid caches (which see the surfels all round) converge to 1 / (1 - ρ g) and lightmap caches to
  * g / (1 - ρ g) (mean-field: 1 %). Grid caches in the closed box see R = 1 in every direction at
  * the first bounce (the linker normalises their solid angles to 4π): 1 %. */
+/* Destroying a context under a live bake or system is refused (issue 15, D6): logged as
+ * GLOW_ERROR_INVALID_OPERATION, nothing freed, the objects stay usable; in order, all goes. */
+static void test_context_destroy_refused_while_live(void **state) {
+    (void)state;
+    env e;
+    env_open(&e);
+    glow_system *sys = NULL;
+    assert_int_equal(glow_system_create(e.ctx, &(glow_system_desc){.bake = e.bake, .lighting = {.light_surfels = NULL}}, &sys),
+                     GLOW_OK);
+    rec_reset(&e.log);
+    glow_context_destroy(e.ctx); /* bake and system live */
+    assert_int_equal(e.log.errors, 1);
+    glow_bake_info info;
+    assert_int_equal(glow_bake_get_info(e.bake, &info), GLOW_OK); /* the context and bake still work */
+    assert_non_null(glow_system_outputs(sys));
+    glow_system_destroy(sys);
+    rec_reset(&e.log);
+    glow_context_destroy(e.ctx); /* the bake is still live */
+    assert_int_equal(e.log.errors, 1);
+    env_close(&e); /* bake, then context: no message */
+}
+
 static void test_furnace_converges(void **state) {
     (void)state;
     furnace_result fr;
@@ -1298,6 +1320,7 @@ int main(void) {
         cmocka_unit_test(test_single_bounce),
         cmocka_unit_test(test_high_albedo_stays_bounded),
         cmocka_unit_test(test_furnace_converges),
+        cmocka_unit_test(test_context_destroy_refused_while_live),
     };
     return cmocka_run_group_tests(tests, group_setup, group_teardown);
 }

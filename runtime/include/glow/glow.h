@@ -125,7 +125,9 @@ typedef struct glow_bake glow_bake;
 /** Creates a context. \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT for NULL; GLOW_ERROR_VERSION_MISMATCH
  * when desc->api_version has another major. \threadsafety Any thread. \since 0.1 */
 GLOW_API glow_result glow_context_create(const glow_context_desc *desc, glow_context **out_context);
-/** Destroys a context (NULL is a no-op). All its bakes must be destroyed first. \since 0.1 */
+/** Destroys a context (NULL is a no-op). All its bakes and systems must be destroyed first: while any
+ * is live the call logs GLOW_ERROR_INVALID_OPERATION and returns without destroying anything (the
+ * context stays usable; destroy them, then the context). \since 0.1 */
 GLOW_API void glow_context_destroy(glow_context *context);
 
 typedef struct glow_bake_info {
