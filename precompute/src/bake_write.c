@@ -2,8 +2,10 @@
  * table, 64-byte aligned payloads, CRC-32s; and puts it on disk atomically (temp + rename). */
 #include "bake_write.h"
 
+#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -95,6 +97,44 @@ static void sync_parent_dir(const char *path) {
     close(fd);
 }
 
+/* Removes "<path>.tmp.<pid>[.check]" files left by a writer that was killed (kill -9 or a crash
+ * between create and rename; issue 15, D9): only when that process no longer exists on this host
+ * (kill(pid, 0) fails with ESRCH), so a bake writing the same output at the same time keeps its
+ * file. A folder shared between hosts can hold another host's live temporary: its pid means nothing
+ * here, which is why only ESRCH counts and any other doubt keeps the file. */
+static void remove_stale_temporaries(const char *path, glow__log *log) {
+    const char *slash = strrchr(path, '/');
+    const char *base = slash ? slash + 1 : path;
+    size_t dir_len = slash ? (size_t)(slash - path) : 0;
+    char dir[4096];
+    if (dir_len >= sizeof dir) return;
+    if (slash) {
+        memcpy(dir, path, dir_len);
+        dir[dir_len] = 0;
+        if (dir_len == 0) snprintf(dir, sizeof dir, "/");
+    } else {
+        snprintf(dir, sizeof dir, ".");
+    }
+    DIR *d = opendir(dir);
+    if (!d) return;
+    const size_t bl = strlen(base);
+    struct dirent *e;
+    while ((e = readdir(d)) != NULL) {
+        const char *n = e->d_name;
+        if (strncmp(n, base, bl) != 0 || strncmp(n + bl, ".tmp.", 5) != 0) continue;
+        const char *q = n + bl + 5;
+        char *end = NULL;
+        errno = 0;
+        long pid = strtol(q, &end, 10);
+        if (errno || end == q || pid <= 0 || (*end && strcmp(end, ".check") != 0)) continue;
+        if (pid == (long)getpid() || kill((pid_t)pid, 0) == 0 || errno != ESRCH) continue;
+        char full[4096 + 256];
+        snprintf(full, sizeof full, "%s/%s", dir, n);
+        if (remove(full) == 0) glow__infof(log, "%s: removed %s, left by a bake that was killed (pid %ld)", path, full, pid);
+    }
+    closedir(d);
+}
+
 glow_result glow__bake_write_check(const char *path, const char *input, glow__log *log) {
     if (!path || !*path) {
         glow__errorf(log, "bake writer: no output path");
@@ -115,6 +155,7 @@ glow_result glow__bake_write_check(const char *path, const char *input, glow__lo
         glow__errorf(log, "%s: out of memory", path);
         return GLOW_ERROR_OUT_OF_MEMORY;
     }
+    remove_stale_temporaries(path, log);
     snprintf(tmp, tmp_len, "%s.tmp.%ld.check", path, (long)getpid());
     int fd = open(tmp, O_WRONLY | O_CREAT | O_EXCL, 0644);
     if (fd < 0) {

@@ -28,9 +28,10 @@ typedef struct glow__section_data {
 glow_result glow__bake_write_memory(const glow__section_data *sections, uint32_t count, void **out_data,
                                     uint64_t *out_size);
 
-/* Before the work (issue 15, D7/D8): can `path` be written as the writer will (a temporary file
+/* Before the work (issue 15, D7/D8/D9): can `path` be written as the writer will (a temporary file
  * beside it, created and removed again), and is it not the same file as `input` (the scene the bake
- * reads; NULL or a built-in name skips that check)? Logs the path and the reason.
+ * reads; NULL or a built-in name skips that check)? Logs the path and the reason. Also removes the
+ * temporaries "<path>.tmp.<pid>" of earlier writers that were killed (their pid is gone).
  * \returns GLOW_OK; GLOW_ERROR_IO when the folder cannot take the file; GLOW_ERROR_INVALID_ARGUMENT
  * when path names the input. */
 glow_result glow__bake_write_check(const char *path, const char *input, glow__log *log);

@@ -111,6 +111,15 @@ sleep 1
 if kill -0 $pid 2>/dev/null; then pass "bake still running after 1 s"; else fail "bake finished before it could be killed"; fi
 kill -9 $pid 2>/dev/null; wait $pid 2>/dev/null
 no_file "$T/killed.glow"
+# a writer killed between create and rename leaves "<out>.tmp.<pid>" (D9): the next bake of that
+# output removes it when that process is gone, and keeps a live process's
+sleep 30 & live=$!
+( exit 0 ) & dead=$!; wait $dead
+echo partial > "$T/k.glow.tmp.$dead"; echo partial > "$T/k.glow.tmp.$live"
+expect 0 "bake over a killed writer's temporary" "$BIN" builtin:cornell -o "$T/k.glow" "${SMALL[@]}"
+[ -e "$T/k.glow.tmp.$dead" ] && fail "  dead writer's temporary kept" || pass "  dead writer's temporary removed"
+[ -e "$T/k.glow.tmp.$live" ] && pass "  live writer's temporary kept" || fail "  live writer's temporary removed"
+kill $live 2>/dev/null; wait $live 2>/dev/null; rm -f "$T/k.glow.tmp.$live"
 
 # the shared Cornell box (two coincident duplicate faces: skipped and counted)
 if [ -n "$SHARED" ] && [ -f "$SHARED/scenes/cornell-box/CornellBox-Original.obj" ]; then
