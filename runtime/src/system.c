@@ -124,7 +124,7 @@ static void task_hook(void *data, uint32_t b, uint32_t worker) {
     uint8_t st = ST_OK;
     for (size_t i = 0; i < 3 * (size_t)count; ++i) {
         float v = out[i];
-        if (!isfinite(v)) {
+        if (!isfinite(v) || v > GLOW_MAX_IRRADIANCE) {
             st = ST_NONFINITE;
             break;
         }
@@ -572,8 +572,9 @@ static glow_result check_range(glow_system *s, const char *fn, uint32_t first, u
 static glow_result store_checked(glow_system *s, const char *fn, float *dst, const float *src, uint32_t first,
                                  uint32_t count) {
     for (size_t i = 0; i < 3 * (size_t)count; ++i)
-        if (!isfinite(src[i])) {
-            GLOW__LOG_ERROR(s->ctx, GLOW_ERROR_HOST_CALLBACK, "%s(%s): surfel %u has a non-finite value (%g); nothing stored",
+        if (!isfinite(src[i]) || src[i] > GLOW_MAX_IRRADIANCE) {
+            GLOW__LOG_ERROR(s->ctx, GLOW_ERROR_HOST_CALLBACK,
+                            "%s(%s): surfel %u has a non-finite value or one above GLOW_MAX_IRRADIANCE (%g); nothing stored",
                             fn, s->label, first + (uint32_t)(i / 3), (double)src[i]);
             return GLOW_ERROR_HOST_CALLBACK;
         }
@@ -626,10 +627,10 @@ glow_result glow_system_get_surfels(const glow_system *s, glow_surfel_view *v) {
 glow_result glow_system_set_params(glow_system *s, const glow_system_params *p) {
     if (!s || !p) return null_arg(s, "glow_system_set_params");
     if (!(p->bounce_intensity >= 0.0f) || !isfinite(p->bounce_intensity) || !(p->emission_scale >= 0.0f) ||
-        !isfinite(p->emission_scale) || p->bounce_iterations == 0 || p->bounce_iterations > MAX_ITERATIONS) {
+        !(p->emission_scale <= GLOW_MAX_SCALE) || p->bounce_iterations == 0 || p->bounce_iterations > MAX_ITERATIONS) {
         GLOW__LOG_ERROR(s->ctx, GLOW_ERROR_INVALID_ARGUMENT,
-                        "glow_system_set_params(%s): bounce_intensity %g and emission_scale %g must be finite and >= 0, "
-                        "bounce_iterations %u in [1, %u]",
+                        "glow_system_set_params(%s): bounce_intensity %g must be finite and >= 0, emission_scale %g "
+                        "in [0, GLOW_MAX_SCALE], bounce_iterations %u in [1, %u]",
                         s->label, (double)p->bounce_intensity, (double)p->emission_scale, p->bounce_iterations,
                         MAX_ITERATIONS);
         return GLOW_ERROR_INVALID_ARGUMENT;
@@ -654,10 +655,11 @@ glow_result glow_system_set_material(glow_system *s, uint32_t material, const fl
         return GLOW_ERROR_INVALID_ARGUMENT;
     }
     for (int c = 0; c < 3; ++c)
-        if ((emission_scale && (!isfinite(emission_scale[c]) || emission_scale[c] < 0.0f)) ||
-            (albedo_scale && (!isfinite(albedo_scale[c]) || albedo_scale[c] < 0.0f))) {
+        if ((emission_scale && !(emission_scale[c] >= 0.0f && emission_scale[c] <= GLOW_MAX_SCALE)) ||
+            (albedo_scale && !(albedo_scale[c] >= 0.0f && albedo_scale[c] <= GLOW_MAX_SCALE))) {
             GLOW__LOG_ERROR(s->ctx, GLOW_ERROR_INVALID_ARGUMENT,
-                            "glow_system_set_material(%s): material %u: scales must be finite and >= 0", s->label, material);
+                            "glow_system_set_material(%s): material %u: scales must be in [0, GLOW_MAX_SCALE]", s->label,
+                            material);
             return GLOW_ERROR_INVALID_ARGUMENT;
         }
     if (emission_scale) memcpy(s->mat_emis_scale + 3 * (size_t)material, emission_scale, 3 * sizeof(float));
@@ -702,7 +704,9 @@ glow_result glow_system_update(glow_system *s, const glow_update_desc *desc) {
                 GLOW__LOG_ERROR(s->ctx, GLOW_ERROR_HOST_CALLBACK,
                                 "glow_system_update(%s): light_surfels %s for surfels [%u, %u); the update was "
                                 "abandoned and the previous outputs kept",
-                                s->label, s->batch_status[b] == ST_HOOK_FAILED ? "failed" : "returned NaN/Inf",
+                                s->label, s->batch_status[b] == ST_HOOK_FAILED ? "failed"
+                                                                        : "returned NaN/Inf or a value above "
+                                                                          "GLOW_MAX_IRRADIANCE",
                                 first, first + (s->S - first < s->batch ? s->S - first : s->batch));
                 return GLOW_ERROR_HOST_CALLBACK;
             }

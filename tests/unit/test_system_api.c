@@ -10,6 +10,7 @@
 #include <stddef.h>
 #include <stdint.h>
 #include <cmocka.h>
+#include <float.h>
 #include <math.h>
 #include <pthread.h>
 #include <stdatomic.h>
@@ -153,7 +154,7 @@ static void env_close(env *e) {
 }
 
 /* ------------------------------------------------------------------------------ the host hook */
-enum { MODE_OK, MODE_FAIL, MODE_NAN, MODE_INF, MODE_NEG_INF, MODE_NEGATIVE, MODE_NEGATIVE_AS_ZERO };
+enum { MODE_OK, MODE_FAIL, MODE_NAN, MODE_INF, MODE_NEG_INF, MODE_NEGATIVE, MODE_NEGATIVE_AS_ZERO, MODE_HUGE };
 typedef struct hook_ctl {
     int mode;
     uint32_t bad_surfel; /* MODE_FAIL/NAN/INF: the batch holding this surfel misbehaves */
@@ -204,6 +205,7 @@ static glow_result test_hook(void *user, const glow_surfel_batch *b, float *out,
         if (h->mode == MODE_NAN) out[k] = NAN;
         if (h->mode == MODE_INF) out[k] = INFINITY;
         if (h->mode == MODE_NEG_INF) out[k] = -INFINITY;
+        if (h->mode == MODE_HUGE) out[k] = FLT_MAX; /* finite, but overflowed the sums (D3) */
     }
     return GLOW_OK;
 }
@@ -337,6 +339,9 @@ static void test_null_arguments(void **state) {
     EXPECT_LOGGED(&e.log, glow_system_set_surfel_irradiance(s, UINT32_MAX, 2, rgb), GLOW_ERROR_INVALID_ARGUMENT,
                   GLOW_LOG_ERROR); /* first + count wraps */
     EXPECT_LOGGED(&e.log, glow_system_set_surfel_emission(s, 1, UINT32_MAX, rgb), GLOW_ERROR_INVALID_ARGUMENT, GLOW_LOG_ERROR);
+    const float huge[3] = {1.0f, FLT_MAX, 1.0f}; /* finite but overflowing (D3) */
+    EXPECT_LOGGED(&e.log, glow_system_set_surfel_irradiance(s, 0, 1, huge), GLOW_ERROR_HOST_CALLBACK, GLOW_LOG_ERROR);
+    EXPECT_LOGGED(&e.log, glow_system_set_surfel_emission(s, 0, 1, huge), GLOW_ERROR_HOST_CALLBACK, GLOW_LOG_ERROR);
     /* empty ranges are fine, also at the end */
     assert_int_equal(glow_system_set_surfel_irradiance(s, S, 0, rgb), GLOW_OK);
     assert_int_equal(glow_system_set_surfel_emission(s, 0, S, NULL), GLOW_OK); /* NULL: restore the bake's */
@@ -526,14 +531,14 @@ static void test_version_mismatch(void **state) {
     pthread_mutex_destroy(&log.mu);
 }
 
-/* The hook fails / returns NaN or Inf: HOST_CALLBACK, logged; outputs and bounce state exactly
+/* The hook fails / returns NaN, Inf or FLT_MAX: HOST_CALLBACK, logged; outputs and bounce state exactly
  * those of the last good update; the next good update continues as if the failure never happened. */
 static void test_hook_failures(void **state) {
     (void)state;
     env e;
     env_open(&e);
-    const int modes[] = {MODE_FAIL, MODE_NAN, MODE_INF, MODE_NEG_INF};
-    for (size_t mi = 0; mi < 4; ++mi) {
+    const int modes[] = {MODE_FAIL, MODE_NAN, MODE_INF, MODE_NEG_INF, MODE_HUGE};
+    for (size_t mi = 0; mi < 5; ++mi) {
         hook_ctl h, href;
         hook_init(&h, 2);
         hook_init(&href, 2);
@@ -678,6 +683,7 @@ static void test_params(void **state) {
     const glow_system_params bad[] = {
         {NAN, 1.0f, 1}, {1.0f, NAN, 1}, {-0.1f, 1.0f, 1}, {1.0f, -1.0f, 1}, {INFINITY, 1.0f, 1},
         {1.0f, INFINITY, 1}, {1.0f, 1.0f, 0}, {1.0f, 1.0f, 65}, {1.0f, 1.0f, UINT32_MAX}, {-INFINITY, 1.0f, 1},
+        {1.0f, 3e38f, 1}, {1.0f, GLOW_MAX_SCALE * 1.01f, 1}, /* finite but overflowing (D3) */
     };
     const glow_system_params good = {0.5f, 2.0f, 3};
     assert_int_equal(glow_system_set_params(s, &good), GLOW_OK);
@@ -696,6 +702,10 @@ static void test_params(void **state) {
     EXPECT_LOGGED(&e.log, glow_system_set_material(s, 0, nan3, one3), GLOW_ERROR_INVALID_ARGUMENT, GLOW_LOG_ERROR);
     EXPECT_LOGGED(&e.log, glow_system_set_material(s, 0, one3, neg3), GLOW_ERROR_INVALID_ARGUMENT, GLOW_LOG_ERROR);
     EXPECT_LOGGED(&e.log, glow_system_set_material(s, 0, inf3, NULL), GLOW_ERROR_INVALID_ARGUMENT, GLOW_LOG_ERROR);
+    const float huge3[3] = {1.0f, 3e38f, 1.0f};
+    EXPECT_LOGGED(&e.log, glow_system_set_material(s, 0, huge3, NULL), GLOW_ERROR_INVALID_ARGUMENT, GLOW_LOG_ERROR);
+    EXPECT_LOGGED(&e.log, glow_system_set_material(s, 0, NULL, huge3), GLOW_ERROR_INVALID_ARGUMENT, GLOW_LOG_ERROR);
+    assert_int_equal(glow_system_set_params(s, &(glow_system_params){1.0f, GLOW_MAX_SCALE, 1}), GLOW_OK); /* the limit itself */
     EXPECT_LOGGED(&e.log, glow_system_set_material(s, UINT32_MAX, one3, one3), GLOW_ERROR_INVALID_ARGUMENT, GLOW_LOG_ERROR);
     glow_system_destroy(s);
     env_close(&e);

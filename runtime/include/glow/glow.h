@@ -193,6 +193,12 @@ GLOW_API glow_result glow_bake_get_material(const glow_bake *bake, uint32_t inde
 typedef struct glow_system glow_system;
 
 #define GLOW_MAX_SH_BANDS 8u /* l = 1..8 bands, l*l coefficients */
+/* Input limits (issue 15, D3). Finite values this large overflowed float sums inside an update that
+ * returned GLOW_OK; they are refused like NaN. The sun at noon gives ~1e3 W/m², so the limits are
+ * far from any lighting a scene needs. */
+#define GLOW_MAX_IRRADIANCE 1e12f  /* per channel: light_surfels and glow_system_set_surfel_irradiance (W/m²),
+                                      glow_system_set_surfel_emission (W/(m²·sr)) */
+#define GLOW_MAX_SCALE 1e6f        /* emission_scale (params and materials), albedo_scale */
 
 /* What the host's CPU hook sees: a contiguous range of the bake's surfels. */
 typedef struct glow_surfel_batch {
@@ -208,8 +214,8 @@ typedef struct glow_surfel_batch {
  * shadowed the way the host shadows (shadow maps, rays...): E = Σ_lights L_i cos θ_i dω_i. Not radiance,
  * not multiplied by albedo, without emission and without indirect light: Glow adds those.
  * Return GLOW_OK, or any other code to abort the update (glow_system_update then returns
- * GLOW_ERROR_HOST_CALLBACK and keeps the previous outputs). NaN or Inf values abort the update the
- * same way; negative values are clamped to 0 with a warning.
+ * GLOW_ERROR_HOST_CALLBACK and keeps the previous outputs). NaN, Inf or values above
+ * GLOW_MAX_IRRADIANCE abort the update the same way; negative values are clamped to 0 with a warning.
  * \threadsafety Called from the runtime's workers (or the host's parallel_for), several batches at
  * once; `worker` is the calling worker's index (< worker_count), for per-worker scratch. */
 typedef struct glow_lighting_hooks {
@@ -268,7 +274,8 @@ GLOW_API void glow_system_destroy(glow_system *system);
  * [first, first + count); kept until pushed again. For hosts that compute surfel lighting elsewhere
  * (for example on the GPU, read back). Used by updates when the system has no light_surfels hook.
  * \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT (NULL, range outside the bake's surfels);
- * GLOW_ERROR_HOST_CALLBACK when a value is NaN or Inf (nothing is stored); negative values are
+ * GLOW_ERROR_HOST_CALLBACK when a value is NaN, Inf or above GLOW_MAX_IRRADIANCE (nothing is
+ * stored); negative values are
  * clamped to 0 with a warning. \threadsafety Not concurrently with other calls on the system. \since 0.1 */
 GLOW_API glow_result glow_system_set_surfel_irradiance(glow_system *system, uint32_t first, uint32_t count,
                                                        const float *irradiance_rgb);
@@ -295,19 +302,20 @@ GLOW_API glow_result glow_system_get_surfels(const glow_system *system, glow_sur
 typedef struct glow_system_params {
     float bounce_intensity;  /* indirect light fed back into surfel lighting: 0 = single bounce,
                                 1 = physical (default); clamped to [0, 1] */
-    float emission_scale;    /* multiplies all emission (default 1); >= 0 */
+    float emission_scale;    /* multiplies all emission (default 1); 0 .. GLOW_MAX_SCALE */
     uint32_t bounce_iterations; /* feedback iterations per update (default 1): each one lights the
                                    surfels again with the previous iteration's caches */
 } glow_system_params;
-/** Sets the artist controls. \returns GLOW_ERROR_INVALID_ARGUMENT for NaN, negative values or
- * bounce_iterations 0 or > 64. \since 0.1 */
+/** Sets the artist controls. \returns GLOW_ERROR_INVALID_ARGUMENT for NaN, negative values, an
+ * emission_scale above GLOW_MAX_SCALE or bounce_iterations 0 or > 64 (nothing changes). \since 0.1 */
 GLOW_API glow_result glow_system_set_params(glow_system *system, const glow_system_params *params);
 GLOW_API glow_result glow_system_get_params(const glow_system *system, glow_system_params *out_params);
 
 /** Per-material scales (index into the bake's materials): emission_scale multiplies the material's
  * emission (runtime-switchable area lights), albedo_scale its albedo (RGB). The effective albedo is
  * clamped to [0, 0.999] so multi-bounce stays convergent. Defaults 1.
- * \returns GLOW_ERROR_INVALID_ARGUMENT for a bad index, NaN or negative values. \since 0.1 */
+ * \returns GLOW_ERROR_INVALID_ARGUMENT for a bad index, NaN, negative values or values above
+ * GLOW_MAX_SCALE. \since 0.1 */
 GLOW_API glow_result glow_system_set_material(glow_system *system, uint32_t material, const float emission_scale[3],
                                               const float albedo_scale[3]);
 
