@@ -26,6 +26,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -44,6 +45,7 @@
 enum { ST_OK = 0, ST_HOOK_FAILED = 1, ST_NONFINITE = 2 };
 
 struct glow_system {
+    atomic_int updating; /* 1 while glow_system_update runs: misuse is refused, not raced (issue 15 D4, D5) */
     glow_context *ctx;
     const glow_bake *bake;
     const glow_bake_meta *meta;
@@ -404,6 +406,7 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
         return GLOW_ERROR_OUT_OF_MEMORY;
     }
     memset(s, 0, sizeof *s);
+    atomic_init(&s->updating, 0);
     s->ctx = ctx;
     s->bake = desc->bake;
     s->meta = m;
@@ -549,8 +552,21 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     return GLOW_OK;
 }
 
+/* A call that changes the system while its update runs (from the system's own lighting hook, or
+ * from another thread) is refused: re-entering the update deadlocked, and concurrent calls raced.
+ * Detection, not locking: a call that starts just before an update is not seen. */
+static bool busy(glow_system *s, const char *fn) {
+    if (!atomic_load(&s->updating)) return false;
+    GLOW__LOG_ERROR(s->ctx, GLOW_ERROR_INVALID_OPERATION,
+                    "%s(%s): called while an update of this system runs (from its own lighting hook, or from "
+                    "another thread); refused",
+                    fn, s->label);
+    return true;
+}
+
 void glow_system_destroy(glow_system *s) {
     if (!s) return;
+    if (busy(s, "glow_system_destroy")) return;
     glow__bake_release(s->bake);
     free_system(s);
 }
@@ -559,6 +575,7 @@ void glow_system_destroy(glow_system *s) {
 static glow_result check_range(glow_system *s, const char *fn, uint32_t first, uint32_t count, const void *p,
                                bool p_required) {
     if (!s) return GLOW_ERROR_INVALID_ARGUMENT;
+    if (busy(s, fn)) return GLOW_ERROR_INVALID_OPERATION;
     if ((p_required && !p) || first > s->S || count > s->S - first) {
         GLOW__LOG_ERROR(s->ctx, GLOW_ERROR_INVALID_ARGUMENT, "%s(%s): surfels [%u, %u + %u) outside [0, %u) or NULL data",
                         fn, s->label, first, first, count, s->S);
@@ -626,6 +643,7 @@ glow_result glow_system_get_surfels(const glow_system *s, glow_surfel_view *v) {
 
 glow_result glow_system_set_params(glow_system *s, const glow_system_params *p) {
     if (!s || !p) return null_arg(s, "glow_system_set_params");
+    if (busy(s, "glow_system_set_params")) return GLOW_ERROR_INVALID_OPERATION;
     if (!(p->bounce_intensity >= 0.0f) || !isfinite(p->bounce_intensity) || !(p->emission_scale >= 0.0f) ||
         !(p->emission_scale <= GLOW_MAX_SCALE) || p->bounce_iterations == 0 || p->bounce_iterations > MAX_ITERATIONS) {
         GLOW__LOG_ERROR(s->ctx, GLOW_ERROR_INVALID_ARGUMENT,
@@ -649,6 +667,7 @@ glow_result glow_system_get_params(const glow_system *s, glow_system_params *p) 
 glow_result glow_system_set_material(glow_system *s, uint32_t material, const float emission_scale[3],
                                      const float albedo_scale[3]) {
     if (!s) return GLOW_ERROR_INVALID_ARGUMENT;
+    if (busy(s, "glow_system_set_material")) return GLOW_ERROR_INVALID_OPERATION;
     if (material >= s->M) {
         GLOW__LOG_ERROR(s->ctx, GLOW_ERROR_INVALID_ARGUMENT, "glow_system_set_material(%s): material %u >= material_count %u",
                         s->label, material, s->M);
@@ -681,8 +700,23 @@ static void pull(glow_system *s) {
     }
 }
 
+static glow_result system_update(glow_system *s, const glow_update_desc *desc);
+
 glow_result glow_system_update(glow_system *s, const glow_update_desc *desc) {
     if (!s) return GLOW_ERROR_INVALID_ARGUMENT;
+    if (atomic_exchange(&s->updating, 1)) {
+        GLOW__LOG_ERROR(s->ctx, GLOW_ERROR_INVALID_OPERATION,
+                        "glow_system_update(%s): called while an update of this system runs (from its own lighting "
+                        "hook, or from another thread); refused",
+                        s->label);
+        return GLOW_ERROR_INVALID_OPERATION;
+    }
+    glow_result r = system_update(s, desc);
+    atomic_store(&s->updating, 0);
+    return r;
+}
+
+static glow_result system_update(glow_system *s, const glow_update_desc *desc) {
     const uint32_t flags = desc ? desc->flags : 0u;
     if (flags & ~(GLOW_UPDATE_FLAG_RESET_BOUNCE | GLOW_UPDATE_FLAG_KEEP_LIGHTING)) {
         GLOW__LOG_ERROR(s->ctx, GLOW_ERROR_INVALID_ARGUMENT, "glow_system_update(%s): unknown flags 0x%x", s->label,

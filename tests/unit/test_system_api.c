@@ -1276,6 +1276,51 @@ static void run_furnace(furnace_result *fr) {
  * grid caches (which see the surfels all round) converge to 1 / (1 - ρ g) and lightmap caches to
  * g / (1 - ρ g) (mean-field: 1 %). Grid caches in the closed box see R = 1 in every direction at
  * the first bounce (the linker normalises their solid angles to 4π): 1 %. */
+/* Re-entering a system from its own lighting hook (issue 15, D4: it deadlocked) is refused with
+ * GLOW_ERROR_INVALID_OPERATION, and the outer update completes. The same flag refuses a second
+ * thread's overlapping update (D5). */
+typedef struct reentry_ctl {
+    glow_system *sys;
+    glow_result update_r, params_r, irr_r;
+    int calls;
+} reentry_ctl;
+static glow_result reentry_hook(void *user, const glow_surfel_batch *b, float *out, uint32_t worker) {
+    (void)worker;
+    reentry_ctl *c = user;
+    for (uint32_t i = 0; i < 3 * b->count; ++i) out[i] = 1.0f;
+    if (b->first == 0 && c->sys) { /* one batch does the misuse */
+        c->calls++;
+        c->update_r = glow_system_update(c->sys, NULL);
+        c->params_r = glow_system_set_params(c->sys, &(glow_system_params){1.0f, 1.0f, 1});
+        const float one[3] = {1, 1, 1};
+        c->irr_r = glow_system_set_surfel_irradiance(c->sys, 0, 1, one);
+    }
+    return GLOW_OK;
+}
+static void test_reentrant_update_refused(void **state) {
+    (void)state;
+    env e;
+    env_open(&e);
+    reentry_ctl c = {0};
+    glow_system *sys = NULL;
+    assert_int_equal(glow_system_create(e.ctx, &(glow_system_desc){.bake = e.bake, .lighting = {.light_surfels = reentry_hook, .user = &c}},
+                                        &sys),
+                     GLOW_OK);
+    c.sys = sys;
+    rec_reset(&e.log);
+    assert_int_equal(glow_system_update(sys, NULL), GLOW_OK);
+    assert_int_equal(c.calls, 1);
+    assert_int_equal(c.update_r, GLOW_ERROR_INVALID_OPERATION);
+    assert_int_equal(c.params_r, GLOW_ERROR_INVALID_OPERATION);
+    assert_int_equal(c.irr_r, GLOW_ERROR_INVALID_OPERATION);
+    assert_int_equal(e.log.errors, 3);
+    /* afterwards the system is usable again */
+    assert_int_equal(glow_system_set_params(sys, &(glow_system_params){1.0f, 1.0f, 1}), GLOW_OK);
+    c.sys = NULL; /* no misuse this time */
+    glow_system_destroy(sys);
+    env_close(&e);
+}
+
 /* Destroying a context under a live bake or system is refused (issue 15, D6): logged as
  * GLOW_ERROR_INVALID_OPERATION, nothing freed, the objects stay usable; in order, all goes. */
 static void test_context_destroy_refused_while_live(void **state) {
@@ -1331,6 +1376,7 @@ int main(void) {
         cmocka_unit_test(test_high_albedo_stays_bounded),
         cmocka_unit_test(test_furnace_converges),
         cmocka_unit_test(test_context_destroy_refused_while_live),
+        cmocka_unit_test(test_reentrant_update_refused),
     };
     return cmocka_run_group_tests(tests, group_setup, group_teardown);
 }

@@ -345,8 +345,12 @@ typedef struct glow_update_stats {
  * `desc` may be NULL. Allocates nothing.
  * \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT (NULL system, unknown flags);
  * GLOW_ERROR_HOST_CALLBACK when the hook failed or returned NaN/Inf: the outputs and the bounce
- * state stay those of the last good update, and the system remains usable.
- * \threadsafety One thread at a time per system (different systems may update concurrently).
+ * state stay those of the last good update, and the system remains usable;
+ * GLOW_ERROR_INVALID_OPERATION when an update of this system is already running (called from its
+ * own lighting hook, or from a second thread): refused and logged, the running update unharmed.
+ * The setters (glow_system_set_*) and glow_system_destroy refuse the same way while an update runs.
+ * \threadsafety One thread at a time per system (different systems may update concurrently);
+ * overlapping calls are detected on a best-effort basis, not serialised.
  * \since 0.1 */
 GLOW_API glow_result glow_system_update(glow_system *system, const glow_update_desc *desc);
 GLOW_API glow_result glow_system_get_stats(const glow_system *system, glow_update_stats *out_stats);
