@@ -16,7 +16,12 @@
  *  10. known sections: version 1, required ones present, META counts consistent, every size
  *      equal to what META implies (64-bit maths, overflow-checked)           CORRUPT_DATA
  *  11. contents: non-finite / out-of-domain floats CORRUPT_DATA; indices and tree structure
- *      OUT_OF_RANGE (see validate_* below for the full list).
+ *      OUT_OF_RANGE (see validate_* below for the full list). Every float the solver reads is
+ *      checked against its domain, not only for finiteness (issue 15, D2: checksums are not
+ *      authentication, and a resealed bake with a non-unit normal or an 8.8e-43 node area loaded
+ *      and then drove the solver to 5e14 and NaN): unit surfel normals (|n|² within 2 %), albedos in
+ *      [0, 1], emission in [0, GLOW_MAX_IRRADIANCE], leaf areas equal to surfel_area and every
+ *      internal area the sum of its children's (0.1 %), factor_scale = 1 / (pi surfel_area) (0.1 %).
  * Unknown fourccs are CRC-checked and otherwise skipped.
  */
 #include <errno.h>
@@ -115,6 +120,12 @@ static int host_is_little_endian(void) {
 }
 
 static int finite3(const float *p) { return isfinite(p[0]) && isfinite(p[1]) && isfinite(p[2]); }
+/* each component in [lo, hi] (false for NaN) */
+static int in_range3(const float *p, float lo, float hi) {
+    return p[0] >= lo && p[0] <= hi && p[1] >= lo && p[1] <= hi && p[2] >= lo && p[2] <= hi;
+}
+/* a within 0.1 % of b (b > 0); false for NaN */
+static int near_rel(double a, double b) { return fabs(a - b) <= 1e-3 * b; }
 
 /* --------------------------------------------------------------------------- header + table */
 static glow_result check_header(const vstate *v, glow_bake_header *out_hdr) {
@@ -235,6 +246,9 @@ static glow_result check_meta(const vstate *v, const glow_bake_meta *m, section_
         FAIL(GLOW_ERROR_CORRUPT_DATA, "META: surfel_area %g / scene_area %g not finite and > 0", (double)m->surfel_area,
              m->scene_area);
     if (!isfinite(m->factor_scale)) FAIL(GLOW_ERROR_CORRUPT_DATA, "META: non-finite factor_scale");
+    if (!near_rel(m->factor_scale, 1.0 / (3.14159265358979323846 * m->surfel_area)))
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "META: factor_scale %g is not 1 / (pi x surfel_area %g)", (double)m->factor_scale,
+             (double)m->surfel_area);
     if (!finite3(m->grid_origin) || !isfinite(m->grid_spacing) || !isfinite(m->texel_density))
         FAIL(GLOW_ERROR_CORRUPT_DATA, "META: non-finite grid origin / spacing or texel density");
 
@@ -312,6 +326,9 @@ static glow_result check_materials(const vstate *v, const glow_bake_meta *m, con
             FAIL(GLOW_ERROR_CORRUPT_DATA, "material %u: name is not NUL-terminated", i);
         if (!finite3(mat[i].albedo) || !finite3(mat[i].emission))
             FAIL(GLOW_ERROR_CORRUPT_DATA, "material %u: non-finite albedo or emission", i);
+        if (!in_range3(mat[i].albedo, 0.0f, 1.0f) || !in_range3(mat[i].emission, 0.0f, GLOW_MAX_IRRADIANCE))
+            FAIL(GLOW_ERROR_CORRUPT_DATA, "material %u: albedo outside [0, 1] or emission outside [0, %g]", i,
+                 (double)GLOW_MAX_IRRADIANCE);
     }
     return GLOW_OK;
 }
@@ -320,6 +337,14 @@ static glow_result check_surfels(const vstate *v, const glow_bake_meta *m, const
     for (uint32_t i = 0; i < m->surfel_count; i++) {
         if (!finite3(s[i].position) || !finite3(s[i].normal) || !finite3(s[i].albedo) || !finite3(s[i].emission))
             FAIL(GLOW_ERROR_CORRUPT_DATA, "surfel %u: non-finite position, normal, albedo or emission", i);
+        const float *n = s[i].normal;
+        const float n2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+        if (!(n2 >= 0.98f && n2 <= 1.02f))
+            FAIL(GLOW_ERROR_CORRUPT_DATA, "surfel %u: normal (%g, %g, %g) is not unit length", i, (double)n[0],
+                 (double)n[1], (double)n[2]);
+        if (!in_range3(s[i].albedo, 0.0f, 1.0f) || !in_range3(s[i].emission, 0.0f, GLOW_MAX_IRRADIANCE))
+            FAIL(GLOW_ERROR_CORRUPT_DATA, "surfel %u: albedo outside [0, 1] or emission outside [0, %g]", i,
+                 (double)GLOW_MAX_IRRADIANCE);
         if (s[i].material >= m->material_count)
             FAIL(GLOW_ERROR_OUT_OF_RANGE, "surfel %u: material %u out of range (material_count %u)", i, s[i].material,
                  m->material_count);
@@ -375,6 +400,18 @@ static glow_result check_tree(const vstate *v, const glow_bake_meta *m, const gl
                          nd[n->child[c]].parent);
             }
         }
+    }
+    /* areas: a leaf's is surfel_area, an internal node's the sum of its children's (the links turn a
+     * node's flux into radiosity with 1 / its area) */
+    for (uint32_t i = 0; i < ns; i++)
+        if (!near_rel(nd[i].area, m->surfel_area))
+            FAIL(GLOW_ERROR_CORRUPT_DATA, "node %u: area %g of a leaf is not surfel_area %g", i, (double)nd[i].area,
+                 (double)m->surfel_area);
+    for (uint32_t i = ns; i < nn; i++) {
+        const double sum = (double)nd[nd[i].child[0]].area + nd[nd[i].child[1]].area;
+        if (!near_rel(nd[i].area, sum))
+            FAIL(GLOW_ERROR_CORRUPT_DATA, "node %u: area %g is not the sum of its children's (%g)", i,
+                 (double)nd[i].area, sum);
     }
     /* parents: only the root (node_count - 1) has none; every parent lists its child */
     for (uint32_t i = 0; i < nn; i++) {

@@ -838,6 +838,21 @@ static void test_non_finite(void **state) {
                    b->link[1].one_minus_cos[3] = 0x8000);
     EXPECT_PATCHED(WITH_SHLK, C, "SHLK block 0: non-finite", b->meta.link_kind |= GLOW_LINK_KIND_FULL_SH;
                    put_u16(b->shlk + 64 + 2 * 37, 0xFC00));
+    /* finite but outside the domain the solver assumes (issue 15, D2: such bakes loaded, with their
+     * checksums resealed, and drove updates to 5e14 W/m² and then NaN) */
+    EXPECT_PATCHED(0, C, "surfel 0: normal", b->surf[0].normal[1] = 2.0f);
+    EXPECT_PATCHED(0, C, "surfel 1: normal", b->surf[1].normal[1] = 0.5f);
+    EXPECT_PATCHED(0, C, "surfel 0: albedo", b->surf[0].albedo[0] = 1.5f);
+    EXPECT_PATCHED(0, C, "surfel 1: albedo", b->surf[1].albedo[2] = -0.1f);
+    EXPECT_PATCHED(0, C, "surfel 1: albedo", b->surf[1].emission[0] = -1.0f);
+    EXPECT_PATCHED(0, C, "surfel 1: albedo", b->surf[1].emission[1] = 3e38f);
+    EXPECT_PATCHED(0, C, "material 1: albedo", b->mat[1].albedo[0] = 2.0f);
+    EXPECT_PATCHED(0, C, "node 0: area", b->node[0].area = 8.8e-43f);
+    EXPECT_PATCHED(0, C, "node 2: area", b->node[2].area = 5.0f);
+    EXPECT_PATCHED(0, C, "factor_scale", b->meta.factor_scale = 1.0f);
+    /* the edges of the domain stay valid */
+    EXPECT_PATCHED(0, GLOW_OK, NULL, b->surf[0].albedo[0] = 1.0f; b->surf[1].albedo[2] = 0.0f;
+                   b->surf[0].normal[1] = 1.005f);
 }
 
 /* ------------------------------------------------------------------------------ context, results */
