@@ -52,6 +52,16 @@ static glow_result hook(void *user, const glow_surfel_batch *b, float *out, uint
     return GLOW_OK;
 }
 
+/* GLOW_FUZZ_LOG=1: the runtime's messages on stderr (to see why an accepted bake did not update) */
+static void log_stderr(void *user, glow_log_level level, glow_result code, const char *message, const char *file,
+                       int line) {
+    (void)user;
+    (void)level;
+    (void)file;
+    (void)line;
+    fprintf(stderr, "glow (%d): %s\n", (int)code, message);
+}
+
 static void check_finite(const float *p, uint64_t n) {
     if (!p) return;
     for (uint64_t i = 0; i < n; i++)
@@ -79,6 +89,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     memset(&desc, 0, sizeof desc);
     desc.api_version = GLOW_VERSION;
     desc.tasks.worker_count = 1;
+    if (getenv("GLOW_FUZZ_LOG")) desc.logger.log = log_stderr;
     glow_context *ctx = NULL;
     if (glow_context_create(&desc, &ctx) != GLOW_OK) abort();
     glow_bake *bake = NULL;
