@@ -15,27 +15,10 @@
 #include "bake/bake_format.h"
 #include "glow/glow.h"
 #include "runtime_internal.h"
+#include "fuzz_reseal.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
-static uint32_t rd32(const uint8_t *p) { uint32_t v; memcpy(&v, p, 4); return v; }
-static uint64_t rd64(const uint8_t *p) { uint64_t v; memcpy(&v, p, 8); return v; }
-static void wr32(uint8_t *p, uint32_t v) { memcpy(p, &v, 4); }
-
-/* Recomputes section, table and header CRCs in place; entries that do not fit are left alone. */
-static void fix_crcs(uint8_t *img, size_t size) {
-    if (size < 64) return;
-    uint32_t n = rd32(img + 12);
-    if (n > GLOW_BAKE_MAX_SECTIONS || 64u + 32u * (uint64_t)n > size) return;
-    for (uint32_t i = 0; i < n; i++) {
-        uint8_t *e = img + 64 + 32 * i;
-        uint64_t off = rd64(e + 8), sz = rd64(e + 16);
-        if (off <= size && sz <= size - off) wr32(e + 24, glow__crc32(0, img + off, (size_t)sz));
-    }
-    wr32(img + 28, glow__crc32(0, img + 64, 32u * (size_t)n));
-    wr32(img + 32, 0);
-    wr32(img + 32, glow__crc32(0, img, 64));
-}
 
 static volatile uint64_t sink;
 
@@ -85,7 +68,7 @@ static void touch(const glow_bake *bake) {
     if (sh) {
         size_t bs = glow_bake_shlk_block_size(m->sh_bands);
         for (uint64_t b = 0; b < blocks; b++)
-            for (int j = 0; j < (int)GLOW_LINK_BLOCK; j++) acc += nodes[rd32(sh + b * bs + 4 * j)].parent;
+            for (int j = 0; j < (int)GLOW_LINK_BLOCK; j++) acc += nodes[fuzz_rd32(sh + b * bs + 4 * j)].parent;
     }
     sink = acc;
 }
@@ -113,7 +96,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
         uint8_t *copy = malloc(size);
         if (!copy) return 0;
         memcpy(copy, data, size);
-        fix_crcs(copy, size);
+        fuzz_fix_crcs(copy, size);
         load_once(copy, size);
         free(copy);
     }

@@ -19,26 +19,10 @@
 #include "bake/bake_format.h"
 #include "glow/glow.h"
 #include "runtime_internal.h"
+#include "fuzz_reseal.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
-static uint32_t rd32(const uint8_t *p) { uint32_t v; memcpy(&v, p, 4); return v; }
-static uint64_t rd64(const uint8_t *p) { uint64_t v; memcpy(&v, p, 8); return v; }
-static void wr32(uint8_t *p, uint32_t v) { memcpy(p, &v, 4); }
-
-static void fix_crcs(uint8_t *img, size_t size) {
-    if (size < 64) return;
-    uint32_t n = rd32(img + 12);
-    if (n > GLOW_BAKE_MAX_SECTIONS || 64u + 32u * (uint64_t)n > size) return;
-    for (uint32_t i = 0; i < n; i++) {
-        uint8_t *e = img + 64 + 32 * i;
-        uint64_t off = rd64(e + 8), sz = rd64(e + 16);
-        if (off <= size && sz <= size - off) wr32(e + 24, glow__crc32(0, img + off, (size_t)sz));
-    }
-    wr32(img + 28, glow__crc32(0, img + 64, 32u * (size_t)n));
-    wr32(img + 32, 0);
-    wr32(img + 32, glow__crc32(0, img, 64));
-}
 
 typedef struct light {
     float e[3]; /* W/m², from the input */
@@ -84,7 +68,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     uint8_t *img = malloc(size);
     if (!img) return 0;
     memcpy(img, data, size);
-    fix_crcs(img, size);
+    fuzz_fix_crcs(img, size);
     glow_context_desc desc;
     memset(&desc, 0, sizeof desc);
     desc.api_version = GLOW_VERSION;
