@@ -591,6 +591,7 @@ typedef struct lm_state {
     double (*ref)[2]; /* per texel: the centroid of its footprint (texel units), where its cache goes */
     double footprint; /* Σ over covered texels of the surface area inside them (texel units) */
     uint32_t covered;
+    glow__chart_pack_stats pack; /* small charts merged at the density used */
 } lm_state;
 
 static void lm_state_free(lm_state *s) {
@@ -609,7 +610,7 @@ static glow_result lm_try(const glow__scene *scene, const glow__chart_set *cs, d
     glow_result r = GLOW_OK;
     if (cs) {
         float used = 0.0f;
-        r = glow__charts_pack(cs, (float)d, LM_PADDING, log, st->uv, &st->w, &st->h, &used);
+        r = glow__charts_pack(cs, (float)d, LM_PADDING, log, st->uv, &st->w, &st->h, &used, &st->pack);
         if (r != GLOW_OK) return r;
         st->density = used;
     } else {
@@ -855,6 +856,8 @@ glow_result glow__caches_build(const glow__scene *scene, const glow__rt *rt, con
             out->lm_gutter += out->lm_map[i] != GLOW_MAP_EMPTY && st.owner[i] == NONE;
         }
         out->lm_footprint = st.footprint;
+        out->small_charts = st.pack.small;
+        out->shared_texels = st.pack.shared;
         out->lm_uv = st.uv;
         st.uv = NULL;
     }
@@ -883,10 +886,10 @@ glow_result glow__caches_build(const glow__scene *scene, const glow__rt *rt, con
                     out->texel_density > 0.0f ? 1.0 / out->texel_density : 0.0);
     glow__infof(log,
                 "%s: caches: grid %ux%ux%u at %g: %u caches, %u inside geometry; lightmap %ux%u at %g texels/unit "
-                "(%u charts): %u caches, %u invalid texels",
+                "(%u charts, %u of them narrower than a texel sharing %u texels): %u caches, %u invalid texels",
                 scene->source, out->grid_dims[0], out->grid_dims[1], out->grid_dims[2], (double)out->grid_spacing,
                 out->grid_cache_count, out->grid_inside, out->lm_width, out->lm_height, (double)out->texel_density,
-                out->chart_count, out->lm_cache_count, out->lm_invalid);
+                out->chart_count, out->small_charts, out->shared_texels, out->lm_cache_count, out->lm_invalid);
     free(inside);
     lm_state_free(&st);
     free(cand);

@@ -20,7 +20,8 @@
  * footprint, even after the bake's unorm16 UV rounding); footprints are shelf-packed, tallest first,
  * `padding` texels apart and from the border, for several atlas widths; the smallest roughly
  * square atlas wins. Bilinear lookups inside a chart read at most one texel beyond its footprint,
- * so padding >= 2 keeps a chart's dilated gutter free of its neighbours' texels. */
+ * so padding >= 2 keeps a chart's dilated gutter free of its neighbours' texels. Charts narrower than
+ * a texel are first merged into shared one-texel footprints (see "small charts" below). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -239,6 +240,23 @@ static bool ent_push(seg_ctx *c, uint32_t tri, uint32_t next) {
     return true;
 }
 
+/* Two unit tangents (T, B) of the plane with unit normal N, T built from N's smallest axis. */
+static void plane_frame(const double N[3], double T[3], double B[3]) {
+    int ax = 0;
+    if (fabs(N[1]) < fabs(N[ax])) ax = 1;
+    if (fabs(N[2]) < fabs(N[ax])) ax = 2;
+    double A[3] = {0, 0, 0};
+    A[ax] = 1.0;
+    T[0] = A[1] * N[2] - A[2] * N[1];
+    T[1] = A[2] * N[0] - A[0] * N[2];
+    T[2] = A[0] * N[1] - A[1] * N[0];
+    const double tl = sqrt(T[0] * T[0] + T[1] * T[1] + T[2] * T[2]);
+    for (int k = 0; k < 3; ++k) T[k] /= tl;
+    B[0] = N[1] * T[2] - N[2] * T[1];
+    B[1] = N[2] * T[0] - N[0] * T[2];
+    B[2] = N[0] * T[1] - N[1] * T[0];
+}
+
 /* Projects chart members [*m, m + count) onto their mean plane (xy), evicts overlapping triangles
  * (compacting the member list) and rotates to the minimum-area rectangle. Returns false on OOM. */
 static bool finish_chart(seg_ctx *c, uint32_t *m, uint32_t *count, const double seed_nrm[3], double (*xy)[2],
@@ -256,15 +274,8 @@ static bool finish_chart(seg_ctx *c, uint32_t *m, uint32_t *count, const double 
         memcpy(N, seed_nrm, sizeof N);
         if (!(fabs(N[0]) + fabs(N[1]) + fabs(N[2]) > 0.0)) N[2] = 1.0;
     }
-    int ax = 0;
-    if (fabs(N[1]) < fabs(N[ax])) ax = 1;
-    if (fabs(N[2]) < fabs(N[ax])) ax = 2;
-    double A[3] = {0, 0, 0};
-    A[ax] = 1.0;
-    double T[3] = {A[1] * N[2] - A[2] * N[1], A[2] * N[0] - A[0] * N[2], A[0] * N[1] - A[1] * N[0]};
-    double tl = sqrt(T[0] * T[0] + T[1] * T[1] + T[2] * T[2]);
-    for (int k = 0; k < 3; ++k) T[k] /= tl;
-    double B[3] = {N[1] * T[2] - N[2] * T[1], N[2] * T[0] - N[0] * T[2], N[0] * T[1] - N[1] * T[0]};
+    double T[3], B[3];
+    plane_frame(N, T, B);
     const float *o = s->pos[3 * (size_t)m[0]];
     double bx0 = INFINITY, by0 = INFINITY, bx1 = -INFINITY, by1 = -INFINITY;
     for (uint32_t i = 0; i < n; ++i)
@@ -402,6 +413,8 @@ void glow__charts_free(glow__chart_set *cs) {
     free(cs->chart_tris);
     free(cs->xy);
     free(cs->extent);
+    free(cs->normal);
+    free(cs->centre);
     memset(cs, 0, sizeof *cs);
 }
 
@@ -419,6 +432,8 @@ glow_result glow__charts_segment(const glow__scene *scene, glow__log *log, glow_
     uint32_t *adj_start = NULL, *adj = NULL;
     uint32_t *chart_start_tmp = malloc(((size_t)n + 1) * sizeof *chart_start_tmp);
     double(*ext_tmp)[2] = malloc((size_t)n * sizeof *ext_tmp);
+    double(*nrm_tmp)[3] = malloc((size_t)n * sizeof *nrm_tmp);
+    double(*cen_tmp)[3] = malloc((size_t)n * sizeof *cen_tmp);
     c.nrm = malloc((size_t)n * sizeof *c.nrm);
     c.cr = malloc((size_t)n * sizeof *c.cr);
     c.chart_of = malloc((size_t)n * sizeof *c.chart_of);
@@ -427,7 +442,7 @@ glow_result glow__charts_segment(const glow__scene *scene, glow__log *log, glow_
     c.hull = malloc((2 * n3 + 2) * sizeof *c.hull);
     out->chart_tris = malloc((size_t)n * sizeof *out->chart_tris);
     out->xy = calloc(n3, sizeof *out->xy);
-    bool ok = vid && chart_start_tmp && ext_tmp && c.nrm && c.cr && c.chart_of && c.stamp && c.pts && c.hull &&
+    bool ok = vid && chart_start_tmp && ext_tmp && nrm_tmp && cen_tmp && c.nrm && c.cr && c.chart_of && c.stamp && c.pts && c.hull &&
               out->chart_tris && out->xy;
     ok = ok && weld(scene, vid) && build_adjacency(n, vid, &adj_start, &adj);
     if (!ok) goto fail;
@@ -504,6 +519,23 @@ glow_result glow__charts_segment(const glow__scene *scene, glow__log *log, glow_
         uint32_t count = len - first;
         if (!finish_chart(&c, members + first, &count, c.nrm[s0], out->xy, ext_tmp[id], &out->evicted)) goto fail;
         len = first + count;
+        /* mean normal and centroid, for merging small charts at pack time */
+        double N[3] = {0, 0, 0}, C[3] = {0, 0, 0}, wsum = 0.0;
+        for (uint32_t i = first; i < len; ++i) {
+            const double *cr = c.cr[members[i]];
+            const double a = sqrt(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]);
+            const float(*p)[3] = scene->pos + 3 * (size_t)members[i];
+            for (int k = 0; k < 3; ++k) {
+                N[k] += cr[k];
+                C[k] += (a > 0.0 ? a : 1e-300) * ((double)p[0][k] + p[1][k] + p[2][k]) / 3.0;
+            }
+            wsum += a > 0.0 ? a : 1e-300;
+        }
+        const double nl = sqrt(N[0] * N[0] + N[1] * N[1] + N[2] * N[2]);
+        for (int k = 0; k < 3; ++k) {
+            nrm_tmp[id][k] = nl > 0.0 ? N[k] / nl : 0.0;
+            cen_tmp[id][k] = wsum > 0.0 ? C[k] / wsum : 0.0;
+        }
     }
     out->tri_count = n;
     out->chart_count = charts;
@@ -515,11 +547,18 @@ glow_result glow__charts_segment(const glow__scene *scene, glow__log *log, glow_
     out->extent = malloc(((size_t)charts + 1) * sizeof *out->extent);
     if (!out->extent) goto fail;
     memcpy(out->extent, ext_tmp, (size_t)charts * sizeof *out->extent);
+    out->normal = malloc(((size_t)charts + 1) * sizeof *out->normal);
+    out->centre = malloc(((size_t)charts + 1) * sizeof *out->centre);
+    if (!out->normal || !out->centre) goto fail;
+    memcpy(out->normal, nrm_tmp, (size_t)charts * sizeof *out->normal);
+    memcpy(out->centre, cen_tmp, (size_t)charts * sizeof *out->centre);
 
     free(vid);
     free(adj_start);
     free(adj);
     free(ext_tmp);
+    free(nrm_tmp);
+    free(cen_tmp);
     free(c.nrm);
     free(c.cr);
     free(c.chart_of);
@@ -540,6 +579,8 @@ fail:
     free(adj);
     free(chart_start_tmp);
     free(ext_tmp);
+    free(nrm_tmp);
+    free(cen_tmp);
     free(c.nrm);
     free(c.cr);
     free(c.chart_of);
@@ -590,23 +631,162 @@ static uint64_t shelf_pack(const slot *sl, uint32_t count, uint64_t width, uint3
     return h < 4 ? 4 : h;
 }
 
+/* ------------------------------------------------------------------ small charts
+ * A chart narrower than a texel still took a texel of its own (plus its padding): in the Dabrovic
+ * Sponza 4023 of 4757 charts were narrower than one texel at the default budget and held 3.8 % of
+ * the surface, but about half of the lightmap caches. Such charts are merged: those whose centres
+ * fall in the same cell of one texel (world units) and face within GLOW__CHART_MERGE_ANGLE_DEG of the
+ * group's first member share one texel, laid out as their orthographic projection onto the group's
+ * mean plane. The texel's cache then stands at the footprint centroid of the whole group (caches.c).
+ * A lightmap texel's cache sees one hemisphere, hence the angle limit: a member facing further away
+ * keeps its own texel, as do charts wider than GLOW__CHART_SMALL texels. */
+typedef struct unit_plan {
+    uint32_t count;   /* units: large charts, then groups of small charts */
+    uint32_t *first;  /* [count + 1] into charts */
+    uint32_t *charts; /* [chart_count] chart ids, unit by unit */
+    uint32_t small, shared;
+} unit_plan;
+
+static void unit_plan_free(unit_plan *u) {
+    free(u->first);
+    free(u->charts);
+    memset(u, 0, sizeof *u);
+}
+
+typedef struct cell_key {
+    int64_t x, y, z;
+    uint32_t chart;
+} cell_key;
+
+static int cmp_cell_key(const void *pa, const void *pb) {
+    const cell_key *a = pa, *b = pb;
+    if (a->x != b->x) return a->x < b->x ? -1 : 1;
+    if (a->y != b->y) return a->y < b->y ? -1 : 1;
+    if (a->z != b->z) return a->z < b->z ? -1 : 1;
+    return a->chart < b->chart ? -1 : (a->chart > b->chart);
+}
+
+static bool is_small(const glow__chart_set *cs, uint32_t i, double d) {
+    return cs->normal && cs->extent[i][0] * d <= GLOW__CHART_SMALL;
+}
+
+static int64_t cell_of(double x, double d) {
+    double f = floor(x * d);
+    return f < -4e18 ? INT64_MIN / 2 : f > 4e18 ? INT64_MAX / 2 : (int64_t)f;
+}
+
+/* Groups the small charts at density d. Deterministic: cells in coordinate order, charts in index
+ * order within a cell. */
+static bool plan_units(const glow__chart_set *cs, double d, unit_plan *u) {
+    const uint32_t n = cs->chart_count;
+    memset(u, 0, sizeof *u);
+    u->first = malloc(((size_t)n + 1) * sizeof *u->first);
+    u->charts = malloc(((size_t)n + 1) * sizeof *u->charts);
+    uint32_t *unit_of = malloc(((size_t)n + 1) * sizeof *unit_of);
+    uint32_t *seed = malloc(((size_t)n + 1) * sizeof *seed);
+    cell_key *keys = malloc(((size_t)n + 1) * sizeof *keys);
+    if (!u->first || !u->charts || !unit_of || !seed || !keys) {
+        free(unit_of);
+        free(seed);
+        free(keys);
+        unit_plan_free(u);
+        return false;
+    }
+    uint32_t units = 0, ns = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        if (!is_small(cs, i, d)) {
+            unit_of[i] = units++;
+            continue;
+        }
+        keys[ns].x = cell_of(cs->centre[i][0], d);
+        keys[ns].y = cell_of(cs->centre[i][1], d);
+        keys[ns].z = cell_of(cs->centre[i][2], d);
+        keys[ns++].chart = i;
+    }
+    qsort(keys, ns, sizeof *keys, cmp_cell_key);
+    const double cos_max = cos(GLOW__CHART_MERGE_ANGLE_DEG * GLOW__PI / 180.0);
+    for (uint32_t a = 0; a < ns;) {
+        uint32_t b = a + 1;
+        while (b < ns && keys[b].x == keys[a].x && keys[b].y == keys[a].y && keys[b].z == keys[a].z) ++b;
+        const uint32_t cell_first_unit = units;
+        for (uint32_t k = a; k < b; ++k) {
+            const uint32_t i = keys[k].chart;
+            const double *ni = cs->normal[i];
+            const bool zero = ni[0] == 0.0 && ni[1] == 0.0 && ni[2] == 0.0;
+            uint32_t g = NONE;
+            for (uint32_t v = cell_first_unit; v < units && !zero; ++v) {
+                const double *ns0 = cs->normal[seed[v]];
+                if (ni[0] * ns0[0] + ni[1] * ns0[1] + ni[2] * ns0[2] >= cos_max) {
+                    g = v;
+                    break;
+                }
+            }
+            if (g == NONE) {
+                g = units++;
+                seed[g] = i;
+                u->shared += 1;
+            }
+            unit_of[i] = g;
+        }
+        a = b;
+    }
+    u->small = ns;
+    u->count = units;
+    /* counting sort of the charts by unit, charts in index order within a unit */
+    memset(u->first, 0, ((size_t)units + 1) * sizeof *u->first);
+    for (uint32_t i = 0; i < n; ++i) u->first[unit_of[i] + 1]++;
+    for (uint32_t v = 0; v < units; ++v) u->first[v + 1] += u->first[v];
+    memcpy(seed, u->first, ((size_t)units + 1) * sizeof *seed);
+    for (uint32_t i = 0; i < n; ++i) u->charts[seed[unit_of[i]]++] = i;
+    free(unit_of);
+    free(seed);
+    free(keys);
+    return true;
+}
+
+/* Is unit v laid out into one shared texel? */
+static bool unit_shared(const glow__chart_set *cs, const unit_plan *u, uint32_t v, double d) {
+    return is_small(cs, u->charts[u->first[v]], d);
+}
+
+/* Projection frame of a merged group: the members' mean normal and two tangents. */
+static void group_frame(const glow__chart_set *cs, const unit_plan *u, uint32_t v, double T[3], double B[3]) {
+    double N[3] = {0, 0, 0};
+    for (uint32_t j = u->first[v]; j < u->first[v + 1]; ++j)
+        for (int k = 0; k < 3; ++k) N[k] += cs->normal[u->charts[j]][k];
+    double l = sqrt(N[0] * N[0] + N[1] * N[1] + N[2] * N[2]);
+    if (l > 0.0) {
+        for (int k = 0; k < 3; ++k) N[k] /= l;
+    } else {
+        N[0] = N[1] = 0.0;
+        N[2] = 1.0;
+    }
+    plane_frame(N, T, B);
+}
+
 /* Footprints at density d; returns the best atlas size for them. */
-static void layout(const glow__chart_set *cs, double d, uint32_t pad, slot *sl, uint64_t *out_w, uint64_t *out_h) {
+static void layout(const glow__chart_set *cs, const unit_plan *u, double d, uint32_t pad, slot *sl, uint64_t *out_w,
+                   uint64_t *out_h) {
     double total = 0.0;
     uint64_t maxw = 1;
-    for (uint32_t i = 0; i < cs->chart_count; ++i) {
-        double fw = ceil(cs->extent[i][0] * d + 0.1), fh = ceil(cs->extent[i][1] * d + 0.1);
+    for (uint32_t v = 0; v < u->count; ++v) {
+        const uint32_t i = u->charts[u->first[v]];
+        double fw = 1.0, fh = 1.0;
+        if (!unit_shared(cs, u, v, d)) {
+            fw = ceil(cs->extent[i][0] * d + 0.1);
+            fh = ceil(cs->extent[i][1] * d + 0.1);
+        }
         if (!(fw >= 1.0)) fw = 1.0;
         if (!(fh >= 1.0)) fh = 1.0;
         if (fw > 1e7) fw = 1e7;
         if (fh > 1e7) fh = 1e7;
-        sl[i].chart = i;
-        sl[i].w = (uint32_t)fw;
-        sl[i].h = (uint32_t)fh;
+        sl[v].chart = v;
+        sl[v].w = (uint32_t)fw;
+        sl[v].h = (uint32_t)fh;
         total += (fw + pad) * (fh + pad);
-        if (sl[i].w > maxw) maxw = sl[i].w;
+        if (sl[v].w > maxw) maxw = sl[v].w;
     }
-    qsort(sl, cs->chart_count, sizeof *sl, cmp_slot);
+    qsort(sl, u->count, sizeof *sl, cmp_slot);
     double base = fmax(sqrt(total), (double)(maxw + 2 * pad));
     /* Candidate widths from sqrt(area) up; the shortest longer side wins (roughly square), then
      * the smallest area. */
@@ -615,7 +795,7 @@ static void layout(const glow__chart_set *cs, double d, uint32_t pad, slot *sl, 
         uint64_t w = round4((uint64_t)ceil(base * (1.0 + 0.03 * k)));
         if (w < maxw + 2 * (uint64_t)pad) w = round4(maxw + 2 * (uint64_t)pad);
         if (w < 4) w = 4;
-        uint64_t h = shelf_pack(sl, cs->chart_count, w, pad, NULL);
+        uint64_t h = shelf_pack(sl, u->count, w, pad, NULL);
         uint64_t side = w > h ? w : h, best_side = best_w > best_h ? best_w : best_h;
         if (best_w == 0 || side < best_side || (side == best_side && w * h < best_w * best_h)) {
             best_w = w;
@@ -627,10 +807,74 @@ static void layout(const glow__chart_set *cs, double d, uint32_t pad, slot *sl, 
     *out_h = best_h;
 }
 
+static void put_uv(float (*out_uv)[2], size_t corner, double x, double y, uint64_t w, uint64_t h) {
+    out_uv[corner][0] = (float)fmin(fmax(x / (double)w, 0.0), 1.0);
+    out_uv[corner][1] = (float)fmin(fmax(y / (double)h, 0.0), 1.0);
+}
+
+/* Writes the UVs of unit v, whose footprint starts at texel (px, py). */
+static void place_unit(const glow__chart_set *cs, const unit_plan *u, uint32_t v, const slot *sl, uint32_t px,
+                       uint32_t py, double d, uint64_t w, uint64_t h, float (*out_uv)[2]) {
+    const uint32_t c0 = u->charts[u->first[v]];
+    const bool shared = unit_shared(cs, u, v, d);
+    if (u->first[v + 1] - u->first[v] == 1) { /* one chart: its own plane, scaled to fit */
+        double s = d;
+        if (shared && cs->extent[c0][0] * d > 0.9) s = 0.9 / cs->extent[c0][0];
+        const double ox = px + 0.5 * (sl->w - cs->extent[c0][0] * s), oy = py + 0.5 * (sl->h - cs->extent[c0][1] * s);
+        for (uint32_t j = cs->chart_start[c0]; j < cs->chart_start[c0 + 1]; ++j) {
+            const uint32_t t = cs->chart_tris[j];
+            for (uint32_t k = 0; k < 3; ++k) {
+                const double *p = cs->xy[3 * (size_t)t + k];
+                put_uv(out_uv, 3 * (size_t)t + k, ox + p[0] * s, oy + p[1] * s, w, h);
+            }
+        }
+        return;
+    }
+    /* A merged group: each member keeps its own chart's layout (never flipped or stretched), placed
+     * where its centre projects onto the group's mean plane; the whole scaled to fit the texel. */
+    double T[3], B[3];
+    group_frame(cs, u, v, T, B);
+    const double *o = cs->centre[c0];
+    double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY, s = d;
+    for (int pass = 0; pass < 2; ++pass) {
+        if (pass == 1) {
+            const double ext = fmax(x1 - x0, y1 - y0);
+            if (ext * d > 0.9) s = 0.9 / ext;
+        }
+        const double ox = px + 0.5 * (1.0 - (x1 - x0) * s) - x0 * s, oy = py + 0.5 * (1.0 - (y1 - y0) * s) - y0 * s;
+        for (uint32_t jc = u->first[v]; jc < u->first[v + 1]; ++jc) {
+            const uint32_t ch = u->charts[jc];
+            const double q[3] = {cs->centre[ch][0] - o[0], cs->centre[ch][1] - o[1], cs->centre[ch][2] - o[2]};
+            const double cx = q[0] * T[0] + q[1] * T[1] + q[2] * T[2] - 0.5 * cs->extent[ch][0];
+            const double cy = q[0] * B[0] + q[1] * B[1] + q[2] * B[2] - 0.5 * cs->extent[ch][1];
+            if (pass == 0) {
+                x0 = fmin(x0, cx);
+                y0 = fmin(y0, cy);
+                x1 = fmax(x1, cx + cs->extent[ch][0]);
+                y1 = fmax(y1, cy + cs->extent[ch][1]);
+                continue;
+            }
+            for (uint32_t j = cs->chart_start[ch]; j < cs->chart_start[ch + 1]; ++j) {
+                const uint32_t t = cs->chart_tris[j];
+                for (uint32_t k = 0; k < 3; ++k) {
+                    const double *p = cs->xy[3 * (size_t)t + k];
+                    put_uv(out_uv, 3 * (size_t)t + k, ox + (cx + p[0]) * s, oy + (cy + p[1]) * s, w, h);
+                }
+            }
+        }
+    }
+}
+
 glow_result glow__charts_pack(const glow__chart_set *cs, float texel_density, uint32_t padding, glow__log *log,
-                              float (*out_uv)[2], uint32_t *out_width, uint32_t *out_height, float *out_density) {
+                              float (*out_uv)[2], uint32_t *out_width, uint32_t *out_height, float *out_density,
+                              glow__chart_pack_stats *stats) {
     *out_width = *out_height = 0;
     if (out_density) *out_density = texel_density;
+    if (stats) {
+        uint32_t *keep = stats->unit_of;
+        memset(stats, 0, sizeof *stats);
+        stats->unit_of = keep;
+    }
     if (!(texel_density > 0.0f) || !isfinite(texel_density)) {
         glow__errorf(log, "charts: texel density %g must be a positive finite number", (double)texel_density);
         return GLOW_ERROR_INVALID_ARGUMENT;
@@ -638,17 +882,15 @@ glow_result glow__charts_pack(const glow__chart_set *cs, float texel_density, ui
     if (cs->tri_count == 0 || cs->chart_count == 0) return GLOW_OK;
     slot *sl = malloc((size_t)cs->chart_count * sizeof *sl);
     uint32_t(*pos)[2] = malloc((size_t)cs->chart_count * sizeof *pos);
-    if (!sl || !pos) {
-        free(sl);
-        free(pos);
-        glow__errorf(log, "charts: out of memory packing %u charts", cs->chart_count);
-        return GLOW_ERROR_OUT_OF_MEMORY;
-    }
+    unit_plan u = {0};
+    if (!sl || !pos) goto oom;
     double d = texel_density;
     uint64_t w = 0, h = 0;
     bool fits = false;
     for (int iter = 0; iter < 40; ++iter) {
-        layout(cs, d, padding, sl, &w, &h);
+        unit_plan_free(&u);
+        if (!plan_units(cs, d, &u)) goto oom;
+        layout(cs, &u, d, padding, sl, &w, &h);
         uint64_t side = w > h ? w : h;
         if (side <= GLOW__CHART_MAX_ATLAS) {
             fits = true;
@@ -659,6 +901,7 @@ glow_result glow__charts_pack(const glow__chart_set *cs, float texel_density, ui
     if (!fits) {
         free(sl);
         free(pos);
+        unit_plan_free(&u);
         glow__errorf(log, "charts: %u charts do not fit a %ux%u atlas at any texel density", cs->chart_count,
                      GLOW__CHART_MAX_ATLAS, GLOW__CHART_MAX_ATLAS);
         return GLOW_ERROR_UNSUPPORTED;
@@ -666,27 +909,29 @@ glow_result glow__charts_pack(const glow__chart_set *cs, float texel_density, ui
     if (d < texel_density)
         glow__warnf(log, "charts: the atlas at %g texels per unit would exceed %u texels a side; using %g",
                     (double)texel_density, GLOW__CHART_MAX_ATLAS, d);
-    shelf_pack(sl, cs->chart_count, w, padding, pos);
-    for (uint32_t i = 0; i < cs->chart_count; ++i) {
-        uint32_t ch = sl[i].chart;
-        double ox = pos[i][0] + 0.5 * (sl[i].w - cs->extent[ch][0] * d);
-        double oy = pos[i][1] + 0.5 * (sl[i].h - cs->extent[ch][1] * d);
-        for (uint32_t j = cs->chart_start[ch]; j < cs->chart_start[ch + 1]; ++j) {
-            uint32_t t = cs->chart_tris[j];
-            for (uint32_t k = 0; k < 3; ++k) {
-                const double *p = cs->xy[3 * (size_t)t + k];
-                double u = (ox + p[0] * d) / (double)w, v = (oy + p[1] * d) / (double)h;
-                out_uv[3 * (size_t)t + k][0] = (float)fmin(fmax(u, 0.0), 1.0);
-                out_uv[3 * (size_t)t + k][1] = (float)fmin(fmax(v, 0.0), 1.0);
-            }
-        }
+    shelf_pack(sl, u.count, w, padding, pos);
+    for (uint32_t i = 0; i < u.count; ++i) place_unit(cs, &u, sl[i].chart, &sl[i], pos[i][0], pos[i][1], d, w, h, out_uv);
+    if (stats) {
+        stats->small = u.small;
+        stats->shared = u.shared;
+        stats->slots = u.count;
+        if (stats->unit_of)
+            for (uint32_t v = 0; v < u.count; ++v)
+                for (uint32_t j = u.first[v]; j < u.first[v + 1]; ++j) stats->unit_of[u.charts[j]] = v;
     }
     free(sl);
     free(pos);
+    unit_plan_free(&u);
     *out_width = (uint32_t)w;
     *out_height = (uint32_t)h;
     if (out_density) *out_density = (float)d;
     return GLOW_OK;
+oom:
+    free(sl);
+    free(pos);
+    unit_plan_free(&u);
+    glow__errorf(log, "charts: out of memory packing %u charts", cs->chart_count);
+    return GLOW_ERROR_OUT_OF_MEMORY;
 }
 
 glow_result glow__charts_build(const glow__scene *scene, float texel_density, uint32_t padding, glow__log *log,
@@ -697,7 +942,7 @@ glow_result glow__charts_build(const glow__scene *scene, float texel_density, ui
     glow__chart_set cs;
     glow_result r = glow__charts_segment(scene, log, &cs);
     if (r != GLOW_OK) return r;
-    r = glow__charts_pack(&cs, texel_density, padding, log, out_uv, out_width, out_height, NULL);
+    r = glow__charts_pack(&cs, texel_density, padding, log, out_uv, out_width, out_height, NULL, NULL);
     if (r == GLOW_OK && out_chart_count) *out_chart_count = cs.chart_count;
     glow__charts_free(&cs);
     return r;

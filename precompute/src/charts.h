@@ -13,7 +13,18 @@ typedef struct glow__chart_set {
     double (*xy)[2];         /* [3*tri_count] corner positions in the chart's plane (m), chart min at 0,0 */
     double (*extent)[2];     /* [chart_count] chart width >= height (m), after the min-area rotation */
     uint32_t evicted;        /* triangles moved to a later chart because their projection overlapped */
+    double (*normal)[3];     /* [chart_count] area-weighted mean geometric normal (unit; 0 when none) */
+    double (*centre)[3];     /* [chart_count] area-weighted centroid */
 } glow__chart_set;
+
+/* What one packing did with the small charts (glow__charts_pack). */
+typedef struct glow__chart_pack_stats {
+    uint32_t small;   /* charts no wider than GLOW__CHART_SMALL texels at the density used */
+    uint32_t shared;  /* texels they were merged into (a chart alone in its group keeps its own) */
+    uint32_t slots;   /* footprints packed: the large charts plus the shared texels */
+    uint32_t *unit_of; /* in: NULL, or [chart_count] to receive each chart's footprint index (merged
+                          charts share one) */
+} glow__chart_pack_stats;
 
 /* Welds corners by exact position, grows planar-ish charts over shared edges (normals within
  * GLOW__CHART_MAX_ANGLE_DEG of the seed's), projects each onto its mean plane, evicts triangles
@@ -23,13 +34,19 @@ glow_result glow__charts_segment(const glow__scene *scene, glow__log *log, glow_
 /* Packs the charts at `texel_density` texels per m into one atlas (shelf packing, charts' texel
  * footprints `padding` texels apart and from the border; width and height multiples of 4). When
  * the atlas would exceed GLOW__CHART_MAX_ATLAS texels a side the density is lowered (warning).
- * out_uv: [3*tri_count] per-corner UV in [0,1]; out_density: the density used. */
+ * Charts no wider than GLOW__CHART_SMALL texels are merged: those whose centres share a cell of one
+ * texel and whose normals lie within GLOW__CHART_MERGE_ANGLE_DEG of the group's first share one
+ * texel, projected together onto their mean plane (shrunk when the group is wider than a texel).
+ * out_uv: [3*tri_count] per-corner UV in [0,1]; out_density: the density used; stats may be NULL. */
 glow_result glow__charts_pack(const glow__chart_set *cs, float texel_density, uint32_t padding, glow__log *log,
-                              float (*out_uv)[2], uint32_t *out_width, uint32_t *out_height, float *out_density);
+                              float (*out_uv)[2], uint32_t *out_width, uint32_t *out_height, float *out_density,
+                              glow__chart_pack_stats *stats);
 
 void glow__charts_free(glow__chart_set *cs);
 
 #define GLOW__CHART_MAX_ANGLE_DEG 40.0
 #define GLOW__CHART_MAX_ATLAS 4096u
+#define GLOW__CHART_SMALL 1.0          /* texels: charts no wider than this may share a texel */
+#define GLOW__CHART_MERGE_ANGLE_DEG 30.0
 
 #endif /* GLOW_CHARTS_H */

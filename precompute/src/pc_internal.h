@@ -215,6 +215,8 @@ typedef struct glow__caches {
     double lm_footprint;      /* Σ over covered texels of the surface area inside them, in texels */
     float (*lm_uv)[2];        /* [3*tri_count] lightmap UV per triangle corner, in [0,1] */
     uint32_t chart_count;     /* 0 when the mesh's own second UV set was used */
+    uint32_t small_charts;    /* charts narrower than a texel (charts.h GLOW__CHART_SMALL) ... */
+    uint32_t shared_texels;   /* ... and the texels they share (a lone one keeps its own) */
     /* per surfel (in the hierarchy's surfel order): cache whose light it re-emits */
     uint32_t *surfel_feedback;
 } glow__caches;

@@ -507,6 +507,8 @@ glow_result glow_pc_bake(const char *scene_path, const char *out_path, const glo
         stats->lightmap_coverage = covered ? (float)(caches.lm_footprint / (double)covered) : 0.0f;
     }
     stats->charts = caches.chart_count;
+    stats->small_charts = caches.small_charts;
+    stats->shared_texels = caches.shared_texels;
     stats->caches = caches.count;
 
     {   /* refuse link tables that cannot fit before trying (each link costs ~28 B while baking) */

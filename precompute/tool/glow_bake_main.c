@@ -199,10 +199,11 @@ static void print_summary(const char *scene, const char *out, const glow_pc_stat
         printf("  \"caches\": {\"total\": %u, \"grid\": %u, \"grid_dims\": [%u, %u, %u], \"grid_spacing\": %.6g, "
                "\"grid_inside_rejected\": %u, \"lightmap\": %u, \"lightmap_size\": [%u, %u], \"texel_density\": %.6g, "
                "\"lightmap_invalid\": %u, \"lightmap_gutter\": %u, \"lightmap_unused\": %u, \"lightmap_coverage\": %.4f, "
-               "\"charts\": %u},\n",
+               "\"charts\": %u, \"small_charts\": %u, \"shared_texels\": %u},\n",
                s->caches, s->grid_caches, s->grid_dims[0], s->grid_dims[1], s->grid_dims[2], (double)s->grid_spacing,
                s->grid_inside, s->lightmap_caches, s->lightmap_width, s->lightmap_height, (double)s->texel_density,
-               s->lightmap_invalid, s->lightmap_gutter, s->lightmap_unused, (double)s->lightmap_coverage, s->charts);
+               s->lightmap_invalid, s->lightmap_gutter, s->lightmap_unused, (double)s->lightmap_coverage, s->charts,
+               s->small_charts, s->shared_texels);
         printf("  \"links\": {\"per_cache\": %u, \"total\": %llu, \"bands\": %u, \"bytes_per_link\": %.3f},\n",
                s->links_per_cache, (unsigned long long)s->links, s->bands, s->bytes_per_link);
         printf("  \"file_bytes\": %llu,\n  \"sections\": [", (unsigned long long)s->file_size);
@@ -228,10 +229,11 @@ static void print_summary(const char *scene, const char *out, const glow_pc_stat
            s->charts, s->lightmap_invalid);
     if (s->lightmap_width)
         printf("  lightmap  %.3g units per texel; the atlas holds %u caches (%.0f %% of their area is surface), %u gutter "
-               "copies and %u unused texels (%.0f %%)\n",
+               "copies and %u unused texels (%.0f %%); %u charts narrower than a texel share %u texels\n",
                s->texel_density > 0.0f ? 1.0 / (double)s->texel_density : 0.0, s->lightmap_caches,
                100.0 * (double)s->lightmap_coverage, s->lightmap_gutter, s->lightmap_unused,
-               100.0 * s->lightmap_unused / ((double)s->lightmap_width * s->lightmap_height));
+               100.0 * s->lightmap_unused / ((double)s->lightmap_width * s->lightmap_height), s->small_charts,
+               s->shared_texels);
     printf("  links     %llu (%u per cache, l=%u), %.2f bytes per link\n", (unsigned long long)s->links,
            s->links_per_cache, s->bands, s->bytes_per_link);
     printf("  file      %llu bytes:", (unsigned long long)s->file_size);

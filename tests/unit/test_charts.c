@@ -223,6 +223,8 @@ typedef struct report {
     double centre_fill; /* texels whose centre lies in (or on) a triangle / atlas */
     double stretch;     /* total UV area / (3-D area * density^2) */
     double foot_fill;   /* texels a triangle overlaps (conservative) / atlas */
+    uint32_t merged;    /* texels shared by several small charts */
+    uint32_t slots;     /* footprints packed */
 } report;
 
 /* Area of triangle t (texel units) clipped to the unit square at (x, y): Sutherland-Hodgman. */
@@ -266,7 +268,7 @@ static double clip_area(const double t[3][2], double x, double y) {
  * charts (or twice in one chart), conservative footprints of different charts > padding apart and
  * >= padding from the border, no stretching. */
 static report check_atlas(const glow__scene *s, const glow__chart_set *cs, const float (*uv)[2], uint32_t w,
-                          uint32_t h, float density, uint32_t padding) {
+                          uint32_t h, float density, uint32_t padding, const uint32_t *unit_of) {
     report r = {.w = w, .h = h, .charts = cs->chart_count};
     assert_true(w % 4 == 0 && h % 4 == 0 && w >= 4 && h >= 4);
     assert_true(w <= GLOW__CHART_MAX_ATLAS && h <= GLOW__CHART_MAX_ATLAS);
@@ -282,9 +284,16 @@ static report check_atlas(const glow__scene *s, const glow__chart_set *cs, const
     for (uint32_t c = 0; c < cs->chart_count; ++c)
         for (uint32_t j = cs->chart_start[c]; j < cs->chart_start[c + 1]; ++j) {
             assert_true(chart_of[cs->chart_tris[j]] == UINT32_MAX); /* each triangle in one chart */
-            chart_of[cs->chart_tris[j]] = c;
+            chart_of[cs->chart_tris[j]] = unit_of ? unit_of[c] : c; /* merged small charts: one footprint */
         }
     for (uint32_t t = 0; t < s->tri_count; ++t) assert_true(chart_of[t] != UINT32_MAX);
+    /* multi[u]: footprint u holds several (merged) charts; texels[u]: texels it touches */
+    uint32_t *multi = calloc((size_t)cs->chart_count + 1, sizeof *multi);
+    uint32_t *texels = calloc((size_t)cs->chart_count + 1, sizeof *texels);
+    assert_non_null(multi);
+    assert_non_null(texels);
+    for (uint32_t c = 0; c < cs->chart_count && unit_of; ++c) multi[unit_of[c]]++;
+    for (uint32_t c = 0; c < cs->chart_count; ++c) multi[c] = multi[c] > 1;
     memset(centre, 0xFF, (size_t)w * h * sizeof *centre);
     memset(foot, 0xFF, (size_t)w * h * sizeof *foot);
     double uv_area = 0.0, area3 = 0.0;
@@ -336,8 +345,9 @@ static report check_atlas(const glow__scene *s, const glow__chart_set *cs, const
                     covered[i] = 1;
                     ++centres;
                 }
-                if (centre_in) {
-                    if (centre[i] != UINT32_MAX) fail_msg("texel %ld,%ld is inside triangles %u and %u", x, y, centre[i], t);
+                if (centre_in) { /* merged small charts may overlap inside their shared texel */
+                    if (centre[i] != UINT32_MAX && !(chart_of[centre[i]] == chart_of[t] && multi[chart_of[t]]))
+                        fail_msg("texel %ld,%ld is inside triangles %u and %u", x, y, centre[i], t);
                     centre[i] = t;
                 }
             }
@@ -360,7 +370,17 @@ static report check_atlas(const glow__scene *s, const glow__chart_set *cs, const
         }
     r.centre_fill = (double)centres / ((double)w * h);
     uint64_t feet = 0;
-    for (size_t i = 0; i < (size_t)w * h; ++i) feet += foot[i] != UINT32_MAX;
+    for (size_t i = 0; i < (size_t)w * h; ++i) {
+        feet += foot[i] != UINT32_MAX;
+        if (foot[i] != UINT32_MAX) texels[foot[i]]++;
+    }
+    /* merged charts share exactly one texel */
+    for (uint32_t u = 0; u < cs->chart_count; ++u) {
+        if (multi[u] && texels[u] != 1) fail_msg("merged footprint %u touches %u texels", u, texels[u]);
+        r.merged += multi[u];
+    }
+    free(multi);
+    free(texels);
     r.foot_fill = (double)feet / ((double)w * h);
     r.stretch = uv_area / area3;
     free(chart_of);
@@ -400,10 +420,15 @@ static report run(const glow__scene *s, float density, uint32_t padding, double 
     assert_int_equal(glow__charts_segment(s, &log, &cs), GLOW_OK);
     uint32_t w, h;
     float used;
-    assert_int_equal(glow__charts_pack(&cs, density, padding, &log, uv, &w, &h, &used), GLOW_OK);
+    uint32_t *unit_of = malloc(((size_t)cs.chart_count + 1) * sizeof *unit_of);
+    assert_non_null(unit_of);
+    glow__chart_pack_stats st = {.unit_of = unit_of};
+    assert_int_equal(glow__charts_pack(&cs, density, padding, &log, uv, &w, &h, &used, &st), GLOW_OK);
     if (seconds) *seconds = now() - t0;
     if (evicted) *evicted = cs.evicted;
-    report r = check_atlas(s, &cs, (const float(*)[2])uv, w, h, used, padding);
+    report r = check_atlas(s, &cs, (const float(*)[2])uv, w, h, used, padding, unit_of);
+    r.slots = st.slots;
+    free(unit_of);
     uint32_t w2, h2, charts2;
     assert_int_equal(glow__charts_build(s, density, padding, &log, uv2, &w2, &h2, &charts2), GLOW_OK);
     assert_int_equal(w2, w);
@@ -489,12 +514,12 @@ static void test_huge_chart_reduces_density(void **state) {
     assert_non_null(uv);
     uint32_t w, h;
     float used;
-    assert_int_equal(glow__charts_pack(&cs, 100.0f, 2, &log, uv, &w, &h, &used), GLOW_OK);
+    assert_int_equal(glow__charts_pack(&cs, 100.0f, 2, &log, uv, &w, &h, &used, NULL), GLOW_OK);
     assert_true(w <= 4096 && h <= 4096);
     assert_true(used < 100.0f && used > 20.0f); /* 100 m at <= 4096 texels: ~40 texels per m */
     assert_int_equal(cap.warnings, 1);
     assert_non_null(strstr(cap.last, "4096"));
-    report r = check_atlas(&s, &cs, (const float(*)[2])uv, w, h, used, 2);
+    report r = check_atlas(&s, &cs, (const float(*)[2])uv, w, h, used, 2, NULL);
     print_message("huge: requested 100 texels/m, got %.2f, atlas %ux%u\n", (double)used, r.w, r.h);
     glow__charts_free(&cs);
     free(uv);
@@ -581,12 +606,66 @@ static void test_sponza(void **state) {
     scene_free(&s);
 }
 
+/* Charts narrower than a texel share texels: pieces facing the same way in the same texel-sized cell
+ * share one, pieces facing away from each other never do, and charts wider than a texel keep their
+ * own footprint. */
+static void test_small_charts_merge(void **state) {
+    (void)state;
+    builder b = {0};
+    for (int i = 0; i < 10; ++i)
+        for (int j = 0; j < 10; ++j) {
+            const double x = 0.1 * i + 0.01, z = 0.1 * j + 0.01;
+            /* a 5 cm tile facing +y, and one 1 cm below it facing -y */
+            b_grid(&b, (double[3]){x, 0, z}, (double[3]){0, 0, 0.05}, (double[3]){0.05, 0, 0}, 1, 1);
+            b_grid(&b, (double[3]){x, -0.01, z}, (double[3]){0.05, 0, 0}, (double[3]){0, 0, 0.05}, 1, 1);
+        }
+    glow__scene s;
+    b_finish(&b, &s);
+    glow__log log = {0};
+    glow__chart_set cs;
+    assert_int_equal(glow__charts_segment(&s, &log, &cs), GLOW_OK);
+    assert_int_equal(cs.chart_count, 200);
+    for (uint32_t c = 0; c < cs.chart_count; ++c) assert_true(fabs(fabs(cs.normal[c][1]) - 1.0) < 1e-9);
+    glow__charts_free(&cs);
+
+    /* 2 texels per m: the 1 m square spans at most 3 x 3 cells a side, twice (up and down) */
+    report r = run(&s, 2.0f, 2, NULL, NULL);
+    print_message("small charts: 200 tiles at 2 texels/m: %u footprints, %u shared texels\n", r.slots, r.merged);
+    assert_true(r.slots <= 18 && r.slots >= 2);
+    assert_true(r.merged >= 2);
+    /* no footprint mixes up- and down-facing tiles */
+    assert_int_equal(glow__charts_segment(&s, &log, &cs), GLOW_OK);
+    uint32_t *unit_of = malloc(cs.chart_count * sizeof *unit_of);
+    float(*uv)[2] = malloc(3 * (size_t)s.tri_count * sizeof *uv);
+    assert_non_null(unit_of);
+    assert_non_null(uv);
+    glow__chart_pack_stats st = {.unit_of = unit_of};
+    uint32_t w, h;
+    float used;
+    assert_int_equal(glow__charts_pack(&cs, 2.0f, 2, &log, uv, &w, &h, &used, &st), GLOW_OK);
+    assert_int_equal(st.small, 200);
+    for (uint32_t a = 0; a < cs.chart_count; ++a)
+        for (uint32_t c = 0; c < cs.chart_count; ++c)
+            if (unit_of[a] == unit_of[c]) assert_true(cs.normal[a][1] * cs.normal[c][1] > 0.0);
+    /* 40 texels per m: a 5 cm tile is 2 texels wide, no longer small */
+    assert_int_equal(glow__charts_pack(&cs, 40.0f, 2, &log, uv, &w, &h, &used, &st), GLOW_OK);
+    assert_int_equal(st.small, 0);
+    assert_int_equal(st.slots, 200);
+    r = run(&s, 40.0f, 2, NULL, NULL);
+    assert_int_equal(r.merged, 0);
+    free(unit_of);
+    free(uv);
+    glow__charts_free(&cs);
+    scene_free(&s);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_cube_six_charts),  cmocka_unit_test(test_mixed_scene),
         cmocka_unit_test(test_spiral_is_split),  cmocka_unit_test(test_huge_chart_reduces_density),
         cmocka_unit_test(test_bad_density_rejected), cmocka_unit_test(test_messy_topology),
         cmocka_unit_test(test_60k_triangles),    cmocka_unit_test(test_sponza),
+        cmocka_unit_test(test_small_charts_merge),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -92,6 +92,8 @@ typedef struct glow_pc_stats {
     uint32_t nodes, levels;
     uint32_t grid_dims[3], grid_caches, grid_inside;
     uint32_t lightmap_width, lightmap_height, lightmap_caches, lightmap_invalid, charts;
+    uint32_t small_charts, shared_texels; /* charts narrower than a texel, and the texels they share
+                                             (merged by position and facing; a lone one keeps its own) */
     uint32_t lightmap_gutter, lightmap_unused; /* atlas texels holding a gutter copy / nothing */
     float lightmap_coverage;  /* mean share of a covered texel's area that is surface (the rest
                                  overhangs its chart's border: budget spent on no surface) */
