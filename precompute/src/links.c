@@ -310,6 +310,34 @@ static float cut_priority(const link_job *job, const float *omega, const float *
     return om * (float)(tv + spread);
 }
 
+/* Audit: the gather of one link if it read, instead of its node's mean, the means of the node's
+ * visible descendants `levels` levels down (or leaves), each weighted by its own visible share wt. */
+static double audit_descendants(const link_job *job, const float *wt, const float *omega, const float *B, uint32_t v,
+                                uint32_t levels) {
+    uint32_t stack[64], depth[64], sp = 0;
+    double g = 0.0;
+    stack[sp] = v;
+    depth[sp++] = 0;
+    while (sp) {
+        --sp;
+        const uint32_t u = stack[sp], dd = depth[sp];
+        const glow__node *nu = &job->h->nodes[u];
+        if (nu->child[0] == GLOW_NODE_NONE || dd == levels) {
+            const uint32_t a = job->leaf_first[u], b = job->leaf_end[u];
+            double sum = 0.0;
+            for (uint32_t i = a; i < b; ++i) sum += B[i];
+            g += wt[u] * sum / (b - a);
+            continue;
+        }
+        for (int c = 0; c < 2; ++c)
+            if (omega[nu->child[c]] > 0.0f && sp < 64) {
+                stack[sp] = nu->child[c];
+                depth[sp++] = dd + 1;
+            }
+    }
+    return g;
+}
+
 static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
     const glow__hierarchy *h = job->h;
     const glow__surfels *S = job->surfels;
@@ -498,26 +526,33 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
      * a node's link applies the mean over all its leaves, where the exact sum weighs each visible leaf by
      * its own solid angle; the difference is the error of the cut alone (PIC's Fig. 9c bleeding, the
      * energy of partly visible nodes). Lightmap caches weigh by the diffuse response (the leaves' ω K_L),
-     * grid caches by the solid angle. Also the visible part's mean (the same cut, each node's radiance
-     * averaged over its visible leaves only, ω-weighted): what a link could give at best. */
+     * grid caches by the solid angle. Also what a link could read instead of its node's mean: the
+     * visible part's mean (ω-weighted: what a link could give at best; uniform over the visible leaves:
+     * what a link to its node's visible leaves could give), and its visible children's or grandchildren's
+     * means weighted by their own shares (a link that blends a few nodes below its own). */
     if (set->audit_radiance) {
         const float *B = set->audit_radiance;
         const float *wt = hemi ? kappa : omega;
-        double exact = 0.0, linked = 0.0, linked_vis = 0.0, fvis = 0.0, om = 0.0;
+        double exact = 0.0, linked = 0.0, linked_vis = 0.0, fvis = 0.0, om = 0.0, linked_uvis = 0.0;
+        double linked_d1 = 0.0, linked_d2 = 0.0;
         for (uint32_t i = 0; i < n; ++i) exact += (double)wt[i] * B[i];
         for (uint32_t j = 0; j < cut_n; ++j) {
             const uint32_t v = cut[j], a = job->leaf_first[v], b = job->leaf_end[v];
-            double sum = 0.0, sum_vis = 0.0, w_vis = 0.0, n_vis = 0.0;
+            double sum = 0.0, sum_vis = 0.0, w_vis = 0.0, n_vis = 0.0, sum_uvis = 0.0;
             for (uint32_t i = a; i < b; ++i) {
                 sum += B[i];
                 if (omega[i] > 0.0f) {
                     sum_vis += (double)omega[i] * B[i];
+                    sum_uvis += B[i];
                     w_vis += omega[i];
                     n_vis += 1.0;
                 }
             }
             linked += wt[v] * sum / (b - a);
             linked_vis += w_vis > 0.0 ? wt[v] * sum_vis / w_vis : 0.0;
+            linked_uvis += n_vis > 0.0 ? wt[v] * sum_uvis / n_vis : 0.0;
+            linked_d1 += audit_descendants(job, wt, omega, B, v, 1);
+            linked_d2 += audit_descendants(job, wt, omega, B, v, 2);
             fvis += omega[v] * n_vis / (b - a);
             om += omega[v];
         }
@@ -527,6 +562,9 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
         row[2] = (float)linked_vis;
         row[3] = om > 0.0 ? (float)(fvis / om) : 1.0f;
         row[4] = (float)om;
+        row[5] = (float)linked_uvis;
+        row[6] = (float)linked_d1;
+        row[7] = (float)linked_d2;
     }
     /* 4. links */
     const uint32_t bands = job->out->sh_bands;

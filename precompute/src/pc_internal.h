@@ -269,10 +269,12 @@ typedef struct glow__links {
     double visible_solid_angle_total;  /* sum over caches of visible solid angle (diagnostic) */
     /* with audit_radiance: per cache [GLOW__AUDIT_FIELDS] = the exact gather through the visible leaves,
      * the gather through the cut, the gather through the cut with each node's visible part's mean, the
-     * linked nodes' visible fraction (ω-weighted), the visible solid angle */
+     * linked nodes' visible fraction (ω-weighted), the visible solid angle, the gather with each link
+     * reading its node's visible leaves' uniform mean, its visible children's means (weighted by their
+     * own shares), its visible grandchildren's */
     float *audit;
 } glow__links;
-enum { GLOW__AUDIT_FIELDS = 5 };
+enum { GLOW__AUDIT_FIELDS = 8 };
 
 typedef void (*glow__progress_fn)(void *user, double fraction);
 glow_result glow__links_build(const glow__scene *scene, const glow__rt *rt, const glow__surfels *surfels,

@@ -372,14 +372,40 @@ static void report_audit(const glow__caches *c, const glow__links *l, FILE *csv,
                     (double)ratio[(size_t)(0.05 * (nr - 1))], (double)ratio[nr / 2], (double)ratio[(size_t)(0.95 * (nr - 1))],
                     bright, dark, fw > 0 ? 100.0 * fsum / fw : 100.0);
     }
+    /* what a link could read instead of its node's mean (links.c): per variant the total, the relative
+     * RMS error over caches and the per-cache ratio's p05 / p95 */
+    static const char *const variant[3] = {"its visible leaves' mean", "its visible children's means",
+                                           "its visible grandchildren's means"};
+    char line[512];
+    int len = snprintf(line, sizeof line, "link alternatives audit: if each link read, instead of its node's mean,");
+    for (int f = 5; f < GLOW__AUDIT_FIELDS && ratio; ++f) {
+        double t = 0.0, ee = 0.0, rr = 0.0;
+        nr = 0;
+        for (uint32_t i = 0; i < c->count; ++i) {
+            const float *a = l->audit + (size_t)i * GLOW__AUDIT_FIELDS;
+            t += a[f];
+            ee += ((double)a[f] - a[0]) * ((double)a[f] - a[0]);
+            rr += (double)a[0] * a[0];
+            if (a[0] > 0.05 * mean) ratio[nr++] = a[f] / a[0];
+        }
+        if (!nr) break;
+        qsort(ratio, nr, sizeof *ratio, cmp_float);
+        if (len > 0 && (size_t)len < sizeof line)
+            len += snprintf(line + len, sizeof line - (size_t)len, "%s %s: / exact %.4f, rel. RMS error %.4f, p05 %.3f p95 %.3f",
+                            f > 5 ? ";" : "", variant[f - 5], exact > 0 ? t / exact : 0.0, rr > 0 ? sqrt(ee / rr) : 0.0,
+                            (double)ratio[(size_t)(0.05 * (nr - 1))], (double)ratio[(size_t)(0.95 * (nr - 1))]);
+    }
+    if (ratio && nr) glow__infof(log, "%s", line);
     free(ratio);
     if (!csv) return;
-    fprintf(csv, "cache,kind,x,y,z,nx,ny,nz,visible_solid_angle,visible_fraction,exact,link,link_visible_mean\n");
+    fprintf(csv, "cache,kind,x,y,z,nx,ny,nz,visible_solid_angle,visible_fraction,exact,link,link_visible_mean,"
+                 "link_visible_uniform_mean,link_children,link_grandchildren\n");
     for (uint32_t i = 0; i < c->count; ++i) {
         const glow__cache *k = &c->caches[i];
         const float *a = l->audit + (size_t)i * GLOW__AUDIT_FIELDS;
-        fprintf(csv, "%u,%s,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g\n", i, k->kind == GLOW_CACHE_KIND_LIGHTMAP ? "lightmap" : "grid",
-                k->pos[0], k->pos[1], k->pos[2], k->nrm[0], k->nrm[1], k->nrm[2], a[4], a[3], a[0], a[1], a[2]);
+        fprintf(csv, "%u,%s,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g\n", i,
+                k->kind == GLOW_CACHE_KIND_LIGHTMAP ? "lightmap" : "grid", k->pos[0], k->pos[1], k->pos[2], k->nrm[0],
+                k->nrm[1], k->nrm[2], a[4], a[3], a[0], a[1], a[2], a[5], a[6], a[7]);
     }
     if (ferror(csv)) glow__warnf(log, "%s: writing the audit CSV failed", csv_path);
 }

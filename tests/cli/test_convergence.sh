@@ -36,5 +36,16 @@ assert all(b[2] <= a[2] for a, b in zip(rows, rows[1:])), rows  # p95 never rise
 assert rows[-1][1] < 0.25 * rows[0][1], rows                   # and by a lot: 4 -> 64 links
 PY
 done
+# The audit's alternatives (what a link could read instead of its node's mean): the mean of the node's
+# visible leaves must gather closer to the exact sum than the node's mean does, at every budget.
+for L in 8 32; do
+  "$BIN/glow-bake" "${B[@]}" --links $L -o "$T/x.glow" --audit-radiance "$T/radiance.bin" >"$T/out" 2>"$T/err" \
+    || fail "bake --links $L (alternatives)"
+  cut=$(grep "links audit" "$T/err" | sed -n 's/.*rel\. RMS error \([0-9.]*\);.*/\1/p')
+  vis=$(grep "link alternatives audit" "$T/err" | sed -n "s/.*visible leaves' mean: \/ exact [0-9.]*, rel\. RMS error \([0-9.]*\),.*/\1/p")
+  echo "     $L links: rel. RMS through the cut $cut, with the visible leaves' means $vis"
+  python3 -c "import sys; c, v = float(sys.argv[1]), float(sys.argv[2]); assert 0 <= v < c, (c, v)" "$cut" "$vis" \
+    && pass "$L links: visible leaves' means beat the node means" || fail "$L links: audit alternatives ($cut, $vis)"
+done
 echo "$fails failure(s)"
 [ "$fails" = 0 ]
