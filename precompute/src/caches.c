@@ -667,8 +667,8 @@ static glow_result lm_try(const glow__scene *scene, const glow__chart_set *cs, d
     return GLOW_OK;
 }
 
-static glow_result build_lightmap_layout(const glow__scene *scene, const glow__cache_settings *set, glow__log *log,
-                                         glow__caches *out, lm_state *st) {
+static glow_result build_lightmap_layout(const glow__scene *scene, const glow__rt *rt, const glow__cache_settings *set,
+                                         glow__log *log, glow__caches *out, lm_state *st) {
     const uint32_t n = scene->tri_count;
     st->uv = malloc(3 * (size_t)n * sizeof *st->uv);
     if (!st->uv) {
@@ -714,7 +714,7 @@ static glow_result build_lightmap_layout(const glow__scene *scene, const glow__c
         }
     }
     if (!use_uv1) {
-        glow_result r = glow__charts_segment(scene, log, &cs);
+        glow_result r = glow__charts_segment(scene, rt, log, &cs);
         if (r != GLOW_OK) return r;
         out->chart_count = cs.chart_count;
     }
@@ -774,7 +774,7 @@ glow_result glow__caches_build(const glow__scene *scene, const glow__rt *rt, con
 
     uint32_t lm_candidates = 0;
     if (scene->tri_count) {
-        r = build_lightmap_layout(scene, settings, log, out, &st);
+        r = build_lightmap_layout(scene, rt, settings, log, out, &st);
         if (r != GLOW_OK) goto fail;
         const size_t texels = (size_t)st.w * st.h;
         cand = malloc(((size_t)st.covered + 1) * sizeof *cand);

@@ -418,7 +418,70 @@ void glow__charts_free(glow__chart_set *cs) {
     memset(cs, 0, sizeof *cs);
 }
 
-glow_result glow__charts_segment(const glow__scene *scene, glow__log *log, glow__chart_set *out) {
+/* A wall standing on a chart's surface, seen from one blocked step t -> q: triangles whose centroid
+ * lies on q's side of the midpoint (along s = t - q) and within `r2` of it are beyond it. */
+typedef struct barrier {
+    double m[3], s[3], r2;
+} barrier;
+
+static void tri_centroid(const glow__scene *sc, uint32_t t, double out[3]) {
+    const float(*P)[3] = sc->pos + 3 * (size_t)t;
+    for (int k = 0; k < 3; ++k) out[k] = ((double)P[0][k] + P[1][k] + P[2][k]) / 3.0;
+}
+
+static bool add_barrier(const seg_ctx *c, barrier **bar, uint32_t *nbar, uint32_t *cap, uint32_t t, uint32_t q) {
+    if (*nbar == *cap) {
+        uint32_t nc = *cap ? 2 * *cap : 16;
+        barrier *nb = realloc(*bar, (size_t)nc * sizeof *nb);
+        if (!nb) return false;
+        *bar = nb;
+        *cap = nc;
+    }
+    double a[3], b[3], d2 = 0.0;
+    tri_centroid(c->scene, t, a);
+    tri_centroid(c->scene, q, b);
+    barrier *r = &(*bar)[(*nbar)++];
+    for (int k = 0; k < 3; ++k) {
+        r->m[k] = 0.5 * (a[k] + b[k]);
+        r->s[k] = a[k] - b[k];
+        d2 += r->s[k] * r->s[k];
+    }
+    r->r2 = 6.25 * d2; /* reach: 2.5 centroid spacings */
+    return true;
+}
+
+static bool beyond_barrier(const seg_ctx *c, const barrier *bar, uint32_t nbar, uint32_t u) {
+    if (!nbar) return false;
+    double p[3];
+    tri_centroid(c->scene, u, p);
+    for (uint32_t i = 0; i < nbar; ++i) {
+        const barrier *b = &bar[i];
+        const double d[3] = {p[0] - b->m[0], p[1] - b->m[1], p[2] - b->m[2]};
+        if (d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < b->r2 && d[0] * b->s[0] + d[1] * b->s[1] + d[2] * b->s[2] < 0.0)
+            return true;
+    }
+    return false;
+}
+
+/* Is the step from triangle t to its coplanar neighbour u blocked by geometry standing on the surface
+ * between them (a wall on a floor, a partition under a ceiling)? The segment between their centroids,
+ * lifted `lift` along the normal, must reach u without hitting anything but t and u. */
+static bool step_blocked(const seg_ctx *c, const glow__rt *rt, uint32_t t, uint32_t u, double lift) {
+    const float(*P)[3] = c->scene->pos + 3 * (size_t)t, (*Q)[3] = c->scene->pos + 3 * (size_t)u;
+    float a[3], dir[3];
+    for (int k = 0; k < 3; ++k) {
+        const double ca = ((double)P[0][k] + P[1][k] + P[2][k]) / 3.0, cb = ((double)Q[0][k] + Q[1][k] + Q[2][k]) / 3.0;
+        a[k] = (float)(ca + lift * c->nrm[t][k]);
+        dir[k] = (float)(cb + lift * c->nrm[u][k]) - a[k];
+    }
+    const float len = sqrtf(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+    if (!(len > 0.0f)) return false;
+    for (int k = 0; k < 3; ++k) dir[k] /= len;
+    const glow__hit h = glow__rt_intersect(rt, a, dir, 0.0f, len);
+    return h.t < len && h.tri != t && h.tri != u;
+}
+
+glow_result glow__charts_segment(const glow__scene *scene, const glow__rt *rt, glow__log *log, glow__chart_set *out) {
     memset(out, 0, sizeof *out);
     const uint32_t n = scene->tri_count;
     if (n == 0) {
@@ -430,6 +493,10 @@ glow_result glow__charts_segment(const glow__scene *scene, glow__log *log, glow_
     seg_ctx c = {.scene = scene};
     uint32_t *vid = malloc(n3 * sizeof *vid);
     uint32_t *adj_start = NULL, *adj = NULL;
+    uint32_t *blk_start = NULL, *blk = NULL; /* blocked partners (rt only) */
+    uint32_t *bar_stamp = NULL;              /* chart id + 1 whose barriers hold this triangle's */
+    barrier *bar = NULL;
+    uint32_t nbar = 0, bar_cap = 0;
     uint32_t *chart_start_tmp = malloc(((size_t)n + 1) * sizeof *chart_start_tmp);
     double(*ext_tmp)[2] = malloc((size_t)n * sizeof *ext_tmp);
     double(*nrm_tmp)[3] = malloc((size_t)n * sizeof *nrm_tmp);
@@ -464,6 +531,33 @@ glow_result glow__charts_segment(const glow__scene *scene, glow__log *log, glow_
     }
 
     const double cos_max = cos(GLOW__CHART_MAX_ANGLE_DEG * GLOW__PI / 180.0);
+    double diag = 0.0;
+    for (int a = 0; a < 3; ++a) {
+        const double e = (double)scene->bounds_max[a] - scene->bounds_min[a];
+        diag += e * e;
+    }
+    const double lift = diag > 0.0 ? 1e-4 * sqrt(diag) : 1e-6; /* caches.c lifts texels as much */
+    /* blocked partners: coplanar neighbours with geometry standing on the surface between them */
+    if (rt) {
+        blk_start = calloc((size_t)n + 1, sizeof *blk_start);
+        blk = malloc(((size_t)adj_start[n] + 1) * sizeof *blk);
+        bar_stamp = calloc((size_t)n + 1, sizeof *bar_stamp);
+        if (!blk_start || !blk || !bar_stamp) goto fail;
+        uint32_t nb = 0;
+        for (uint32_t t = 0; t < n; ++t) {
+            blk_start[t] = nb;
+            const double *tn = c.nrm[t];
+            for (uint32_t a = adj_start[t]; a < adj_start[t + 1]; ++a) {
+                const uint32_t u = adj[a];
+                const double *un = c.nrm[u];
+                if (tn[0] * un[0] + tn[1] * un[1] + tn[2] * un[2] > 0.99 && step_blocked(&c, rt, t, u, lift)) {
+                    blk[nb++] = u;
+                    out->blocked += t < u;
+                }
+            }
+        }
+        blk_start[n] = nb;
+    }
     uint32_t *members = out->chart_tris;
     uint32_t len = 0, charts = 0;
     for (uint32_t seed = 0; seed < n;) {
@@ -494,8 +588,20 @@ glow_result glow__charts_segment(const glow__scene *scene, glow__log *log, glow_
                     bool accept =
                         zero_seed ? zero_u : (zero_u || un[0] * sn[0] + un[1] * sn[1] + un[2] * sn[2] >= cos_max);
                     if (!accept) continue;
+                    /* never both sides of a wall standing on the surface: u stays out when a member of
+                     * this chart is one of its blocked partners, or lies beyond a barrier of it */
+                    bool barred = false;
+                    for (uint32_t q = blk_start ? blk_start[u] : 0; blk_start && q < blk_start[u + 1] && !barred; ++q)
+                        barred = c.chart_of[blk[q]] == id;
+                    if (barred || beyond_barrier(&c, bar, nbar, u)) continue;
                     c.chart_of[u] = id;
                     members[len++] = u;
+                }
+                /* t's blocked partners mark where a wall stands on the chart: a barrier */
+                if (blk_start && blk_start[t + 1] > blk_start[t] && bar_stamp[t] != id + 1u) {
+                    bar_stamp[t] = id + 1u;
+                    for (uint32_t q = blk_start[t]; q < blk_start[t + 1]; ++q)
+                        if (!add_barrier(&c, &bar, &nbar, &bar_cap, t, blk[q])) goto fail;
                 }
             }
             if (grow == 2 || zero_seed || len - first < 3) break;
@@ -516,6 +622,20 @@ glow_result glow__charts_segment(const glow__scene *scene, glow__log *log, glow_
             for (uint32_t i = first; i < len; ++i) c.chart_of[members[i]] = NONE;
             s0 = best;
         }
+        /* members accepted before a barrier was found may lie beyond it: they leave for a later chart */
+        if (nbar) {
+            uint32_t kept = first;
+            for (uint32_t i = first; i < len; ++i) {
+                const uint32_t t = members[i];
+                if (t != s0 && beyond_barrier(&c, bar, nbar, t)) {
+                    c.chart_of[t] = NONE;
+                    continue;
+                }
+                members[kept++] = t;
+            }
+            len = kept;
+        }
+        nbar = 0;
         uint32_t count = len - first;
         if (!finish_chart(&c, members + first, &count, c.nrm[s0], out->xy, ext_tmp[id], &out->evicted)) goto fail;
         len = first + count;
@@ -556,6 +676,10 @@ glow_result glow__charts_segment(const glow__scene *scene, glow__log *log, glow_
     free(vid);
     free(adj_start);
     free(adj);
+    free(blk_start);
+    free(blk);
+    free(bar_stamp);
+    free(bar);
     free(ext_tmp);
     free(nrm_tmp);
     free(cen_tmp);
@@ -571,12 +695,19 @@ glow_result glow__charts_segment(const glow__scene *scene, glow__log *log, glow_
     if (out->evicted)
         glow__infof(log, "%s: charts: %u triangles overlapped their chart's projection and moved to another chart",
                     scene->source, out->evicted);
+    if (out->blocked)
+        glow__infof(log, "%s: charts: %u shared edges not crossed where geometry stands on the surface", scene->source,
+                    out->blocked);
     return GLOW_OK;
 
 fail:
     free(vid);
     free(adj_start);
     free(adj);
+    free(blk_start);
+    free(blk);
+    free(bar_stamp);
+    free(bar);
     free(chart_start_tmp);
     free(ext_tmp);
     free(nrm_tmp);
@@ -940,7 +1071,7 @@ glow_result glow__charts_build(const glow__scene *scene, float texel_density, ui
     *out_width = *out_height = 0;
     if (out_chart_count) *out_chart_count = 0;
     glow__chart_set cs;
-    glow_result r = glow__charts_segment(scene, log, &cs);
+    glow_result r = glow__charts_segment(scene, NULL, log, &cs);
     if (r != GLOW_OK) return r;
     r = glow__charts_pack(&cs, texel_density, padding, log, out_uv, out_width, out_height, NULL, NULL);
     if (r == GLOW_OK && out_chart_count) *out_chart_count = cs.chart_count;

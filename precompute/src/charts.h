@@ -13,6 +13,7 @@ typedef struct glow__chart_set {
     double (*xy)[2];         /* [3*tri_count] corner positions in the chart's plane (m), chart min at 0,0 */
     double (*extent)[2];     /* [chart_count] chart width >= height (m), after the min-area rotation */
     uint32_t evicted;        /* triangles moved to a later chart because their projection overlapped */
+    uint32_t blocked;        /* shared edges not crossed because geometry stands on the surface there */
     double (*normal)[3];     /* [chart_count] area-weighted mean geometric normal (unit; 0 when none) */
     double (*centre)[3];     /* [chart_count] area-weighted centroid */
 } glow__chart_set;
@@ -28,8 +29,11 @@ typedef struct glow__chart_pack_stats {
 
 /* Welds corners by exact position, grows planar-ish charts over shared edges (normals within
  * GLOW__CHART_MAX_ANGLE_DEG of the seed's), projects each onto its mean plane, evicts triangles
- * whose projection overlaps the chart, and rotates each chart to its minimum-area rectangle. */
-glow_result glow__charts_segment(const glow__scene *scene, glow__log *log, glow__chart_set *out);
+ * whose projection overlaps the chart, and rotates each chart to its minimum-area rectangle.
+ * With a ray tracer (rt may be NULL), a chart does not grow across an edge between coplanar
+ * triangles where other geometry stands on the surface between them (a wall on a floor): the
+ * segment between their centroids, lifted off the surface, must be clear. */
+glow_result glow__charts_segment(const glow__scene *scene, const glow__rt *rt, glow__log *log, glow__chart_set *out);
 
 /* Packs the charts at `texel_density` texels per m into one atlas (shelf packing, charts' texel
  * footprints `padding` texels apart and from the border; width and height multiples of 4). When

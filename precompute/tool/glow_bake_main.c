@@ -30,6 +30,7 @@ static const char *usage_text =
     "  builtin:two-rooms   two closed rooms sharing one thin wall (light-leak tests)\n"
     "  builtin:pillar-hall a hall with a row of pillars and a bench (partly visible nodes, contacts)\n"
     "  builtin:pillar-court the same without its ceiling (an open shell)\n"
+    "  builtin:wall-gap    a room split by a thin partition with a doorway (contact leaks)\n"
     "\n"
     "Options:\n"
     "  -o, --output FILE      bake file to write (required); written atomically\n"

@@ -620,7 +620,9 @@ static void test_targets(void **state) {
     assert_true(cells >= 1000 && cells <= 4000);
     assert_true(c.grid_cache_count >= 1000);
     assert_true(c.lm_cache_count + c.lm_invalid >= 4000 && c.lm_cache_count + c.lm_invalid <= 16000);
-    assert_true(c.chart_count == 18);
+    /* 6 room faces + 2 x 6 block faces, and the floor cut in two where a block stands on it (charts.c:
+     * a chart does not reach across a contact, where both sides would share texels) */
+    assert_true(c.chart_count == 19);
     check_bilinear(&c, &s);
     glow__caches_free(&c);
     glow__pool_destroy(pool);

@@ -417,7 +417,7 @@ static report run(const glow__scene *s, float density, uint32_t padding, double 
     assert_non_null(uv);
     assert_non_null(uv2);
     double t0 = now();
-    assert_int_equal(glow__charts_segment(s, &log, &cs), GLOW_OK);
+    assert_int_equal(glow__charts_segment(s, NULL, &log, &cs), GLOW_OK);
     uint32_t w, h;
     float used;
     uint32_t *unit_of = malloc(((size_t)cs.chart_count + 1) * sizeof *unit_of);
@@ -509,7 +509,7 @@ static void test_huge_chart_reduces_density(void **state) {
     capture cap = {0};
     glow__log log = {.fn = capture_log, .user = &cap};
     glow__chart_set cs;
-    assert_int_equal(glow__charts_segment(&s, &log, &cs), GLOW_OK);
+    assert_int_equal(glow__charts_segment(&s, NULL, &log, &cs), GLOW_OK);
     float(*uv)[2] = malloc(3 * (size_t)s.tri_count * sizeof *uv);
     assert_non_null(uv);
     uint32_t w, h;
@@ -623,7 +623,7 @@ static void test_small_charts_merge(void **state) {
     b_finish(&b, &s);
     glow__log log = {0};
     glow__chart_set cs;
-    assert_int_equal(glow__charts_segment(&s, &log, &cs), GLOW_OK);
+    assert_int_equal(glow__charts_segment(&s, NULL, &log, &cs), GLOW_OK);
     assert_int_equal(cs.chart_count, 200);
     for (uint32_t c = 0; c < cs.chart_count; ++c) assert_true(fabs(fabs(cs.normal[c][1]) - 1.0) < 1e-9);
     glow__charts_free(&cs);
@@ -634,7 +634,7 @@ static void test_small_charts_merge(void **state) {
     assert_true(r.slots <= 18 && r.slots >= 2);
     assert_true(r.merged >= 2);
     /* no footprint mixes up- and down-facing tiles */
-    assert_int_equal(glow__charts_segment(&s, &log, &cs), GLOW_OK);
+    assert_int_equal(glow__charts_segment(&s, NULL, &log, &cs), GLOW_OK);
     uint32_t *unit_of = malloc(cs.chart_count * sizeof *unit_of);
     float(*uv)[2] = malloc(3 * (size_t)s.tri_count * sizeof *uv);
     assert_non_null(unit_of);
