@@ -69,22 +69,6 @@ static void fibonacci_hemisphere(uint32_t n, double (*out)[3]) {
     }
 }
 
-static void tangent_frame(const double n[3], double t[3], double b[3]) {
-    int ax = 0;
-    if (fabs(n[1]) < fabs(n[ax])) ax = 1;
-    if (fabs(n[2]) < fabs(n[ax])) ax = 2;
-    double a[3] = {0, 0, 0};
-    a[ax] = 1.0;
-    t[0] = a[1] * n[2] - a[2] * n[1];
-    t[1] = a[2] * n[0] - a[0] * n[2];
-    t[2] = a[0] * n[1] - a[1] * n[0];
-    double l = sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
-    for (int k = 0; k < 3; ++k) t[k] /= l;
-    b[0] = n[1] * t[2] - n[2] * t[1];
-    b[1] = n[2] * t[0] - n[0] * t[2];
-    b[2] = n[0] * t[1] - n[1] * t[0];
-}
-
 /* ------------------------------------------------------------------ dilation */
 /* Breadth-first layers into cells with eligible[c] != 0 and map[c] == EMPTY, from every non-empty
  * cell, at most max_layers layers. nb/nb_count: neighbour offsets in priority order (dx, dy, dz);
@@ -478,7 +462,7 @@ static void lm_range(void *p, uint32_t begin, uint32_t end, uint32_t worker) {
             j->nrm[i][k] = (float)n[k];
         }
         double tb[3], bb[3];
-        tangent_frame(n, tb, bb);
+        glow__tangent_frame(n, tb, bb);
         uint32_t hits = 0, back = 0;
         for (uint32_t r = 0; r < LM_RAYS; ++r) {
             const double *d = j->dirs[r];

@@ -240,23 +240,6 @@ static bool ent_push(seg_ctx *c, uint32_t tri, uint32_t next) {
     return true;
 }
 
-/* Two unit tangents (T, B) of the plane with unit normal N, T built from N's smallest axis. */
-static void plane_frame(const double N[3], double T[3], double B[3]) {
-    int ax = 0;
-    if (fabs(N[1]) < fabs(N[ax])) ax = 1;
-    if (fabs(N[2]) < fabs(N[ax])) ax = 2;
-    double A[3] = {0, 0, 0};
-    A[ax] = 1.0;
-    T[0] = A[1] * N[2] - A[2] * N[1];
-    T[1] = A[2] * N[0] - A[0] * N[2];
-    T[2] = A[0] * N[1] - A[1] * N[0];
-    const double tl = sqrt(T[0] * T[0] + T[1] * T[1] + T[2] * T[2]);
-    for (int k = 0; k < 3; ++k) T[k] /= tl;
-    B[0] = N[1] * T[2] - N[2] * T[1];
-    B[1] = N[2] * T[0] - N[0] * T[2];
-    B[2] = N[0] * T[1] - N[1] * T[0];
-}
-
 /* Projects chart members [*m, m + count) onto their mean plane (xy), evicts overlapping triangles
  * (compacting the member list) and rotates to the minimum-area rectangle. Returns false on OOM. */
 static bool finish_chart(seg_ctx *c, uint32_t *m, uint32_t *count, const double seed_nrm[3], double (*xy)[2],
@@ -275,7 +258,7 @@ static bool finish_chart(seg_ctx *c, uint32_t *m, uint32_t *count, const double 
         if (!(fabs(N[0]) + fabs(N[1]) + fabs(N[2]) > 0.0)) N[2] = 1.0;
     }
     double T[3], B[3];
-    plane_frame(N, T, B);
+    glow__tangent_frame(N, T, B);
     const float *o = s->pos[3 * (size_t)m[0]];
     double bx0 = INFINITY, by0 = INFINITY, bx1 = -INFINITY, by1 = -INFINITY;
     for (uint32_t i = 0; i < n; ++i)
@@ -892,7 +875,7 @@ static void group_frame(const glow__chart_set *cs, const unit_plan *u, uint32_t 
         N[0] = N[1] = 0.0;
         N[2] = 1.0;
     }
-    plane_frame(N, T, B);
+    glow__tangent_frame(N, T, B);
 }
 
 /* Footprints at density d; returns the best atlas size for them. */

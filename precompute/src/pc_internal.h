@@ -18,6 +18,7 @@
 #ifndef GLOW_PC_INTERNAL_H
 #define GLOW_PC_INTERNAL_H
 
+#include <math.h>
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -285,6 +286,23 @@ void glow__links_free(glow__links *l);
 
 /* ---------------------------------------------------------------- small vector helpers */
 static inline float glow__dot(const float a[3], const float b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+/* Two unit tangents t, b of the plane with unit normal n (t from n's smallest axis, b = n x t): the
+ * frame of lightmap texels' hemisphere rays (caches.c) and of chart projections (charts.c). */
+static inline void glow__tangent_frame(const double n[3], double t[3], double b[3]) {
+    int ax = 0;
+    if (fabs(n[1]) < fabs(n[ax])) ax = 1;
+    if (fabs(n[2]) < fabs(n[ax])) ax = 2;
+    double a[3] = {0, 0, 0};
+    a[ax] = 1.0;
+    t[0] = a[1] * n[2] - a[2] * n[1];
+    t[1] = a[2] * n[0] - a[0] * n[2];
+    t[2] = a[0] * n[1] - a[1] * n[0];
+    const double l = sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
+    for (int k = 0; k < 3; ++k) t[k] /= l;
+    b[0] = n[1] * t[2] - n[2] * t[1];
+    b[1] = n[2] * t[0] - n[0] * t[2];
+    b[2] = n[0] * t[1] - n[1] * t[0];
+}
 static inline void glow__sub(const float a[3], const float b[3], float o[3]) { o[0] = a[0] - b[0]; o[1] = a[1] - b[1]; o[2] = a[2] - b[2]; }
 static inline void glow__cross(const float a[3], const float b[3], float o[3]) {
     o[0] = a[1] * b[2] - a[2] * b[1]; o[1] = a[2] * b[0] - a[0] * b[2]; o[2] = a[0] * b[1] - a[1] * b[0];
