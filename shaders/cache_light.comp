@@ -21,6 +21,39 @@ layout(local_size_x = GLOW_CACHE_GROUP) in;
 layout(std430, binding = GLOW_BINDING_LINKS) readonly buffer GlowLinks { uint glow_links[]; };
 layout(std430, binding = GLOW_BINDING_FLUX) readonly buffer GlowFlux { vec4 glow_flux[]; };
 layout(std430, binding = GLOW_BINDING_CACHE_SH) writeonly buffer GlowCacheSh { float glow_cache_sh[]; };
+#ifdef GLOW_LINK_SUBSETS
+/* link subsets (bake_format.h, LSUB): a link reads R[node] times the weighted luma ratio of the node's
+ * four slots, as the CPU kernel does (it rounds the ratios to IEEE halves) */
+layout(std430, binding = GLOW_BINDING_LINK_SUBSETS) readonly buffer GlowSubsets { uint glow_subsets[]; };
+layout(std430, binding = GLOW_BINDING_NODES) readonly buffer GlowNodes { uvec4 glow_nodes[]; };
+float glow_luma(uint n) { vec4 f = glow_flux[n]; return f.x * f.w; }
+float glow_subset_scale(uint v, uint q, float yn) {
+    if (q == 0u || !(yn > 0.0)) return 1.0;
+    uint slot[4];
+    if (v < glow_p.surfel_count) {
+        slot[0] = slot[1] = slot[2] = slot[3] = v;
+    } else {
+        uvec4 nv = glow_nodes[v];
+        for (int k = 0; k < 2; ++k) {
+            uint ch = k == 0 ? nv.x : nv.y;
+            if (ch < glow_p.surfel_count) {
+                slot[2 * k] = slot[2 * k + 1] = ch;
+            } else {
+                uvec4 nc = glow_nodes[ch];
+                slot[2 * k] = nc.x;
+                slot[2 * k + 1] = nc.y;
+            }
+        }
+    }
+    float num = 0.0, den = 0.0;
+    for (int i = 0; i < 4; ++i) {
+        float w = float((q >> (4 * i)) & 15u);
+        num += w * glow_luma(slot[i]);
+        den += w;
+    }
+    return num / (den * yn);
+}
+#endif
 
 shared float glow_red[GLOW_REDUCE_CHUNK][GLOW_CACHE_GROUP + 1];
 
@@ -42,6 +75,10 @@ void main() {
         vec3 d = glow_oct_decode12(((nd >> 24) << 4) | (lo & 15u), lo >> 4);
         vec4 f = glow_flux[nd & 0x00FFFFFFu];
         vec3 R = f.xyz * f.w;
+#ifdef GLOW_LINK_SUBSETS
+        uint li = (c * glow_p.blocks_per_cache + j / 16u) * 16u + lane;
+        R *= glow_subset_scale(nd & 0x00FFFFFFu, (glow_subsets[li >> 1] >> ((li & 1u) * 16u)) & 0xFFFFu, R.x);
+#endif
         float y[GLOW_L2];
         glow_sh_eval(GLOW_LUMA_BANDS, d, y);
         float x = 1.0 - omc, g = omc * (2.0 - omc);

@@ -338,6 +338,54 @@ static double audit_descendants(const link_job *job, const float *wt, const floa
     return g;
 }
 
+/* Below this total variation between a link's slot weights and the slots' shares of its node's area
+ * the link stores no weights (it reads the node's mean). Sponza, seeds 0-1 (docs/results.md): 0 puts
+ * weights on 76 % of the links, 0.1 on 60 % for the same image error (0.1511/0.1400 against
+ * 0.1520/0.1397), 0.2 on 38 % and loses a third of the gain. The kernel's cost follows the share of
+ * 8-link groups with weights. */
+#define GLOW__SUBSET_MIN_TV 0.1
+
+/* LSUB weights of node v's four slots (bake_format.h): each slot's share of the link's response wt
+ * (the diffuse response for lightmap caches, the solid angle for grid caches), the largest scaled to
+ * 15. A slot that repeats the one before it (a leaf child) gets 0. 0 (the link reads the node's mean)
+ * where nothing below v is seen. */
+static void link_slots(const glow__hierarchy *h, uint32_t v, uint32_t slot[4]) {
+    const glow__node *nv = &h->nodes[v];
+    const uint32_t none[2] = {GLOW_NODE_NONE, GLOW_NODE_NONE};
+    glow_bake_link_slots(v, nv->child, nv->child[0] != GLOW_NODE_NONE ? h->nodes[nv->child[0]].child : none,
+                         nv->child[1] != GLOW_NODE_NONE ? h->nodes[nv->child[1]].child : none, slot);
+}
+
+static uint16_t link_subsets(const glow__hierarchy *h, const float *wt, uint32_t v) {
+    const glow__node *nv = &h->nodes[v];
+    uint32_t slot[4];
+    link_slots(h, v, slot);
+    float w[4], wmax = 0.0f;
+    for (int i = 0; i < 4; ++i) {
+        w[i] = (i > 0 && slot[i] == slot[i - 1]) ? 0.0f : wt[slot[i]];
+        if (!(w[i] > 0.0f)) w[i] = 0.0f;
+        if (w[i] > wmax) wmax = w[i];
+    }
+    if (!(wmax > 0.0f)) return 0;
+    uint16_t q = 0;
+    uint32_t qi[4], qs = 0;
+    for (int i = 0; i < 4; ++i) {
+        qi[i] = (uint32_t)lrintf(15.0f * (w[i] / wmax));
+        qs += qi[i];
+        q |= (uint16_t)(qi[i] << (4 * i));
+    }
+    /* weights that give the slots their shares of the node's area read the node's mean anyway:
+     * below a total variation of GLOW__SUBSET_MIN_TV from those shares, store none (the kernel
+     * skips lanes without weights) */
+    double tv = 0.0;
+    for (int i = 0; i < 4; ++i) {
+        const double ai = (i > 0 && slot[i] == slot[i - 1]) ? 0.0 : (double)h->nodes[slot[i]].area / nv->area;
+        tv += fabs((double)qi[i] / qs - ai);
+    }
+    if (0.5 * tv < GLOW__SUBSET_MIN_TV) return 0;
+    return q;
+}
+
 static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
     const glow__hierarchy *h = job->h;
     const glow__surfels *S = job->surfels;
@@ -521,6 +569,16 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
             cut[j] = t;
         }
 
+    /* Links with LSUB weights after those without (each group still by node index), so that the
+     * kernel's blocks of links without weights skip the subset work */
+    if (set->link_subsets && cut_n > 1) {
+        uint32_t tmp[4096], nt = 0, k = 0;
+        for (uint32_t j = 0; j < cut_n && nt < 4096; ++j) {
+            if (link_subsets(h, hemi ? job->kappa[worker] : omega, cut[j])) tmp[nt++] = cut[j];
+            else cut[k++] = cut[j];
+        }
+        memcpy(cut + k, tmp, nt * sizeof *cut);
+    }
     /* Audit (settings->audit_radiance, glow-bake --audit-radiance): with one radiance per surfel from any
      * lighting, the gather as the exact sum over the visible leaves against the gather through the cut:
      * a node's link applies the mean over all its leaves, where the exact sum weighs each visible leaf by
@@ -534,7 +592,7 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
         const float *B = set->audit_radiance;
         const float *wt = hemi ? kappa : omega;
         double exact = 0.0, linked = 0.0, linked_vis = 0.0, fvis = 0.0, om = 0.0, linked_uvis = 0.0;
-        double linked_d1 = 0.0, linked_d2 = 0.0;
+        double linked_d1 = 0.0, linked_d2 = 0.0, linked_sub = 0.0;
         for (uint32_t i = 0; i < n; ++i) exact += (double)wt[i] * B[i];
         for (uint32_t j = 0; j < cut_n; ++j) {
             const uint32_t v = cut[j], a = job->leaf_first[v], b = job->leaf_end[v];
@@ -553,6 +611,23 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
             linked_uvis += n_vis > 0.0 ? wt[v] * sum_uvis / n_vis : 0.0;
             linked_d1 += audit_descendants(job, wt, omega, B, v, 1);
             linked_d2 += audit_descendants(job, wt, omega, B, v, 2);
+            /* what the runtime gathers: with LSUB weights, the weighted mean of the slots' means */
+            const uint16_t q = set->link_subsets ? link_subsets(h, wt, v) : 0u;
+            if (q) {
+                uint32_t slot[4];
+                link_slots(h, v, slot);
+                double num = 0.0, den = 0.0;
+                for (int k = 0; k < 4; ++k) {
+                    const uint32_t qk = (q >> (4 * k)) & 15u, sa = job->leaf_first[slot[k]], sb = job->leaf_end[slot[k]];
+                    double ms = 0.0;
+                    for (uint32_t i = sa; i < sb; ++i) ms += B[i];
+                    num += qk * ms / (sb - sa);
+                    den += qk;
+                }
+                linked_sub += wt[v] * num / den;
+            } else {
+                linked_sub += wt[v] * sum / (b - a);
+            }
             fvis += omega[v] * n_vis / (b - a);
             om += omega[v];
         }
@@ -565,6 +640,7 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
         row[5] = (float)linked_uvis;
         row[6] = (float)linked_d1;
         row[7] = (float)linked_d2;
+        row[8] = (float)linked_sub;
     }
     /* 4. links */
     const uint32_t bands = job->out->sh_bands;
@@ -599,6 +675,7 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
         /* Lightmap caches: the cone's size is fitted so its diffuse response at the cache normal
          * equals the cluster's (cone_fit.c); grid caches keep the solid angle. */
         if (hemi && !set->no_cone_fit) lk->one_minus_cos = glow__cone_fit_omc(fit_bands, lk->one_minus_cos, glow__dot(lk->dir, cache->nrm), kappa[v]);
+        if (set->link_subsets) lk->subsets = link_subsets(h, hemi ? kappa : omega, v);
         if (shout) {
             /* PIC Eq. 2 over this node's visible leaves: Σ ω_i y(dir_i), in units of the runtime
              * projection (multiplied by factor; factor_scale applied at runtime). */

@@ -253,6 +253,7 @@ typedef struct glow__link_settings {
                                   links.c cut_priority and cut_descend (--cut error, the pipeline's default) */
     const float *audit_radiance; /* optional [surfel count]: a radiance per surfel (any lighting); the
                                     links then also fill glow__links.audit (links.c, "Audit") */
+    bool link_subsets;         /* fill glow__link.subsets (LSUB, bake_format.h) */
 } glow__link_settings;
 
 typedef struct glow__link {
@@ -260,6 +261,7 @@ typedef struct glow__link {
     float factor;             /* surfel_area / node area (times factor_scale at runtime) */
     float one_minus_cos;      /* 1 - cos(alpha) of the equal-visible-solid-angle cone */
     float dir[3];             /* mean visible direction, unit */
+    uint16_t subsets;         /* LSUB weights of the node's four slots (bake_format.h), 0 = none */
 } glow__link;
 
 typedef struct glow__links {
@@ -272,10 +274,10 @@ typedef struct glow__links {
      * the gather through the cut, the gather through the cut with each node's visible part's mean, the
      * linked nodes' visible fraction (ω-weighted), the visible solid angle, the gather with each link
      * reading its node's visible leaves' uniform mean, its visible children's means (weighted by their
-     * own shares), its visible grandchildren's */
+     * own shares), its visible grandchildren's, and through its LSUB weights (what the runtime reads) */
     float *audit;
 } glow__links;
-enum { GLOW__AUDIT_FIELDS = 8 };
+enum { GLOW__AUDIT_FIELDS = 9 };
 
 typedef void (*glow__progress_fn)(void *user, double fraction);
 glow_result glow__links_build(const glow__scene *scene, const glow__rt *rt, const glow__surfels *surfels,

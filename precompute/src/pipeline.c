@@ -153,10 +153,21 @@ static glow_result serialise(const glow_pc_settings *set, const glow__scene *sc,
     glow_bake_link_block *lb = calloc((size_t)ca->count * blocks + 1, sizeof *lb);
     size_t shlk_block = glow_bake_shlk_block_size(lk->sh_bands);
     uint8_t *sh = lk->sh ? calloc((size_t)ca->count * blocks + 1, shlk_block) : NULL;
+    size_t n_sub = 0, n_used = 0;
+    for (size_t i = 0; i < (size_t)ca->count * nl; ++i) {
+        n_sub += lk->links[i].subsets != 0;
+        n_used += lk->links[i].factor != 0.0f;
+    }
+    const bool any_sub = n_sub > 0;
+    if (any_sub)
+        glow__infof(log, "link subsets: %zu of %zu links (%.1f %%) read the part of their node the cache sees", n_sub,
+                    n_used, n_used ? 100.0 * (double)n_sub / (double)n_used : 0.0);
+    uint16_t *lsub = any_sub ? calloc((size_t)ca->count * blocks * GLOW_LINK_BLOCK + 1, sizeof *lsub) : NULL;
     glow_bake_triangle *tr = calloc(sc->tri_count, sizeof *tr);
     if (!m || !mat || !su || !no || !lv || !cc || (grid_cells && !gm) || (lm_texels && !lmm) || !lb ||
-        (lk->sh && !sh) || !tr) {
+        (lk->sh && !sh) || (any_sub && !lsub) || !tr) {
         free(m); free(mat); free(su); free(no); free(lv); free(cc); free(gm); free(lmm); free(lb); free(sh); free(tr);
+        free(lsub);
         free(gvis);
         glow__errorf(log, "write: out of memory while serialising the bake");
         return GLOW_ERROR_OUT_OF_MEMORY;
@@ -171,7 +182,8 @@ static glow_result serialise(const glow_pc_settings *set, const glow__scene *sc,
     m->links_per_cache = nl;
     m->link_blocks_per_cache = blocks;
     m->sh_bands = set->bands;
-    m->link_kind = GLOW_LINK_KIND_RUNTIME_PROJECTION | (lk->sh ? GLOW_LINK_KIND_FULL_SH : 0u);
+    m->link_kind = GLOW_LINK_KIND_RUNTIME_PROJECTION | (lk->sh ? GLOW_LINK_KIND_FULL_SH : 0u) |
+                   (lsub ? GLOW_LINK_KIND_SUBSETS : 0u);
     m->material_count = sc->material_count;
     m->triangle_count = sc->tri_count;
     memcpy(m->bounds_min, sc->bounds_min, sizeof m->bounds_min);
@@ -249,6 +261,7 @@ static glow_result serialise(const glow_pc_settings *set, const glow__scene *sc,
                 glow__oct_encode12(L->dir, &u, &v);
                 glow_bake_link_pack(b, lane, L->node, glow__half_from_float(L->one_minus_cos), u, v);
             }
+            if (lsub && L->factor != 0.0f) lsub[(size_t)c * blocks * GLOW_LINK_BLOCK + j] = L->subsets;
             if (sh) {
                 uint8_t *blk = sh + ((size_t)c * blocks + j / GLOW_LINK_BLOCK) * shlk_block;
                 uint32_t *node = (uint32_t *)blk;
@@ -291,6 +304,7 @@ static glow_result serialise(const glow_pc_settings *set, const glow__scene *sc,
     else free(lmm);
     add_section(ss, GLOW_SECTION_LINK, lb, (uint64_t)ca->count * blocks * sizeof *lb);
     if (sh) add_section(ss, GLOW_SECTION_SHLK, sh, (uint64_t)ca->count * blocks * shlk_block);
+    if (lsub) add_section(ss, GLOW_SECTION_LSUB, lsub, (uint64_t)ca->count * blocks * GLOW_LINK_BLOCK * sizeof *lsub);
     add_section(ss, GLOW_SECTION_GEOM, tr, (uint64_t)sc->tri_count * sizeof *tr);
     return GLOW_OK;
 }
@@ -374,8 +388,9 @@ static void report_audit(const glow__caches *c, const glow__links *l, FILE *csv,
     }
     /* what a link could read instead of its node's mean (links.c): per variant the total, the relative
      * RMS error over caches and the per-cache ratio's p05 / p95 */
-    static const char *const variant[3] = {"its visible leaves' mean", "its visible children's means",
-                                           "its visible grandchildren's means"};
+    static const char *const variant[4] = {"its visible leaves' mean", "its visible children's means",
+                                           "its visible grandchildren's means",
+                                           "its link subsets (what this bake's runtime reads)"};
     char line[512];
     int len = snprintf(line, sizeof line, "link alternatives audit: if each link read, instead of its node's mean,");
     for (int f = 5; f < GLOW__AUDIT_FIELDS && ratio; ++f) {
@@ -399,13 +414,13 @@ static void report_audit(const glow__caches *c, const glow__links *l, FILE *csv,
     free(ratio);
     if (!csv) return;
     fprintf(csv, "cache,kind,x,y,z,nx,ny,nz,visible_solid_angle,visible_fraction,exact,link,link_visible_mean,"
-                 "link_visible_uniform_mean,link_children,link_grandchildren\n");
+                 "link_visible_uniform_mean,link_children,link_grandchildren,link_subsets\n");
     for (uint32_t i = 0; i < c->count; ++i) {
         const glow__cache *k = &c->caches[i];
         const float *a = l->audit + (size_t)i * GLOW__AUDIT_FIELDS;
-        fprintf(csv, "%u,%s,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g\n", i,
+        fprintf(csv, "%u,%s,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g\n", i,
                 k->kind == GLOW_CACHE_KIND_LIGHTMAP ? "lightmap" : "grid", k->pos[0], k->pos[1], k->pos[2], k->nrm[0],
-                k->nrm[1], k->nrm[2], a[4], a[3], a[0], a[1], a[2], a[5], a[6], a[7]);
+                k->nrm[1], k->nrm[2], a[4], a[3], a[0], a[1], a[2], a[5], a[6], a[7], a[8]);
     }
     if (ferror(csv)) glow__warnf(log, "%s: writing the audit CSV failed", csv_path);
 }
@@ -554,7 +569,7 @@ glow_result glow_pc_bake(const char *scene_path, const char *out_path, const glo
     glow__link_settings slink = {.links_per_cache = set.links, .sh_bands = set.bands, .full_sh = set.sh_links,
                                  .rays_per_surfel = set.rays_per_surfel, .seed = set.seed,
                                  .no_normalize = set.no_link_normalize, .cut_error = !set.cut_solid_angle,
-                                 .audit_radiance = audit_radiance};
+                                 .audit_radiance = audit_radiance, .link_subsets = !set.no_link_subsets};
     res = glow__links_build(&scene, rt, &surfels, &hier, &caches, &slink, pool, &log, stage_progress, &pc, &links);
     STAGE_END(ST_LINKS);
     if (res != GLOW_OK) goto done;

@@ -54,6 +54,9 @@ static const char *usage_text =
     "                         whose link can err most (partly visible nodes, uneven visibility) and links\n"
     "                         a node's visible subtree (see --audit-radiance); solid-angle splits the\n"
     "                         largest visible solid angle first (PIC 4.5)\n"
+    "  --link-subsets on|off  on (default): a partly visible link reads the light of the part of its\n"
+    "                         node the cache sees (four weights per link, 2 bytes, LSUB); off: the\n"
+    "                         node's mean, as PIC\n"
     "  --audit-radiance FILE  audit the cuts under a lighting: FILE holds one float32 radiance per surfel\n"
     "                         (glow-stability audit --radiance-out, for a bake with the same settings);\n"
     "                         logs each cut's gather against the exact gather through visible surfels\n"
@@ -399,6 +402,11 @@ int main(int argc, char **argv) {
         } else if (!strcmp(a, "--audit-csv")) {
             NEED_VALUE();
             s.audit_csv = v;
+        } else if (!strcmp(a, "--link-subsets")) {
+            NEED_VALUE();
+            if (!strcmp(v, "off")) s.no_link_subsets = true;
+            else if (!strcmp(v, "on")) s.no_link_subsets = false;
+            else return usage_error("--link-subsets '%s': expected on or off", v);
         } else if (!strcmp(a, "--no-link-normalize")) {
             s.no_link_normalize = true;
         } else if (!strcmp(a, "--sh-links")) {

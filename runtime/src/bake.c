@@ -36,11 +36,12 @@
 #define BAKE_ENTRY_SIZE ((uint64_t)sizeof(glow_bake_section))
 #define MAX_SH_BANDS 16u
 
-enum { S_META, S_MATL, S_SURF, S_NODE, S_LEVL, S_CACH, S_GRID, S_LMAP, S_LINK, S_SHLK, S_GEOM, S_GVIS, S_KNOWN_COUNT };
+enum { S_META, S_MATL, S_SURF, S_NODE, S_LEVL, S_CACH, S_GRID, S_LMAP, S_LINK, S_SHLK, S_GEOM, S_GVIS, S_LSUB, S_KNOWN_COUNT };
 
 static const uint32_t known_fourcc[S_KNOWN_COUNT] = {
     GLOW_SECTION_META, GLOW_SECTION_MATL, GLOW_SECTION_SURF, GLOW_SECTION_NODE, GLOW_SECTION_LEVL, GLOW_SECTION_CACH,
     GLOW_SECTION_GRID, GLOW_SECTION_LMAP, GLOW_SECTION_LINK, GLOW_SECTION_SHLK, GLOW_SECTION_GEOM, GLOW_SECTION_GVIS,
+    GLOW_SECTION_LSUB,
 };
 
 typedef struct section_ref {
@@ -278,6 +279,11 @@ static glow_result check_meta(const vstate *v, const glow_bake_meta *m, section_
         FAIL(GLOW_ERROR_CORRUPT_DATA, "missing section 'SHLK' (link_kind 0x%x has full-SH links)", m->link_kind);
     if (!full_sh && sec[S_SHLK].present)
         FAIL(GLOW_ERROR_CORRUPT_DATA, "section 'SHLK' present but link_kind 0x%x has no full-SH links", m->link_kind);
+    const int subsets = (m->link_kind & GLOW_LINK_KIND_SUBSETS) != 0;
+    if (subsets != sec[S_LSUB].present)
+        FAIL(GLOW_ERROR_CORRUPT_DATA, subsets ? "missing section 'LSUB' (link_kind 0x%x has link subsets)"
+                                              : "section 'LSUB' present but link_kind 0x%x has no link subsets",
+             m->link_kind);
 
     /* sizes */
     if ((r = check_section_size(v, &sec[S_MATL], GLOW_SECTION_MATL, m->material_count, sizeof(glow_bake_material),
@@ -309,6 +315,10 @@ static glow_result check_meta(const vstate *v, const glow_bake_meta *m, section_
         return r;
     if (sec[S_GEOM].present && (r = check_section_size(v, &sec[S_GEOM], GLOW_SECTION_GEOM, m->triangle_count,
                                                        sizeof(glow_bake_triangle), "triangle_count")))
+        return r;
+    /* LSUB (optional): one uint16_t of four 4-bit weights per link; any value is valid */
+    if (sec[S_LSUB].present && (r = check_section_size(v, &sec[S_LSUB], GLOW_SECTION_LSUB, d->link_blocks,
+                                                       GLOW_LINK_BLOCK * sizeof(uint16_t), "link blocks x 16 lanes")))
         return r;
     /* GVIS (optional): 8 octant masks per grid cell; any byte value is valid */
     if (sec[S_GVIS].present &&
@@ -796,6 +806,7 @@ const uint32_t *glow__bake_lightmap_map(const glow_bake *b) {
 }
 const glow_bake_link_block *glow__bake_link_blocks(const glow_bake *b) { return known_ptr(b, S_LINK); }
 const void *glow__bake_shlk_blocks(const glow_bake *b) { return known_ptr(b, S_SHLK); }
+const uint16_t *glow__bake_link_subsets(const glow_bake *b) { return known_ptr(b, S_LSUB); }
 const glow_bake_triangle *glow__bake_triangles(const glow_bake *b) { return known_ptr(b, S_GEOM); }
 
 const void *glow__bake_section(const glow_bake *b, uint32_t fourcc, uint64_t *out_size) {

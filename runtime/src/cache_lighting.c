@@ -92,6 +92,11 @@ static inline __attribute__((always_inline, unused)) float reduce16(glow__v16f v
     return reduce8(a);
 }
 
+static inline glow__v8u gather_u_generic(const uint32_t *base, glow__v8u idx) {
+    glow__v8u v;
+    for (int i = 0; i < 8; ++i) v[i] = base[idx[i]];
+    return v;
+}
 static inline glow__v8f sqrt8_generic(glow__v8f x) {
     for (int i = 0; i < 8; ++i) x[i] = sqrtf(x[i]);
     return x;
@@ -111,6 +116,7 @@ static inline glow__v8f sqrt8_generic(glow__v8f x) {
 #define LOAD_U16(p) load_u16_generic(p)
 #define HALF8(p) half8_generic(p)
 #define GATHER(base, idx) gather_generic((base), (idx))
+#define GATHER_U(base, idx) gather_u_generic((base), (idx))
 #define GATHER3(a, idx, y, co, cg) GATHER3_PLAIN(a, idx, y, co, cg)
 #define RSQRT(x) (1.0f / sqrt8_generic(x))
 #include "cache_kernel.inc"
@@ -120,6 +126,7 @@ static inline glow__v8f sqrt8_generic(glow__v8f x) {
 #undef LOAD_U16
 #undef HALF8
 #undef GATHER
+#undef GATHER_U
 #undef GATHER3
 #undef RSQRT
 #undef REDUCE_STORE
@@ -150,6 +157,7 @@ static inline glow__v8f sqrt8_generic(glow__v8f x) {
 #define LOAD_U16(p) ((glow__v8u)_mm256_cvtepu16_epi32(_mm_loadu_si128((const __m128i *)(const void *)(p))))
 #define HALF8(p) ((glow__v8f)_mm256_cvtph_ps(_mm_loadu_si128((const __m128i *)(const void *)(p))))
 #define GATHER(base, idx) ((glow__v8f)_mm256_i32gather_ps((base), (__m256i)(idx), 4))
+#define GATHER_U(base, idx) ((glow__v8u)_mm256_i32gather_epi32((const int *)(const void *)(base), (__m256i)(idx), 4))
 #define GATHER3(a, idx, y, co, cg) GATHER3_PLAIN(a, idx, y, co, cg)
 /* rsqrt estimate (12 bits) + one Newton step: ~1e-7 relative, a fraction of the sqrt+div cost */
 #define RSQRT(x) rsqrt_avx2(x)
@@ -168,6 +176,7 @@ static inline glow__v8f rsqrt_avx2(glow__v8f x) {
 #undef LOAD_U16
 #undef HALF8
 #undef GATHER
+#undef GATHER_U
 #undef GATHER3
 #undef RSQRT
 #undef REDUCE_STORE
@@ -231,6 +240,7 @@ static inline __attribute__((always_inline)) void reduce_store16(const glow__v16
 #define LOAD_U16(p) ((glow__v16u)_mm512_cvtepu16_epi32(_mm256_loadu_si256((const __m256i *)(const void *)(p))))
 #define HALF8(p) ((glow__v16f)_mm512_cvtph_ps(_mm256_loadu_si256((const __m256i *)(const void *)(p))))
 #define GATHER(base, idx) ((glow__v16f)_mm512_i32gather_ps((__m512i)(idx), (base), 4))
+#define GATHER_U(base, idx) ((glow__v16u)_mm512_i32gather_epi32((__m512i)(idx), (const void *)(base), 4))
 /* With the system's interleaved node radiance (Y Co Cg pad per node, 16 bytes) a lane's three
  * values are two adjacent qwords: four 8-lane qword gathers (32 element loads) and three two-source
  * permutes replace three 16-lane dword gathers (48 element loads). Same floats, same results. */

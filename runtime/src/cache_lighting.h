@@ -26,6 +26,11 @@ typedef struct glow__cl_args {
                            links (SHLK, same layout with the bake's sh_bands² rows) pass their own */
     const float *coeff_scale; /* compact links: glow__cl_coeff_scale(luma, chroma) computed once by
                                  the caller, or NULL (computed per call) */
+    const uint16_t *subsets; /* LSUB weights, one per link in blocks' order (bake_format.h), or NULL:
+                                each link reads its node's radiance scaled by the weighted luma
+                                ratio of the node's four slots */
+    const uint32_t *sub_ratio; /* with subsets: [node] four IEEE halves Y[slot_i] / Y[node] (slot 0 in
+                                  the low half of the first uint32), read as uint32 pairs */
     float xscale;       /* expanded links only: every cache coefficient times this (SHLK: the bake's
                            factor_scale, with rad_* the node flux); 0 = 1 */
 } glow__cl_args;

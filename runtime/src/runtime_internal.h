@@ -97,6 +97,7 @@ const glow_bake_link_block *glow__bake_link_blocks(const glow_bake *bake);
 /* Full-SH link blocks, glow_bake_shlk_block_size(sh_bands) bytes each, same count as the LINK
  * blocks; NULL unless link_kind has GLOW_LINK_KIND_FULL_SH. */
 const void *glow__bake_shlk_blocks(const glow_bake *bake);
+const uint16_t *glow__bake_link_subsets(const glow_bake *bake); /* LSUB, or NULL */
 /* [triangle_count]; NULL when the bake has no GEOM section. */
 const glow_bake_triangle *glow__bake_triangles(const glow_bake *bake);
 /* Any section by fourcc (also ones this runtime does not know); NULL when absent. */

@@ -62,6 +62,9 @@ struct glow_system {
                                     full-SH links (GLOW_LINK_MODE_SH), else NULL */
     size_t xlink_size;           /* bytes per block of xlinks (0 = from luma) */
     float xscale;                /* SH mode: the bake's factor_scale (SHLK is against node flux) */
+    const uint16_t *subsets;     /* the bake's LSUB (every link mode), else NULL */
+    uint32_t *slots;             /* with subsets: [N][4] glow_bake_link_slots of every node */
+    uint16_t *sub_ratio;         /* with subsets: [N][4] Y[slot] / Y[node] as IEEE halves, each update */
     uint64_t memory_bytes;
     /* surfels */
     float *pos4, *nrm4;
@@ -200,6 +203,16 @@ static void task_flux(void *data, uint32_t k, uint32_t worker) {
     }
 }
 
+/* A ratio Y[slot] / Y[node] as an IEEE half, rounded to nearest: values below the smallest normal
+ * half (6.1e-5) become 0, above the largest (65504) 65504, NaN 0. The kernel decodes normals only. */
+static inline uint16_t ratio_half(float x) {
+    if (!(x >= 6.103515625e-05f)) return 0u;
+    if (x >= 65504.0f) return 0x7BFFu;
+    uint32_t b;
+    memcpy(&b, &x, sizeof b);
+    return (uint16_t)(((b + 0x1000u) >> 13) - (112u << 10));
+}
+
 static void pull_range(glow_system *s, uint32_t first, uint32_t end) {
     const size_t N = s->N;
     float *restrict fy = s->flux, *restrict fco = s->flux + N, *restrict fcg = s->flux + 2 * N;
@@ -218,6 +231,12 @@ static void pull_range(glow_system *s, uint32_t first, uint32_t end) {
         rn[1] = co * ipa;
         rn[2] = cg * ipa;
         rn[3] = 0.0f;
+        if (s->sub_ratio) { /* LSUB: the four slots (grandchildren) are on lower levels, final */
+            const uint32_t *sl = s->slots + 4 * (size_t)n;
+            const float inv = y * ipa > 0.0f ? 1.0f / (y * ipa) : 0.0f;
+            for (int i = 0; i < 4; ++i)
+                s->sub_ratio[4 * (size_t)n + (size_t)i] = inv > 0.0f ? ratio_half(r[4 * (size_t)sl[i]] * inv) : 0x3C00u;
+        }
     }
 }
 
@@ -247,7 +266,9 @@ static void task_caches(void *data, uint32_t k, uint32_t worker) {
                        .xblocks = s->xlinks,
                        .xblock_size = s->xlink_size,
                        .coeff_scale = s->cl_scale,
-                       .xscale = s->xscale};
+                       .xscale = s->xscale,
+                       .subsets = s->subsets,
+                       .sub_ratio = (const uint32_t *)(const void *)s->sub_ratio};
     uint32_t first = k * CACHE_CHUNK, count = s->C - first < CACHE_CHUNK ? s->C - first : CACHE_CHUNK;
     glow__cl_light_caches(&a, first, count);
 }
@@ -341,7 +362,7 @@ static void free_system(glow_system *s) {
                     s->direct, s->direct_spare, s->fb_w, s->rho_ind_max, s->flux, s->rad, s->inv_pi_area,
                     s->cache_sh, s->grid_sh, s->lm_sh, s->grid_map, s->lm_map, s->mat_emis_scale,
                     s->mat_albedo_scale, s->batch_status, s->batch_negative, s->out_index, s->out_cache,
-                    s->xblocks};
+                    s->xblocks, s->slots, s->sub_ratio};
     for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; ++i) glow__ctx_free(ctx, bufs[i]);
     glow__ctx_free(ctx, s);
 }
@@ -475,6 +496,9 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     s->out_cache = alloc_array(s, used, sizeof(uint32_t), &ok);
     if (link_mode == GLOW_LINK_MODE_EXPANDED)
         s->xblocks = alloc_array(s, (size_t)s->C * s->bpc, glow__cl_xblock_size(luma), &ok);
+    if (glow__bake_link_subsets(desc->bake))
+        s->slots = alloc_array(s, N, 4 * sizeof(uint32_t), &ok);
+    if (s->slots) s->sub_ratio = alloc_array(s, N, 4 * sizeof(uint16_t), &ok);
     if (!ok) {
         GLOW__LOG_ERROR(ctx, GLOW_ERROR_OUT_OF_MEMORY, "glow_system_create(%s): out of memory (%u surfels, %u caches)",
                         label, s->S, s->C);
@@ -500,6 +524,16 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     memset(s->flux, 0, N * 3 * sizeof(float));
     memset(s->rad, 0, N * 4 * sizeof(float));
     for (size_t n = 0; n < N; ++n) s->inv_pi_area[n] = 1.0f / (PI_F * s->nodes[n].area);
+    if (s->slots) {
+        s->subsets = glow__bake_link_subsets(desc->bake);
+        const uint32_t none[2] = {GLOW_NODE_NONE, GLOW_NODE_NONE};
+        for (size_t n = 0; n < N; ++n) {
+            const uint32_t *ch = s->nodes[n].child;
+            glow_bake_link_slots((uint32_t)n, ch, ch[0] != GLOW_NODE_NONE ? s->nodes[ch[0]].child : none,
+                                 ch[1] != GLOW_NODE_NONE ? s->nodes[ch[1]].child : none, s->slots + 4 * n);
+            for (int i = 0; i < 4; ++i) s->sub_ratio[4 * n + (size_t)i] = 0x3C00u; /* 1: leaves keep it */
+        }
+    }
     memset(s->cache_sh, 0, (size_t)s->C * s->coeffs * sizeof(float));
     for (size_t i = 0; i < 3 * (size_t)(s->M ? s->M : 1u); ++i) s->mat_emis_scale[i] = s->mat_albedo_scale[i] = 1.0f;
     for (size_t i = 0; i < s->grid_cells; ++i) s->grid_map[i] = gmap[i] == GLOW_MAP_EMPTY ? GLOW_MAP_EMPTY : (gmap[i] & GLOW_MAP_INDEX_MASK);
@@ -822,6 +856,7 @@ glow_result glow_system_get_solver_tables(const glow_system *s, glow_solver_tabl
                               .cache_stride = (uint32_t)(sizeof(glow_bake_cache) / sizeof(float)),
                               .level_starts = s->level_starts,
                               .link_blocks = glow__bake_link_blocks(s->bake),
+                              .link_subsets = glow__bake_link_subsets(s->bake),
                               .output_index = s->out_index,
                               .output_cache = s->out_cache,
                               .grid_used = (uint32_t)s->grid_used,

@@ -36,6 +36,7 @@ typedef struct glow_vec4 { float x, y, z, w; } glow_vec4;
 #define GLOW_BINDING_SURFEL_MAT 1   /* glow_gl_surfel_mat[S] */
 #define GLOW_BINDING_DIRECT 2       /* vec4[S]: direct irradiance W/m² (rgb), w unused */
 #define GLOW_BINDING_FEEDBACK_W 3   /* float[S][luma²]: π s_l(1) y_lm(n) */
+#define GLOW_BINDING_LINK_SUBSETS 3 /* cache_light only (with GLOW_LINK_SUBSETS): uint[]: the bake's LSUB */
 #define GLOW_BINDING_STATUS 3       /* surfel_direct only: glow_gl_status */
 #define GLOW_BINDING_CACHE_SH 4     /* float[C][coeff_count]: Y luma², Co chroma², Cg chroma² */
 #define GLOW_BINDING_NODES 5        /* uvec4[N]: child0, child1, floatBits(1/(π area)), 0 */

@@ -43,9 +43,13 @@ for L in 8 32; do
     || fail "bake --links $L (alternatives)"
   cut=$(grep "links audit" "$T/err" | sed -n 's/.*rel\. RMS error \([0-9.]*\);.*/\1/p')
   vis=$(grep "link alternatives audit" "$T/err" | sed -n "s/.*visible leaves' mean: \/ exact [0-9.]*, rel\. RMS error \([0-9.]*\),.*/\1/p")
-  echo "     $L links: rel. RMS through the cut $cut, with the visible leaves' means $vis"
+  sub=$(grep "link alternatives audit" "$T/err" | sed -n "s/.*its link subsets (what this bake's runtime reads): \/ exact [0-9.]*, rel\. RMS error \([0-9.]*\),.*/\1/p")
+  echo "     $L links: rel. RMS through the cut $cut, with the visible leaves' means $vis, with link subsets $sub"
   python3 -c "import sys; c, v = float(sys.argv[1]), float(sys.argv[2]); assert 0 <= v < c, (c, v)" "$cut" "$vis" \
     && pass "$L links: visible leaves' means beat the node means" || fail "$L links: audit alternatives ($cut, $vis)"
+  # link subsets (the default): what the runtime reads must gather closer than the node means
+  python3 -c "import sys; c, s = float(sys.argv[1]), float(sys.argv[2]); assert 0 <= s < 0.95 * c, (c, s)" "$cut" "$sub" \
+    && pass "$L links: link subsets beat the node means" || fail "$L links: link subsets ($cut, $sub)"
 done
 echo "$fails failure(s)"
 [ "$fails" = 0 ]

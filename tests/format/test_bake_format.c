@@ -159,6 +159,7 @@ typedef struct test_bake {
     uint32_t lmap[4];
     glow_bake_link_block link[2];
     unsigned char shlk[2 * SHLK_BLOCK];
+    uint16_t lsub[2 * GLOW_LINK_BLOCK];
     glow_bake_triangle tri[2];
 } test_bake;
 
@@ -291,7 +292,7 @@ static void build_golden(test_bake *b) {
     b->tri[1].normal_oct = OCT_UP;
 }
 
-enum { WITH_SHLK = 1, NO_GEOM = 2, NO_GRID = 4, NO_LMAP = 8, EXTRA_UNKNOWN = 16 };
+enum { WITH_SHLK = 1, NO_GEOM = 2, NO_GRID = 4, NO_LMAP = 8, EXTRA_UNKNOWN = 16, WITH_LSUB = 32, SHORT_LSUB = 64 };
 
 static uint32_t sections_of(const test_bake *b, int flags, glow__section_data *s) {
     static const unsigned char unknown_payload[5] = {1, 2, 3, 4, 5};
@@ -308,6 +309,8 @@ static uint32_t sections_of(const test_bake *b, int flags, glow__section_data *s
     if (flags & EXTRA_UNKNOWN) ADD(GLOW_FOURCC('Z', 'Z', 'Z', 'Z'), unknown_payload, sizeof unknown_payload);
     ADD(GLOW_SECTION_LINK, b->link, sizeof b->link);
     if (flags & WITH_SHLK) ADD(GLOW_SECTION_SHLK, b->shlk, sizeof b->shlk);
+    if (flags & (WITH_LSUB | SHORT_LSUB))
+        ADD(GLOW_SECTION_LSUB, b->lsub, (flags & SHORT_LSUB) ? sizeof b->lsub - 2u : sizeof b->lsub);
     if (!(flags & NO_GEOM)) ADD(GLOW_SECTION_GEOM, b->tri, sizeof b->tri);
 #undef ADD
     return n;
@@ -454,6 +457,29 @@ static void test_load_variants(void **state) {
         const unsigned char *sh = glow__bake_shlk_blocks(bake);
         assert_non_null(sh);
         assert_int_equal(u32_at(sh + SHLK_BLOCK), 1); /* block 1, lane 0 node */
+        glow_bake_destroy(bake);
+        glow_context_destroy(ctx);
+        free(img);
+    }
+    /* link subsets (LSUB): any weights; the section and link_kind's bit go together, one uint16 a lane */
+    EXPECT_PATCHED(WITH_LSUB, GLOW_OK, NULL, b->meta.link_kind |= GLOW_LINK_KIND_SUBSETS; b->lsub[3] = 0xFFFFu);
+    EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "missing section 'LSUB'", b->meta.link_kind |= GLOW_LINK_KIND_SUBSETS);
+    EXPECT_PATCHED(WITH_LSUB, GLOW_ERROR_CORRUPT_DATA, "section 'LSUB' present but link_kind", (void)b);
+    EXPECT_PATCHED(SHORT_LSUB, GLOW_ERROR_CORRUPT_DATA, "LSUB", b->meta.link_kind |= GLOW_LINK_KIND_SUBSETS);
+    {
+        test_bake tb;
+        build_golden(&tb);
+        tb.meta.link_kind |= GLOW_LINK_KIND_SUBSETS;
+        tb.lsub[GLOW_LINK_BLOCK + 1] = 0x1234u;
+        size_t size;
+        unsigned char *img = write_bake(&tb, WITH_LSUB, &size);
+        test_log log;
+        glow_context *ctx = make_ctx(&log);
+        glow_bake *bake = NULL;
+        assert_int_equal(glow_bake_load(ctx, img, size, &bake), GLOW_OK);
+        const uint16_t *ls = glow__bake_link_subsets(bake);
+        assert_non_null(ls);
+        assert_int_equal(ls[GLOW_LINK_BLOCK + 1], 0x1234u); /* block 1, lane 1 */
         glow_bake_destroy(bake);
         glow_context_destroy(ctx);
         free(img);

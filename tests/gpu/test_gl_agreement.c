@@ -108,6 +108,11 @@ static int make_fixture(fixture *f, const char *scene, const char *hook, uint32_
     glow_system_desc sd = {.bake = f->bake, .sh_bands_luma = luma, .sh_bands_chroma = chroma,
                            .lighting = {hook ? cpu_point : NULL, NULL}};
     if (glow_system_create(f->ctx, &sd, &f->cpu) != GLOW_OK) return -1;
+    glow_solver_tables tables;
+    if (glow_system_get_solver_tables(f->cpu, &tables) != GLOW_OK || !tables.link_subsets) {
+        fprintf(stderr, "%s: the bake has no link subsets (LSUB): the GPU's subset path would go untested\n", scene);
+        return -1;
+    }
     glow_gl_desc gd = {.system = f->cpu, .get_proc_address = glow_glctx_get_proc_address(g_gl), .hook_glsl = hook,
                        .flags = flags, .label = scene, .logger = {logger, NULL}};
     glow_result r = glow_gl_system_create(&gd, &f->gpu);

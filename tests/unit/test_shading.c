@@ -844,8 +844,20 @@ static void test_kernels(void **state) {
     }
     assert_true(run[0]);
     assert_true(glow__cl_isa_supported(glow__cl_best_isa()));
+    /* link subsets (LSUB): the bake's weights (the builtin Cornell box has some on most caches) and
+     * random per-node luma ratios, as the system's pull leaves them */
+    const uint16_t *lsub = glow__bake_link_subsets(bake);
+    assert_non_null(lsub);
+    uint32_t n_sub = 0;
+    for (size_t j = 0; j < (size_t)C * bpc * GLOW_LINK_BLOCK; ++j) n_sub += lsub[j] != 0;
+    assert_true(n_sub > (uint32_t)C); /* the kernel's subset path is exercised */
+    uint16_t *ratio = malloc(4 * (size_t)N * sizeof *ratio);
+    assert_non_null(ratio);
+    for (size_t i = 0; i < 4 * (size_t)N; ++i) ratio[i] = i % 7 == 3 ? 0u : glow__half_from_float((float)(rnd() * 4.0));
     const uint32_t combos[][2] = {{1, 1}, {2, 1}, {3, 3}, {4, 2}, {5, 3}, {8, 8}};
-    for (size_t ci = 0; ci < sizeof combos / sizeof combos[0]; ++ci) {
+    for (size_t cw = 0; cw < 2 * sizeof combos / sizeof combos[0]; ++cw) {
+        const size_t ci = cw / 2;
+        const bool ws = cw % 2 == 1;
         const uint32_t L = combos[ci][0], Cb = combos[ci][1], nco = L * L + 2 * Cb * Cb, stride = nco + 3; /* padding */
         float *out[NISA];
         for (int i = 0; i < NISA; ++i) {
@@ -859,7 +871,8 @@ static void test_kernels(void **state) {
             if (!run[i]) continue;
             glow__cl_args a = {.blocks = lb, .blocks_per_cache = bpc, .rad_y = rad, .rad_co = rad + N,
                                .rad_cg = rad + 2 * (size_t)N, .luma = L, .chroma = Cb, .coeffs = stride,
-                               .cache_sh = out[i], .isa = isas[i]};
+                               .cache_sh = out[i], .isa = isas[i], .subsets = ws ? lsub : NULL,
+                               .sub_ratio = (const uint32_t *)(const void *)ratio};
             /* in uneven ranges: the result must not depend on how the caches are split */
             for (uint32_t first = 0; first < C;) {
                 uint32_t cnt = 1 + (uint32_t)(rnd() * 37.0);
@@ -883,7 +896,18 @@ static void test_kernels(void **state) {
                 glow_bake_link_dir12(b, lane, &du, &dv);
                 glow__oct_decode12(du, dv, d);
                 glow_sh_eval(L, d, y);
-                const double x = 1.0 - omc, R[3] = {rad[node], rad[N + node], rad[2 * (size_t)N + node]};
+                double sr = 1.0; /* LSUB: R[node] x sum_i q_i r_i / sum_i q_i */
+                const uint16_t q = ws ? lsub[(size_t)c * bpc * GLOW_LINK_BLOCK + j] : 0u;
+                if (q) {
+                    double num = 0.0, den = 0.0;
+                    for (int k = 0; k < 4; ++k) {
+                        num += ((q >> (4 * k)) & 15u) * (double)glow__half_to_float(ratio[4 * (size_t)node + (size_t)k]);
+                        den += (q >> (4 * k)) & 15u;
+                    }
+                    sr = num / den;
+                }
+                const double x = 1.0 - omc,
+                             R[3] = {rad[node] * sr, rad[N + node] * sr, rad[2 * (size_t)N + node] * sr};
                 for (uint32_t l = 0; l < L; ++l) {
                     const double kl = l == 0 ? 2.0 * M_PI * omc
                                              : 2.0 * M_PI / (2.0 * l + 1.0) * (legendre((int)l - 1, x) - legendre((int)l + 1, x));
@@ -918,9 +942,10 @@ static void test_kernels(void **state) {
         }
         for (int i = 0; i < NISA; ++i) {
             if (!run[i]) continue;
-            print_message("kernel %-14s luma %u chroma %u, %u caches x %u links: vs double %.2e, vs generic %.2e "
+            print_message("kernel %-14s luma %u chroma %u%s, %u caches x %u links: vs double %.2e, vs generic %.2e "
                           "(relative to Σ|R| ω)\n",
-                          glow__cl_isa_name(isas[i]), L, Cb, C, m->links_per_cache, worst_ref[i], worst_gen[i]);
+                          glow__cl_isa_name(isas[i]), L, Cb, ws ? " subsets" : "", C, m->links_per_cache, worst_ref[i],
+                          worst_gen[i]);
             assert_true(worst_ref[i] < 1e-5);
             assert_true(worst_gen[i] < 1e-5);
         }
@@ -947,6 +972,7 @@ static void test_kernels(void **state) {
     }
     assert_string_equal(glow__cl_isa_name(GLOW__CL_GENERIC), "generic");
     free(rad);
+    free(ratio);
     glow_bake_destroy(bake);
     glow_context_destroy(ctx);
 }

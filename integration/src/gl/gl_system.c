@@ -31,7 +31,7 @@ extern const struct { const char *name, *source; } glow__kernels[];
 enum { K_DIRECT, K_FLUX, K_PULL, K_PULL_TAIL, K_CACHE, K_OUTPUT, K_COUNT };
 static const char *const kernel_names[K_COUNT] = {"surfel_direct", "surfel_flux", "pull", "pull_tail", "cache_light",
                                                   "outputs"};
-enum { B_GEOM, B_MAT, B_DIRECT, B_FBW, B_CACHE, B_NODES, B_FLUX, B_LINKS, B_PAIRS, B_STATUS, B_PARAMS, B_LEVELS, B_COUNT };
+enum { B_GEOM, B_MAT, B_DIRECT, B_FBW, B_CACHE, B_NODES, B_FLUX, B_LINKS, B_PAIRS, B_STATUS, B_PARAMS, B_LEVELS, B_SUBSETS, B_COUNT };
 enum { T_BEGIN, T_DIRECT, T_FLUX, T_PULL, T_CACHE, T_OUTPUT, T_COUNT };
 
 struct glow_gl_system {
@@ -104,10 +104,10 @@ static GLuint build_program(glow_gl_system *s, int k, const char *hook, glow_res
         *err = GLOW_ERROR_UNSUPPORTED;
         return 0;
     }
-    char prelude[256];
+    char prelude[320];
     snprintf(prelude, sizeof prelude,
-             "#version 450 core\n#define GLOW_GLSL 1\n#define GLOW_LUMA_BANDS %u\n#define GLOW_CHROMA_BANDS %u\n#line 1 0\n",
-             s->t.sh_bands_luma, s->t.sh_bands_chroma);
+             "#version 450 core\n#define GLOW_GLSL 1\n#define GLOW_LUMA_BANDS %u\n#define GLOW_CHROMA_BANDS %u\n%s#line 1 0\n",
+             s->t.sh_bands_luma, s->t.sh_bands_chroma, s->t.link_subsets ? "#define GLOW_LINK_SUBSETS 1\n" : "");
     const char *strings[6];
     GLint lengths[6];
     int n = 0;
@@ -371,6 +371,7 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
     s->buf[B_STATUS] = make_buffer(s, sizeof(glow_gl_status), NULL, dyn);
     s->buf[B_PARAMS] = make_buffer(s, sizeof(glow_gl_params), NULL, dyn);
     s->buf[B_LEVELS] = make_buffer(s, ((size_t)s->levels + 1u) * 4u, t->level_starts, 0);
+    if (t->link_subsets) s->buf[B_SUBSETS] = make_buffer(s, links_bytes / 4u, t->link_subsets, 0); /* 2 of 8 bytes per link */
     free(geom), free(nodes), free(pairs);
     const float zero = 0.0f;
     gl->ClearNamedBufferData(s->buf[B_DIRECT], GL_R32F, GL_RED, GL_FLOAT, &zero);
@@ -636,6 +637,10 @@ glow_result glow_gl_system_update(glow_gl_system *s, const glow_update_desc *des
         bind(s, GLOW_BINDING_LINKS, B_LINKS);
         bind(s, GLOW_BINDING_FLUX, B_FLUX);
         bind(s, GLOW_BINDING_CACHE_SH, B_CACHE);
+        if (t->link_subsets) {
+            bind(s, GLOW_BINDING_LINK_SUBSETS, B_SUBSETS);
+            bind(s, GLOW_BINDING_NODES, B_NODES);
+        }
         dispatch(s, s->C);
         gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     }

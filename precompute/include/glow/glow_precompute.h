@@ -74,6 +74,10 @@ typedef struct glow_pc_settings {
                                    per cache x 8 bytes and a gather per update); the texel density is
                                    searched to land within 20 % of it. 0 = preset; ignored when
                                    texel_density is set (--lightmap-caches) */
+    bool no_link_subsets;       /* false (default): links whose node the cache sees unevenly carry four
+                                   weights (LSUB, 2 bytes per link) so that they read the light of the
+                                   part it sees, not the node's mean; true: no LSUB, PIC's links
+                                   (--link-subsets off; docs/linker.md "Link subsets") */
 } glow_pc_settings;
 
 typedef struct glow_pc_stats {

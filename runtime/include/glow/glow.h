@@ -423,6 +423,12 @@ typedef struct glow_solver_tables {
                                           glow_system_set_surfel_irradiance, or the hook's last); valid until
                                           the next update */
     uint64_t direct_revision;          /* grows whenever `direct_irradiance` changes */
+    const uint16_t *link_subsets;      /* the bake's link subsets (LSUB), one per link in link_blocks' order,
+                                          or NULL: link j reads its node's radiance times
+                                          s = sum_i q_i Y[slot_i] / (sum_i q_i Y[node]), q_i = bits 4i..4i+3,
+                                          slot_i the node's grandchildren (children's children; a leaf
+                                          child twice; a leaf itself four times), s = 1 where all q_i
+                                          are 0 or Y[node] is 0; docs/bake-format.md "LSUB" */
 } glow_solver_tables;
 /** Fills `out_tables`. \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT for NULL. \since 0.1 */
 GLOW_API glow_result glow_system_get_solver_tables(const glow_system *system, glow_solver_tables *out_tables);

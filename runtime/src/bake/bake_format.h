@@ -47,6 +47,7 @@
 #define GLOW_SECTION_LINK GLOW_FOURCC('L', 'I', 'N', 'K') /* glow_bake_link_block[cache_count*blocks] */
 #define GLOW_SECTION_SHLK GLOW_FOURCC('S', 'H', 'L', 'K') /* full-SH links (optional), see below */
 #define GLOW_SECTION_GEOM GLOW_FOURCC('G', 'E', 'O', 'M') /* glow_bake_triangle[triangle_count] */
+#define GLOW_SECTION_LSUB GLOW_FOURCC('L', 'S', 'U', 'B') /* uint16_t[cache_count*blocks][16] link subsets (optional, link_kind bit 2), see below */
 #define GLOW_SECTION_GVIS GLOW_FOURCC('G', 'V', 'I', 'S') /* uint8_t[dx*dy*dz][8] grid cell visibility (optional; readers that predate it skip it) */
 
 /* Cache-map entries (GRID and LMAP): the low 31 bits index the cache array. */
@@ -63,6 +64,7 @@
 /* Link encodings (meta.link_kind bits; LINK is always present, SHLK only with bit 1). */
 #define GLOW_LINK_KIND_RUNTIME_PROJECTION 1u
 #define GLOW_LINK_KIND_FULL_SH 2u
+#define GLOW_LINK_KIND_SUBSETS 4u /* LSUB present: each link blends its node's four grandchildren */
 
 #define GLOW_LINK_BLOCK 16u /* links per SoA block; caches own whole blocks */
 
@@ -211,6 +213,32 @@ static inline void glow_bake_link_pack(glow_bake_link_block *b, uint32_t lane, u
     b->node_dir[lane] = (node & GLOW_LINK_NODE_MASK) | (((u >> 4) & 0xFFu) << 24);
     b->one_minus_cos[lane] = one_minus_cos;
     b->dir_lo[lane] = (uint16_t)((u & 0xFu) | ((v & 0xFFFu) << 4));
+}
+
+/* Link subsets (LSUB, link_kind bit GLOW_LINK_KIND_SUBSETS): one uint16_t per link, in LINK's order
+ * (block c*link_blocks_per_cache + j/16, lane j%16). A link's node v has four slots below it
+ * (glow_bake_link_slots: its grandchildren, or a child twice where that child is a leaf, or v four
+ * times where v is a leaf), and nibble i (bits 4i..4i+3) is slot i's weight q_i in [0, 15]: the
+ * share of the link's visible response that slot i gives, scaled so the largest is 15. The link then
+ * reads the radiance
+ *     R = sum_i q_i R[slot_i] / sum_i q_i          (R[node] = flux / (pi area), as for LINK)
+ * instead of R[v]: the mean of the part of the node the cache sees, where R[v] is the mean of all of
+ * it (the energy of partly visible nodes; docs/linker.md). A link whose four weights are 0 reads
+ * R[v]. Direction and cone are LINK's. */
+static inline void glow_bake_link_slots(uint32_t v, const uint32_t child[2], const uint32_t child0_child[2],
+                                        const uint32_t child1_child[2], uint32_t slot[4]) {
+    if (child[0] == 0xFFFFFFFFu) {
+        slot[0] = slot[1] = slot[2] = slot[3] = v;
+        return;
+    }
+    for (int k = 0; k < 2; ++k) {
+        const uint32_t *cc = k ? child1_child : child0_child;
+        if (cc[0] == 0xFFFFFFFFu) slot[2 * k] = slot[2 * k + 1] = child[k];
+        else {
+            slot[2 * k] = cc[0];
+            slot[2 * k + 1] = cc[1];
+        }
+    }
 }
 
 /* Full-SH links (PIC Eq. 2, Monte-Carlo projection), SHLK: the same cut as LINK, per block of
