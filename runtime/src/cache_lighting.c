@@ -117,6 +117,11 @@ static inline glow__v8f sqrt8_generic(glow__v8f x) {
 #define HALF8(p) half8_generic(p)
 #define GATHER(base, idx) gather_generic((base), (idx))
 #define GATHER_U(base, idx) gather_u_generic((base), (idx))
+#define GATHER_PAIR(base, node, lo, hi) \
+    do {                                \
+        (lo) = GATHER_U((base), (node) << 1); \
+        (hi) = GATHER_U((base), ((node) << 1) + 1u); \
+    } while (0)
 #define GATHER3(a, idx, y, co, cg) GATHER3_PLAIN(a, idx, y, co, cg)
 #define RSQRT(x) (1.0f / sqrt8_generic(x))
 #include "cache_kernel.inc"
@@ -127,6 +132,7 @@ static inline glow__v8f sqrt8_generic(glow__v8f x) {
 #undef HALF8
 #undef GATHER
 #undef GATHER_U
+#undef GATHER_PAIR
 #undef GATHER3
 #undef RSQRT
 #undef REDUCE_STORE
@@ -158,12 +164,40 @@ static inline glow__v8f sqrt8_generic(glow__v8f x) {
 #define HALF8(p) ((glow__v8f)_mm256_cvtph_ps(_mm_loadu_si128((const __m128i *)(const void *)(p))))
 #define GATHER(base, idx) ((glow__v8f)_mm256_i32gather_ps((base), (__m256i)(idx), 4))
 #define GATHER_U(base, idx) ((glow__v8u)_mm256_i32gather_epi32((const int *)(const void *)(base), (__m256i)(idx), 4))
-#define GATHER3(a, idx, y, co, cg) GATHER3_PLAIN(a, idx, y, co, cg)
+/* Pairs of adjacent floats per lane (base[2n], base[2n + 1]; or Y Co and Cg pad of the interleaved
+ * node radiance) as 4-lane qword gathers: on Zen 3 a qword gather of 4 costs about half a dword
+ * gather of 8, so two of them and two shuffles replace two dword gathers, and four replace GATHER3's
+ * three (docs/results.md "Link subsets"). Same values. */
+#define GATHER_PAIR(base, node, lo, hi) gather_pair_avx2((const void *)(base), (node), &(lo), &(hi))
+#define GATHER3(a, idx, y, co, cg) gather3_avx2((a), (idx), &(y), &(co), &(cg))
 /* rsqrt estimate (12 bits) + one Newton step: ~1e-7 relative, a fraction of the sqrt+div cost */
 #define RSQRT(x) rsqrt_avx2(x)
 /* the inline helpers of the .inc must also carry the target to be inlined into KATTR code */
 #pragma GCC push_options
 #pragma GCC target("avx2,fma,f16c")
+/* idx in units of 8 bytes from base: lane l's two dwords at base + 8 idx[l] -> lo[l], hi[l] */
+static inline __attribute__((always_inline)) void gather_pair_avx2(const void *base, glow__v8u idx, glow__v8u *lo,
+                                                                   glow__v8u *hi) {
+    const __m128i i0 = _mm256_castsi256_si128((__m256i)idx), i1 = _mm256_extracti128_si256((__m256i)idx, 1);
+    const glow__v8u g0 = (glow__v8u)_mm256_i32gather_epi64((const long long *)base, i0, 8);
+    const glow__v8u g1 = (glow__v8u)_mm256_i32gather_epi64((const long long *)base, i1, 8);
+    *lo = __builtin_shufflevector(g0, g1, 0, 2, 4, 6, 8, 10, 12, 14);
+    *hi = __builtin_shufflevector(g0, g1, 1, 3, 5, 7, 9, 11, 13, 15);
+}
+static inline __attribute__((always_inline)) void gather3_avx2(const glow__cl_args *a, glow__v8u node, glow__v8f *y,
+                                                               glow__v8f *co, glow__v8f *cg) {
+    if (a->rad_stride == 4u && a->rad_co == a->rad_y + 1 && a->rad_cg == a->rad_y + 2) {
+        glow__v8u yc, cp, cgp, pad;
+        gather_pair_avx2(a->rad_y, node << 1, &yc, &cp);
+        gather_pair_avx2(a->rad_y + 2, node << 1, &cgp, &pad);
+        (void)pad;
+        *y = (glow__v8f)yc;
+        *co = (glow__v8f)cp;
+        *cg = (glow__v8f)cgp;
+    } else {
+        GATHER3_PLAIN(a, node, *y, *co, *cg);
+    }
+}
 static inline glow__v8f rsqrt_avx2(glow__v8f x) {
     glow__v8f y = (glow__v8f)_mm256_rsqrt_ps((__m256)x);
     return y * (1.5f - 0.5f * x * y * y);
@@ -177,6 +211,7 @@ static inline glow__v8f rsqrt_avx2(glow__v8f x) {
 #undef HALF8
 #undef GATHER
 #undef GATHER_U
+#undef GATHER_PAIR
 #undef GATHER3
 #undef RSQRT
 #undef REDUCE_STORE
@@ -241,6 +276,11 @@ static inline __attribute__((always_inline)) void reduce_store16(const glow__v16
 #define HALF8(p) ((glow__v16f)_mm512_cvtph_ps(_mm256_loadu_si256((const __m256i *)(const void *)(p))))
 #define GATHER(base, idx) ((glow__v16f)_mm512_i32gather_ps((__m512i)(idx), (base), 4))
 #define GATHER_U(base, idx) ((glow__v16u)_mm512_i32gather_epi32((__m512i)(idx), (const void *)(base), 4))
+#define GATHER_PAIR(base, node, lo, hi) \
+    do {                                \
+        (lo) = GATHER_U((base), (node) << 1); \
+        (hi) = GATHER_U((base), ((node) << 1) + 1u); \
+    } while (0)
 /* With the system's interleaved node radiance (Y Co Cg pad per node, 16 bytes) a lane's three
  * values are two adjacent qwords: four 8-lane qword gathers (32 element loads) and three two-source
  * permutes replace three 16-lane dword gathers (48 element loads). Same floats, same results. */

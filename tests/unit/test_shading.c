@@ -851,6 +851,16 @@ static void test_kernels(void **state) {
     uint32_t n_sub = 0;
     for (size_t j = 0; j < (size_t)C * bpc * GLOW_LINK_BLOCK; ++j) n_sub += lsub[j] != 0;
     assert_true(n_sub > (uint32_t)C); /* the kernel's subset path is exercised */
+    /* the system's interleaved layout (Y Co Cg pad per node, the ISAs' pair gathers), used in the
+     * subset passes; the plain passes read planar arrays */
+    float *rad4 = malloc(4 * (size_t)N * sizeof *rad4);
+    assert_non_null(rad4);
+    for (uint32_t i = 0; i < N; ++i) {
+        rad4[4 * (size_t)i] = rad[i];
+        rad4[4 * (size_t)i + 1] = rad[N + i];
+        rad4[4 * (size_t)i + 2] = rad[2 * (size_t)N + i];
+        rad4[4 * (size_t)i + 3] = -1.0f; /* never read */
+    }
     uint16_t *ratio = malloc(4 * (size_t)N * sizeof *ratio);
     assert_non_null(ratio);
     for (size_t i = 0; i < 4 * (size_t)N; ++i) ratio[i] = i % 7 == 3 ? 0u : glow__half_from_float((float)(rnd() * 4.0));
@@ -869,8 +879,9 @@ static void test_kernels(void **state) {
         assert_true(ref && scale);
         for (int i = 0; i < NISA; ++i) {
             if (!run[i]) continue;
-            glow__cl_args a = {.blocks = lb, .blocks_per_cache = bpc, .rad_y = rad, .rad_co = rad + N,
-                               .rad_cg = rad + 2 * (size_t)N, .luma = L, .chroma = Cb, .coeffs = stride,
+            glow__cl_args a = {.blocks = lb, .blocks_per_cache = bpc, .rad_y = ws ? rad4 : rad,
+                               .rad_co = ws ? rad4 + 1 : rad + N, .rad_cg = ws ? rad4 + 2 : rad + 2 * (size_t)N,
+                               .rad_stride = ws ? 4u : 0u, .luma = L, .chroma = Cb, .coeffs = stride,
                                .cache_sh = out[i], .isa = isas[i], .subsets = ws ? lsub : NULL,
                                .sub_ratio = (const uint32_t *)(const void *)ratio};
             /* in uneven ranges: the result must not depend on how the caches are split */
@@ -972,6 +983,7 @@ static void test_kernels(void **state) {
     }
     assert_string_equal(glow__cl_isa_name(GLOW__CL_GENERIC), "generic");
     free(rad);
+    free(rad4);
     free(ratio);
     glow_bake_destroy(bake);
     glow_context_destroy(ctx);
