@@ -1,11 +1,17 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets (clang, -fsanitize=fuzzer,address,undefined) in their own build
-# directory and fuzzes each for SECONDS (default 60), seeded from tests/data/*.glow (the hand-built
-# golden bake and a tiny real bake of builtin:cornell written by glow-bake):
+# directory and fuzzes each for SECONDS (default 60):
 #   fuzz_bake_reader  glow_bake_load (tests/fuzz/fuzz_bake_reader.c)
 #   fuzz_bake_solver  load + 3 updates, every output finite (tests/fuzz/fuzz_bake_solver.c)
-# Exits non-zero when a fuzzer finds a crash, leak, sanitizer report, non-finite output or timeout
-# (the reproducer is written to BUILD/fuzz-artifacts/TARGET/); both targets run either way.
+#     both seeded from tests/data/*.glow (the hand-built golden bake and two tiny real bakes of
+#     builtin:cornell written by glow-bake, one with link subsets)
+#   fuzz_scene_json   the scene JSON reader (tests/fuzz/fuzz_scene_json.c), seeded from scenes/*.json
+#                     and, where present, ../shared/scenes/*/*.json
+#   fuzz_mesh_import  mesh import through assimp and our cleaning (tests/fuzz/fuzz_mesh_import.c),
+#                     seeded from tests/data/scenes (OBJ, glTF, GLB) and, where present, the shared
+#                     Cornell boxes; leaks inside libassimp are suppressed (tests/fuzz/lsan.supp)
+# Exits non-zero when a fuzzer finds a crash, leak, sanitizer report, broken invariant or timeout
+# (the reproducer is written to BUILD/fuzz-artifacts/TARGET/); every target runs either way.
 #
 # Usage: tools/fuzz-smoke.sh [SECONDS]
 #   GLOW_FUZZ_BUILD_DIR  build directory (default: <repo>/build-fuzz)
@@ -17,25 +23,43 @@ root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 build=${GLOW_FUZZ_BUILD_DIR:-$root/build-fuzz}
 jobs=${GLOW_FUZZ_JOBS:-1}
 
-# Only the runtime is fuzzed: the linker (Embree, assimp) is not needed.
+# The linker library is not built (no Embree): the import fuzzer compiles only import.c and what it
+# calls (tests/fuzz/CMakeLists.txt).
 CC=clang CXX=clang++ cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DGLOW_FUZZ=ON -DGLOW_BUILD_PRECOMPUTE=OFF -DGLOW_BUILD_TESTS=ON >/dev/null
-cmake --build "$build" --target fuzz_bake_reader fuzz_bake_solver
+cmake --build "$build" --target fuzz_bake_reader fuzz_bake_solver fuzz_scene_json fuzz_mesh_import
 
-# Each target for SECONDS: the bake reader, then "load + 3 updates" (outputs must stay finite).
+# Each target for SECONDS: the bake reader, "load + 3 updates" (outputs must stay finite), the scene
+# JSON reader, mesh import.
+shared=$root/../shared/scenes
 failed=0
-for target in bake_reader bake_solver; do
+for target in bake_reader bake_solver scene_json mesh_import; do
   corpus=$build/fuzz-corpus/$target # grows across runs
   seeds=$build/fuzz-seeds/$target
   artifacts=$build/fuzz-artifacts/$target
   mkdir -p "$corpus" "$seeds" "$artifacts"
-  cp "$root"/tests/data/*.glow "$seeds/"
+  extra=()
+  case $target in
+    bake_*) cp "$root"/tests/data/*.glow "$seeds/" ;;
+    scene_json)
+      cp "$root"/scenes/*.json "$seeds/"
+      if [ -d "$shared" ]; then cp "$shared"/*/*.json "$seeds/" 2>/dev/null || true; fi ;;
+    mesh_import)
+      cp "$root"/tests/data/scenes/*.obj "$root"/tests/data/scenes/*.gltf "$root"/tests/data/scenes/*.glb "$seeds/"
+      if [ -d "$shared/cornell-box" ]; then cp "$shared"/cornell-box/CornellBox-Original.obj "$seeds/"; fi
+      extra=(-max_len=65536) ;;
+  esac
+  # mesh import: the slow (DWARF) unwinder, so that leak stacks reach into libassimp (built without
+  # frame pointers) and lsan.supp can match them by module
+  asan=${ASAN_OPTIONS:-}
+  if [ "$target" = mesh_import ]; then asan=fast_unwind_on_malloc=0${asan:+:$asan}; fi
   echo "fuzz-smoke: fuzz_$target for ${secs}s (corpus $corpus)"
   args=(-max_total_time="$secs" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1
-        -artifact_prefix="$artifacts/")
+        -artifact_prefix="$artifacts/" "${extra[@]}")
   if [ "$jobs" -gt 1 ]; then args+=(-jobs="$jobs" -workers="$jobs"); fi
   set +e
-  "$build/bin/fuzz_$target" "${args[@]}" "$corpus" "$seeds"
+  ASAN_OPTIONS=$asan LSAN_OPTIONS=suppressions=$root/tests/fuzz/lsan.supp \
+    "$build/bin/fuzz_$target" "${args[@]}" "$corpus" "$seeds"
   rc=$?
   set -e
   if [ $rc -ne 0 ]; then

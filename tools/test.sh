@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The README's test command: installs dependencies, builds with warnings as errors, runs the test
-# suite under ASan+UBSan, the libFuzzer smoke (bake reader; load + updates), then the test suite on the
-# optimised build. Every stage runs even when an earlier one failed (a red sanitizer pass must not
+# suite under ASan+UBSan, the libFuzzer smoke (bake reader; load + updates; scene JSON; mesh import),
+# then the test suite on the optimised build. Every stage runs even when an earlier one failed (a red sanitizer pass must not
 # hide what the fuzzer or the release pass would say); the exit status is non-zero when any failed,
 # and the last lines name the stages that did.
 #   GLOW_FUZZ_SECONDS   fuzz smoke duration (default 30; 0 skips it)
@@ -38,7 +38,7 @@ fi
 
 fuzz_s=${GLOW_FUZZ_SECONDS:-30}
 if [ "$fuzz_s" != 0 ]; then
-  echo "== libFuzzer smoke: bake reader, then load + 3 updates (${fuzz_s} s each)"
+  echo "== libFuzzer smoke: bake reader, load + 3 updates, scene JSON, mesh import (${fuzz_s} s each)"
   stage "fuzz smoke" bash tools/fuzz-smoke.sh "$fuzz_s"
 fi
 
