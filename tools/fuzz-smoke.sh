@@ -26,7 +26,7 @@ jobs=${GLOW_FUZZ_JOBS:-1}
 # The linker library is not built (no Embree): the import fuzzer compiles only import.c and what it
 # calls (tests/fuzz/CMakeLists.txt).
 CC=clang CXX=clang++ cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  -DGLOW_FUZZ=ON -DGLOW_BUILD_PRECOMPUTE=OFF -DGLOW_BUILD_TESTS=ON >/dev/null
+  -DGLOW_FUZZ=ON -DGLOW_BUILD_PRECOMPUTE=OFF -DGLOW_WITH_GL=OFF -DGLOW_BUILD_TESTS=ON >/dev/null
 cmake --build "$build" --target fuzz_bake_reader fuzz_bake_solver fuzz_scene_json fuzz_mesh_import
 
 # Each target for SECONDS: the bake reader, "load + 3 updates" (outputs must stay finite), the scene

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The README's test command: installs dependencies, builds with warnings as errors, runs the test
 # suite under ASan+UBSan, the libFuzzer smoke (bake reader; load + updates; scene JSON; mesh import),
-# then the test suite on the optimised build. Every stage runs even when an earlier one failed (a red sanitizer pass must not
+# then the test suite on the optimised build and the installed SDK's consumer test
+# (tools/consumer-test.sh). Every stage runs even when an earlier one failed (a red sanitizer pass must not
 # hide what the fuzzer or the release pass would say); the exit status is non-zero when any failed,
 # and the last lines name the stages that did.
 #   GLOW_FUZZ_SECONDS   fuzz smoke duration (default 30; 0 skips it)
@@ -44,6 +45,9 @@ fi
 
 echo "== build (RelWithDebInfo, -Werror) + tests"
 stage "release tests" release_pass
+
+echo "== SDK: install, then out-of-tree consumers (find_package, pkg-config, add_subdirectory)"
+stage "SDK consumer" bash tools/consumer-test.sh build
 
 if [ ${#failed[@]} -gt 0 ]; then
   printf 'test.sh: FAILED: %s\n' "${failed[@]}" >&2
