@@ -5,7 +5,7 @@
 # (tools/consumer-test.sh). Every stage runs even when an earlier one failed (a red sanitizer pass must not
 # hide what the fuzzer or the release pass would say); the exit status is non-zero when any failed,
 # and the last lines name the stages that did.
-#   GLOW_FUZZ_SECONDS   fuzz smoke duration (default 30; 0 skips it)
+#   GLOW_FUZZ_SECONDS   fuzz smoke duration per target (default 20; 0 skips it)
 #   GLOW_SKIP_ASAN=1    skip the sanitizer pass
 set -uo pipefail
 cd "$(dirname "$0")/.."
@@ -37,7 +37,7 @@ if [ "${GLOW_SKIP_ASAN:-0}" != 1 ]; then
   stage "ASan/UBSan tests" asan_pass
 fi
 
-fuzz_s=${GLOW_FUZZ_SECONDS:-30}
+fuzz_s=${GLOW_FUZZ_SECONDS:-20}
 if [ "$fuzz_s" != 0 ]; then
   echo "== libFuzzer smoke: bake reader, load + 3 updates, scene JSON, mesh import (${fuzz_s} s each)"
   stage "fuzz smoke" bash tools/fuzz-smoke.sh "$fuzz_s"
