@@ -87,6 +87,27 @@ expect 0 "compare: --panels, an image against itself" "$BIN/glow-compare" "$T/re
 expect 0 "compare: --panels, test twice the reference" "$BIN/glow-compare" "$T/ref.exr" "$T/ref.exr" --add "$T/ref.exr" --panels "$T/bright.png" --no-flip
 expect 0 "compare: --panels, reference twice the test" "$BIN/glow-compare" "$T/ref.exr" "$T/ref.exr" --ref-add "$T/ref.exr" --panels "$T/dark.png" --block 4 --no-flip
 expect 0 "compare: --panels of PFMs, --panel-exposure" "$BIN/glow-compare" "$T/grad_be.pfm" "$T/grad_le.pfm" --panels "$T/grad.png" --panel-exposure 0.25 --no-flip
+# --blocks-csv: the block means the block error is made of. 4 x 3 images, --block 2: blocks at x 0, 2 and
+# y 0, 2 (the last row a partial block of 2 pixels); the test (big-endian file) is twice the reference.
+expect 0 "compare: --blocks-csv" "$BIN/glow-compare" "$T/grad_be.pfm" "$T/grad_le.pfm" --block 2 --blocks-csv "$T/blocks.csv" --no-flip
+python3 - "$T" <<'PY' && pass "  blocks CSV: 4 blocks, partial ones sized right, means of both images" || fail "  blocks CSV wrong"
+import csv, sys
+rows = list(csv.DictReader(open(sys.argv[1] + "/blocks.csv")))
+assert [(int(r["x0"]), int(r["y0"]), int(r["pixels"])) for r in rows] == [(0, 0, 4), (2, 0, 4), (0, 2, 2), (2, 2, 2)], rows
+# the PFM's rows are stored bottom first: image row y is file row 2 - y; pixel value (x + 4 * row + c) / 8
+def mean(x0, y0, c):
+    px = [(x + 4 * (2 - y) + c) / 8 for y in range(y0, min(y0 + 2, 3)) for x in range(x0, x0 + 2)]
+    return sum(px) / len(px)
+for r in rows:
+    x0, y0 = int(r["x0"]), int(r["y0"])
+    for k, c in enumerate("rgb"):
+        assert abs(float(r["ref_" + c]) - mean(x0, y0, k)) < 1e-6, (r, c)
+        assert abs(float(r["test_" + c]) - 2 * mean(x0, y0, k)) < 1e-6, (r, c)
+    luma = 0.2126 * mean(x0, y0, 0) + 0.7152 * mean(x0, y0, 1) + 0.0722 * mean(x0, y0, 2)
+    assert abs(float(r["ref_luma"]) - luma) < 1e-6 and abs(float(r["test_luma"]) - 2 * luma) < 1e-6, r
+PY
+expect 1 "compare: unwritable --blocks-csv" "$BIN/glow-compare" "$T/grad_le.pfm" "$T/grad_le.pfm" --blocks-csv "$T/no/such/dir/b.csv" --no-flip
+err_has "b.csv"; [ ! -e "$T/no/such/dir/b.csv.tmp" ] && pass "  no partial file" || fail "  partial file left"
 # A stdlib PNG decoder (8-bit RGB, the 5 filters) checks the panels: 3W x H; TEST and REF as glow-render's
 # PNG at the same exposure; the error panel black for equal images, pure red (255) where the test is twice
 # the reference, blue round(255 * 0.5) = 128 where it is half, one colour per block.

@@ -1,7 +1,8 @@
 /* glow-compare — the error metrics of glow_eval.h on two image files, for scripts (glow-eval).
  *
  *   glow-compare TEST REF [--exposure E] [--add IMAGE] [--ref-add IMAGE] [--block N] [--ppd P]
- *                [--flip-map OUT.exr] [--no-flip] [--panels OUT.png [--panel-exposure E]] [--json]
+ *                [--flip-map OUT.exr] [--no-flip] [--panels OUT.png [--panel-exposure E]] [--blocks-csv OUT.csv]
+ *                [--json]
  *
  * TEST, REF and the added images may each be OpenEXR or PFM (chosen by the file's magic bytes;
  * PFM is what the independent referee, shared/referee/, writes).
@@ -34,7 +35,7 @@
 
 static int usage(FILE *f) {
     fprintf(f, "usage: glow-compare TEST REF [--exposure E] [--add IMAGE] [--ref-add IMAGE] [--block N] [--ppd P]\n"
-               "                    [--flip-map OUT.exr] [--no-flip] [--panels OUT.png [--panel-exposure E]] [--json]\n"
+               "                    [--flip-map OUT.exr] [--no-flip] [--panels OUT.png [--panel-exposure E]] [--blocks-csv OUT.csv] [--json]\n"
                "Compares TEST with the reference REF (each OpenEXR or PFM): relative RMSE of the HDR\n"
                "values, RMSE and PSNR of the display images (x * exposure, clamped, sRGB-encoded) and their\n"
                "mean SSIM, the block error (relative RMS error of N x N block means, default 8), the mean\n"
@@ -43,6 +44,7 @@ static int usage(FILE *f) {
                "--add IMAGE adds IMAGE to TEST before comparing; --ref-add IMAGE adds IMAGE to REF (e.g.\n"
                "  the referee's direct.pfm to its indirect.pfm for a scene lit by emissive meshes).\n"
                "--flip-map OUT.exr writes the per-pixel HDR-FLIP as a grey EXR.\n"
+               "--blocks-csv OUT.csv writes the N x N block means of TEST and REF (luma and RGB), one row a block.\n"
                "--panels OUT.png writes TEST | REF | error side by side (3W x H): TEST and REF at exposure\n"
                "  --panel-exposure E (default: --exposure) and sRGB; the error map of the N x N blocks'\n"
                "  mean luma, (T - R) / max(R, 1e-3 mean luma of REF) clamped to [-1, 1], red where TEST\n"
@@ -78,6 +80,53 @@ static double luma(const float *p) { return 0.2126 * p[0] + 0.7152 * p[1] + 0.07
 
 /* The inverse of the sRGB curve (IEC 61966-2-1), for v in [0, 1]. */
 static double srgb_decode(double v) { return v <= 0.04045 ? v / 12.92 : pow((v + 0.055) / 1.055, 2.4); }
+
+/* Writes the N x N block means (the block error's inputs) as CSV: x0, y0 (the block's first pixel),
+ * pixel count, then TEST's and REF's mean luma and RGB. For looking at where an error lives (by region,
+ * by brightness) without re-reading the images. Written under FILE.tmp and renamed when complete. */
+static glow_result write_blocks_csv(const glow_eval_image *test, const glow_eval_image *ref, uint32_t block,
+                                    const char *path, char *msg, size_t msg_size) {
+    const uint32_t W = ref->width, H = ref->height;
+    char tmp[4096];
+    if (snprintf(tmp, sizeof tmp, "%s.tmp", path) >= (int)sizeof tmp) {
+        snprintf(msg, msg_size, "%s: path too long", path);
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    FILE *f = fopen(tmp, "w");
+    if (!f) {
+        snprintf(msg, msg_size, "%.400s: cannot write", tmp);
+        return GLOW_ERROR_IO;
+    }
+    int ok = fprintf(f, "x0,y0,pixels,test_luma,ref_luma,test_r,test_g,test_b,ref_r,ref_g,ref_b\n") > 0;
+    for (uint32_t by = 0; ok && by < H; by += block)
+        for (uint32_t bx = 0; ok && bx < W; bx += block) {
+            const uint32_t ey = H - by < block ? H : by + block, ex = W - bx < block ? W : bx + block;
+            double t[3] = {0, 0, 0}, rf[3] = {0, 0, 0};
+            for (uint32_t y = by; y < ey; y++)
+                for (uint32_t x = bx; x < ex; x++) {
+                    const size_t i = ((size_t)y * W + x) * 3;
+                    for (int k = 0; k < 3; k++) {
+                        t[k] += test->rgb[i + k];
+                        rf[k] += ref->rgb[i + k];
+                    }
+                }
+            const double n = (double)(ey - by) * (ex - bx);
+            for (int k = 0; k < 3; k++) {
+                t[k] /= n;
+                rf[k] /= n;
+            }
+            ok = fprintf(f, "%u,%u,%.0f,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n", bx, by, n,
+                         0.2126 * t[0] + 0.7152 * t[1] + 0.0722 * t[2], 0.2126 * rf[0] + 0.7152 * rf[1] + 0.0722 * rf[2],
+                         t[0], t[1], t[2], rf[0], rf[1], rf[2]) > 0;
+        }
+    if (fclose(f) != 0) ok = 0;
+    if (!ok || rename(tmp, path) != 0) {
+        remove(tmp);
+        snprintf(msg, msg_size, "%s: cannot write", path);
+        return GLOW_ERROR_IO;
+    }
+    return GLOW_OK;
+}
 
 /* Writes TEST | REF | block error map (see the file comment) as one PNG through glow_eval_write_png:
  * the error panel holds linear values that its display transform (x * exposure, sRGB, round(255 v))
@@ -131,7 +180,8 @@ static glow_result write_panels(const glow_eval_image *test, const glow_eval_ima
 }
 
 int main(int argc, char **argv) {
-    const char *paths[2] = {NULL, NULL}, *add = NULL, *ref_add = NULL, *flip_map = NULL, *panels = NULL;
+    const char *paths[2] = {NULL, NULL}, *add = NULL, *ref_add = NULL, *flip_map = NULL, *panels = NULL,
+               *blocks_csv = NULL;
     int np = 0, json = 0, flip = 1;
     float exposure = 1.0f, panel_exposure = 0.0f; /* 0: --exposure */
     unsigned long block = GLOW_EVAL_BLOCK_SIZE;
@@ -150,6 +200,9 @@ int main(int argc, char **argv) {
         } else if (!strcmp(a, "--panels")) {
             if (i + 1 >= argc) return usage(stderr);
             panels = argv[++i];
+        } else if (!strcmp(a, "--blocks-csv")) {
+            if (i + 1 >= argc) return usage(stderr);
+            blocks_csv = argv[++i];
         } else if (!strcmp(a, "--panel-exposure")) {
             char *end = NULL;
             if (i + 1 >= argc) return usage(stderr);
@@ -229,6 +282,12 @@ int main(int argc, char **argv) {
     }
     if (r == GLOW_OK && panels && write_panels(&img[0], &img[1], (uint32_t)block, panel_exposure, panels, msg,
                                                sizeof msg) != GLOW_OK) {
+        fprintf(stderr, "glow-compare: %s\n", msg);
+        glow_eval_image_free(&img[0]);
+        glow_eval_image_free(&img[1]);
+        return 1;
+    }
+    if (r == GLOW_OK && blocks_csv && write_blocks_csv(&img[0], &img[1], (uint32_t)block, blocks_csv, msg, sizeof msg) != GLOW_OK) {
         fprintf(stderr, "glow-compare: %s\n", msg);
         glow_eval_image_free(&img[0]);
         glow_eval_image_free(&img[1]);
