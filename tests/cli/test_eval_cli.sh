@@ -33,6 +33,30 @@ err_has "furnace.glow"
 R=(--width 32 --height 32 --spp 16 --seed 7 -q)
 expect 0 "render: reference" "$BIN/glow-render" "$SCENE" --out "$T/ref" "${R[@]}"
 for f in ref.exr ref_direct.exr ref_indirect.exr ref.png; do [ -s "$T/$f" ] && pass "  wrote $f" || fail "  missing $f"; done
+# --near-split: the indirect image is unchanged; the near part is a per-pixel part of it (never above it,
+# not zero in a box with corners); a split beyond the scene puts all of it in the near part.
+expect 2 "render: --near-split 0" "$BIN/glow-render" "$SCENE" --out "$T/x" --near-split 0; err_has "near-split"
+expect 2 "render: --near-split with --glow" "$BIN/glow-render" "$SCENE" --out "$T/x" --near-split 0.1 --glow "$T/none.glow"; err_has "near-split"
+expect 0 "render: reference, --near-split 0.1" "$BIN/glow-render" "$SCENE" --out "$T/ns" "${R[@]}" --near-split 0.1
+cmp -s "$T/ns_indirect.exr" "$T/ref_indirect.exr" && pass "  indirect image unchanged by the split" || fail "  the split changed the indirect image"
+expect 0 "render: reference, --near-split 1000" "$BIN/glow-render" "$SCENE" --out "$T/nall" "${R[@]}" --near-split 1000
+cmp -s "$T/nall_indirect_near.exr" "$T/ref_indirect.exr" && pass "  a split beyond the scene: all light is near" || fail "  near != indirect at R = 1000"
+expect 0 "compare: near part against the indirect" "$BIN/glow-compare" "$T/ns_indirect_near.exr" "$T/ref_indirect.exr" --blocks-csv "$T/nb.csv" --block 1 --no-flip --json
+python3 - "$T" <<'PY' && pass "  near part: within every pixel's indirect, 0 < share < 1" || fail "  near part wrong"
+import csv, json, sys
+t = sys.argv[1]
+rows = list(csv.DictReader(open(t + "/nb.csv")))
+assert len(rows) == 32 * 32
+for r in rows:
+    for c in "rgb":
+        assert float(r["test_" + c]) <= float(r["ref_" + c]) + 1e-6 * max(1.0, float(r["ref_" + c])), r
+ratio = json.load(open(t + "/out"))["mean_ratio"]
+assert 0.005 < ratio < 0.9, ratio
+PY
+expect 0 "compare: --ref-sub undoes --ref-add" "$BIN/glow-compare" "$T/ref.exr" "$T/ref.exr" --ref-add "$T/ns_indirect_near.exr" --ref-sub "$T/ns_indirect_near.exr" --json --no-flip
+python3 -c "import json,sys; sys.exit(0 if json.load(open(sys.argv[1]))['rel_rmse'] < 1e-6 else 1)" "$T/out" \
+  && pass "  rel RMSE below 1e-6 (float rounding of a + b - b)" || fail "  rel RMSE $(json_num "$T/out" rel_rmse)"
+expect 1 "compare: --ref-sub of a missing image" "$BIN/glow-compare" "$T/ref.exr" "$T/ref.exr" --ref-sub "$T/none.exr"; err_has "none.exr"
 "$BIN/glow-bake" builtin:cornell -o "$T/cornell.glow" --quality low -q >/dev/null 2>&1 && pass "bake builtin:cornell (low)" || fail "bake builtin:cornell"
 expect 0 "render: Glow's view" "$BIN/glow-render" "$SCENE" --glow "$T/cornell.glow" --out "$T/glow" "${R[@]}" --bounces 64
 expect 0 "render: Glow's indirect only" "$BIN/glow-render" "$SCENE" --glow "$T/cornell.glow" --out "$T/gi" "${R[@]}" --bounces 64 --indirect-only

@@ -1,6 +1,6 @@
 /* glow-compare — the error metrics of glow_eval.h on two image files, for scripts (glow-eval).
  *
- *   glow-compare TEST REF [--exposure E] [--add IMAGE] [--ref-add IMAGE] [--block N] [--ppd P]
+ *   glow-compare TEST REF [--exposure E] [--add IMAGE] [--ref-add IMAGE] [--ref-sub IMAGE] [--block N] [--ppd P]
  *                [--flip-map OUT.exr] [--no-flip] [--panels OUT.png [--panel-exposure E]] [--blocks-csv OUT.csv]
  *                [--json]
  *
@@ -34,7 +34,7 @@
 #include "glow_eval.h"
 
 static int usage(FILE *f) {
-    fprintf(f, "usage: glow-compare TEST REF [--exposure E] [--add IMAGE] [--ref-add IMAGE] [--block N] [--ppd P]\n"
+    fprintf(f, "usage: glow-compare TEST REF [--exposure E] [--add IMAGE] [--ref-add IMAGE] [--ref-sub IMAGE] [--block N] [--ppd P]\n"
                "                    [--flip-map OUT.exr] [--no-flip] [--panels OUT.png [--panel-exposure E]] [--blocks-csv OUT.csv] [--json]\n"
                "Compares TEST with the reference REF (each OpenEXR or PFM): relative RMSE of the HDR\n"
                "values, RMSE and PSNR of the display images (x * exposure, clamped, sRGB-encoded) and their\n"
@@ -44,6 +44,8 @@ static int usage(FILE *f) {
                "--add IMAGE adds IMAGE to TEST before comparing; --ref-add IMAGE adds IMAGE to REF (e.g.\n"
                "  the referee's direct.pfm to its indirect.pfm for a scene lit by emissive meshes).\n"
                "--flip-map OUT.exr writes the per-pixel HDR-FLIP as a grey EXR.\n"
+               "--ref-sub IMAGE subtracts IMAGE from REF (e.g. glow-render --near-split's PREFIX_indirect_near.exr\n"
+               "  from PREFIX_indirect.exr: the light of surfaces farther than the split).\n"
                "--blocks-csv OUT.csv writes the N x N block means of TEST and REF (luma and RGB), one row a block.\n"
                "--panels OUT.png writes TEST | REF | error side by side (3W x H): TEST and REF at exposure\n"
                "  --panel-exposure E (default: --exposure) and sRGB; the error map of the N x N blocks'\n"
@@ -58,7 +60,7 @@ static void print_num(const char *key, double v, const char *sep) {
 }
 
 /* Reads `path` and adds it to *dst (read from dst_path), same size. 0 on success, else prints why. */
-static int add_image(const char *path, glow_eval_image *dst, const char *dst_path) {
+static int add_image(const char *path, glow_eval_image *dst, const char *dst_path, float sign) {
     glow_eval_image extra = {0};
     char msg[512];
     if (glow_eval_read_image(path, &extra, msg, sizeof msg) != GLOW_OK) {
@@ -71,7 +73,7 @@ static int add_image(const char *path, glow_eval_image *dst, const char *dst_pat
         glow_eval_image_free(&extra);
         return 1;
     }
-    for (size_t i = 0; i < (size_t)extra.width * extra.height * 3; ++i) dst->rgb[i] += extra.rgb[i];
+    for (size_t i = 0; i < (size_t)extra.width * extra.height * 3; ++i) dst->rgb[i] += sign * extra.rgb[i];
     glow_eval_image_free(&extra);
     return 0;
 }
@@ -181,7 +183,7 @@ static glow_result write_panels(const glow_eval_image *test, const glow_eval_ima
 
 int main(int argc, char **argv) {
     const char *paths[2] = {NULL, NULL}, *add = NULL, *ref_add = NULL, *flip_map = NULL, *panels = NULL,
-               *blocks_csv = NULL;
+               *blocks_csv = NULL, *ref_sub = NULL;
     int np = 0, json = 0, flip = 1;
     float exposure = 1.0f, panel_exposure = 0.0f; /* 0: --exposure */
     unsigned long block = GLOW_EVAL_BLOCK_SIZE;
@@ -200,6 +202,9 @@ int main(int argc, char **argv) {
         } else if (!strcmp(a, "--panels")) {
             if (i + 1 >= argc) return usage(stderr);
             panels = argv[++i];
+        } else if (!strcmp(a, "--ref-sub")) {
+            if (i + 1 >= argc) return usage(stderr);
+            ref_sub = argv[++i];
         } else if (!strcmp(a, "--blocks-csv")) {
             if (i + 1 >= argc) return usage(stderr);
             blocks_csv = argv[++i];
@@ -267,7 +272,8 @@ int main(int argc, char **argv) {
             glow_eval_image_free(&img[0]);
             return 1;
         }
-    if ((add && add_image(add, &img[0], paths[0])) || (ref_add && add_image(ref_add, &img[1], paths[1]))) {
+    if ((add && add_image(add, &img[0], paths[0], 1.0f)) || (ref_add && add_image(ref_add, &img[1], paths[1], 1.0f)) ||
+        (ref_sub && add_image(ref_sub, &img[1], paths[1], -1.0f))) {
         glow_eval_image_free(&img[0]);
         glow_eval_image_free(&img[1]);
         return 1;

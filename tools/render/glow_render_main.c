@@ -19,7 +19,7 @@
 static void usage(FILE *f) {
     fprintf(f,
             "usage: glow-render SCENE.json --out PREFIX [--spp N] [--seed S] [--threads N] [--width W --height H]\n"
-            "                   [--exposure E] [--max-depth D] [--albedo-scale A]\n"
+            "                   [--exposure E] [--max-depth D] [--albedo-scale A] [--near-split R]\n"
             "                   [--glow BAKE [--bounces K] [--sky-rays R] [--luma L] [--chroma C]\n"
             "                   [--link-mode compact|expanded|sh] [--indirect-only]] [--progress | -q]\n"
             "  SCENE.json       scene description (docs/scene-format.md): mesh, camera, lights, environment\n"
@@ -31,6 +31,9 @@ static void usage(FILE *f) {
             "  --exposure E     PNG exposure multiplier before sRGB encoding (default 1)\n"
             "  --max-depth D    path vertices at most (default 256; Russian roulette ends paths well before)\n"
             "  --albedo-scale A multiplies every albedo, clamped to 0.999 (default 1; e.g. the furnace at 0.9: 1.8)\n"
+            "  --near-split R   reference only: also writes PREFIX_indirect_near.exr, the part of the indirect\n"
+            "                   light that reached each first hit from a surface closer than R scene units (the\n"
+            "                   scale a cache-based solver must resolve to reproduce it); the rest is far light\n"
             "  --glow BAKE      render Glow's view: direct light as the reference computes it, indirect light\n"
             "                   from BAKE's caches (lightmap on static surfaces, else the grid)\n"
             "  --bounces K      Glow's feedback iterations in all, run as updates of up to 64 (default 192)\n"
@@ -154,6 +157,12 @@ static int parse_args(int argc, char **argv, options *o) {
                 return 0;
             }
             ++i;
+        } else if (!strcmp(a, "--near-split")) {
+            if (!parse_float(v, &o->rs.near_split) || !(o->rs.near_split > 0.0f)) {
+                fprintf(stderr, "glow-render: --near-split needs a finite distance > 0, not \"%s\"\n", v ? v : "nothing");
+                return 0;
+            }
+            ++i;
         } else if (!strcmp(a, "-q") || !strcmp(a, "--quiet")) o->quiet = 1;
         else if (!strcmp(a, "--progress")) o->progress = 1;
         else if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
@@ -172,6 +181,10 @@ static int parse_args(int argc, char **argv, options *o) {
     if (!o->scene) { fprintf(stderr, "glow-render: need a SCENE.json\n"); return 0; }
     if (!o->out) { fprintf(stderr, "glow-render: need --out PREFIX\n"); return 0; }
     if (have_w != have_h) { fprintf(stderr, "glow-render: give both --width and --height\n"); return 0; }
+    if (o->bake && o->rs.near_split > 0.0f) {
+        fprintf(stderr, "glow-render: --near-split splits the reference's light; it does not go with --glow\n");
+        return 0;
+    }
     if (!o->bake && (o->gs.bounce_iterations || o->gs.sky_rays || o->gs.sh_bands_luma || o->gs.sh_bands_chroma ||
                      o->gs.link_mode || o->gs.indirect_only)) {
         fprintf(stderr, "glow-render: --bounces, --sky-rays, --luma, --chroma, --link-mode and --indirect-only go with "
@@ -245,7 +258,16 @@ int main(int argc, char **argv) {
         printf("  mean radiance W/(m^2 sr) (R G B): final %.5g %.5g %.5g | direct %.5g %.5g %.5g | indirect %.5g %.5g %.5g\n",
                res.mean_final[0], res.mean_final[1], res.mean_final[2], res.mean_direct[0], res.mean_direct[1],
                res.mean_direct[2], res.mean_indirect[0], res.mean_indirect[1], res.mean_indirect[2]);
-        printf("  wrote %s.exr %s_direct.exr %s_indirect.exr %s.png\n", o.out, o.out, o.out, o.out);
+        if (res.indirect_near.rgb) {
+            const double ln = 0.2126 * res.mean_indirect_near[0] + 0.7152 * res.mean_indirect_near[1] +
+                              0.0722 * res.mean_indirect_near[2],
+                         li = 0.2126 * res.mean_indirect[0] + 0.7152 * res.mean_indirect[1] + 0.0722 * res.mean_indirect[2];
+            printf("  near light (from surfaces closer than %g): %.5g %.5g %.5g, %.1f %% of the indirect luma\n",
+                   (double)o.rs.near_split, res.mean_indirect_near[0], res.mean_indirect_near[1], res.mean_indirect_near[2],
+                   li > 0.0 ? 100.0 * ln / li : 0.0);
+        }
+        printf("  wrote %s.exr %s_direct.exr %s_indirect.exr %s.png%s%s%s\n", o.out, o.out, o.out, o.out,
+               res.indirect_near.rgb ? " " : "", res.indirect_near.rgb ? o.out : "", res.indirect_near.rgb ? "_indirect_near.exr" : "");
     }
     glow_render_result_free(&res);
     glow_render_scene_destroy(scene);

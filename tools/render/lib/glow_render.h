@@ -87,6 +87,10 @@ typedef struct glow_render_settings {
     uint32_t threads;         /* 0 = one per online CPU */
     uint32_t max_depth;       /* path vertices; 0 = 256 (reference only) */
     float albedo_scale;       /* multiplies every albedo (clamped to 0.999); 0 = 1 */
+    float near_split;         /* reference only, m: > 0 also returns indirect_near, the part of the indirect
+                                 light that reached the first hit from a surface closer than this (the
+                                 first bounce's hit, or the emitter point of its NEE): light a cache-based
+                                 solver can only resolve at that scale. 0 = no split */
     glow_render_progress_fn progress; /* optional: called with the fraction of rows done (serialised) */
     void *progress_user;
 } glow_render_settings;
@@ -105,11 +109,13 @@ typedef struct glow_render_glow_settings {
 
 typedef struct glow_render_result {
     glow_eval_image final, direct, indirect;
+    glow_eval_image indirect_near; /* reference with settings->near_split > 0 only (else empty): part of indirect */
     uint32_t width, height, spp, threads;
     double seconds;           /* the rendering itself (glow: not the solve) */
     uint64_t rays;            /* Embree queries: camera, bounce and shadow rays */
     double mrays_per_s;
     double mean_final[3], mean_direct[3], mean_indirect[3];
+    double mean_indirect_near[3]; /* with indirect_near */
     uint64_t nonfinite_samples; /* samples whose direct or indirect radiance was NaN or infinite: left out
                                    of their pixel (counted as 0) so that one cannot poison an image.
                                    0 unless something is wrong; glow-render warns when it is not */

@@ -145,6 +145,7 @@ void glow_render_result_free(glow_render_result *r) {
     glow_eval_image_free(&r->final);
     glow_eval_image_free(&r->direct);
     glow_eval_image_free(&r->indirect);
+    glow_eval_image_free(&r->indirect_near);
     memset(r, 0, sizeof *r);
 }
 
@@ -156,10 +157,11 @@ glow_result glow_render_write(const glow_render_result *res, const char *prefix,
     if (!isfinite(exposure) || exposure < 0.0f)
         return glow__render_fail(message, message_size, GLOW_ERROR_INVALID_ARGUMENT,
                                  "glow_render_write: exposure %g must be finite and >= 0", (double)exposure);
-    enum { N = 4 };
-    static const char *suffix[N] = {".exr", "_direct.exr", "_indirect.exr", ".png"};
-    const glow_eval_image *img[N] = {&res->final, &res->direct, &res->indirect, &res->final};
-    char path[N][1024], part[N][1040];
+    /* the near part of the indirect light (glow_render_settings.near_split) only when it was rendered */
+    const int N = res->indirect_near.rgb ? 5 : 4;
+    static const char *suffix[5] = {".exr", "_direct.exr", "_indirect.exr", ".png", "_indirect_near.exr"};
+    const glow_eval_image *img[5] = {&res->final, &res->direct, &res->indirect, &res->final, &res->indirect_near};
+    char path[5][1024], part[5][1040];
     for (int i = 0; i < N; ++i) {
         int n = snprintf(path[i], sizeof path[i], "%s%s", prefix, suffix[i]);
         int n2 = snprintf(part[i], sizeof part[i], "%s%s.part", prefix, suffix[i]);
@@ -169,8 +171,8 @@ glow_result glow_render_write(const glow_render_result *res, const char *prefix,
     glow_result r = GLOW_OK;
     for (int i = 0; i < N && r == GLOW_OK; ++i) {
         char why[512] = "";
-        r = i < 3 ? glow_eval_write_exr(img[i], part[i], why, sizeof why)
-                  : glow_eval_write_png(img[i], exposure, part[i], why, sizeof why);
+        r = i != 3 ? glow_eval_write_exr(img[i], part[i], why, sizeof why)
+                   : glow_eval_write_png(img[i], exposure, part[i], why, sizeof why);
         if (r != GLOW_OK) glow__render_fail(message, message_size, r, "%s: cannot write it (%s)", path[i], why);
     }
     if (r == GLOW_OK) {

@@ -118,6 +118,8 @@ typedef struct render_ctx {
     const glow_view *gv;
     /* accumulators: per pixel RGB */
     float *direct, *indirect;
+    float *indirect_near; /* NULL unless settings->near_split > 0 (reference only) */
+    float near_split;
     /* scheduling */
     atomic_uint next_row, rows_done;
     pthread_mutex_t progress_lock;
@@ -236,8 +238,9 @@ static inline float mis2(float a, float b) { /* power heuristic, weight of a */
 
 /* Next-event estimation of the emissive triangles at s: reflected radiance (before the path's
  * throughput), MIS-weighted against BSDF sampling. Always draws 3 numbers. */
-static void emitter_nee(const render_ctx *c, rng *rp, const surf *s, float out[3], uint64_t *rays) {
+static void emitter_nee(const render_ctx *c, rng *rp, const surf *s, float out[3], float *out_dist, uint64_t *rays) {
     out[0] = out[1] = out[2] = 0.0f;
+    if (out_dist) *out_dist = INFINITY;
     const glow_render_scene *sc = c->sc;
     float u = rnd(rp), r1 = rnd(rp), r2 = rnd(rp);
     if (!c->emitters_on) return;
@@ -256,6 +259,7 @@ static void emitter_nee(const render_ctx *c, rng *rp, const surf *s, float out[3
     float d2 = glow__dot(d, d);
     if (!(d2 > 1e-20f)) return;
     float dl = sqrtf(d2), w[3] = {d[0] / dl, d[1] / dl, d[2] / dl};
+    if (out_dist) *out_dist = dl;
     float cos_s = glow__dot(s->ns, w);
     if (!(cos_s > 0.0f) || glow__dot(s->ng, w) <= 0.0f) return;
     float cos_l = -glow__dot(sc->ng[t], w);
@@ -330,7 +334,7 @@ static void continue_path(const render_ctx *c, rng *rp, glow__hit h, const float
         }
         if (depth >= c->max_depth) break;
         delta_irradiance(c, &s, E, rays);
-        emitter_nee(c, rp, &s, nee, rays);
+        emitter_nee(c, rp, &s, nee, NULL, rays);
         for (int k = 0; k < 3; ++k) out[k] += beta[k] * (s.rho[k] * INV_PI_F * E[k] + nee[k]);
         float r = rnd(rp), a = rnd(rp), b = rnd(rp);
         float nb[3] = {beta[0] * s.rho[0], beta[1] * s.rho[1], beta[2] * s.rho[2]};
@@ -355,7 +359,7 @@ static void continue_path(const render_ctx *c, rng *rp, glow__hit h, const float
 
 /* One sample of pixel (x, y): adds to direct[3] and indirect[3]. */
 static void sample(const render_ctx *c, uint32_t x, uint32_t y, rng *rd, rng *rp, float *coeffs, worker_stats *ws,
-                   float direct[3], float indirect[3]) {
+                   float direct[3], float indirect[3], float near[3]) {
     const glow_render_scene *sc = c->sc;
     /* ---- camera ray (stream rd) */
     float jx = rnd(rd), jy = rnd(rd);
@@ -407,13 +411,21 @@ static void sample(const render_ctx *c, uint32_t x, uint32_t y, rng *rd, rng *rp
         for (int k = 0; k < 3; ++k) indirect[k] += g[k];
         return;
     }
-    /* ---- reference: the rest of the path (stream rp) */
-    float nee[3];
-    emitter_nee(c, rp, &s, nee, &ws->rays);
+    /* ---- reference: the rest of the path (stream rp). With a near split, each part of the indirect
+     * light also goes to near[] when the surface it last left before the first hit (the emitter point
+     * of the NEE, the hit of the first bounce) is closer than c->near_split. */
+    float nee[3], nee_dist;
+    emitter_nee(c, rp, &s, nee, &nee_dist, &ws->rays);
     for (int k = 0; k < 3; ++k) indirect[k] += nee[k];
+    if (nee_dist < c->near_split)
+        for (int k = 0; k < 3; ++k) near[k] += nee[k];
     if (!valid || h1.tri == UINT32_MAX) return;
     const float beta[3] = {s.rho[0], s.rho[1], s.rho[2]}; /* f cos / pdf = ρ for cosine sampling */
-    continue_path(c, rp, h1, beta, s.p, w1, cos1 * INV_PI_F, indirect, &ws->rays);
+    float rest[3] = {0.0f, 0.0f, 0.0f};
+    continue_path(c, rp, h1, beta, s.p, w1, cos1 * INV_PI_F, rest, &ws->rays);
+    for (int k = 0; k < 3; ++k) indirect[k] += rest[k];
+    if (h1.t < c->near_split)
+        for (int k = 0; k < 3; ++k) near[k] += rest[k];
 }
 
 typedef struct worker_arg {
@@ -434,10 +446,10 @@ static void *worker(void *p) {
             rng rd, rp;
             rng_init(&rd, c->seed, pixel, 0);
             rng_init(&rp, c->seed, pixel, 1);
-            double sd[3] = {0, 0, 0}, si[3] = {0, 0, 0};
+            double sd[3] = {0, 0, 0}, si[3] = {0, 0, 0}, sn[3] = {0, 0, 0};
             for (uint32_t n = 0; n < c->spp; ++n) {
-                float d[3] = {0, 0, 0}, ind[3] = {0, 0, 0};
-                sample(c, x, y, &rd, &rp, coeffs, ws, d, ind);
+                float d[3] = {0, 0, 0}, ind[3] = {0, 0, 0}, nr[3] = {0, 0, 0};
+                sample(c, x, y, &rd, &rp, coeffs, ws, d, ind, nr);
                 if (!(isfinite(d[0]) && isfinite(d[1]) && isfinite(d[2]) && isfinite(ind[0]) && isfinite(ind[1]) &&
                       isfinite(ind[2]))) { /* a bug upstream: counted and reported, kept out of the pixel */
                     ws->nonfinite++;
@@ -446,11 +458,13 @@ static void *worker(void *p) {
                 for (int k = 0; k < 3; ++k) {
                     sd[k] += d[k];
                     si[k] += ind[k];
+                    sn[k] += nr[k];
                 }
             }
             for (int k = 0; k < 3; ++k) {
                 c->direct[3 * pixel + k] = (float)(sd[k] / c->spp);
                 c->indirect[3 * pixel + k] = (float)(si[k] / c->spp);
+                if (c->indirect_near) c->indirect_near[3 * pixel + k] = (float)(sn[k] / c->spp);
             }
         }
         unsigned done = atomic_fetch_add(&c->rows_done, 1u) + 1u;
@@ -502,6 +516,9 @@ static glow_result check_settings(const glow_render_scene *sc, const glow_render
     if (!isfinite(s->albedo_scale) || s->albedo_scale < 0.0f)
         return glow__render_fail(message, message_size, GLOW_ERROR_INVALID_ARGUMENT,
                                  "glow_render: albedo_scale %g must be finite and >= 0", (double)s->albedo_scale);
+    if (!(s->near_split >= 0.0f) || isinf(s->near_split))
+        return glow__render_fail(message, message_size, GLOW_ERROR_INVALID_ARGUMENT,
+                                 "glow_render: near_split %g must be finite and >= 0", (double)s->near_split);
     return GLOW_OK;
 }
 
@@ -556,12 +573,15 @@ static glow_result render(const glow_render_scene *sc, const glow_render_setting
     c.light_count = sc->desc.light_count;
     if ((r = glow_eval_image_alloc(&out->direct, c.w, c.h)) != GLOW_OK ||
         (r = glow_eval_image_alloc(&out->indirect, c.w, c.h)) != GLOW_OK ||
-        (r = glow_eval_image_alloc(&out->final, c.w, c.h)) != GLOW_OK) {
+        (r = glow_eval_image_alloc(&out->final, c.w, c.h)) != GLOW_OK ||
+        (!gv && st->near_split > 0.0f && (r = glow_eval_image_alloc(&out->indirect_near, c.w, c.h)) != GLOW_OK)) {
         r = glow__render_fail(message, message_size, r, "%s: cannot allocate %u x %u images", sc->path, c.w, c.h);
         goto done;
     }
     c.direct = out->direct.rgb;
     c.indirect = out->indirect.rgb;
+    c.indirect_near = out->indirect_near.rgb; /* NULL unless allocated above */
+    c.near_split = c.indirect_near ? st->near_split : 0.0f;
     atomic_init(&c.next_row, 0u);
     atomic_init(&c.rows_done, 0u);
     pthread_mutex_init(&c.progress_lock, NULL);
@@ -595,6 +615,7 @@ static glow_result render(const glow_render_scene *sc, const glow_render_setting
     image_mean(&out->final, out->mean_final);
     image_mean(&out->direct, out->mean_direct);
     image_mean(&out->indirect, out->mean_indirect);
+    if (c.indirect_near) image_mean(&out->indirect_near, out->mean_indirect_near);
 done:
     free(c.lights);
     free(c.ws);
