@@ -22,7 +22,7 @@ const char *glow_pc_stage_name(uint32_t stage) { return stage < GLOW_PC_STAGE_CO
 typedef struct preset {
     uint32_t surfels, links, bands, grid, lightmap, relax;
 } preset;
-static const preset presets[4] = {
+static const preset presets[5] = {
     /* default = moderate */ {32768, 128, 3, 2000, 8000, 6},
     /* low      */ {8192, 64, 3, 500, 2000, 4},
     /* moderate: PIC's. Half the links on twice the lightmap caches (about the same links per bake)
@@ -30,10 +30,16 @@ static const preset presets[4] = {
      * +11.5 % update time: not taken (docs/results.md, "More budget"); --lightmap-caches sets it */
     /* moderate */ {32768, 128, 3, 2000, 8000, 6},
     /* high     */ {131072, 254, 4, 2000, 8000, 6},
+    /* fine: moderate's links and bands on 4x its surfels (0.24 m apart on Sponza) and 4x its lightmap
+     * caches. It resolves light from surfaces a fraction of a metre away (pillar feet next to a sunlit
+     * floor, capitals, arch rims), which neither density alone does: Sponza's block error 0.152 ->
+     * 0.079 (surfel seeds 0-2), at about 4x moderate's update time, 3.3x its bake and 6-10x its bake
+     * time (docs/results.md, "Near light") */
+    /* fine     */ {131072, 128, 3, 2000, 32000, 6},
 };
 
 static const preset *preset_of(glow_pc_quality q) {
-    return (unsigned)q <= GLOW_PC_QUALITY_HIGH ? &presets[q] : &presets[0];
+    return (unsigned)q <= GLOW_PC_QUALITY_FINE ? &presets[q] : &presets[0];
 }
 
 glow_pc_settings glow_pc_settings_resolve(const glow_pc_settings *in) {
@@ -51,7 +57,7 @@ glow_pc_settings glow_pc_settings_resolve(const glow_pc_settings *in) {
 
 glow_result glow_pc_settings_validate(const glow_pc_settings *s, char *msg, size_t n) {
 #define BAD(...) do { if (msg && n) snprintf(msg, n, __VA_ARGS__); return GLOW_ERROR_INVALID_ARGUMENT; } while (0)
-    if ((unsigned)s->quality > GLOW_PC_QUALITY_HIGH) BAD("quality %u is not low, moderate or high", (unsigned)s->quality);
+    if ((unsigned)s->quality > GLOW_PC_QUALITY_FINE) BAD("quality %u is not low, moderate, high or fine", (unsigned)s->quality);
     if (s->surfels && (s->surfels < 16 || s->surfels > (1u << 22)))
         BAD("--surfels %u is out of range (16..4194304)", s->surfels);
     if (s->links && s->links > 4096) BAD("--links %u is out of range (1..4096)", s->links);

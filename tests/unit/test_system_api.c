@@ -1354,9 +1354,35 @@ static void test_furnace_converges(void **state) {
     assert_true(fabs(fr.lm / (g / (1.0 - rho * g)) - 1.0) < 0.01);
 }
 
+/* The linker's presets: what each resolves to (docs/linker.md), explicit settings win, and a quality
+ * past the last preset is refused. */
+static void test_bake_presets(void **state) {
+    (void)state;
+    const struct { glow_pc_quality q; uint32_t surfels, links, bands, lightmap; } want[] = {
+        {GLOW_PC_QUALITY_DEFAULT, 32768, 128, 3, 8000}, {GLOW_PC_QUALITY_LOW, 8192, 64, 3, 2000},
+        {GLOW_PC_QUALITY_MODERATE, 32768, 128, 3, 8000}, {GLOW_PC_QUALITY_HIGH, 131072, 254, 4, 8000},
+        {GLOW_PC_QUALITY_FINE, 131072, 128, 3, 32000}};
+    char msg[256];
+    for (size_t i = 0; i < sizeof want / sizeof want[0]; ++i) {
+        glow_pc_settings s = glow_pc_settings_resolve(&(glow_pc_settings){.quality = want[i].q});
+        assert_int_equal(s.surfels, want[i].surfels);
+        assert_int_equal(s.links, want[i].links);
+        assert_int_equal(s.bands, want[i].bands);
+        assert_int_equal(s.lightmap_caches, want[i].lightmap);
+        assert_int_equal(glow_pc_settings_validate(&s, msg, sizeof msg), GLOW_OK);
+    }
+    glow_pc_settings s = glow_pc_settings_resolve(&(glow_pc_settings){.quality = GLOW_PC_QUALITY_FINE, .links = 64});
+    assert_int_equal(s.links, 64);
+    assert_int_equal(s.surfels, 131072);
+    s.quality = (glow_pc_quality)(GLOW_PC_QUALITY_FINE + 1);
+    assert_int_equal(glow_pc_settings_validate(&s, msg, sizeof msg), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_non_null(strstr(msg, "fine"));
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_null_arguments),
+        cmocka_unit_test(test_bake_presets),
         cmocka_unit_test(test_solver_tables),
         cmocka_unit_test(test_null_out_pointers_logged),
         cmocka_unit_test(test_band_counts),

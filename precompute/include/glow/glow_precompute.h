@@ -28,6 +28,7 @@ typedef enum glow_pc_quality {
     GLOW_PC_QUALITY_LOW,
     GLOW_PC_QUALITY_MODERATE,    /* PIC: n_S = 32k, n_L = 128, l = 3, ~10k caches (8000 lightmap) */
     GLOW_PC_QUALITY_HIGH,        /* PIC: n_S = 128k, n_L = 254, l = 4, ~10k caches */
+    GLOW_PC_QUALITY_FINE,        /* n_S = 128k, n_L = 128, l = 3, ~34k caches (32000 lightmap): near light */
     GLOW_PC_QUALITY_FORCE_U32 = 0x7FFFFFFF
 } glow_pc_quality;
 
