@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # CLI behaviour of the evaluation tools: glow-render (reference and Glow's view), glow-compare and
-# glow-eval --quick on the built-in Cornell box at CI size (32x32). Checks exit codes and messages
+# glow-stability on the built-in Cornell box at CI size (32x32); glow-eval's sweeps are in
+# test_eval_sweep_cli.sh (a test of its own, so that ctest runs the two halves side by side). Checks exit codes and messages
 # for bad input, that nothing is left behind on failure, that Glow's indirect-only view plus the
 # reference's direct image scores exactly what the full Glow view scores, and that glow-eval writes
 # its CSV, summary and charts.
@@ -232,36 +233,6 @@ err_has "8192 surfels"
 expect 1 "bake: unwritable audit CSV fails first" "$BIN/glow-bake" builtin:cornell -o "$T/x.glow" --quality low \
   --audit-radiance "$T/radiance.bin" --audit-csv "$T/no/such/dir/cut.csv"
 [ -e "$T/x.glow" ] && fail "  a bake was written" || pass "  no bake written"
-
-# --- glow-eval quick (two settings of one parameter)
-expect 0 "glow-eval quick" python3 "$ROOT/tools/glow-eval" sweep "$SCENE" --out "$T/eval" --quick --params chroma --bin "$BIN" \
-  --width 24 --height 24 --ref-spp 8 --frames 3
-[ "$(wc -l < "$T/eval/results.csv")" -ge 3 ] && pass "  results.csv has the rows" || fail "  results.csv short"
-grep -q "rel. RMSE indirect" "$T/eval/summary.md" && pass "  summary.md written" || fail "  summary.md missing"
-if command -v gnuplot >/dev/null; then
-  [ -s "$T/eval/cornell-builtin_error_vs_time.png" ] && pass "  chart written" || fail "  chart missing"
-fi
-expect 2 "glow-eval: unknown parameter" python3 "$ROOT/tools/glow-eval" sweep "$SCENE" --out "$T/eval2" --params frob --bin "$BIN"
-head -1 "$T/eval/results.csv" | grep -q "block_error_indirect" && head -1 "$T/eval/results.csv" | grep -q "mean_ratio_indirect" \
-  && pass "  results.csv has the block error and mean ratio" || fail "  results.csv lacks block error / mean ratio"
-# --bake-seeds: each setting baked with two surfel seeds, metrics averaged, block error's spread kept
-expect 0 "glow-eval quick --bake-seeds 2" python3 "$ROOT/tools/glow-eval" sweep "$SCENE" --out "$T/eval4" --quick --params chroma \
-  --bin "$BIN" --width 24 --height 24 --ref-spp 8 --frames 3 --bake-seeds 2
-ls "$T/eval4/bakes/" | grep -q "_seed1.glow" && pass "  a seed-1 bake" || fail "  no seed-1 bake: $(ls "$T/eval4/bakes/")"
-python3 - "$T/eval4/results.csv" <<'PY' && pass "  block error averaged over the seeds, with a spread" || fail "  seeds' block errors"
-import csv, sys
-rows = list(csv.DictReader(open(sys.argv[1])))
-assert rows, "no rows"
-for r in rows:
-    lo, mid, hi = (float(r["block_error_indirect" + s]) for s in ("_min", "", "_max"))
-    assert r["bake_seeds"] == "2" and lo <= mid <= hi, r
-assert any(float(r["block_error_indirect_min"]) < float(r["block_error_indirect_max"]) for r in rows), "seeds gave equal images"
-PY
-expect 2 "glow-eval: --bake-seeds 0" python3 "$ROOT/tools/glow-eval" sweep "$SCENE" --out "$T/eval5" --bin "$BIN" --bake-seeds 0
-err_has "bake-seeds"
-expect 2 "glow-eval: --referee without indirect.pfm" python3 "$ROOT/tools/glow-eval" sweep "$SCENE" --out "$T/eval3" --bin "$BIN" \
-  --referee "$T/no-referee"
-err_has "indirect.pfm"
 
 echo "$fails failure(s)"
 [ "$fails" = 0 ]
