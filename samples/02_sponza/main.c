@@ -114,13 +114,6 @@ static float flicker(float t) {
 
 static float luma(const float c[3]) { return 0.25f * c[0] + 0.5f * c[1] + 0.25f * c[2]; }
 
-/* A window key going down since the last call (`down` keeps its state). */
-static bool key_pressed(sample_app *a, int key, bool *down) {
-    bool now = glfwGetKey((GLFWwindow *)glow_glctx_window(a->glctx), key) == GLFW_PRESS;
-    bool edge = now && !*down;
-    *down = now;
-    return edge;
-}
 
 /* The frame's mean display luminance (Rec. 709 weights of the tone-mapped sRGB values, 0..1): the
  * test compares frames with it. */
@@ -271,14 +264,13 @@ int main(int argc, char **argv) {
     glow_scene_light lights[2], sent[2];
     uint32_t sent_count = UINT32_MAX;
     float sent_env[3] = {-1.0f, -1.0f, -1.0f}, hour_offset = 0.0f;
-    bool keys[3] = {false, false, false};
     torch_mode mode = o.torch;
     for (long f = 0; status < 0; f++) {
         /* 1. the time of day and the sky */
         float t = sample_app_time(&a, f);
         if (a.window) {
-            if (key_pressed(&a, GLFW_KEY_B, &keys[1])) hour_offset -= 1.0f;
-            if (key_pressed(&a, GLFW_KEY_N, &keys[2])) hour_offset += 1.0f;
+            if (sample_app_key(&a, GLFW_KEY_B)) hour_offset -= 1.0f;
+            if (sample_app_key(&a, GLFW_KEY_N)) hour_offset += 1.0f;
         }
         float hour = o.start_hour + hour_offset + 24.0f * (a.window ? t / o.day_seconds : (float)f / (float)day_frames);
         hour = fmodf(hour, 24.0f);
@@ -287,7 +279,7 @@ int main(int argc, char **argv) {
         sky_at(&path, hour, &sky);
         /* 2. the torch: auto follows the sun; T switches it by hand (and leaves auto) */
         bool lit = mode == TORCH_ON || (mode == TORCH_AUTO && sky.elevation_deg < TORCH_AUTO_BELOW_DEG);
-        if (a.window && key_pressed(&a, GLFW_KEY_T, &keys[0])) mode = lit ? TORCH_OFF : TORCH_ON, lit = !lit;
+        if (a.window && sample_app_key(&a, GLFW_KEY_T)) mode = lit ? TORCH_OFF : TORCH_ON, lit = !lit;
         /* 3. the lights: the sun while it is up, the torch while it burns; to the GPU when they change */
         memset(lights, 0, sizeof lights);
         uint32_t count = 0;
@@ -324,7 +316,7 @@ int main(int argc, char **argv) {
         snprintf(a.title, sizeof a.title, "Glow 02_sponza  %s", state); /* the window's title starts with it */
         status = sample_app_frame(&a, f, NULL, 0, NULL);
         if (!a.window && status != 1)
-            printf("day %ld  %s  mean luminance %.4f\n", f, state, mean_luminance(&a, rgba));
+            printf("time %s  mean luminance %.4f  (frame %ld)\n", state, mean_luminance(&a, rgba), f);
     }
     free(rgba);
     sample_app_destroy(&a);

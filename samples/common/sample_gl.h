@@ -1038,7 +1038,7 @@ typedef struct sample_app {
     glow_scene_camera camera;
     float centre[3], size[3];
     double anim_time, last_wall;
-    int keys[GLFW_KEY_LAST + 1];
+    unsigned char key_latch[GLFW_KEY_LAST + 1]; /* set by GLFW's key callback, cleared when read */
     uint32_t levels;
     char title[512];
 } sample_app;
@@ -1176,6 +1176,15 @@ static inline void sample_app_destroy(sample_app *a) {
 
 /* Everything up to the first frame. -1 to go on, else the exit status (the message printed; on
  * failure everything made is destroyed). */
+/* GLFW key callback: latches presses (not repeats: the keys toggle) for sample_app_key. The window's user pointer is
+ * the sample_app, set when the window is made. */
+static void sample_app__key_callback(GLFWwindow *w, int key, int scancode, int action, int mods) {
+    (void)scancode;
+    (void)mods;
+    sample_app *a = (sample_app *)glfwGetWindowUserPointer(w);
+    if (a && action == GLFW_PRESS && key >= 0 && key <= GLFW_KEY_LAST) a->key_latch[key] = 1;
+}
+
 static inline int sample_app_init(sample_app *a, int argc, char **argv, const char *emission_glsl) {
     memset(a, 0, sizeof *a);
     a->name = argv[0];
@@ -1229,6 +1238,11 @@ static inline int sample_app_init(sample_app *a, int argc, char **argv, const ch
         return SAMPLE_APP_EXIT_NO_GL;
     }
     a->window = glow_glctx_window(a->glctx) != NULL;
+    if (a->window) { /* key presses through GLFW's callback: a tap shorter than a frame still counts */
+        GLFWwindow *w = (GLFWwindow *)glow_glctx_window(a->glctx);
+        glfwSetWindowUserPointer(w, a);
+        glfwSetKeyCallback(w, sample_app__key_callback);
+    }
     glow_gl_loader load = glow_glctx_get_proc_address(a->glctx);
     /* 3. the CPU system (the artist controls live there), the GPU lights (shadow maps + their GLSL
      * hook) and the GL system lit by that hook; then the renderer, with the same hook for the screen */
@@ -1317,12 +1331,14 @@ static inline int sample_app_set_lights(sample_app *a, const glow_scene_light *l
     return r == GLOW_OK ? 0 : 1;
 }
 
-static inline bool sample_app__pressed(sample_app *a, int key) {
-    int now = glfwGetKey((GLFWwindow *)glow_glctx_window(a->glctx), key) == GLFW_PRESS;
-    bool edge = now && !a->keys[key];
-    a->keys[key] = now;
-    return edge;
+/* Whether `key` went down since the last call for it (latched by sample_app__key_callback, so a press
+ * and release within one frame is not lost as it was when the keys were polled with glfwGetKey). */
+static inline bool sample_app_key(sample_app *a, int key) {
+    if (key < 0 || key > GLFW_KEY_LAST || !a->key_latch[key]) return false;
+    a->key_latch[key] = 0;
+    return true;
 }
+static inline bool sample_app__pressed(sample_app *a, int key) { return sample_app_key(a, key); }
 
 static inline void sample_app__keys(sample_app *a) {
     for (int v = 0; v < SAMPLE_VIEW_COUNT; v++)

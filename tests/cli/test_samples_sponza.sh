@@ -38,11 +38,11 @@ is_png() { # FILE W H: a PNG of that size
   local wh; wh=$(od -An -tu1 -j16 -N8 "$1" | awk '{ print $1*16777216 + $2*65536 + $3*256 + $4, $5*16777216 + $6*65536 + $7*256 + $8 }')
   [ "$wh" = "$2 $3" ]
 }
-# field FILE FRAME WHAT: from the line "day FRAME  HH:MM  sun elevation E deg (...)  ...  torch on|off (...)  mean luminance L"
+# field FILE FRAME WHAT: from the line "time HH:MM  sun elevation E deg (...)  ...  torch on|off (...)  mean luminance L  (frame FRAME)"
 field() {
-  awk -v f="$2" -v what="$3" '$1 == "day" && $2 == f {
+  awk -v f="$2" -v what="$3" '$1 == "time" && $NF == f ")" {
     for (i = 1; i <= NF; i++) {
-      if (what == "hour" && i == 3) print $i
+      if (what == "hour" && i == 2) print $i
       if (what == "elevation" && $i == "elevation") print $(i + 1)
       if (what == "torch" && $i == "torch") print $(i + 1)
       if (what == "luminance" && $i == "luminance") print $(i + 1)
