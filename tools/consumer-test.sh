@@ -6,7 +6,8 @@
 # Then add_subdirectory: a C-only parent project with its own build type and output folders pulls in
 # this source tree with -DGLOW_BUILD_PRECOMPUTE=OFF (the GPU runtime without the bake toolchain: no
 # Embree or assimp may be looked up), builds glow::gl and its consumer, and must find its cache and
-# folders as it set them.
+# folders as it set them. Last, a shared build (BUILD_SHARED_LIBS) installed and consumed both ways, its
+# libraries checked for SONAME and for exporting the public API only.
 #   usage: tools/consumer-test.sh [BUILD_DIR]   (default: build; configure and build it first)
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -75,4 +76,34 @@ cmake --build "$parent/build" --target parent_consumer glow_gl >"$tmp/parent-bui
 [ -x "$parent/build/parent-bin/parent_consumer" ] && [ ! -d "$parent/build/bin" ] && [ ! -d "$parent/build/lib" ] ||
   { echo "consumer-test: output folders: Glow wrote into the parent's bin/ or lib/" >&2; exit 1; }
 "$parent/build/parent-bin/parent_consumer" "$bake"
-echo "consumer-test: OK (find_package, pkg-config, add_subdirectory with the GPU runtime only)"
+
+# 4. shared libraries: a GPU-runtime build of this tree with BUILD_SHARED_LIBS, installed; the consumer
+# links libglow_runtime.so.0.1 (find_package and pkg-config), which exports the public API only.
+cmake -S "$root" -B "$tmp/shared" -G Ninja -DCMAKE_BUILD_TYPE=Release -DBUILD_SHARED_LIBS=ON \
+  -DGLOW_BUILD_PRECOMPUTE=OFF -DGLOW_BUILD_TESTS=OFF -DGLOW_BUILD_SAMPLES=OFF >"$tmp/shared.log" 2>&1 &&
+  cmake --build "$tmp/shared" >>"$tmp/shared.log" 2>&1 ||
+  { tail -20 "$tmp/shared.log" >&2; echo "consumer-test: shared build failed" >&2; exit 1; }
+sprefix=$tmp/sprefix
+cmake --install "$tmp/shared" --prefix "$sprefix" >/dev/null
+so=$(find "$sprefix" -name 'libglow_runtime.so.*.*' -type f | head -1)
+[ -n "$so" ] && [ -z "$(find "$sprefix" -name 'libglow_runtime.a')" ] ||
+  { echo "consumer-test: the shared install holds no libglow_runtime.so or also the static library" >&2; exit 1; }
+soname=$(objdump -p "$so" | awk '/SONAME/ { print $2 }')
+[ "$soname" = libglow_runtime.so.0.1 ] || { echo "consumer-test: SONAME '$soname', wanted libglow_runtime.so.0.1" >&2; exit 1; }
+for lib in "$so" "$(find "$sprefix" -name 'libglow_gl.so.*.*' -type f | head -1)"; do
+  [ -f "$lib" ] || { echo "consumer-test: no libglow_gl.so installed" >&2; exit 1; }
+  bad=$(nm -D --defined-only "$lib" | awk '$2 ~ /^[TDBR]$/ && $3 !~ /^glow_[a-z]/ { print $3 }' | head -5)
+  internal=$(nm -D --defined-only "$lib" | awk '$3 ~ /^glow__/ { print $3 }' | head -5)
+  [ -z "$bad$internal" ] || { echo "consumer-test: $(basename "$lib") exports more than the API: $bad $internal" >&2; exit 1; }
+done
+cmake -S "$root/tests/consumer" -B "$tmp/scmake" -G Ninja -DCMAKE_PREFIX_PATH="$sprefix" -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build "$tmp/scmake" >/dev/null
+objdump -p "$tmp/scmake/glow_consumer" | grep -q 'NEEDED *libglow_runtime.so.0.1' ||
+  { echo "consumer-test: the find_package consumer does not load libglow_runtime.so.0.1" >&2; exit 1; }
+"$tmp/scmake/glow_consumer" "$bake"
+spc=$(find "$sprefix" -name glow.pc | head -1)
+cc -std=c11 -O2 "$root/tests/consumer/consumer.c" -o "$tmp/spc_consumer" \
+  $(PKG_CONFIG_PATH=$(dirname "$spc") pkg-config --cflags --libs glow)
+LD_LIBRARY_PATH=$(dirname "$so") "$tmp/spc_consumer" "$bake"
+echo "consumer-test: shared: $(basename "$so") (SONAME $soname), $(nm -D --defined-only "$so" | grep -c ' glow_') exported functions"
+echo "consumer-test: OK (find_package, pkg-config, add_subdirectory with the GPU runtime only, shared libraries)"

@@ -22,6 +22,14 @@
 
 #include "glow/glow_gl_loader.h"
 
+#ifndef GLOW_API /* as in glow.h: exported from a shared build, nothing for consumers */
+#if defined(GLOW_BUILDING_SHARED) && defined(__GNUC__)
+#define GLOW_API __attribute__((visibility("default")))
+#else
+#define GLOW_API
+#endif
+#endif
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -178,7 +186,7 @@ typedef struct glow_glfns {
 /** Loads every entry point of the list. \returns 1 when all were found; else 0 with the names of the
  * first missing ones in `missing` (may be NULL). Entry points are per context on some platforms:
  * load once per context. */
-int glow_glfns_load(glow_glfns *fns, glow_gl_loader load, char *missing, size_t missing_size);
+GLOW_API int glow_glfns_load(glow_glfns *fns, glow_gl_loader load, char *missing, size_t missing_size);
 
 #ifdef __cplusplus
 }

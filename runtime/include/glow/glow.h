@@ -55,8 +55,15 @@ extern "C" {
 #define GLOW_VERSION (GLOW_VERSION_MAJOR * 10000 + GLOW_VERSION_MINOR * 100 + GLOW_VERSION_PATCH)
 #define GLOW_BAKE_FORMAT_MAJOR 1 /* the bake major this runtime reads */
 
+/* GLOW_API marks the public functions. A shared build (BUILD_SHARED_LIBS) compiles the libraries with
+ * hidden visibility and GLOW_BUILDING_SHARED, so that only these are exported (ELF, GCC and Clang;
+ * Windows DLLs are not supported yet). Consumers need no definition. */
 #ifndef GLOW_API
+#if defined(GLOW_BUILDING_SHARED) && defined(__GNUC__)
+#define GLOW_API __attribute__((visibility("default")))
+#else
 #define GLOW_API
+#endif
 #endif
 
 typedef enum glow_result {
