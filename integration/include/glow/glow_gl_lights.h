@@ -43,16 +43,10 @@
  * 2D array textures, reallocated only when a set() needs a different number of layers; memory is
  * 4 bytes per texel: 4 MiB per sun/narrow-spot map at 1024², 6 MiB per cube at 512².
  *
- * COST (llvmpipe, Mesa 22.3, on this repository's 2-core machine: the GPU is the CPU here; times to GPU
- * idle, tests/gpu/test_gl_lights.c and a Sponza run): create 1-15 ms (two small programs; Mesa
- * caches them). set() does not wait for the GPU (llvmpipe still does part of the work inside the
- * call: 1-16 ms of CPU in these runs); until the GPU is idle it takes, Cornell box (34 triangles):
- * cube 6 x 512² 4-7 ms, map 1024² 3-4 ms, 2048² 11-21 ms;
- * Dabrovic Sponza (66k triangles): sun 1024² 29 ms, 2048² 37 ms, 4096² 88 ms (glow_host's software
- * maps: 67, 216, 814 ms), point cube 6 x 512² 38 ms. The first draw in a process costs about 100 ms
- * more on llvmpipe (shader variant compile). The hook, per surfel: one pass over the lights and
- * pcf_size² texelFetch per lit, shadowed light — 32k Sponza surfels, 1 sun: 4-5 ms on llvmpipe; in
- * glow_gl's update on the Cornell box (8192 surfels, 3 lights): 2.8 ms of 29 ms.
+ * COST: set() renders one depth pass per changed light and does not wait for the GPU; the hook costs
+ * one pass over the lights per surfel and pcf_size² texelFetch per lit, shadowed light. Measured
+ * figures (llvmpipe and an NVIDIA H100) are in docs/benchmarks.md and docs/gpu.md, not here: they
+ * depend on the machine.
  *
  * USAGE
  *   glow_gl_lights *gll;

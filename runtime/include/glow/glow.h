@@ -3,8 +3,8 @@
  *
  * Glow is real-time global-illumination middleware (precomputed illuminance composition,
  * Jendersie et al. 2016). The linker (`glow-bake`, glow_precompute.h) turns a static scene into
- * a bake file; this runtime loads the bake and (in a later version) turns the host's direct light
- * into multi-bounce indirect light every frame.
+ * a bake file; this runtime loads the bake and turns the host's direct light into multi-bounce
+ * indirect light every frame.
  *
  * WHAT IT DOES NOT DO: it never includes GL or Embree, never reads files other than the bake, and
  * keeps no global state.
@@ -36,7 +36,10 @@
  * index) before anything reads them, in every build.
  *
  * ON THREADS: a glow_context may be used from several threads; a glow_bake is immutable after
- * load and may be read concurrently.
+ * load and may be read concurrently. A glow_system is used by one thread at a time: its calls
+ * (update, setters, getters, destroy) must not overlap, except that its outputs and getters may be
+ * read concurrently between updates. Functions without an object (shading helpers, result strings)
+ * are pure and run on any thread. Each function's \threadsafety line says where it differs.
  */
 #ifndef GLOW_GLOW_H
 #define GLOW_GLOW_H
@@ -134,7 +137,8 @@ typedef struct glow_bake glow_bake;
 GLOW_API glow_result glow_context_create(const glow_context_desc *desc, glow_context **out_context);
 /** Destroys a context (NULL is a no-op). All its bakes and systems must be destroyed first: while any
  * is live the call logs GLOW_ERROR_INVALID_OPERATION and returns without destroying anything (the
- * context stays usable; destroy them, then the context). \since 0.1 */
+ * context stays usable; destroy them, then the context). \threadsafety Not while another thread
+ * uses the context. \since 0.1 */
 GLOW_API void glow_context_destroy(glow_context *context);
 
 typedef struct glow_bake_info {
@@ -152,7 +156,8 @@ typedef struct glow_bake_info {
 } glow_bake_info;
 
 /** Reads the format version of a bake in memory without a context (cheap: header only).
- * \returns GLOW_OK, GLOW_ERROR_TRUNCATED (< 64 bytes), GLOW_ERROR_BAD_MAGIC. \since 0.1 */
+ * \returns GLOW_OK, GLOW_ERROR_TRUNCATED (< 64 bytes), GLOW_ERROR_BAD_MAGIC. \threadsafety Any thread.
+ * \since 0.1 */
 GLOW_API glow_result glow_bake_peek_version(const void *data, size_t size, uint32_t *out_major,
                                             uint32_t *out_minor);
 
@@ -163,12 +168,14 @@ GLOW_API glow_result glow_bake_peek_version(const void *data, size_t size, uint3
  * errors), GLOW_ERROR_OUT_OF_MEMORY. *out_bake is NULL on failure.
  * \threadsafety Any thread. \since 0.1 */
 GLOW_API glow_result glow_bake_load(glow_context *context, const void *data, size_t size, glow_bake **out_bake);
-/** glow_bake_load on a file's bytes; GLOW_ERROR_IO when it cannot be read. \since 0.1 */
+/** glow_bake_load on a file's bytes; GLOW_ERROR_IO when it cannot be read. \threadsafety Any thread.
+ * \since 0.1 */
 GLOW_API glow_result glow_bake_load_file(glow_context *context, const char *path, glow_bake **out_bake);
-/** Fills `out_info`. \since 0.1 */
+/** Fills `out_info`. \threadsafety Any thread (the bake is immutable). \since 0.1 */
 GLOW_API glow_result glow_bake_get_info(const glow_bake *bake, glow_bake_info *out_info);
 /** Destroys a bake (NULL is a no-op). A bake still used by a system is not destroyed: the call logs
- * GLOW_ERROR_INVALID_OPERATION and returns (destroy the systems first). \since 0.1 */
+ * GLOW_ERROR_INVALID_OPERATION and returns (destroy the systems first). \threadsafety Not while
+ * another thread uses the bake. \since 0.1 */
 GLOW_API void glow_bake_destroy(glow_bake *bake);
 
 /* The static geometry the bake was made from (the triangles the linker kept), for hosts that need
@@ -181,7 +188,8 @@ typedef struct glow_bake_geometry {
     const uint16_t *lightmap_uv;/* per triangle: 6 unorm16 (u0 v0 u1 v1 u2 v2) of [0,1] */
     const uint32_t *materials;  /* per triangle: material index */
 } glow_bake_geometry;
-/** Fills `out_geometry` (triangle_count 0 when the bake carries no geometry). \since 0.1 */
+/** Fills `out_geometry` (triangle_count 0 when the bake carries no geometry). \threadsafety Any
+ * thread. \since 0.1 */
 GLOW_API glow_result glow_bake_get_geometry(const glow_bake *bake, glow_bake_geometry *out_geometry);
 
 typedef struct glow_material_info {
@@ -190,7 +198,8 @@ typedef struct glow_material_info {
     float emission[3]; /* emitted radiance W/(m²·sr), front face only */
     uint32_t has_albedo_texture;
 } glow_material_info;
-/** Material `index` of the bake. \returns GLOW_ERROR_INVALID_ARGUMENT for NULL or a bad index. \since 0.1 */
+/** Material `index` of the bake. \returns GLOW_ERROR_INVALID_ARGUMENT for NULL or a bad index.
+ * \threadsafety Any thread. \since 0.1 */
 GLOW_API glow_result glow_bake_get_material(const glow_bake *bake, uint32_t index, glow_material_info *out_material);
 
 
@@ -200,8 +209,8 @@ GLOW_API glow_result glow_bake_get_material(const glow_bake *bake, uint32_t inde
 typedef struct glow_system glow_system;
 
 #define GLOW_MAX_SH_BANDS 8u /* l = 1..8 bands, l*l coefficients */
-/* Input limits (issue 15, D3). Finite values this large overflowed float sums inside an update that
- * returned GLOW_OK; they are refused like NaN. The sun at noon gives ~1e3 W/m², so the limits are
+/* Input limits. Finite values this large would overflow float sums inside an update that returns
+ * GLOW_OK; they are refused like NaN. The sun at noon gives ~1e3 W/m², so the limits are
  * far from any lighting a scene needs. */
 #define GLOW_MAX_IRRADIANCE 1e12f  /* per channel: light_surfels and glow_system_set_surfel_irradiance (W/m²),
                                       glow_system_set_surfel_emission (W/(m²·sr)) */
@@ -240,8 +249,8 @@ typedef enum glow_link_mode {
     GLOW_LINK_MODE_EXPANDED,     /* at create, each link's cone factors x SH basis (k_l(cos a) y_lm(dir),
                                     luma² IEEE halves) are computed once, so an update does luma² + 2
                                     chroma² multiply-adds per link and no decoding. Memory: (4 + 2 luma²)
-                                    bytes per link (22 at l = 3: +29 MB for 1.37 M links). Measured no
-                                    faster on an AVX-512 Zen 4 (the node-radiance gathers bound both);
+                                    bytes per link (22 at l = 3: +29 MB for 1.37 M links). Not faster
+                                    where the node-radiance gathers bound the update (docs/benchmarks.md);
                                     for CPUs with slow FMA and fast gathers */
     GLOW_LINK_MODE_SH,           /* the bake's full-SH links (glow-bake --sh-links, PIC Eq. 2): each link's
                                     SH coefficients were projected at bake time from the visible leaf
@@ -274,7 +283,8 @@ typedef struct glow_system_desc {
  * \threadsafety Any thread; several systems may share one bake. \since 0.1 */
 GLOW_API glow_result glow_system_create(glow_context *context, const glow_system_desc *desc,
                                         glow_system **out_system);
-/** Destroys a system (NULL is a no-op). \since 0.1 */
+/** Destroys a system (NULL is a no-op). \threadsafety Not during an update of the system (refused
+ * and logged, as the setters). \since 0.1 */
 GLOW_API void glow_system_destroy(glow_system *system);
 
 /** Pushes direct irradiance (W/m², RGB, as the hook would return it) for surfels
@@ -290,7 +300,8 @@ GLOW_API glow_result glow_system_set_surfel_irradiance(glow_system *system, uint
 /** Overrides the emitted radiance (W/(m²·sr), RGB, before the emission scales) of surfels
  * [first, first + count), e.g. from an animated emissive texture the host samples at the surfels
  * (glow_system_get_surfels gives their positions and triangles). NULL restores the bake's emission for
- * the range. \returns as glow_system_set_surfel_irradiance. \since 0.1 */
+ * the range. \returns as glow_system_set_surfel_irradiance. \threadsafety As
+ * glow_system_set_surfel_irradiance. \since 0.1 */
 GLOW_API glow_result glow_system_set_surfel_emission(glow_system *system, uint32_t first, uint32_t count,
                                                      const float *radiance_rgb);
 
@@ -302,7 +313,8 @@ typedef struct glow_surfel_view {
     const uint32_t *materials; /* count */
     const uint32_t *triangles; /* count: the bake triangle (GEOM) each surfel lies on */
 } glow_surfel_view;
-/** Fills `out_view`; valid until the system is destroyed. \since 0.1 */
+/** Fills `out_view`; valid until the system is destroyed. \threadsafety Any thread; the view is
+ * immutable. \since 0.1 */
 GLOW_API glow_result glow_system_get_surfels(const glow_system *system, glow_surfel_view *out_view);
 
 /* Lighting-artist controls. All take effect at the next update and persist. */
@@ -314,23 +326,31 @@ typedef struct glow_system_params {
                                    surfels again with the previous iteration's caches */
 } glow_system_params;
 /** Sets the artist controls. \returns GLOW_ERROR_INVALID_ARGUMENT for NaN, negative values, an
- * emission_scale above GLOW_MAX_SCALE or bounce_iterations 0 or > 64 (nothing changes). \since 0.1 */
+ * emission_scale above GLOW_MAX_SCALE or bounce_iterations 0 or > 64 (nothing changes).
+ * \threadsafety Not concurrently with other calls on the system. \since 0.1 */
 GLOW_API glow_result glow_system_set_params(glow_system *system, const glow_system_params *params);
+/** The artist controls in effect. \threadsafety Between updates, from any thread. \since 0.1 */
 GLOW_API glow_result glow_system_get_params(const glow_system *system, glow_system_params *out_params);
 
 /** Per-material scales (index into the bake's materials): emission_scale multiplies the material's
  * emission (runtime-switchable area lights), albedo_scale its albedo (RGB). The effective albedo is
  * clamped to [0, 0.999] so multi-bounce stays convergent. Defaults 1.
  * \returns GLOW_ERROR_INVALID_ARGUMENT for a bad index, NaN, negative values or values above
- * GLOW_MAX_SCALE. \since 0.1 */
+ * GLOW_MAX_SCALE. \threadsafety Not concurrently with other calls on the system. \since 0.1 */
 GLOW_API glow_result glow_system_set_material(glow_system *system, uint32_t material, const float emission_scale[3],
                                               const float albedo_scale[3]);
 
-#define GLOW_UPDATE_FLAG_RESET_BOUNCE 1u /* forget the indirect light of previous updates first */
-#define GLOW_UPDATE_FLAG_KEEP_LIGHTING 2u /* reuse the last direct irradiance (do not call the hook) */
+/* Update flags, OR-ed into glow_update_desc.flags (a uint32_t, so that C++ needs no casts). They were
+ * macros before 0.1's release; the names and values are unchanged. */
+typedef enum glow_update_flags {
+    GLOW_UPDATE_FLAG_NONE = 0,
+    GLOW_UPDATE_FLAG_RESET_BOUNCE = 1,  /* forget the indirect light of previous updates first */
+    GLOW_UPDATE_FLAG_KEEP_LIGHTING = 2, /* reuse the last direct irradiance (do not call the hook) */
+    GLOW_UPDATE_FLAGS_FORCE_U32 = 0x7FFFFFFF
+} glow_update_flags;
 
 typedef struct glow_update_desc {
-    uint32_t flags; /* GLOW_UPDATE_FLAG_* */
+    uint32_t flags; /* glow_update_flags, OR-ed; 0 = none */
 } glow_update_desc;
 
 /* Wall-clock milliseconds of the last successful update, per stage (summed over bounce iterations). */
@@ -360,6 +380,8 @@ typedef struct glow_update_stats {
  * overlapping calls are detected on a best-effort basis, not serialised.
  * \since 0.1 */
 GLOW_API glow_result glow_system_update(glow_system *system, const glow_update_desc *desc);
+/** The last successful update's timings and counters. \threadsafety Between updates, from any thread.
+ * \since 0.1 */
 GLOW_API glow_result glow_system_get_stats(const glow_system *system, glow_update_stats *out_stats);
 
 /* Outputs: incident-radiance SH, YCoCg, in planar layout (one plane per coefficient) so each plane
@@ -437,7 +459,8 @@ typedef struct glow_solver_tables {
                                           child twice; a leaf itself four times), s = 1 where all q_i
                                           are 0 or Y[node] is 0; docs/bake-format.md "LSUB" */
 } glow_solver_tables;
-/** Fills `out_tables`. \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT for NULL. \since 0.1 */
+/** Fills `out_tables`. \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT for NULL. \threadsafety Between
+ * updates; the views change only through the setters and updates. \since 0.1 */
 GLOW_API glow_result glow_system_get_solver_tables(const glow_system *system, glow_solver_tables *out_tables);
 
 /* ============================================================================ shading
@@ -457,7 +480,9 @@ GLOW_API float glow_sh_lobe_factor(uint32_t l, float exponent);
  * by σ_l trades sharpness for less ringing (negative lobes opposite bright sources); measured in
  * docs/results.md ("SH ringing"). 0 for l >= bands. \since 0.1 */
 GLOW_API float glow_sh_window_factor(uint32_t l, uint32_t bands);
+/** RGB -> YCoCg and back (PIC Eq. 7, see glow_cache_outputs). \since 0.1 */
 GLOW_API void glow_rgb_to_ycocg(const float rgb[3], float out_ycocg[3]);
+/** \since 0.1 */
 GLOW_API void glow_ycocg_to_rgb(const float ycocg[3], float out_rgb[3]);
 
 /** Convolves one cache's SH (`coeffs` in the output layout: luma² Y, chroma² Co, chroma² Cg) with
