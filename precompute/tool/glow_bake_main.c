@@ -13,6 +13,8 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <cjson/cJSON.h>
+
 #include "bake/bake_format.h"
 #include "glow/glow.h"
 #include "glow/glow_precompute.h"
@@ -171,54 +173,82 @@ static void fourcc_str(uint32_t f, char out[5]) {
     out[4] = 0;
 }
 
-static void json_string(const char *s) {
-    putchar('"');
-    for (; *s; ++s) {
-        unsigned char c = (unsigned char)*s;
-        if (c == '"' || c == '\\') printf("\\%c", c);
-        else if (c < 32) printf("\\u%04x", c);
-        else putchar(c);
+/* --json output through cJSON (Debian's libcjson, which the scene loader links too): pretty-printed,
+ * strings escaped. Out of memory leaves a short document; it is reported, not printed. */
+static void print_json(cJSON *o) {
+    char *text = o ? cJSON_Print(o) : NULL;
+    cJSON_Delete(o);
+    if (!text) {
+        fprintf(stderr, "glow-bake: out of memory for the JSON output\n");
+        return;
     }
-    putchar('"');
+    puts(text);
+    cJSON_free(text);
 }
 
 static void print_summary(const char *scene, const char *out, const glow_pc_stats *s, bool json) {
     char fc[5];
     if (json) {
-        printf("{\n  \"scene\": ");
-        json_string(scene);
-        printf(",\n  \"output\": ");
-        json_string(out);
-        printf(",\n  \"threads\": %u,\n  \"seed\": %u,\n  \"total_seconds\": %.4f,\n", s->threads, s->seed,
-               s->total_seconds);
-        printf("  \"stages\": [");
-        for (int i = 0; i < GLOW_PC_STAGE_COUNT; ++i)
-            printf("%s\n    {\"name\": \"%s\", \"seconds\": %.4f, \"peak_rss_bytes\": %zu}", i ? "," : "",
-                   glow_pc_stage_name((uint32_t)i), s->stage_seconds[i], s->stage_peak_rss[i]);
-        printf("\n  ],\n");
-        printf("  \"scene_stats\": {\"source_triangles\": %u, \"triangles\": %u, \"skipped_degenerate\": %u, "
-               "\"skipped_repeated\": %u, \"skipped_collinear\": %u, \"skipped_duplicate\": %u, \"skipped_nonfinite\": %u, \"materials\": %u, \"textures\": %u, "
-               "\"textures_missing\": %u, \"area\": %.6g},\n",
-               s->source_triangles, s->triangles, s->skipped_degenerate, s->skipped_repeated, s->skipped_collinear,
-               s->skipped_duplicate, s->skipped_nonfinite, s->materials, s->textures, s->textures_missing, s->scene_area);
-        printf("  \"surfels\": %u,\n  \"nodes\": %u,\n  \"levels\": %u,\n", s->surfels, s->nodes, s->levels);
-        printf("  \"caches\": {\"total\": %u, \"grid\": %u, \"grid_dims\": [%u, %u, %u], \"grid_spacing\": %.6g, "
-               "\"grid_inside_rejected\": %u, \"lightmap\": %u, \"lightmap_size\": [%u, %u], \"texel_density\": %.6g, "
-               "\"lightmap_invalid\": %u, \"lightmap_gutter\": %u, \"lightmap_unused\": %u, \"lightmap_coverage\": %.4f, "
-               "\"charts\": %u, \"small_charts\": %u, \"shared_texels\": %u},\n",
-               s->caches, s->grid_caches, s->grid_dims[0], s->grid_dims[1], s->grid_dims[2], (double)s->grid_spacing,
-               s->grid_inside, s->lightmap_caches, s->lightmap_width, s->lightmap_height, (double)s->texel_density,
-               s->lightmap_invalid, s->lightmap_gutter, s->lightmap_unused, (double)s->lightmap_coverage, s->charts,
-               s->small_charts, s->shared_texels);
-        printf("  \"links\": {\"per_cache\": %u, \"total\": %llu, \"bands\": %u, \"bytes_per_link\": %.3f},\n",
-               s->links_per_cache, (unsigned long long)s->links, s->bands, s->bytes_per_link);
-        printf("  \"file_bytes\": %llu,\n  \"sections\": [", (unsigned long long)s->file_size);
-        for (uint32_t i = 0; i < s->section_count && i < 16; ++i) {
-            fourcc_str(s->section_fourcc[i], fc);
-            printf("%s\n    {\"fourcc\": \"%s\", \"bytes\": %llu}", i ? "," : "", fc,
-                   (unsigned long long)s->section_size[i]);
+        cJSON *o = cJSON_CreateObject(), *a, *x;
+        cJSON_AddStringToObject(o, "scene", scene);
+        cJSON_AddStringToObject(o, "output", out);
+        cJSON_AddNumberToObject(o, "threads", s->threads);
+        cJSON_AddNumberToObject(o, "seed", s->seed);
+        cJSON_AddNumberToObject(o, "total_seconds", s->total_seconds);
+        a = cJSON_AddArrayToObject(o, "stages");
+        for (int i = 0; a && i < GLOW_PC_STAGE_COUNT; ++i) {
+            cJSON_AddItemToArray(a, x = cJSON_CreateObject());
+            cJSON_AddStringToObject(x, "name", glow_pc_stage_name((uint32_t)i));
+            cJSON_AddNumberToObject(x, "seconds", s->stage_seconds[i]);
+            cJSON_AddNumberToObject(x, "peak_rss_bytes", (double)s->stage_peak_rss[i]);
         }
-        printf("\n  ]\n}\n");
+        x = cJSON_AddObjectToObject(o, "scene_stats");
+        cJSON_AddNumberToObject(x, "source_triangles", s->source_triangles);
+        cJSON_AddNumberToObject(x, "triangles", s->triangles);
+        cJSON_AddNumberToObject(x, "skipped_degenerate", s->skipped_degenerate);
+        cJSON_AddNumberToObject(x, "skipped_repeated", s->skipped_repeated);
+        cJSON_AddNumberToObject(x, "skipped_collinear", s->skipped_collinear);
+        cJSON_AddNumberToObject(x, "skipped_duplicate", s->skipped_duplicate);
+        cJSON_AddNumberToObject(x, "skipped_nonfinite", s->skipped_nonfinite);
+        cJSON_AddNumberToObject(x, "materials", s->materials);
+        cJSON_AddNumberToObject(x, "textures", s->textures);
+        cJSON_AddNumberToObject(x, "textures_missing", s->textures_missing);
+        cJSON_AddNumberToObject(x, "area", s->scene_area);
+        cJSON_AddNumberToObject(o, "surfels", s->surfels);
+        cJSON_AddNumberToObject(o, "nodes", s->nodes);
+        cJSON_AddNumberToObject(o, "levels", s->levels);
+        x = cJSON_AddObjectToObject(o, "caches");
+        cJSON_AddNumberToObject(x, "total", s->caches);
+        cJSON_AddNumberToObject(x, "grid", s->grid_caches);
+        const int dims[3] = {(int)s->grid_dims[0], (int)s->grid_dims[1], (int)s->grid_dims[2]};
+        cJSON_AddItemToObject(x, "grid_dims", cJSON_CreateIntArray(dims, 3));
+        cJSON_AddNumberToObject(x, "grid_spacing", s->grid_spacing);
+        cJSON_AddNumberToObject(x, "grid_inside_rejected", s->grid_inside);
+        cJSON_AddNumberToObject(x, "lightmap", s->lightmap_caches);
+        const int lsz[2] = {(int)s->lightmap_width, (int)s->lightmap_height};
+        cJSON_AddItemToObject(x, "lightmap_size", cJSON_CreateIntArray(lsz, 2));
+        cJSON_AddNumberToObject(x, "texel_density", s->texel_density);
+        cJSON_AddNumberToObject(x, "lightmap_invalid", s->lightmap_invalid);
+        cJSON_AddNumberToObject(x, "lightmap_gutter", s->lightmap_gutter);
+        cJSON_AddNumberToObject(x, "lightmap_unused", s->lightmap_unused);
+        cJSON_AddNumberToObject(x, "lightmap_coverage", s->lightmap_coverage);
+        cJSON_AddNumberToObject(x, "charts", s->charts);
+        cJSON_AddNumberToObject(x, "small_charts", s->small_charts);
+        cJSON_AddNumberToObject(x, "shared_texels", s->shared_texels);
+        x = cJSON_AddObjectToObject(o, "links");
+        cJSON_AddNumberToObject(x, "per_cache", s->links_per_cache);
+        cJSON_AddNumberToObject(x, "total", (double)s->links);
+        cJSON_AddNumberToObject(x, "bands", s->bands);
+        cJSON_AddNumberToObject(x, "bytes_per_link", s->bytes_per_link);
+        cJSON_AddNumberToObject(o, "file_bytes", (double)s->file_size);
+        a = cJSON_AddArrayToObject(o, "sections");
+        for (uint32_t i = 0; a && i < s->section_count && i < 16; ++i) {
+            fourcc_str(s->section_fourcc[i], fc);
+            cJSON_AddItemToArray(a, x = cJSON_CreateObject());
+            cJSON_AddStringToObject(x, "fourcc", fc);
+            cJSON_AddNumberToObject(x, "bytes", (double)s->section_size[i]);
+        }
+        print_json(o);
         return;
     }
     printf("glow-bake: %s -> %s\n", scene, out);
@@ -288,30 +318,49 @@ static int run_info(const char *path, bool json) {
     double links = (double)in.cache_count * in.links_per_cache;
     char fc[5];
     if (json) {
-        printf("{\n  \"file\": ");
-        json_string(path);
-        printf(",\n  \"format\": [%u, %u],\n  \"file_bytes\": %llu,\n", in.format_major, in.format_minor,
-               (unsigned long long)in.file_size);
-        printf("  \"surfels\": %u,\n  \"surfel_area\": %.6g,\n  \"scene_area\": %.6g,\n  \"nodes\": %u,\n  \"levels\": %u,\n",
-               in.surfel_count, (double)in.surfel_area, in.scene_area, in.node_count, in.level_count);
-        printf("  \"caches\": {\"total\": %u, \"grid\": %u, \"grid_dims\": [%u, %u, %u], \"grid_spacing\": %.6g, "
-               "\"lightmap\": %u, \"lightmap_size\": [%u, %u], \"texel_density\": %.6g},\n",
-               in.cache_count, in.grid_cache_count, in.grid_dims[0], in.grid_dims[1], in.grid_dims[2],
-               (double)in.grid_spacing, in.lightmap_cache_count, in.lightmap_width, in.lightmap_height,
-               (double)in.texel_density);
-        printf("  \"links\": {\"per_cache\": %u, \"total\": %.0f, \"bands\": %u, \"full_sh\": %s},\n", in.links_per_cache,
-               links, in.sh_bands, (in.link_kind & GLOW_LINK_KIND_FULL_SH) ? "true" : "false");
-        printf("  \"materials\": %u,\n  \"triangles\": %u,\n", in.material_count, in.triangle_count);
-        printf("  \"bounds\": [[%.6g, %.6g, %.6g], [%.6g, %.6g, %.6g]],\n", (double)in.bounds_min[0],
-               (double)in.bounds_min[1], (double)in.bounds_min[2], (double)in.bounds_max[0], (double)in.bounds_max[1],
-               (double)in.bounds_max[2]);
-        printf("  \"sections\": [");
-        for (uint32_t i = 0; i < nsec; ++i) {
+        cJSON *o = cJSON_CreateObject(), *a, *x;
+        cJSON_AddStringToObject(o, "file", path);
+        const int fmt[2] = {(int)in.format_major, (int)in.format_minor};
+        cJSON_AddItemToObject(o, "format", cJSON_CreateIntArray(fmt, 2));
+        cJSON_AddNumberToObject(o, "file_bytes", (double)in.file_size);
+        cJSON_AddNumberToObject(o, "surfels", in.surfel_count);
+        cJSON_AddNumberToObject(o, "surfel_area", in.surfel_area);
+        cJSON_AddNumberToObject(o, "scene_area", in.scene_area);
+        cJSON_AddNumberToObject(o, "nodes", in.node_count);
+        cJSON_AddNumberToObject(o, "levels", in.level_count);
+        x = cJSON_AddObjectToObject(o, "caches");
+        cJSON_AddNumberToObject(x, "total", in.cache_count);
+        cJSON_AddNumberToObject(x, "grid", in.grid_cache_count);
+        const int dims[3] = {(int)in.grid_dims[0], (int)in.grid_dims[1], (int)in.grid_dims[2]};
+        cJSON_AddItemToObject(x, "grid_dims", cJSON_CreateIntArray(dims, 3));
+        cJSON_AddNumberToObject(x, "grid_spacing", in.grid_spacing);
+        cJSON_AddNumberToObject(x, "lightmap", in.lightmap_cache_count);
+        const int lsz[2] = {(int)in.lightmap_width, (int)in.lightmap_height};
+        cJSON_AddItemToObject(x, "lightmap_size", cJSON_CreateIntArray(lsz, 2));
+        cJSON_AddNumberToObject(x, "texel_density", in.texel_density);
+        x = cJSON_AddObjectToObject(o, "links");
+        cJSON_AddNumberToObject(x, "per_cache", in.links_per_cache);
+        cJSON_AddNumberToObject(x, "total", links);
+        cJSON_AddNumberToObject(x, "bands", in.sh_bands);
+        cJSON_AddBoolToObject(x, "full_sh", (in.link_kind & GLOW_LINK_KIND_FULL_SH) != 0);
+        cJSON_AddNumberToObject(o, "materials", in.material_count);
+        cJSON_AddNumberToObject(o, "triangles", in.triangle_count);
+        a = cJSON_AddArrayToObject(o, "bounds");
+        const double bmin[3] = {in.bounds_min[0], in.bounds_min[1], in.bounds_min[2]},
+                     bmax[3] = {in.bounds_max[0], in.bounds_max[1], in.bounds_max[2]};
+        cJSON_AddItemToArray(a, cJSON_CreateDoubleArray(bmin, 3));
+        cJSON_AddItemToArray(a, cJSON_CreateDoubleArray(bmax, 3));
+        a = cJSON_AddArrayToObject(o, "sections");
+        for (uint32_t i = 0; a && i < nsec; ++i) {
+            char crc[9];
             fourcc_str(sec[i].fourcc, fc);
-            printf("%s\n    {\"fourcc\": \"%s\", \"bytes\": %llu, \"crc32\": \"%08x\"}", i ? "," : "", fc,
-                   (unsigned long long)sec[i].size, sec[i].crc32);
+            snprintf(crc, sizeof crc, "%08x", sec[i].crc32);
+            cJSON_AddItemToArray(a, x = cJSON_CreateObject());
+            cJSON_AddStringToObject(x, "fourcc", fc);
+            cJSON_AddNumberToObject(x, "bytes", (double)sec[i].size);
+            cJSON_AddStringToObject(x, "crc32", crc);
         }
-        printf("\n  ]\n}\n");
+        print_json(o);
     } else {
         printf("%s: Glow bake format %u.%u, %llu bytes (valid)\n", path, in.format_major, in.format_minor,
                (unsigned long long)in.file_size);

@@ -18,6 +18,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "glow_tool_json.h"
 #include "glow/glow.h"
 #include "glow/glow_host.h"
 #include "glow/glow_scene.h"
@@ -414,35 +415,65 @@ int main(int argc, char **argv) {
         bound = t_bw > t_fl ? "memory bandwidth" : "FMA throughput";
     }
     if (o.json) {
-        printf("{\"bake\": \"%s\", \"scene\": \"%s\", \"host\": \"%s\", \"threads\": %u, \"frames\": %u,\n", o.bake,
-               o.scene, o.host == GLOW_HOST_KIND_EXACT ? "exact" : "shadow-map", threads, n);
+        cJSON *jo = cJSON_CreateObject(), *jm, *jc, *jmach, *jp;
+        cJSON_AddStringToObject(jo, "bake", o.bake);
+        cJSON_AddStringToObject(jo, "scene", o.scene);
+        cJSON_AddStringToObject(jo, "host", o.host == GLOW_HOST_KIND_EXACT ? "exact" : "shadow-map");
+        cJSON_AddNumberToObject(jo, "threads", threads);
+        cJSON_AddNumberToObject(jo, "frames", n);
 #ifdef GLOW_BENCH_HAVE_GL
-        if (o.gl)
-            printf(" \"backend\": \"gl\", \"renderer\": \"%s\", \"gl_timing\": \"%s\", \"gpu_memory_bytes\": %llu,\n",
-                   gl_renderer, o.gl_finish ? "finish" : "queries", (unsigned long long)st.memory_bytes);
-        else
+        if (o.gl) {
+            cJSON_AddStringToObject(jo, "backend", "gl");
+            cJSON_AddStringToObject(jo, "renderer", gl_renderer);
+            cJSON_AddStringToObject(jo, "gl_timing", o.gl_finish ? "finish" : "queries");
+            cJSON_AddNumberToObject(jo, "gpu_memory_bytes", (double)st.memory_bytes);
+        } else
 #endif
-        printf(" \"backend\": \"cpu\", \"link_mode\": \"%s\", \"kernel\": \"%s\", \"system_memory_bytes\": %llu,\n",
-               link_mode_name(st.link_mode), st.kernel ? st.kernel : "-",
-               (unsigned long long)st.memory_bytes);
-        printf(" \"surfels\": %u, \"caches\": %u, \"links_per_cache\": %u, \"luma\": %u, \"chroma\": %u, \"iterations\": %u,\n",
-               info.surfel_count, info.cache_count, info.links_per_cache, out->sh_bands_luma, out->sh_bands_chroma,
-               o.iterations);
-        printf(" \"median_ms\": {\"light_move\": %.4f, \"host_hook\": %.4f, \"surfel_lighting\": %.4f, \"pull\": %.4f, "
-               "\"cache_lighting\": %.4f, \"output\": %.4f, \"total\": %.4f},\n",
-               m_move, m_host, m_light, m_pull, m_cache, m_out, m_total);
-        printf(" \"cache_lighting\": {\"links\": %llu, \"link_bytes\": %.0f, \"gb_per_s\": %.3f, \"flops_per_link\": %.1f, "
-               "\"gflop_per_s\": %.3f, \"ns_per_link\": %.4f},\n",
-               (unsigned long long)links, link_bytes, gbs, fpl, gflops, m_cache * 1e6 / (double)links);
-        printf(" \"machine\": {\"stream_triad_gb_per_s\": %.3f, \"fma_peak_gflop_per_s\": %.3f, \"fma_isa\": \"%s\", "
-               "\"fraction_of_triad\": %.4f, \"fraction_of_fma_peak\": %.4f, \"bound\": \"%s\"},\n",
-               triad, peak, fma_isa, frac_bw, frac_fma, bound);
-        printf(" \"probes\": [");
-        for (uint32_t k = 0; k < o.probe_count; ++k)
-            printf("%s{\"position\": [%g, %g, %g], \"ok\": %s, \"diffuse_up_rgb\": [%.6g, %.6g, %.6g]}", k ? ", " : "",
-                   o.probes[k][0], o.probes[k][1], o.probes[k][2], probe_ok[k] ? "true" : "false", probe_rgb[k][0],
-                   probe_rgb[k][1], probe_rgb[k][2]);
-        printf("]}\n");
+        {
+            cJSON_AddStringToObject(jo, "backend", "cpu");
+            cJSON_AddStringToObject(jo, "link_mode", link_mode_name(st.link_mode));
+            cJSON_AddStringToObject(jo, "kernel", st.kernel ? st.kernel : "-");
+            cJSON_AddNumberToObject(jo, "system_memory_bytes", (double)st.memory_bytes);
+        }
+        cJSON_AddNumberToObject(jo, "surfels", info.surfel_count);
+        cJSON_AddNumberToObject(jo, "caches", info.cache_count);
+        cJSON_AddNumberToObject(jo, "links_per_cache", info.links_per_cache);
+        cJSON_AddNumberToObject(jo, "luma", out->sh_bands_luma);
+        cJSON_AddNumberToObject(jo, "chroma", out->sh_bands_chroma);
+        cJSON_AddNumberToObject(jo, "iterations", o.iterations);
+        jm = cJSON_AddObjectToObject(jo, "median_ms");
+        glow_json_num(jm, "light_move", m_move);
+        glow_json_num(jm, "host_hook", m_host);
+        glow_json_num(jm, "surfel_lighting", m_light);
+        glow_json_num(jm, "pull", m_pull);
+        glow_json_num(jm, "cache_lighting", m_cache);
+        glow_json_num(jm, "output", m_out);
+        glow_json_num(jm, "total", m_total);
+        jc = cJSON_AddObjectToObject(jo, "cache_lighting");
+        cJSON_AddNumberToObject(jc, "links", (double)links);
+        glow_json_num(jc, "link_bytes", link_bytes);
+        glow_json_num(jc, "gb_per_s", gbs);
+        glow_json_num(jc, "flops_per_link", fpl);
+        glow_json_num(jc, "gflop_per_s", gflops);
+        glow_json_num(jc, "ns_per_link", m_cache * 1e6 / (double)links);
+        jmach = cJSON_AddObjectToObject(jo, "machine");
+        glow_json_num(jmach, "stream_triad_gb_per_s", triad);
+        glow_json_num(jmach, "fma_peak_gflop_per_s", peak);
+        cJSON_AddStringToObject(jmach, "fma_isa", fma_isa);
+        glow_json_num(jmach, "fraction_of_triad", frac_bw);
+        glow_json_num(jmach, "fraction_of_fma_peak", frac_fma);
+        cJSON_AddStringToObject(jmach, "bound", bound);
+        jp = cJSON_AddArrayToObject(jo, "probes");
+        for (uint32_t k = 0; jp && k < o.probe_count; ++k) {
+            cJSON *pr = cJSON_CreateObject();
+            cJSON_AddItemToArray(jp, pr);
+            const double pos[3] = {o.probes[k][0], o.probes[k][1], o.probes[k][2]};
+            const double rgb[3] = {probe_rgb[k][0], probe_rgb[k][1], probe_rgb[k][2]};
+            glow_json_array3(pr, "position", pos);
+            cJSON_AddBoolToObject(pr, "ok", probe_ok[k]);
+            glow_json_array3(pr, "diffuse_up_rgb", rgb);
+        }
+        if (glow_json_print(jo) != 0) goto done;
     } else {
         printf("glow-bench %s + %s: %u surfels, %u caches x %u links, SH luma %u chroma %u, %u thread(s), %s host\n",
                o.bake, o.scene, info.surfel_count, info.cache_count, info.links_per_cache, out->sh_bands_luma,

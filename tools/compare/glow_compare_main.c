@@ -32,6 +32,7 @@
 #include <string.h>
 
 #include "glow_eval.h"
+#include "glow_tool_json.h"
 
 static int usage(FILE *f) {
     fprintf(f, "usage: glow-compare TEST REF [--exposure E] [--add IMAGE] [--ref-add IMAGE] [--ref-sub IMAGE] [--block N] [--ppd P]\n"
@@ -54,10 +55,6 @@ static int usage(FILE *f) {
     return f == stdout ? 0 : 2;
 }
 
-static void print_num(const char *key, double v, const char *sep) {
-    if (isfinite(v)) printf("\"%s\": %.9g%s", key, v, sep);
-    else printf("\"%s\": %s%s", key, isnan(v) ? "null" : (v > 0 ? "1e999" : "-1e999"), sep);
-}
 
 /* Reads `path` and adds it to *dst (read from dst_path), same size. 0 on success, else prints why. */
 static int add_image(const char *path, glow_eval_image *dst, const char *dst_path, float sign) {
@@ -329,23 +326,26 @@ int main(int argc, char **argv) {
         }
     }
     if (json) {
-        printf("{");
-        print_num("rel_rmse", m.rel_rmse, ", ");
-        print_num("rmse_display", m.rmse_display, ", ");
-        print_num("psnr_db", m.psnr_db, ", ");
-        print_num("ssim", m.ssim, ", ");
-        print_num("block_error", m.block_error, ", ");
-        printf("\"block_size\": %u, ", (unsigned)m.block_size);
-        print_num("mean_ratio", m.mean_ratio, ", ");
+        cJSON *o = cJSON_CreateObject();
+        glow_json_num(o, "rel_rmse", m.rel_rmse);
+        glow_json_num(o, "rmse_display", m.rmse_display);
+        glow_json_num(o, "psnr_db", m.psnr_db);
+        glow_json_num(o, "ssim", m.ssim);
+        glow_json_num(o, "block_error", m.block_error);
+        cJSON_AddNumberToObject(o, "block_size", m.block_size);
+        glow_json_num(o, "mean_ratio", m.mean_ratio);
         if (flip) {
-            print_num("hdr_flip", fr.mean, ", ");
-            printf("\"flip_ppd\": %.9g, \"flip_start_exposure\": %.9g, \"flip_stop_exposure\": %.9g, "
-                   "\"flip_exposures\": %d, ",
-                   fr.ppd, fr.start_exposure, fr.stop_exposure, fr.num_exposures);
+            glow_json_num(o, "hdr_flip", fr.mean);
+            glow_json_num(o, "flip_ppd", fr.ppd);
+            glow_json_num(o, "flip_start_exposure", fr.start_exposure);
+            glow_json_num(o, "flip_stop_exposure", fr.stop_exposure);
+            cJSON_AddNumberToObject(o, "flip_exposures", fr.num_exposures);
         }
-        printf("\"exposure\": %.9g, \"pixels\": %llu, ", (double)exposure, (unsigned long long)m.pixels);
-        printf("\"mean_test\": [%.9g, %.9g, %.9g], \"mean_ref\": [%.9g, %.9g, %.9g]}\n", m.mean_test[0], m.mean_test[1],
-               m.mean_test[2], m.mean_ref[0], m.mean_ref[1], m.mean_ref[2]);
+        glow_json_num(o, "exposure", exposure);
+        cJSON_AddNumberToObject(o, "pixels", (double)m.pixels);
+        glow_json_array3(o, "mean_test", m.mean_test);
+        glow_json_array3(o, "mean_ref", m.mean_ref);
+        if (glow_json_print(o) != 0) return 1;
     } else {
         printf("%s%s%s vs %s%s%s (exposure %g, %llu pixels)\n", paths[0], add ? " + " : "", add ? add : "", paths[1],
                ref_add ? " + " : "", ref_add ? ref_add : "", (double)exposure, (unsigned long long)m.pixels);

@@ -52,6 +52,7 @@
 #include "glow/glow_host.h"
 #include "glow/glow_scene.h"
 #include "glow_render.h"
+#include "glow_tool_json.h"
 #include "bake/bake_format.h" /* link blocks (audit) */
 #include "runtime_internal.h" /* the bake's cache normals (glow__bake_caches); a tool of this repository */
 
@@ -94,6 +95,7 @@ static void radiance(const float *c, uint32_t L, const float *y, const float *wi
 }
 
 static int ringing(const char *bake_path, const char *scene_path, uint32_t lmax, uint32_t ndirs, int json) {
+    cJSON *jrows = NULL; /* --json: one object per band count, printed at the end */
     glow_logger lg = {.log = logger_fn};
     glow_scene_desc scene;
     char msg[512];
@@ -127,7 +129,7 @@ static int ringing(const char *bake_path, const char *scene_path, uint32_t lmax,
         goto done;
     }
     if (lmax > info.sh_bands) lmax = info.sh_bands;
-    if (json) printf("[");
+    if (json) jrows = cJSON_CreateArray();
     else
         printf("%s (%u caches, bake bands %u), %u directions\n"
                "bands  negative radiance (pairs)  windowed   worst (x mean luma)  windowed   lightmap irradiance < 0  windowed\n",
@@ -188,19 +190,30 @@ static int ringing(const char *bake_path, const char *scene_path, uint32_t lmax,
         glow_system_destroy(sys);
         const double sh_neg = k.pairs ? k.neg / k.pairs : 0.0, sh_neg_w = k.pairs ? k.neg_w / k.pairs : 0.0;
         const double irr = k.lm ? k.lm_neg_irr / k.lm : 0.0, irr_w = k.lm ? k.lm_neg_irr_w / k.lm : 0.0;
-        if (json)
-            printf("%s\n {\"bands\": %u, \"negative_share\": %.6f, \"negative_share_windowed\": %.6f, "
-                   "\"worst\": %.6f, \"worst_windowed\": %.6f, \"lightmap_irradiance_negative_share\": %.6f, "
-                   "\"lightmap_irradiance_negative_share_windowed\": %.6f, \"pairs\": %.0f}",
-                   L == 2 ? "" : ",", L, sh_neg, sh_neg_w, k.worst, k.worst_w, irr, irr_w, k.pairs);
-        else
+        if (json) {
+            cJSON *row = cJSON_CreateObject();
+            cJSON_AddItemToArray(jrows, row);
+            cJSON_AddNumberToObject(row, "bands", L);
+            glow_json_num(row, "negative_share", sh_neg);
+            glow_json_num(row, "negative_share_windowed", sh_neg_w);
+            glow_json_num(row, "worst", k.worst);
+            glow_json_num(row, "worst_windowed", k.worst_w);
+            glow_json_num(row, "lightmap_irradiance_negative_share", irr);
+            glow_json_num(row, "lightmap_irradiance_negative_share_windowed", irr_w);
+            glow_json_num(row, "pairs", k.pairs);
+        } else
             printf("%5u  %25.2f %%  %8.2f %%  %19.3f  %8.3f  %22.2f %%  %6.2f %%\n", L, 100 * sh_neg, 100 * sh_neg_w, k.worst,
                    k.worst_w, 100 * irr, 100 * irr_w);
         fflush(stdout);
     }
-    if (json) printf("\n]\n");
+    if (json) {
+        const int bad = glow_json_print(jrows);
+        jrows = NULL;
+        if (bad) goto done;
+    }
     rc = 0;
 done:
+    cJSON_Delete(jrows);
     glow_host_destroy(host);
     glow_bake_destroy(bake);
     glow_context_destroy(ctx);
@@ -519,6 +532,7 @@ static int cmp_ratio(const void *a, const void *b) {
  * histogram: what the cut covers. */
 static int audit(const char *bake_path, const char *scene_path, uint32_t nprobes, uint32_t samples, const char *csv_path,
                  const char *radiance_out, int json) {
+    cJSON *jroot = NULL; /* --json: built as the figures come, printed at the end */
     session s;
     int rc = 1;
     float *pts = NULL, *er1 = NULL, *erc = NULL, *eg1 = NULL, *egc = NULL, *sg1 = NULL, *sgc = NULL;
@@ -591,7 +605,13 @@ static int audit(const char *bake_path, const char *scene_path, uint32_t nprobes
     if (csv) fprintf(csv, "cache,x,y,z,nx,ny,nz,glow_1b,ref_1b,glow,ref\n");
     const char *names[2] = {"single_bounce", "converged"};
     const float *G[2] = {eg1, egc}, *R[2] = {er1, erc};
-    if (json) printf("{\"scene\": \"%s\", \"bake\": \"%s\", \"probes\": %u, \"samples\": %u", scene_path, bake_path, nprobes, samples);
+    if (json) {
+        jroot = cJSON_CreateObject();
+        cJSON_AddStringToObject(jroot, "scene", scene_path);
+        cJSON_AddStringToObject(jroot, "bake", bake_path);
+        cJSON_AddNumberToObject(jroot, "probes", nprobes);
+        cJSON_AddNumberToObject(jroot, "samples", samples);
+    }
     for (int pass = 0; pass < 2; ++pass) {
         double sg = 0, sr = 0, se2 = 0, sr2 = 0, mean_r = 0;
         for (uint32_t i = 0; i < nprobes; ++i) mean_r += luma(R[pass] + 3 * i);
@@ -613,11 +633,17 @@ static int audit(const char *bake_path, const char *scene_path, uint32_t nprobes
         qsort(ratio, nr, sizeof *ratio, cmp_ratio);
         const double q05 = nr ? ratio[(size_t)(0.05 * (nr - 1))] : NAN, q50 = nr ? ratio[nr / 2] : NAN,
                      q95 = nr ? ratio[(size_t)(0.95 * (nr - 1))] : NAN;
-        if (json)
-            printf(",\n \"%s\": {\"mean_ratio\": %.5f, \"rel_rms_error\": %.5f, \"ratio_p05\": %.4f, \"ratio_median\": %.4f, "
-                   "\"ratio_p95\": %.4f, \"caches_rated\": %u, \"over_1_5x\": %u, \"under_1_5x\": %u}",
-                   names[pass], sg / sr, sqrt(se2 / sr2), q05, q50, q95, nr, bright, dark);
-        else
+        if (json) {
+            cJSON *o = cJSON_AddObjectToObject(jroot, names[pass]);
+            glow_json_num(o, "mean_ratio", sg / sr);
+            glow_json_num(o, "rel_rms_error", sqrt(se2 / sr2));
+            glow_json_num(o, "ratio_p05", q05);
+            glow_json_num(o, "ratio_median", q50);
+            glow_json_num(o, "ratio_p95", q95);
+            cJSON_AddNumberToObject(o, "caches_rated", nr);
+            cJSON_AddNumberToObject(o, "over_1_5x", bright);
+            cJSON_AddNumberToObject(o, "under_1_5x", dark);
+        } else
             printf("audit %-13s Glow/reference mean %.4f, rel. RMS error %.4f; per cache (%u with ref > 5%% of the mean): "
                    "p05 %.3f median %.3f p95 %.3f, %u above 1.5x, %u below 1/1.5x\n",
                    names[pass], sg / sr, sqrt(se2 / sr2), nr, q05, q50, q95, bright, dark);
@@ -667,10 +693,13 @@ static int audit(const char *bake_path, const char *scene_path, uint32_t nprobes
             sr2 += r * r;
         }
         free(sr1);
-        if (ok && json)
-            printf(",\n \"surfels\": {\"single_bounce_mean_ratio\": %.5f, \"mean_ratio\": %.5f, \"rel_rms_error\": %.5f, "
-                   "\"points\": %u}", sg1s / sr1s, sg / srr, sqrt(se2 / sr2), np);
-        else if (ok)
+        if (ok && json) {
+            cJSON *o = cJSON_AddObjectToObject(jroot, "surfels");
+            glow_json_num(o, "single_bounce_mean_ratio", sg1s / sr1s);
+            glow_json_num(o, "mean_ratio", sg / srr);
+            glow_json_num(o, "rel_rms_error", sqrt(se2 / sr2));
+            cJSON_AddNumberToObject(o, "points", np);
+        } else if (ok)
             printf("audit surfels (area-uniform, %u): Glow's feedback irradiance / reference: single bounce %.4f, converged %.4f "
                    "(rel. RMS error %.4f)\n", np, sg1s / sr1s, sg / srr, sqrt(se2 / sr2));
         if (scsv) fclose(scsv);
@@ -694,9 +723,11 @@ static int audit(const char *bake_path, const char *scene_path, uint32_t nprobes
             hist[b < 0 ? 0 : b > 8 ? 8 : b]++;
         }
         if (json) {
-            printf(",\n \"visible_solid_angle_hist_2pi_eighths\": [");
-            for (int b = 0; b < 9; ++b) printf("%s%u", b ? ", " : "", hist[b]);
-            printf("]\n}\n");
+            cJSON *a = cJSON_AddArrayToObject(jroot, "visible_solid_angle_hist_2pi_eighths");
+            for (int b = 0; a && b < 9; ++b) cJSON_AddItemToArray(a, cJSON_CreateNumber(hist[b]));
+            const int bad = glow_json_print(jroot);
+            jroot = NULL;
+            if (bad) goto done;
         } else {
             printf("audit visible solid angle of the caches' links (x 2 pi sr, in eighths; the last bin: >= 1):");
             for (int b = 0; b < 9; ++b) printf(" %u", hist[b]);
@@ -708,6 +739,7 @@ static int audit(const char *bake_path, const char *scene_path, uint32_t nprobes
                 pts[6 * i + 4], pts[6 * i + 5], luma(eg1 + 3 * i), luma(er1 + 3 * i), luma(egc + 3 * i), luma(erc + 3 * i));
     rc = 0;
 done:
+    cJSON_Delete(jroot);
     if (csv) fclose(csv);
     free(pts);
     free(er1);
