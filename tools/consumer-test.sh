@@ -77,11 +77,12 @@ cmake --build "$parent/build" --target parent_consumer glow_gl >"$tmp/parent-bui
   { echo "consumer-test: output folders: Glow wrote into the parent's bin/ or lib/" >&2; exit 1; }
 "$parent/build/parent-bin/parent_consumer" "$bake"
 
-# 4. shared libraries: a GPU-runtime build of this tree with BUILD_SHARED_LIBS, installed; the consumer
-# links libglow_runtime.so.0.1 (find_package and pkg-config), which exports the public API only.
+# 4. shared libraries: a GPU-runtime build of this tree with BUILD_SHARED_LIBS (only the two libraries
+# the install holds are built), installed; the consumer links libglow_runtime.so.0.1 (find_package and
+# pkg-config), which exports the public API only.
 cmake -S "$root" -B "$tmp/shared" -G Ninja -DCMAKE_BUILD_TYPE=Release -DBUILD_SHARED_LIBS=ON \
   -DGLOW_BUILD_PRECOMPUTE=OFF -DGLOW_BUILD_TESTS=OFF -DGLOW_BUILD_SAMPLES=OFF >"$tmp/shared.log" 2>&1 &&
-  cmake --build "$tmp/shared" >>"$tmp/shared.log" 2>&1 ||
+  cmake --build "$tmp/shared" --target glow_runtime_shared glow_gl_shared >>"$tmp/shared.log" 2>&1 ||
   { tail -20 "$tmp/shared.log" >&2; echo "consumer-test: shared build failed" >&2; exit 1; }
 sprefix=$tmp/sprefix
 cmake --install "$tmp/shared" --prefix "$sprefix" >/dev/null
