@@ -60,6 +60,9 @@ python3 -c "import json,sys; sys.exit(0 if json.load(open(sys.argv[1]))['rel_rms
 expect 1 "compare: --ref-sub of a missing image" "$BIN/glow-compare" "$T/ref.exr" "$T/ref.exr" --ref-sub "$T/none.exr"; err_has "none.exr"
 "$BIN/glow-bake" builtin:cornell -o "$T/cornell.glow" --quality low -q >/dev/null 2>&1 && pass "bake builtin:cornell (low)" || fail "bake builtin:cornell"
 expect 0 "render: Glow's view" "$BIN/glow-render" "$SCENE" --glow "$T/cornell.glow" --out "$T/glow" "${R[@]}" --bounces 64
+# glow-bench's CPU path runs under ASan here (cli/test_bench_gl runs only in the release pass)
+expect 0 "bench: cpu, exact host" "$BIN/glow-bench" "$T/cornell.glow" "$SCENE" --frames 3 --warmup 1 --no-machine --json
+grep -q '"total' "$T/out" && pass "  bench JSON has the update total" || fail "  bench JSON lacks the update total"
 expect 0 "render: Glow's indirect only" "$BIN/glow-render" "$SCENE" --glow "$T/cornell.glow" --out "$T/gi" "${R[@]}" --bounces 64 --indirect-only
 cmp -s "$T/glow_indirect.exr" "$T/gi_indirect.exr" && pass "  indirect-only gives the same indirect image" || fail "  indirect images differ"
 cmp -s "$T/glow_direct.exr" "$T/ref_direct.exr" && pass "  Glow's direct image is the reference's" || fail "  direct images differ"
