@@ -316,9 +316,16 @@ static glow_result serialise(const glow_pc_settings *set, const glow__scene *sc,
 }
 
 /* ------------------------------------------------------------------ the bake */
+/* Messages go to settings.logger (glow.h's logger type): warnings and info as they happen with code
+ * GLOW_OK, the error once, when glow_pc_bake returns, with the code it returns (glow_pc_bake below).
+ * The deprecated settings.log callback gets everything as it happens, as in 0.1. */
 static void log_adapter(void *user, glow_log_level level, const char *msg) {
     const glow_pc_settings *s = user;
-    if (s->log) s->log(s->log_user, level, msg);
+    if (s->logger.log) {
+        if (level != GLOW_LOG_ERROR) s->logger.log(s->logger.user, level, GLOW_OK, msg, NULL, 0);
+    } else if (s->log) {
+        s->log(s->log_user, level, msg);
+    }
 }
 
 /* --audit-radiance: one little-endian float32 per surfel, in the bake's surfel order (what
@@ -431,10 +438,8 @@ static void report_audit(const glow__caches *c, const glow__links *l, FILE *csv,
     if (ferror(csv)) glow__warnf(log, "%s: writing the audit CSV failed", csv_path);
 }
 
-glow_result glow_pc_bake(const char *scene_path, const char *out_path, const glow_pc_settings *settings_in,
-                         glow_pc_stats *stats) {
-    glow_pc_stats local_stats;
-    if (!stats) stats = &local_stats;
+static glow_result bake(const char *scene_path, const char *out_path, const glow_pc_settings *settings_in,
+                        glow_pc_stats *stats) {
     memset(stats, 0, sizeof *stats);
     glow_pc_settings zero = {0};
     glow_pc_settings set = glow_pc_settings_resolve(settings_in ? settings_in : &zero);
@@ -618,4 +623,15 @@ done:
     glow__pool_destroy(pool);
     if (res != GLOW_OK) snprintf(stats->error, sizeof stats->error, "%s", log.last_error);
     return res;
+}
+
+glow_result glow_pc_bake(const char *scene_path, const char *out_path, const glow_pc_settings *settings_in,
+                         glow_pc_stats *stats) {
+    glow_pc_stats local_stats;
+    if (!stats) stats = &local_stats;
+    const glow_result r = bake(scene_path, out_path, settings_in, stats);
+    if (r != GLOW_OK && settings_in && settings_in->logger.log)
+        settings_in->logger.log(settings_in->logger.user, GLOW_LOG_ERROR, r,
+                                stats->error[0] ? stats->error : glow_result_string(r), NULL, 0);
+    return r;
 }

@@ -156,8 +156,11 @@ static void on_progress(void *user, uint32_t stage, double f) {
     fflush(stderr);
 }
 
-static void on_log(void *user, glow_log_level level, const char *msg) {
+static void on_log(void *user, glow_log_level level, glow_result code, const char *msg, const char *file, int line) {
     progress_state *p = user;
+    (void)code;
+    (void)file;
+    (void)line;
     if (level == GLOW_LOG_ERROR) return; /* printed once by main, after the bake returns */
     if (level == GLOW_LOG_INFO && p->quiet) return;
     if (level > GLOW_LOG_INFO) return;
@@ -488,8 +491,7 @@ int main(int argc, char **argv) {
     progress_state ps = {.tty = isatty(2) != 0, .quiet = quiet};
     s.progress = on_progress;
     s.progress_user = &ps;
-    s.log = on_log;
-    s.log_user = &ps;
+    s.logger = (glow_logger){.log = on_log, .user = &ps};
     glow_pc_stats stats;
     glow_result r = glow_pc_bake(scene, out, &s, &stats);
     if (r != GLOW_OK) {

@@ -458,7 +458,7 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
         else if (k && !strcmp(k, "avx512")) want = GLOW__CL_AVX512;
         if (glow__cl_isa_supported(want)) s->isa = want;
     }
-    s->params = (glow_system_params){.bounce_intensity = 1.0f, .emission_scale = 1.0f, .bounce_iterations = 1};
+    s->params = (glow_system_params)GLOW_SYSTEM_PARAMS_INIT;
     const uint32_t *gmap = glow__bake_grid_map(desc->bake), *lmap = glow__bake_lightmap_map(desc->bake);
     s->grid_cells = gmap ? (size_t)m->grid_dims[0] * m->grid_dims[1] * m->grid_dims[2] : 0;
     s->lm_texels = lmap && m->lightmap_count ? (size_t)m->lightmap_width * m->lightmap_height : 0;
@@ -679,16 +679,17 @@ glow_result glow_system_set_params(glow_system *s, const glow_system_params *p) 
     if (!s || !p) return null_arg(s, "glow_system_set_params");
     if (busy(s, "glow_system_set_params")) return GLOW_ERROR_INVALID_OPERATION;
     if (!(p->bounce_intensity >= 0.0f) || !isfinite(p->bounce_intensity) || !(p->emission_scale >= 0.0f) ||
-        !(p->emission_scale <= GLOW_MAX_SCALE) || p->bounce_iterations == 0 || p->bounce_iterations > MAX_ITERATIONS) {
+        !(p->emission_scale <= GLOW_MAX_SCALE) || p->bounce_iterations > MAX_ITERATIONS) {
         GLOW__LOG_ERROR(s->ctx, GLOW_ERROR_INVALID_ARGUMENT,
                         "glow_system_set_params(%s): bounce_intensity %g must be finite and >= 0, emission_scale %g "
-                        "in [0, GLOW_MAX_SCALE], bounce_iterations %u in [1, %u]",
+                        "in [0, GLOW_MAX_SCALE], bounce_iterations %u in [0 (= 1), %u]",
                         s->label, (double)p->bounce_intensity, (double)p->emission_scale, p->bounce_iterations,
                         MAX_ITERATIONS);
         return GLOW_ERROR_INVALID_ARGUMENT;
     }
     s->params = *p;
     if (s->params.bounce_intensity > 1.0f) s->params.bounce_intensity = 1.0f;
+    if (s->params.bounce_iterations == 0) s->params.bounce_iterations = 1; /* zero is the default */
     return GLOW_OK;
 }
 

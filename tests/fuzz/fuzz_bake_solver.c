@@ -87,7 +87,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
         glow_system *sys = NULL;
         glow_system_desc sd = {.bake = bake, .lighting = {.light_surfels = hook, .user = &l}};
         if (glow_system_create(ctx, &sd, &sys) == GLOW_OK) {
-            glow_system_params p = {1.0f, 1.0f, 1};
+            glow_system_params p = GLOW_SYSTEM_PARAMS_INIT;
             glow_system_set_params(sys, &p);
             int u = 0;
             for (; u < 3; u++) {

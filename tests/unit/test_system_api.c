@@ -316,7 +316,7 @@ static void test_null_arguments(void **state) {
     }
     /* NULL system everywhere: the code, no crash */
     float rgb[3] = {1, 1, 1};
-    glow_system_params p = {1.0f, 1.0f, 1};
+    glow_system_params p = GLOW_SYSTEM_PARAMS_INIT;
     glow_surfel_view v;
     glow_update_stats st;
     assert_int_equal(glow_system_update(NULL, NULL), GLOW_ERROR_INVALID_ARGUMENT);
@@ -682,7 +682,7 @@ static void test_params(void **state) {
     assert_true(p.bounce_intensity == 1.0f && p.emission_scale == 1.0f && p.bounce_iterations == 1); /* defaults */
     const glow_system_params bad[] = {
         {NAN, 1.0f, 1}, {1.0f, NAN, 1}, {-0.1f, 1.0f, 1}, {1.0f, -1.0f, 1}, {INFINITY, 1.0f, 1},
-        {1.0f, INFINITY, 1}, {1.0f, 1.0f, 0}, {1.0f, 1.0f, 65}, {1.0f, 1.0f, UINT32_MAX}, {-INFINITY, 1.0f, 1},
+        {1.0f, INFINITY, 1}, {1.0f, 1.0f, 65}, {1.0f, 1.0f, UINT32_MAX}, {-INFINITY, 1.0f, 1},
         {1.0f, 3e38f, 1}, {1.0f, GLOW_MAX_SCALE * 1.01f, 1}, /* finite but overflowing (D3) */
     };
     const glow_system_params good = {0.5f, 2.0f, 3};
@@ -697,6 +697,15 @@ static void test_params(void **state) {
     assert_int_equal(glow_system_set_params(s, &(glow_system_params){1.5f, 1.0f, 1}), GLOW_OK);
     assert_int_equal(glow_system_get_params(s, &p), GLOW_OK);
     assert_true(p.bounce_intensity == 1.0f);
+    /* bounce_iterations 0 is its default (1); GLOW_SYSTEM_PARAMS_INIT is what a new system starts with */
+    assert_int_equal(glow_system_set_params(s, &(glow_system_params){0.5f, 2.0f, 0}), GLOW_OK);
+    assert_int_equal(glow_system_get_params(s, &p), GLOW_OK);
+    assert_true(p.bounce_intensity == 0.5f && p.emission_scale == 2.0f && p.bounce_iterations == 1);
+    const glow_system_params defaults = GLOW_SYSTEM_PARAMS_INIT;
+    glow_system *s2 = make_system(&e, NULL, 0);
+    assert_int_equal(glow_system_get_params(s2, &p), GLOW_OK);
+    assert_memory_equal(&p, &defaults, sizeof p);
+    glow_system_destroy(s2);
     /* material scales */
     const float nan3[3] = {1.0f, NAN, 1.0f}, neg3[3] = {1.0f, 1.0f, -0.5f}, inf3[3] = {INFINITY, 1.0f, 1.0f}, one3[3] = {1, 1, 1};
     EXPECT_LOGGED(&e.log, glow_system_set_material(s, 0, nan3, one3), GLOW_ERROR_INVALID_ARGUMENT, GLOW_LOG_ERROR);
@@ -1291,7 +1300,7 @@ static glow_result reentry_hook(void *user, const glow_surfel_batch *b, float *o
     if (b->first == 0 && c->sys) { /* one batch does the misuse */
         c->calls++;
         c->update_r = glow_system_update(c->sys, NULL);
-        c->params_r = glow_system_set_params(c->sys, &(glow_system_params){1.0f, 1.0f, 1});
+        c->params_r = glow_system_set_params(c->sys, &(glow_system_params)GLOW_SYSTEM_PARAMS_INIT);
         const float one[3] = {1, 1, 1};
         c->irr_r = glow_system_set_surfel_irradiance(c->sys, 0, 1, one);
     }
@@ -1315,7 +1324,7 @@ static void test_reentrant_update_refused(void **state) {
     assert_int_equal(c.irr_r, GLOW_ERROR_INVALID_OPERATION);
     assert_int_equal(e.log.errors, 3);
     /* afterwards the system is usable again */
-    assert_int_equal(glow_system_set_params(sys, &(glow_system_params){1.0f, 1.0f, 1}), GLOW_OK);
+    assert_int_equal(glow_system_set_params(sys, &(glow_system_params)GLOW_SYSTEM_PARAMS_INIT), GLOW_OK);
     c.sys = NULL; /* no misuse this time */
     glow_system_destroy(sys);
     env_close(&e);
@@ -1379,10 +1388,68 @@ static void test_bake_presets(void **state) {
     assert_non_null(strstr(msg, "fine"));
 }
 
+
+/* glow_pc_settings.logger: glow.h's logger type. Warnings and info as they happen with GLOW_OK, the
+ * error once at the return with the returned code; the deprecated log callback only without it. */
+typedef struct pc_log_rec {
+    int errors, others, bad_code, old_calls;
+    glow_result error_code;
+    char error[512];
+} pc_log_rec;
+static void pc_logger(void *user, glow_log_level level, glow_result code, const char *message, const char *file,
+                      int line) {
+    pc_log_rec *r = user;
+    assert_non_null(message);
+    assert_null(file);
+    assert_int_equal(line, 0);
+    if (level == GLOW_LOG_ERROR) {
+        r->errors++;
+        r->error_code = code;
+        snprintf(r->error, sizeof r->error, "%s", message);
+    } else {
+        r->others++;
+        if (code != GLOW_OK) r->bad_code++;
+    }
+}
+static void pc_old_log(void *user, glow_log_level level, const char *message) {
+    (void)level;
+    (void)message;
+    ((pc_log_rec *)user)->old_calls++;
+}
+static void test_bake_logger(void **state) {
+    (void)state;
+    char out[256];
+    snprintf(out, sizeof out, "/tmp/glow_test_logger_%d.glow", (int)getpid());
+    pc_log_rec rec = {0}, old = {0};
+    glow_pc_settings s = {.quality = GLOW_PC_QUALITY_LOW, .surfels = 512, .links = 16, .threads = 1,
+                          .logger = {.log = pc_logger, .user = &rec}, .log = pc_old_log, .log_user = &old};
+    glow_pc_stats st;
+    /* failure: one error, with the code returned and the text of stats.error */
+    glow_result r = glow_pc_bake("/nonexistent/glow_no_scene.obj", out, &s, &st);
+    assert_int_not_equal(r, GLOW_OK);
+    assert_int_equal(rec.errors, 1);
+    assert_int_equal(rec.error_code, r);
+    assert_string_equal(rec.error, st.error);
+    assert_non_null(strstr(rec.error, "glow_no_scene.obj"));
+    assert_int_equal(old.old_calls, 0); /* logger set: the deprecated callback is not called */
+    /* success: info lines with GLOW_OK, no error */
+    memset(&rec, 0, sizeof rec);
+    assert_int_equal(glow_pc_bake("builtin:cornell", out, &s, &st), GLOW_OK);
+    assert_int_equal(rec.errors, 0);
+    assert_true(rec.others > 0);
+    assert_int_equal(rec.bad_code, 0);
+    /* the deprecated callback alone still gets every message */
+    s.logger = (glow_logger){0};
+    assert_int_not_equal(glow_pc_bake("/nonexistent/glow_no_scene.obj", out, &s, &st), GLOW_OK);
+    assert_true(old.old_calls >= 1);
+    remove(out);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_null_arguments),
         cmocka_unit_test(test_bake_presets),
+        cmocka_unit_test(test_bake_logger),
         cmocka_unit_test(test_solver_tables),
         cmocka_unit_test(test_null_out_pointers_logged),
         cmocka_unit_test(test_band_counts),

@@ -21,7 +21,8 @@
  *   glow_scene_desc scene; char msg[512];
  *   if (glow_scene_load("cornell.json", NULL, &scene, msg, sizeof msg) != GLOW_OK) { puts(msg); ... }
  *   glow_pc_bake(scene.mesh, "cornell.glow", &settings, NULL);    bake the mesh it names
- *   glow_system_set_params(sys, &(glow_system_params){ .emission_scale = scene.emission_scale, ... });
+ *   glow_system_params prm = GLOW_SYSTEM_PARAMS_INIT;  prm.emission_scale = scene.emission_scale;
+ *   glow_system_set_params(sys, &prm);
  *   glow_host_desc hd = glow_host_desc_from_scene(&scene, bake, GLOW_HOST_KIND_EXACT);  (glow_host.h)
  *   if (!scene.has_camera) glow_scene_camera_default(info.bounds_min, info.bounds_max, &scene.camera);
  *   glow_scene_free(&scene);

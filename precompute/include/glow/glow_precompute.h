@@ -32,6 +32,7 @@ typedef enum glow_pc_quality {
     GLOW_PC_QUALITY_FORCE_U32 = 0x7FFFFFFF
 } glow_pc_quality;
 
+/* Deprecated, removed in 0.2: glow_pc_settings.logger takes glow.h's glow_logger. */
 typedef void (*glow_pc_log_fn)(void *user, glow_log_level level, const char *message);
 /* stage: 0-based index into glow_pc_stage_names; fraction in [0,1] of that stage. */
 typedef void (*glow_pc_progress_fn)(void *user, uint32_t stage, double fraction);
@@ -52,7 +53,8 @@ typedef struct glow_pc_settings {
     bool sh_links;            /* also write full-SH links (SHLK) */
     uint32_t relax_iterations;/* 0 = preset */
     uint32_t rays_per_surfel; /* 0 = 1 */
-    glow_pc_log_fn log;       /* NULL = silent */
+    glow_pc_log_fn log;       /* deprecated: use logger (below); removed in 0.2. Used
+                                 only when logger.log is NULL, and gets every message as it happens */
     void *log_user;
     glow_pc_progress_fn progress; /* NULL = none */
     void *progress_user;
@@ -79,6 +81,10 @@ typedef struct glow_pc_settings {
                                    weights (LSUB, 2 bytes per link) so that they read the light of the
                                    part it sees, not the node's mean; true: no LSUB, PIC's links
                                    (--link-subsets off; docs/linker.md "Link subsets") */
+    glow_logger logger;         /* zero = silent. The runtime's logger (glow.h), so that one sink serves
+                                   both: warnings and info as they happen (code GLOW_OK), the error
+                                   once, when glow_pc_bake returns, with the code it returns (the text
+                                   of stats.error); file NULL, line 0. Replaces log. */
 } glow_pc_settings;
 
 typedef struct glow_pc_stats {

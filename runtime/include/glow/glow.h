@@ -317,16 +317,22 @@ typedef struct glow_surfel_view {
  * immutable. \since 0.1 */
 GLOW_API glow_result glow_system_get_surfels(const glow_system *system, glow_surfel_view *out_view);
 
-/* Lighting-artist controls. All take effect at the next update and persist. */
+/* Lighting-artist controls. All take effect at the next update and persist.
+ * Departure from zero-is-default (STYLE.md): the two scales keep 0 as a setting, because artists use
+ * it (bounce off, emission off) and reading 0 as 1 would silently change valid code; counts take 0 as
+ * their default. GLOW_SYSTEM_PARAMS_INIT is the defaults, for C and C++ initialisers:
+ *     glow_system_params p = GLOW_SYSTEM_PARAMS_INIT;  p.emission_scale = 2.0f; */
 typedef struct glow_system_params {
     float bounce_intensity;  /* indirect light fed back into surfel lighting: 0 = single bounce,
                                 1 = physical (default); clamped to [0, 1] */
     float emission_scale;    /* multiplies all emission (default 1); 0 .. GLOW_MAX_SCALE */
-    uint32_t bounce_iterations; /* feedback iterations per update (default 1): each one lights the
-                                   surfels again with the previous iteration's caches */
+    uint32_t bounce_iterations; /* feedback iterations per update, 0 = the default, 1: each one lights
+                                   the surfels again with the previous iteration's caches */
 } glow_system_params;
+/** The defaults of glow_system_params (what a new system starts with). \since 0.1 */
+#define GLOW_SYSTEM_PARAMS_INIT {1.0f, 1.0f, 1u}
 /** Sets the artist controls. \returns GLOW_ERROR_INVALID_ARGUMENT for NaN, negative values, an
- * emission_scale above GLOW_MAX_SCALE or bounce_iterations 0 or > 64 (nothing changes).
+ * emission_scale above GLOW_MAX_SCALE or bounce_iterations above 64 (nothing changes).
  * \threadsafety Not concurrently with other calls on the system. \since 0.1 */
 GLOW_API glow_result glow_system_set_params(glow_system *system, const glow_system_params *params);
 /** The artist controls in effect. \threadsafety Between updates, from any thread. \since 0.1 */
