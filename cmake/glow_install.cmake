@@ -8,7 +8,7 @@ include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
 # BUILD_SHARED_LIBS: the shared twins (libglow_runtime.so.0.1, libglow_gl.so.0.1 with the GL entry-point
-# table inside; runtime/CMakeLists.txt, integration/src/gl/CMakeLists.txt) under the same exported names.
+# table inside; runtime/CMakeLists.txt, integration/gpu/CMakeLists.txt) under the same exported names.
 if(BUILD_SHARED_LIBS)
   set(glow_rt glow_runtime_shared)
   set(glow_gl_t glow_gl_shared)
@@ -35,9 +35,9 @@ if(TARGET ${glow_gl_t} AND TARGET glow_glfns)
   foreach(t ${glow_gl_t} ${glow_glfns_t})
     target_include_directories(${t} INTERFACE $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
   endforeach()
-  install(FILES ${PROJECT_SOURCE_DIR}/integration/include/glow/glow_gl.h
-                ${PROJECT_SOURCE_DIR}/integration/include/glow/glow_gl_loader.h
-                ${PROJECT_SOURCE_DIR}/integration/include/glow/glow_glfns.h
+  install(FILES ${PROJECT_SOURCE_DIR}/integration/gpu/include/glow/glow_gl.h
+                ${PROJECT_SOURCE_DIR}/integration/gpu/include/glow/glow_gl_loader.h
+                ${PROJECT_SOURCE_DIR}/integration/gpu/include/glow/glow_glfns.h
           DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/glow)
   list(APPEND GLOW_PACKAGE_COMPONENTS gl)
 endif()

@@ -1,5 +1,5 @@
 /*
- * glow_shared.h — what Glow's GL kernels and their C host (integration/src/gl/) must agree on: buffer
+ * glow_shared.h — what Glow's GL kernels and their C host (integration/gpu/) must agree on: buffer
  * bindings, struct layouts (std430 / std140 with only 4-byte scalars and vec4s, so C and GLSL lay them
  * out alike), workgroup sizes. Valid C11 and GLSL 4.50: the embed step defines GLOW_GLSL before it.
  *

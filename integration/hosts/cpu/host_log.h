@@ -1,5 +1,5 @@
 /* host_log.h — the logging and clock helpers of the CPU hosts (host.c) and the GPU lights
- * (gl45/gl_lights.c): one copy instead of one per file. Not installed. */
+ * (../gl_lights/gl_lights.c): one copy instead of one per file. Not installed. */
 #ifndef GLOW_HOST_LOG_H
 #define GLOW_HOST_LOG_H
 

@@ -1,5 +1,5 @@
 /* host_math.h — the small vector helpers of the CPU hosts (host.c, shadow_map.c) and the GPU lights
- * (gl45/gl_lights.c). One copy on purpose: the GPU shadow maps must place their texel grids exactly
+ * (../gl_lights/gl_lights.c). One copy on purpose: the GPU shadow maps must place their texel grids exactly
  * where the software maps do (the same orthonormal basis), or the two hosts stop agreeing. Not installed. */
 #ifndef GLOW_HOST_MATH_H
 #define GLOW_HOST_MATH_H

@@ -3,7 +3,7 @@
  * sun lights plus a constant sky at the surfels, shadowed either exactly (Embree rays) or the way an
  * engine does it (software-rasterised shadow maps with bias and PCF).
  *
- * Part of glow_host (target glow::host, folder integration/; links Embree 3). The lights are the
+ * Part of glow_host (target glow::host, folder integration/hosts/cpu/; links Embree 3). The lights are the
  * scene description's (glow_scene.h); their units are those of docs/scene-format.md.
  *
  * WHAT IT DOES NOT DO: emission (the runtime adds the bake's material emission; pass the scene's

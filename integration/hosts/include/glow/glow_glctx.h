@@ -1,7 +1,7 @@
 /*
  * glow_glctx.h — OpenGL 4.5 core contexts for hosts, samples and tests: headless (EGL surfaceless or
  * OSMesa, Mesa's llvmpipe on machines without a GPU, the vendor driver through EGL where there is one)
- * or a GLFW window. Part of glow_glctx (target glow::glctx, integration/src/context/).
+ * or a GLFW window. Part of glow_glctx (target glow::glctx, integration/hosts/context/).
  *
  * WHAT IT DOES NOT DO: load GL functions for you (glow_glctx_get_proc_address gives the loader the GL
  * backend, glow_gl.h, and samples use), render, or read pixels: a headless context has no default

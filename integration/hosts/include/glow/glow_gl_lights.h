@@ -3,7 +3,7 @@
  * plus a constant sky, shadowed by depth maps rendered on the GPU, given to Glow as the GLSL surfel
  * lighting hook (and to the host's own fragment shaders, for the same direct light on screen).
  *
- * Part of glow_gl_lights (target glow::gl_lights, folder integration/src/gl45/; links glow_glfns and
+ * Part of glow_gl_lights (target glow::gl_lights, folder integration/hosts/gl_lights/; links glow_glfns and
  * glow_host for glow_scene.h). It is the GPU twin of glow_host.h's GLOW_HOST_KIND_SHADOW_MAP host:
  * the same light models, the same maps (placement, resolution, margins, near plane), the same bias,
  * normal offset and PCF — so the two agree surfel by surfel up to rasteriser and float rounding

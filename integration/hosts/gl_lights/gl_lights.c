@@ -1,7 +1,7 @@
 /* gl_lights.c — glow_gl_lights (glow_gl_lights.h): GPU shadow-mapped lights as Glow's GLSL surfel
  * lighting hook.
  *
- * The maps are placed exactly as glow_host's software maps (integration/src/shadow_map.c: the same
+ * The maps are placed exactly as glow_host's software maps (integration/hosts/cpu/shadow_map.c: the same
  * bases, texel sizes, margins and near plane, set up here in the same float arithmetic), rendered by
  * the GPU rasteriser (pixel centres, like the software one) into GL_DEPTH_COMPONENT32F array layers
  * with the view-axis distance written by the fragment shader, and read by the hook
@@ -17,9 +17,9 @@
 
 #include "glow/glow_gl_lights.h"
 #include "glow/glow_glfns.h"
-#include "../host_math.h"
-#include "../host_log.h"
-#include "../shadow_map.h" /* the software maps' placement: the texel grids must coincide */
+#include "host_math.h"
+#include "host_log.h"
+#include "shadow_map.h" /* the software maps' placement: the texel grids must coincide */
 
 #define GLL_PI 3.14159265358979323846
 #define SPOT_MAX_SINGLE_MAP_DEG 60.0f /* as glow_host: wider spots get a cube */

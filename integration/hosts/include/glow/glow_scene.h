@@ -1,7 +1,7 @@
 /*
  * glow_scene.h — the scene description file (JSON): which mesh, seen from where, lit by what.
  *
- * Part of glow_host (target glow::host, folder integration/). The schema, units, defaults and every
+ * Part of glow_host (target glow::host, folder integration/hosts/cpu/). The schema, units, defaults and every
  * error are documented in docs/scene-format.md; in short:
  *
  *   { "mesh": "CornellBox-Original.obj",              (relative to the JSON file, or "builtin:NAME")

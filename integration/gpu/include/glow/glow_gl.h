@@ -2,7 +2,7 @@
  * glow_gl.h — the GL 4.5 backend of Glow's solver: the same frame as glow_system_update (PIC Fig. 2:
  * surfel lighting -> pull -> cache lighting -> output textures), as GLSL compute kernels, with the
  * host lighting the surfels through its own shadow maps in a GLSL hook. Part of glow_gl (target
- * glow::gl, integration/src/gl/); the kernels (shaders/NAME.comp) are embedded at build time.
+ * glow::gl, integration/gpu/); the kernels (shaders/NAME.comp) are embedded at build time.
  *
  * WHAT IT MIRRORS: a CPU glow_system made from the same bake. Its solver tables (glow.h,
  * glow_system_get_solver_tables: surfels, hierarchy, links, feedback weights, the non-divergence cap)

@@ -1,7 +1,7 @@
 /*
  * glow_glfns.h — the OpenGL 4.5 core entry points Glow's GL code uses, loaded through a host loader
  * (eglGetProcAddress, OSMesaGetProcAddress, glfwGetProcAddress: glow_glctx_get_proc_address gives one).
- * Part of glow_glctx (integration/src/glfns/).
+ * Part of glow_glfns (target glow::glfns, folder integration/gpu/).
  *
  * Why a table and not libGL/libOpenGL: middleware must work in whatever context the host made (EGL on a
  * GPU, OSMesa in CI, GLX through GLFW), and only the context's own GetProcAddress is valid for all of

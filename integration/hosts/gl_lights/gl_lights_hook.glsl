@@ -2,7 +2,7 @@
 // ASCII only (GLSL's character set; the embedded bytes are a char array).
 // Embedded into gl_lights.c at configure time (CMakeLists.txt); gl_lights.c puts the GLOW_GL_LIGHTS_* sizes and bindings
 // in front of it. Valid in compute and fragment shaders (texelFetch only, no derivatives).
-// It mirrors integration/src/host.c (light_term) and shadow_map.c (glow__dm_visibility): change
+// It mirrors integration/hosts/cpu/host.c (light_term) and shadow_map.c (glow__dm_visibility): change
 // them together. Block layout: the std140 structs in gl_lights.c.
 
 #define GLOW_HOST_SURFEL_IRRADIANCE_DEFINED
