@@ -17,6 +17,7 @@
 #include <time.h>
 
 #include "glow/glow_gl.h"
+#include "glow/glow_backend.h"
 #include "glow/glow_glfns.h"
 
 #include "glow_shared.h" /* shaders/include: layouts and bindings shared with the kernels */
@@ -55,8 +56,7 @@ struct glow_gl_system {
     glow_gl_outputs out;
     glow_gl_params params;
     /* what the material state was last computed from */
-    float *mat_scales_seen; /* [M][6] */
-    uint64_t emission_rev_seen, direct_rev_seen;
+    uint64_t emission_rev_seen, direct_rev_seen, material_rev_seen; /* the tables' revisions uploaded */
     float emission_scale_seen;
     int mat_valid, direct_valid;
     glow_gl_surfel_mat *mat_staging; /* [S] */
@@ -203,7 +203,6 @@ static void free_system(glow_gl_system *s) {
         gl->DeleteTextures(4, tex);
     }
     if (gl->DeleteQueries && s->queries[0]) gl->DeleteQueries(T_COUNT, s->queries);
-    free(s->mat_scales_seen);
     free(s->mat_staging);
     free(s->direct_staging);
     free(s);
@@ -327,12 +326,11 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
     /* host staging */
     s->mat_staging = malloc((size_t)(s->S ? s->S : 1u) * sizeof *s->mat_staging);
     s->direct_staging = malloc((size_t)(s->S ? s->S : 1u) * 4u * sizeof(float));
-    s->mat_scales_seen = malloc((size_t)(t->material_count ? t->material_count : 1u) * 6u * sizeof(float));
     void *geom = malloc((size_t)(s->S ? s->S : 1u) * sizeof(glow_gl_surfel_geom));
     uint32_t *nodes = malloc((size_t)(s->N ? s->N : 1u) * 4u * sizeof(uint32_t));
     const size_t pairs_n = (size_t)t->grid_used + t->lightmap_used;
     uint32_t *pairs = malloc((pairs_n ? pairs_n : 1u) * 2u * sizeof(uint32_t));
-    if (!s->mat_staging || !s->direct_staging || !s->mat_scales_seen || !geom || !nodes || !pairs) {
+    if (!s->mat_staging || !s->direct_staging || !geom || !nodes || !pairs) {
         free(geom), free(nodes), free(pairs);
         LOG_ERR(s, GLOW_ERROR_OUT_OF_MEMORY, "out of host memory (%u surfels)", s->S);
         free_system(s);
@@ -377,8 +375,6 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
     gl->ClearNamedBufferData(s->buf[B_DIRECT], GL_R32F, GL_RED, GL_FLOAT, &zero);
     gl->ClearNamedBufferData(s->buf[B_CACHE], GL_R32F, GL_RED, GL_FLOAT, &zero);
     gl->ClearNamedBufferData(s->buf[B_FLUX], GL_R32F, GL_RED, GL_FLOAT, &zero);
-    memcpy(s->mat_scales_seen, t->material_albedo_scale, 3u * t->material_count * sizeof(float));
-    memcpy(s->mat_scales_seen + 3u * t->material_count, t->material_emission_scale, 3u * t->material_count * sizeof(float));
     s->mat_valid = 0; /* first update computes it with the real params */
 
     /* output textures */
@@ -543,15 +539,12 @@ glow_result glow_gl_system_update(glow_gl_system *s, const glow_update_desc *des
     glow_system_get_solver_tables(s->sys, &s->t);
     const glow_solver_tables *t = &s->t;
     /* material state: recomputed when emission, material scales or the emission scale changed */
-    const size_t M3 = 3u * t->material_count;
-    if (!s->mat_valid || t->emission_revision != s->emission_rev_seen || prm.emission_scale != s->emission_scale_seen ||
-        memcmp(s->mat_scales_seen, t->material_albedo_scale, M3 * sizeof(float)) ||
-        memcmp(s->mat_scales_seen + M3, t->material_emission_scale, M3 * sizeof(float))) {
+    if (!s->mat_valid || t->emission_revision != s->emission_rev_seen || t->material_revision != s->material_rev_seen ||
+        prm.emission_scale != s->emission_scale_seen) {
         fill_mat(s, prm.emission_scale);
         gl->NamedBufferSubData(s->buf[B_MAT], 0, (GLsizeiptr)((size_t)s->S * sizeof(glow_gl_surfel_mat)), s->mat_staging);
-        memcpy(s->mat_scales_seen, t->material_albedo_scale, M3 * sizeof(float));
-        memcpy(s->mat_scales_seen + M3, t->material_emission_scale, M3 * sizeof(float));
         s->emission_rev_seen = t->emission_revision;
+        s->material_rev_seen = t->material_revision;
         s->emission_scale_seen = prm.emission_scale;
         s->mat_valid = 1;
     }

@@ -16,6 +16,7 @@
 
 #include "bake/bake_format.h"
 #include "glow/glow.h"
+#include "glow/glow_backend.h" /* glow_solver_tables (system.c) */
 
 #if defined(__GNUC__) || defined(__clang__)
 #define GLOW__PRINTF(fmt_index, first_arg) __attribute__((format(printf, fmt_index, first_arg)))

@@ -96,7 +96,7 @@ struct glow_system {
     glow_update_stats stats;
     /* per-stage task arguments */
     uint32_t pull_first, pull_count;
-    uint64_t emission_revision, direct_revision;
+    uint64_t emission_revision, direct_revision, material_revision;
     float cl_scale[GLOW__CL_SCALE_FLOATS]; /* glow__cl_coeff_scale(luma, chroma) */
 };
 
@@ -718,6 +718,7 @@ glow_result glow_system_set_material(glow_system *s, uint32_t material, const fl
         }
     if (emission_scale) memcpy(s->mat_emis_scale + 3 * (size_t)material, emission_scale, 3 * sizeof(float));
     if (albedo_scale) memcpy(s->mat_albedo_scale + 3 * (size_t)material, albedo_scale, 3 * sizeof(float));
+    if (emission_scale || albedo_scale) s->material_revision++;
     return GLOW_OK;
 }
 
@@ -865,6 +866,7 @@ glow_result glow_system_get_solver_tables(const glow_system *s, glow_solver_tabl
                               .material_emission_scale = s->mat_emis_scale,
                               .material_albedo_scale = s->mat_albedo_scale,
                               .emission_revision = s->emission_revision,
+                              .material_revision = s->material_revision,
                               .direct_irradiance = s->direct,
                               .direct_revision = s->direct_revision};
     return GLOW_OK;

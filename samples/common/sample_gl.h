@@ -60,6 +60,7 @@
 #include <string.h>
 
 #include <glow/glow.h>
+#include <glow/glow_backend.h> /* the debug views read the solver's tables (not public API) */
 #include <glow/glow_gl.h>
 #include <glow/glow_glfns.h>
 #include <glow/glow_scene.h>

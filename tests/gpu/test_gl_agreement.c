@@ -27,6 +27,7 @@
 #include <unistd.h>
 
 #include "glow/glow.h"
+#include "glow/glow_backend.h"
 #include "glow/glow_gl.h"
 #include "glow/glow_glctx.h"
 #include "glow/glow_glfns.h"
@@ -205,6 +206,10 @@ static void agree_scene(const char *scene, uint32_t luma, uint32_t chroma) {
     assert_true(compare(&f, "params, material, new light") <= 1.0);
     run_both(&f, 1, GLOW_UPDATE_FLAG_RESET_BOUNCE);
     assert_true(compare(&f, "after a bounce reset") <= 1.0);
+    /* a material change alone: the GL side notices it by the tables' material_revision */
+    assert_int_equal(glow_system_set_material(f.cpu, 0, NULL, (float[3]){0.1f, 0.2f, 0.9f}), GLOW_OK);
+    run_both(&f, 2, 0);
+    assert_true(compare(&f, "a material change alone") <= 1.0);
     free_fixture(&f);
 }
 

@@ -33,6 +33,7 @@
 #include <unistd.h>
 
 #include "glow/glow.h"
+#include "glow/glow_backend.h"
 #include "glow/glow_gl.h"
 #include "glow/glow_glctx.h"
 #include "glow/glow_precompute.h"

@@ -22,6 +22,7 @@
 
 #include "bake/bake_format.h"
 #include "glow/glow.h"
+#include "glow/glow_backend.h"
 #include "glow/glow_precompute.h"
 #include "runtime_internal.h"
 
@@ -1002,6 +1003,17 @@ static void test_solver_tables(void **state) {
     assert_int_equal(glow_system_get_solver_tables(s, &t), GLOW_OK);
     assert_true(t.emission_revision > er && t.direct_revision > dr);
     assert_true(t.emission[3 * 5 + 2] == 3.0f && t.direct_irradiance[3 * 7 + 1] == 2.0f);
+    /* material scales: the revision grows on a change, and not on a refused call (backends re-upload
+     * by revision, without comparing the arrays) */
+    const uint64_t mr = t.material_revision;
+    assert_int_equal(glow_system_set_material(s, 0, (float[3]){2, 2, 2}, NULL), GLOW_OK);
+    assert_int_equal(glow_system_get_solver_tables(s, &t), GLOW_OK);
+    assert_true(t.material_revision > mr && t.material_emission_scale[1] == 2.0f);
+    const uint64_t mr2 = t.material_revision;
+    EXPECT_LOGGED(&e.log, glow_system_set_material(s, 0, (float[3]){-1, 2, 2}, NULL), GLOW_ERROR_INVALID_ARGUMENT,
+                  GLOW_LOG_ERROR);
+    assert_int_equal(glow_system_get_solver_tables(s, &t), GLOW_OK);
+    assert_true(t.material_revision == mr2);
     glow_system_destroy(s);
     env_close(&e);
 }

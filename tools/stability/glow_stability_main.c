@@ -49,6 +49,7 @@
 #include <string.h>
 
 #include "glow/glow.h"
+#include "glow/glow_backend.h"
 #include "glow/glow_host.h"
 #include "glow/glow_scene.h"
 #include "glow_render.h"

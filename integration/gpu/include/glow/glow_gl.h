@@ -4,8 +4,8 @@
  * host lighting the surfels through its own shadow maps in a GLSL hook. Part of glow_gl (target
  * glow::gl, integration/gpu/); the kernels (shaders/NAME.comp) are embedded at build time.
  *
- * WHAT IT MIRRORS: a CPU glow_system made from the same bake. Its solver tables (glow.h,
- * glow_system_get_solver_tables: surfels, hierarchy, links, feedback weights, the non-divergence cap)
+ * WHAT IT MIRRORS: a CPU glow_system made from the same bake. Its solver tables (glow_backend.h, not
+ * public API: glow_system_get_solver_tables: surfels, hierarchy, links, feedback weights, the non-divergence cap)
  * are uploaded at create; its artist controls (glow_system_set_params, glow_system_set_material,
  * glow_system_set_surfel_emission) apply to both and are picked up at the next GL update. So the two
  * backends give the same numbers within float tolerance (tests/gpu/test_gl_agreement.c measures it),

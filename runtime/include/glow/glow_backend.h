@@ -1,0 +1,71 @@
+/*
+ * glow_backend.h — the seam between Glow's runtime and Glow's other backends of the same solver.
+ *
+ * NOT PUBLIC API. The GL backend (glow_gl, integration/gpu/), this repository's tools and the samples'
+ * debug views read the runtime's tables through it: the bake's link bit layout, per-surfel arrays,
+ * the hierarchy. Its layouts follow the bake format and may change in any version; it is not
+ * installed with the SDK. glow_system_get_solver_tables is exported from libglow_runtime.so only
+ * because libglow_gl.so calls it. An engine uses glow.h (and glow_gl.h) instead.
+ */
+#ifndef GLOW_GLOW_BACKEND_H
+#define GLOW_GLOW_BACKEND_H
+
+#include "glow/glow.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Solver tables: everything an update reads besides the host's light, in the layouts the CPU solver
+ * uses, for other backends of the same solver (the GL backend, glow_gl.h, uploads them once and
+ * re-uploads the parts whose revision changed). Views owned by the system (or its bake), valid until
+ * it is destroyed; the values a setter changes are visible at once; the revisions say which changed,
+ * so a backend re-uploads only those (no comparison of the arrays). */
+typedef struct glow_solver_tables {
+    uint32_t surfel_count, node_count, level_count, cache_count, material_count;
+    uint32_t links_per_cache, link_blocks_per_cache; /* link blocks: 16 links each, see link_blocks */
+    uint32_t sh_bands_luma, sh_bands_chroma, coeff_count;
+    float surfel_area;                 /* m², every leaf surfel */
+    const float *albedo;               /* [S][3] linear RGB (texture folded in), before material scales */
+    const float *emission;             /* [S][3] W/(m²·sr) before scales (the bake's, or the host's override) */
+    const uint32_t *materials;         /* [S] */
+    const uint32_t *feedback;          /* [S] the cache each surfel re-emits (multi-bounce) */
+    const float *feedback_weights;     /* [S][luma²] π s_l(1) y_lm(n): E_indirect = Σ w · cache SH (YCoCg) */
+    const float *indirect_albedo_max;  /* [S] cap of the albedo applied to indirect light (non-divergence) */
+    const uint32_t *node_children;     /* node n's children at node_children[n * node_stride + 0/1] (leaves: none) */
+    uint32_t node_stride;              /* uint32 between nodes */
+    const float *node_inv_pi_area;     /* [N] 1 / (π area): node radiance = flux · this */
+    const float *node_positions;       /* node n's area-weighted centre (m) at node_positions[n * node_stride + 0..2]
+                                          (debug views: clusters, a cache's links) */
+    const float *cache_positions;      /* cache c's position (m) at cache_positions[c * cache_stride + 0..2] */
+    uint32_t cache_stride;             /* floats between caches */
+    const uint32_t *level_starts;      /* [level_count + 1]: level v's nodes are [starts[v], starts[v+1]); 0 = leaves */
+    const void *link_blocks;           /* [cache_count * link_blocks_per_cache] blocks of 128 bytes, 16 links:
+                                          uint32 node_dir[16] (bits 0-23 node, 24-31 bits 4-11 of the 12-bit
+                                          octahedral u), half one_minus_cos[16], uint16 dir_lo[16] (bits 0-3:
+                                          u bits 0-3, 4-15: v); docs/bake-format.md "LINK" */
+    const uint32_t *output_index;      /* [grid_used + lightmap_used] the non-empty grid cells, then texels */
+    const uint32_t *output_cache;      /* [same] the cache each of them shows */
+    uint32_t grid_used, lightmap_used;
+    const float *material_emission_scale, *material_albedo_scale; /* [M][3] (glow_system_set_material) */
+    uint64_t emission_revision;        /* grows whenever `emission` changes */
+    uint64_t material_revision;        /* grows whenever a material scale changes (glow_system_set_material) */
+    const float *direct_irradiance;    /* [S][3] W/m²: the direct light the next update uses (pushed with
+                                          glow_system_set_surfel_irradiance, or the hook's last); valid until
+                                          the next update */
+    uint64_t direct_revision;          /* grows whenever `direct_irradiance` changes */
+    const uint16_t *link_subsets;      /* the bake's link subsets (LSUB), one per link in link_blocks' order,
+                                          or NULL: link j reads its node's radiance times
+                                          s = sum_i q_i Y[slot_i] / (sum_i q_i Y[node]), q_i = bits 4i..4i+3,
+                                          slot_i the node's grandchildren (children's children; a leaf
+                                          child twice; a leaf itself four times), s = 1 where all q_i
+                                          are 0 or Y[node] is 0; docs/bake-format.md "LSUB" */
+} glow_solver_tables;
+/** Fills `out_tables`. \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT for NULL. \threadsafety Between
+ * updates; the views change only through the setters and updates. \since 0.1 */
+GLOW_API glow_result glow_system_get_solver_tables(const glow_system *system, glow_solver_tables *out_tables);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* GLOW_GLOW_BACKEND_H */
