@@ -15,7 +15,6 @@
 
 #include <cjson/cJSON.h>
 
-#include "bake/bake_format.h"
 #include "glow/glow.h"
 #include "glow/glow_precompute.h"
 
@@ -309,17 +308,12 @@ static int run_info(const char *path, bool json) {
     glow_bake_info in;
     glow_bake_get_info(bake, &in);
     /* the section table, read from the (already validated) file */
-    glow_bake_header hdr;
-    glow_bake_section sec[GLOW_BAKE_MAX_SECTIONS];
+    /* the section table (the bake is already validated) */
+    glow_bake_section_info sec[64];
     uint32_t nsec = 0;
-    FILE *f = fopen(path, "rb");
-    if (f && fread(&hdr, sizeof hdr, 1, f) == 1) {
-        nsec = hdr.section_count < GLOW_BAKE_MAX_SECTIONS ? hdr.section_count : GLOW_BAKE_MAX_SECTIONS;
-        if (fread(sec, sizeof sec[0], nsec, f) != nsec) nsec = 0;
-    }
-    if (f) fclose(f);
+    glow_bake_get_sections(bake, sec, 64, &nsec);
+    if (nsec > 64) nsec = 64;
     double links = (double)in.cache_count * in.links_per_cache;
-    char fc[5];
     if (json) {
         cJSON *o = cJSON_CreateObject(), *a, *x;
         cJSON_AddStringToObject(o, "file", path);
@@ -356,10 +350,9 @@ static int run_info(const char *path, bool json) {
         a = cJSON_AddArrayToObject(o, "sections");
         for (uint32_t i = 0; a && i < nsec; ++i) {
             char crc[9];
-            fourcc_str(sec[i].fourcc, fc);
             snprintf(crc, sizeof crc, "%08x", sec[i].crc32);
             cJSON_AddItemToArray(a, x = cJSON_CreateObject());
-            cJSON_AddStringToObject(x, "fourcc", fc);
+            cJSON_AddStringToObject(x, "fourcc", sec[i].fourcc);
             cJSON_AddNumberToObject(x, "bytes", (double)sec[i].size);
             cJSON_AddStringToObject(x, "crc32", crc);
         }
@@ -380,8 +373,7 @@ static int run_info(const char *path, bool json) {
                (double)in.bounds_max[0], (double)in.bounds_max[1], (double)in.bounds_max[2]);
         printf("  sections ");
         for (uint32_t i = 0; i < nsec; ++i) {
-            fourcc_str(sec[i].fourcc, fc);
-            printf(" %s %llu", fc, (unsigned long long)sec[i].size);
+            printf(" %s %llu", sec[i].fourcc, (unsigned long long)sec[i].size);
         }
         printf("\n");
     }

@@ -742,6 +742,46 @@ glow_result glow_bake_get_info(const glow_bake *bake, glow_bake_info *out_info) 
     return GLOW_OK;
 }
 
+glow_result glow_bake_get_caches(const glow_bake *bake, uint32_t first, uint32_t count, glow_cache_info *out) {
+    if (!bake || (!out && count)) return GLOW_ERROR_INVALID_ARGUMENT;
+    const uint32_t n = bake->meta.cache_count;
+    if (first > n || count > n - first) {
+        GLOW__LOG_ERROR(bake->ctx, GLOW_ERROR_INVALID_ARGUMENT,
+                        "glow_bake_get_caches: caches [%u, %u + %u) lie outside the bake's %u", first, first, count, n);
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    const glow_bake_cache *c = glow__bake_caches(bake);
+    for (uint32_t i = 0; i < count; ++i) {
+        const glow_bake_cache *src = &c[first + i];
+        glow_cache_info *d = &out[i];
+        memcpy(d->position, src->position, sizeof d->position);
+        d->normal[0] = d->normal[1] = d->normal[2] = 0.0f;
+        if (src->kind == GLOW_CACHE_KIND_LIGHTMAP) glow__oct_decode(src->normal_oct, d->normal);
+        d->kind = src->kind;
+        d->texel = src->texel;
+    }
+    return GLOW_OK;
+}
+
+glow_result glow_bake_get_sections(const glow_bake *bake, glow_bake_section_info *out, uint32_t capacity,
+                                   uint32_t *out_count) {
+    if (!bake || !out_count || (!out && capacity)) return GLOW_ERROR_INVALID_ARGUMENT;
+    *out_count = bake->section_count;
+    for (uint32_t i = 0; i < bake->section_count && i < capacity; ++i) {
+        const glow_bake_section *e = &bake->table[i];
+        for (int k = 0; k < 4; ++k) {
+            const char ch = (char)((e->fourcc >> (8 * k)) & 0xFFu);
+            out[i].fourcc[k] = (ch >= 32 && ch < 127) ? ch : '?';
+        }
+        out[i].fourcc[4] = '\0';
+        out[i].version = e->version;
+        out[i].offset = e->offset;
+        out[i].size = e->size;
+        out[i].crc32 = e->crc32;
+    }
+    return GLOW_OK;
+}
+
 void glow__bake_retain(const glow_bake *bake) { atomic_fetch_add(&((glow_bake *)bake)->systems, 1u); }
 void glow__bake_release(const glow_bake *bake) { atomic_fetch_sub(&((glow_bake *)bake)->systems, 1u); }
 

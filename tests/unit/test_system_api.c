@@ -963,6 +963,65 @@ static void test_emission_override(void **state) {
     env_close(&e);
 }
 
+/* glow_bake_get_caches / glow_bake_get_sections: the public views that tools used internals for. */
+static void test_bake_caches_sections(void **state) {
+    (void)state;
+    env e;
+    env_open(&e);
+    const glow_bake_meta *m = e.meta;
+    const glow_bake_cache *raw = glow__bake_caches(e.bake);
+    glow_cache_info *ci = malloc((size_t)m->cache_count * sizeof *ci);
+    assert_non_null(ci);
+    assert_int_equal(glow_bake_get_caches(NULL, 0, 1, ci), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(glow_bake_get_caches(e.bake, 0, 1, NULL), GLOW_ERROR_INVALID_ARGUMENT);
+    EXPECT_LOGGED(&e.log, glow_bake_get_caches(e.bake, m->cache_count, 1, ci), GLOW_ERROR_INVALID_ARGUMENT, GLOW_LOG_ERROR);
+    EXPECT_LOGGED(&e.log, glow_bake_get_caches(e.bake, 1, UINT32_MAX, ci), GLOW_ERROR_INVALID_ARGUMENT, GLOW_LOG_ERROR);
+    assert_int_equal(glow_bake_get_caches(e.bake, m->cache_count, 0, ci), GLOW_OK); /* empty range at the end */
+    assert_int_equal(glow_bake_get_caches(e.bake, 0, m->cache_count, ci), GLOW_OK);
+    uint32_t grid = 0, lm = 0;
+    for (uint32_t c = 0; c < m->cache_count; ++c) {
+        assert_memory_equal(ci[c].position, raw[c].position, sizeof ci[c].position);
+        assert_int_equal(ci[c].kind, raw[c].kind);
+        assert_int_equal(ci[c].texel, raw[c].texel);
+        const float l2 = ci[c].normal[0] * ci[c].normal[0] + ci[c].normal[1] * ci[c].normal[1] + ci[c].normal[2] * ci[c].normal[2];
+        if (ci[c].kind == GLOW_CACHE_KIND_LIGHTMAP) {
+            lm++;
+            assert_true(fabsf(l2 - 1.0f) < 1e-3f);
+            float n[3];
+            glow__oct_decode(raw[c].normal_oct, n);
+            assert_memory_equal(ci[c].normal, n, sizeof n);
+        } else {
+            grid++;
+            assert_int_equal(ci[c].kind, GLOW_CACHE_KIND_GRID);
+            assert_true(l2 == 0.0f);
+        }
+    }
+    assert_int_equal(grid, m->grid_cache_count);
+    assert_int_equal(lm, m->lightmap_cache_count);
+    /* sections: count with capacity 0, then the table, in file order */
+    uint32_t n = 0;
+    assert_int_equal(glow_bake_get_sections(e.bake, NULL, 0, &n), GLOW_OK);
+    assert_true(n >= 6);
+    glow_bake_section_info sec[GLOW_BAKE_MAX_SECTIONS];
+    uint32_t n2 = 0;
+    assert_int_equal(glow_bake_get_sections(e.bake, sec, 2, &n2), GLOW_OK); /* truncated: still the full count */
+    assert_int_equal(n2, n);
+    assert_int_equal(glow_bake_get_sections(e.bake, sec, GLOW_BAKE_MAX_SECTIONS, &n2), GLOW_OK);
+    assert_string_equal(sec[0].fourcc, "META");
+    int has_link = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        assert_int_equal(strlen(sec[i].fourcc), 4);
+        assert_true(sec[i].offset % GLOW_BAKE_ALIGN == 0 && sec[i].size > 0);
+        if (i) assert_true(sec[i].offset >= sec[i - 1].offset + sec[i - 1].size);
+        has_link |= !strcmp(sec[i].fourcc, "LINK");
+    }
+    assert_true(has_link);
+    assert_int_equal(glow_bake_get_sections(e.bake, NULL, 0, NULL), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(glow_bake_get_sections(NULL, sec, 1, &n2), GLOW_ERROR_INVALID_ARGUMENT);
+    free(ci);
+    env_close(&e);
+}
+
 /* glow_system_get_solver_tables: views of what an update reads (the GL backend's input) — the bake's
  * arrays where they are the bake's, and revisions that grow when the host changes emission or pushes light. */
 static void test_solver_tables(void **state) {
@@ -1463,6 +1522,7 @@ int main(void) {
         cmocka_unit_test(test_bake_presets),
         cmocka_unit_test(test_bake_logger),
         cmocka_unit_test(test_solver_tables),
+        cmocka_unit_test(test_bake_caches_sections),
         cmocka_unit_test(test_null_out_pointers_logged),
         cmocka_unit_test(test_band_counts),
         cmocka_unit_test(test_version_mismatch),

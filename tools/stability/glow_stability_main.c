@@ -54,8 +54,7 @@
 #include "glow/glow_scene.h"
 #include "glow_render.h"
 #include "glow_tool_json.h"
-#include "bake/bake_format.h" /* link blocks (audit) */
-#include "runtime_internal.h" /* the bake's cache normals (glow__bake_caches); a tool of this repository */
+#include "bake/bake_format.h" /* the link block layout (audit: visible solid angle), the format seam */
 
 #define PI_D 3.14159265358979323846
 
@@ -150,7 +149,12 @@ static int ringing(const char *bake_path, const char *scene_path, uint32_t lmax,
                 goto done;
             }
         const glow_cache_outputs *o = glow_system_outputs(sys);
-        const glow_bake_cache *caches = glow__bake_caches(bake);
+        glow_cache_info *caches = malloc(((size_t)o->cache_count + 1) * sizeof *caches);
+        if (!caches || glow_bake_get_caches(bake, 0, o->cache_count, caches) != GLOW_OK) {
+            free(caches);
+            glow_system_destroy(sys);
+            goto done;
+        }
         float win[GLOW_MAX_SH_BANDS], y[GLOW_MAX_SH_BANDS * GLOW_MAX_SH_BANDS];
         for (uint32_t l = 0; l < L; ++l) win[l] = glow_sh_window_factor(l, L);
         counts k = {0};
@@ -159,8 +163,7 @@ static int ringing(const char *bake_path, const char *scene_path, uint32_t lmax,
             const double mean = sh[0] * 0.28209479177387814;
             if (!(mean > 0.0)) continue;
             const bool lm = c >= o->grid_cache_count;
-            float nrm[3] = {0, 0, 0};
-            if (lm) glow__oct_decode(caches[c].normal_oct, nrm);
+            const float *nrm = caches[c].normal;
             for (uint32_t d = 0; d < ndirs; ++d) {
                 const float *w = dirs + 3 * d;
                 if (lm && w[0] * nrm[0] + w[1] * nrm[1] + w[2] * nrm[2] <= 0.0f) continue;
@@ -231,12 +234,15 @@ typedef struct session {
     glow_bake *bake;
     glow_host *host;
     glow_system *sys;
-    const glow_bake_cache *caches;
+    glow_cache_info *caches;   /* [info.cache_count] */
+    glow_surfel_view surfels;  /* positions, normals */
+    const uint32_t *feedback;  /* [surfels] each surfel's feedback cache (glow_backend.h) */
     glow_bake_info info;
 } session;
 
 static void session_free(session *s) {
     glow_system_destroy(s->sys);
+    free(s->caches);
     glow_host_destroy(s->host);
     glow_bake_destroy(s->bake);
     glow_context_destroy(s->ctx);
@@ -259,7 +265,8 @@ static int session_open(session *s, const char *bake_path, const char *scene_pat
         return 0;
     }
     glow_bake_get_info(s->bake, &s->info);
-    s->caches = glow__bake_caches(s->bake);
+    s->caches = malloc(((size_t)s->info.cache_count + 1) * sizeof *s->caches);
+    if (!s->caches || glow_bake_get_caches(s->bake, 0, s->info.cache_count, s->caches) != GLOW_OK) return 0;
     glow_host_desc hd = glow_host_desc_from_scene(&s->scene, s->bake, GLOW_HOST_KIND_EXACT);
     hd.logger = lg;
     if (glow_host_create(&hd, &s->host) != GLOW_OK) {
@@ -269,6 +276,10 @@ static int session_open(session *s, const char *bake_path, const char *scene_pat
     if (glow_system_create(s->ctx, &(glow_system_desc){.bake = s->bake, .lighting = glow_host_hooks(s->host)}, &s->sys) !=
         GLOW_OK)
         return 0;
+    glow_solver_tables tab;
+    if (glow_system_get_surfels(s->sys, &s->surfels) != GLOW_OK || glow_system_get_solver_tables(s->sys, &tab) != GLOW_OK)
+        return 0;
+    s->feedback = tab.feedback;
     glow_system_set_params(s->sys, &(glow_system_params){.bounce_intensity = 1.0f, .emission_scale = s->scene.emission_scale,
                                                          .bounce_iterations = 64});
     for (int u = 0; u < 3; ++u)
@@ -281,18 +292,17 @@ static int session_open(session *s, const char *bake_path, const char *scene_pat
 /* Glow's irradiance E (W/m², RGB) at lightmap cache c: π x the diffuse-shaded cache along its normal */
 static void glow_irradiance(const session *s, uint32_t c, float out[3]) {
     const glow_cache_outputs *o = glow_system_outputs(s->sys);
-    float n[3];
-    glow__oct_decode(s->caches[c].normal_oct, n);
-    glow_shade_sh(o->cache_sh + (size_t)c * o->coeff_count, o->sh_bands_luma, o->sh_bands_chroma, n, 1.0f, out);
+    glow_shade_sh(o->cache_sh + (size_t)c * o->coeff_count, o->sh_bands_luma, o->sh_bands_chroma, s->caches[c].normal, 1.0f,
+                  out);
     for (int k = 0; k < 3; ++k) out[k] *= (float)PI_D;
 }
 
 /* Glow's irradiance E (W/m², RGB) for surfel u's next bounce: π x its feedback cache, diffuse-shaded
  * along the surfel's normal */
-static void surfel_irradiance(const session *s, const glow_bake_surfel *u, float out[3]) {
+static void surfel_irradiance(const session *s, uint32_t u, float out[3]) {
     const glow_cache_outputs *o = glow_system_outputs(s->sys);
-    glow_shade_sh(o->cache_sh + (size_t)u->feedback * o->coeff_count, o->sh_bands_luma, o->sh_bands_chroma, u->normal, 1.0f,
-                  out);
+    glow_shade_sh(o->cache_sh + (size_t)s->feedback[u] * o->coeff_count, o->sh_bands_luma, o->sh_bands_chroma,
+                  s->surfels.normals + 4 * (size_t)u, 1.0f, out);
     for (int k = 0; k < 3; ++k) out[k] *= (float)PI_D;
 }
 
@@ -300,7 +310,7 @@ static float luma(const float *rgb) { return 0.25f * rgb[0] + 0.5f * rgb[1] + 0.
 
 static void cache_point(const session *s, uint32_t c, float *pt) {
     memcpy(pt, s->caches[c].position, 3 * sizeof(float));
-    glow__oct_decode(s->caches[c].normal_oct, pt + 3);
+    memcpy(pt + 3, s->caches[c].normal, 3 * sizeof(float));
 }
 
 /* ------------------------------------------------------------------ flicker */
@@ -444,9 +454,7 @@ static int jumps(const char *bake_path, const char *scene_path, uint32_t max_pai
                 if (x2 >= W || y2 >= H) continue;
                 uint32_t a = o->lightmap_map[y * W + x], b = o->lightmap_map[y2 * W + x2];
                 if (a == GLOW_MAP_EMPTY || b == GLOW_MAP_EMPTY || a == b) continue;
-                float na[3], nb[3];
-                glow__oct_decode(s.caches[a].normal_oct, na);
-                glow__oct_decode(s.caches[b].normal_oct, nb);
+                const float *na = s.caches[a].normal, *nb = s.caches[b].normal;
                 float dx = 0, dot = na[0] * nb[0] + na[1] * nb[1] + na[2] * nb[2];
                 for (int k = 0; k < 3; ++k) dx += (s.caches[a].position[k] - s.caches[b].position[k]) * (s.caches[a].position[k] - s.caches[b].position[k]);
                 if (dot < 0.906f || dx > (2.5f * spacing) * (2.5f * spacing)) continue;
@@ -555,23 +563,22 @@ static int audit(const char *bake_path, const char *scene_path, uint32_t nprobes
     ratio = malloc(sizeof(double) * 2 * nprobes);
     pick = malloc(sizeof(uint32_t) * nprobes);
     /* the area-uniform points (below): every (ns / np)-th surfel */
-    const glow_bake_surfel *sf = glow__bake_surfels(s.bake);
     const uint32_t ns = s.info.surfel_count, np = nprobes < ns ? nprobes : ns;
     sg1 = malloc(sizeof(float) * 3 * (np + 1));
     sgc = malloc(sizeof(float) * 3 * (np + 1));
-    if (!pts || !er1 || !erc || !eg1 || !egc || !ratio || !pick || !sg1 || !sgc || !sf) goto done;
+    if (!pts || !er1 || !erc || !eg1 || !egc || !ratio || !pick || !sg1 || !sgc) goto done;
     for (uint32_t i = 0; i < nprobes; ++i) {
         pick[i] = first + (uint32_t)((uint64_t)i * lm / nprobes);
         cache_point(&s, pick[i], pts + 6 * i);
     }
     /* Glow converged (session_open ran 3 x 64 feedback iterations), then single bounce: no feedback */
     for (uint32_t i = 0; i < nprobes; ++i) glow_irradiance(&s, pick[i], egc + 3 * i);
-    for (uint32_t i = 0; i < np; ++i) surfel_irradiance(&s, &sf[(uint64_t)i * ns / np], sgc + 3 * i);
+    for (uint32_t i = 0; i < np; ++i) surfel_irradiance(&s, (uint32_t)((uint64_t)i * ns / np), sgc + 3 * i);
     glow_system_set_params(s.sys, &(glow_system_params){.bounce_intensity = 0.0f, .emission_scale = s.scene.emission_scale,
                                                         .bounce_iterations = 1});
     if (glow_system_update(s.sys, NULL) != GLOW_OK) goto done;
     for (uint32_t i = 0; i < nprobes; ++i) glow_irradiance(&s, pick[i], eg1 + 3 * i);
-    for (uint32_t i = 0; i < np; ++i) surfel_irradiance(&s, &sf[(uint64_t)i * ns / np], sg1 + 3 * i);
+    for (uint32_t i = 0; i < np; ++i) surfel_irradiance(&s, (uint32_t)((uint64_t)i * ns / np), sg1 + 3 * i);
     if (radiance_out) { /* the surfels' single-bounce radiance (luma), for glow-bake --audit-radiance */
         glow_solver_tables t;
         FILE *f = glow_system_get_solver_tables(s.sys, &t) == GLOW_OK ? fopen(radiance_out, "wb") : NULL;
@@ -662,10 +669,11 @@ static int audit(const char *bake_path, const char *scene_path, uint32_t nprobes
                                          (s.info.bounds_max[1] - s.info.bounds_min[1]) * (s.info.bounds_max[1] - s.info.bounds_min[1]) +
                                          (s.info.bounds_max[2] - s.info.bounds_min[2]) * (s.info.bounds_max[2] - s.info.bounds_min[2]));
         for (uint32_t i = 0; ok && i < np; ++i) {
-            const glow_bake_surfel *u = &sf[(uint64_t)i * ns / np];
+            const size_t u = (size_t)((uint64_t)i * ns / np);
+            const float *up = s.surfels.positions + 4 * u, *un = s.surfels.normals + 4 * u;
             for (int k = 0; k < 3; ++k) {
-                sp[6 * i + k] = u->position[k] + lift * u->normal[k];
-                sp[6 * i + 3 + k] = u->normal[k];
+                sp[6 * i + k] = up[k] + lift * un[k];
+                sp[6 * i + 3 + k] = un[k];
             }
         }
         /* Glow's values were read with the caches' (sg1, sgc); the reference's here */
@@ -680,13 +688,14 @@ static int audit(const char *bake_path, const char *scene_path, uint32_t nprobes
         }
         double sg1s = 0, sr1s = 0;
         for (uint32_t i = 0; ok && i < np; ++i) {
-            const glow_bake_surfel *u = &sf[(uint64_t)i * ns / np];
+            const size_t u = (size_t)((uint64_t)i * ns / np);
+            const float *up = s.surfels.positions + 4 * u, *un = s.surfels.normals + 4 * u;
             const double g = luma(sgc + 3 * i), r = luma(sr + 3 * i);
             sg1s += luma(sg1 + 3 * i);
             sr1s += luma(sr1 + 3 * i);
             if (scsv)
-                fprintf(scsv, "%u,%g,%g,%g,%g,%g,%g,%u,%g,%g,%g,%g\n", (uint32_t)((uint64_t)i * ns / np), u->position[0],
-                        u->position[1], u->position[2], u->normal[0], u->normal[1], u->normal[2], u->feedback,
+                fprintf(scsv, "%u,%g,%g,%g,%g,%g,%g,%u,%g,%g,%g,%g\n", (uint32_t)u, up[0], up[1], up[2], un[0], un[1],
+                        un[2], s.feedback[u],
                         luma(sg1 + 3 * i), luma(sr1 + 3 * i), g, r);
             sg += g;
             srr += r;
@@ -715,7 +724,9 @@ static int audit(const char *bake_path, const char *scene_path, uint32_t nprobes
     {
         uint32_t hist[9] = {0};
         const uint32_t bpc = (s.info.links_per_cache + GLOW_LINK_BLOCK - 1) / GLOW_LINK_BLOCK;
-        const glow_bake_link_block *blocks = glow__bake_link_blocks(s.bake);
+        glow_solver_tables tab;
+        const glow_bake_link_block *blocks =
+            glow_system_get_solver_tables(s.sys, &tab) == GLOW_OK ? (const glow_bake_link_block *)tab.link_blocks : NULL;
         for (uint32_t i = 0; i < nprobes; ++i) {
             double om = 0; /* unused lanes hold 0 */
             for (uint32_t j = 0; blocks && j < bpc * GLOW_LINK_BLOCK; ++j)

@@ -56,6 +56,10 @@ extern "C" {
 #define GLOW_VERSION_MINOR 1
 #define GLOW_VERSION_PATCH 0
 #define GLOW_VERSION (GLOW_VERSION_MAJOR * 10000 + GLOW_VERSION_MINOR * 100 + GLOW_VERSION_PATCH)
+/* The bake format this runtime reads and glow-bake writes: a bake of another major is refused
+ * (GLOW_ERROR_VERSION_MISMATCH); a newer minor loads, its unknown sections skipped. */
+#define GLOW_BAKE_FORMAT_VERSION_MAJOR 1u
+#define GLOW_BAKE_FORMAT_VERSION_MINOR 0u
 #define GLOW_BAKE_FORMAT_MAJOR 1 /* the bake major this runtime reads */
 
 /* GLOW_API marks the public functions. A shared build (BUILD_SHARED_LIBS) compiles the libraries with
@@ -191,6 +195,44 @@ typedef struct glow_bake_geometry {
 /** Fills `out_geometry` (triangle_count 0 when the bake carries no geometry). \threadsafety Any
  * thread. \since 0.1 */
 GLOW_API glow_result glow_bake_get_geometry(const glow_bake *bake, glow_bake_geometry *out_geometry);
+
+/* glow_bake_info.link_kind bits: how the bake's links are encoded. \since 0.1 */
+typedef enum glow_link_kind_bits {
+    GLOW_LINK_KIND_RUNTIME_PROJECTION = 1, /* always: cones projected to SH at run time (PIC 4.6) */
+    GLOW_LINK_KIND_FULL_SH = 2,            /* also full-SH links (glow-bake --sh-links; GLOW_LINK_MODE_SH) */
+    GLOW_LINK_KIND_SUBSETS = 4             /* links carry their node's visible-part weights (link subsets) */
+} glow_link_kind_bits;
+
+/* What a cache is: a grid point (dynamic objects, the whole sphere) or a lightmap texel's (the
+ * hemisphere above its surface). \since 0.1 */
+typedef enum glow_cache_kind { GLOW_CACHE_KIND_GRID = 1, GLOW_CACHE_KIND_LIGHTMAP = 2 } glow_cache_kind;
+typedef struct glow_cache_info {
+    float position[3]; /* m */
+    float normal[3];   /* lightmap caches: the surface normal (unit); grid caches: 0 */
+    uint32_t kind;     /* glow_cache_kind */
+    uint32_t texel;    /* grid: cell index (x fastest); lightmap: y * lightmap_width + x */
+} glow_cache_info;
+/** Copies caches [first, first + count) (grid caches first, then lightmap caches; the order of the
+ * outputs' cache indices), e.g. for debug views or to place effects at the caches.
+ * \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT for NULL or a range outside the bake's caches.
+ * \threadsafety Any thread; the bake is immutable. \since 0.1 */
+GLOW_API glow_result glow_bake_get_caches(const glow_bake *bake, uint32_t first, uint32_t count,
+                                          glow_cache_info *out_caches);
+
+/* One section of a bake file (docs/bake-format.md). */
+typedef struct glow_bake_section_info {
+    char fourcc[5];   /* NUL-terminated, e.g. "LINK"; non-printable bytes as '?' */
+    uint32_t version; /* the section's layout version */
+    uint64_t offset;  /* from the start of the file */
+    uint64_t size;    /* payload bytes */
+    uint32_t crc32;   /* CRC-32 (zlib's) of the payload, as the file states it (verified at load) */
+} glow_bake_section_info;
+/** The bake's section table in file order (unknown sections included). Writes at most `capacity`
+ * entries to out_sections (may be NULL with capacity 0) and the table's length to *out_count.
+ * \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT for a NULL bake or out_count.
+ * \threadsafety Any thread. \since 0.1 */
+GLOW_API glow_result glow_bake_get_sections(const glow_bake *bake, glow_bake_section_info *out_sections,
+                                            uint32_t capacity, uint32_t *out_count);
 
 typedef struct glow_material_info {
     char name[32];

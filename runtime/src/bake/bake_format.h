@@ -26,9 +26,10 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "glow/glow.h" /* glow_cache_kind, glow_link_kind_bits */
+
 #define GLOW_BAKE_MAGIC "GLOW"
-#define GLOW_BAKE_FORMAT_VERSION_MAJOR 1u
-#define GLOW_BAKE_FORMAT_VERSION_MINOR 0u
+/* GLOW_BAKE_FORMAT_VERSION_MAJOR / _MINOR: glow.h (public: what this runtime reads). */
 #define GLOW_BAKE_ALIGN 64u
 #define GLOW_BAKE_MAX_SECTIONS 64u
 
@@ -57,14 +58,13 @@
 
 #define GLOW_NODE_NONE 0xFFFFFFFFu /* child of a leaf, parent of the root */
 
-/* Cache kinds. */
-#define GLOW_CACHE_KIND_GRID 1u     /* spherical cache at a grid point (dynamic objects) */
-#define GLOW_CACHE_KIND_LIGHTMAP 2u /* cache at a lightmap texel centre (hemisphere above nrm) */
-
-/* Link encodings (meta.link_kind bits; LINK is always present, SHLK only with bit 1). */
-#define GLOW_LINK_KIND_RUNTIME_PROJECTION 1u
-#define GLOW_LINK_KIND_FULL_SH 2u
-#define GLOW_LINK_KIND_SUBSETS 4u /* LSUB present: each link blends its node's four grandchildren */
+/* Cache kinds (glow_bake_cache.kind) and link encodings (meta.link_kind bits; LINK is always present,
+ * SHLK only with GLOW_LINK_KIND_FULL_SH, LSUB only with GLOW_LINK_KIND_SUBSETS: each link blends its
+ * node's four grandchildren) are glow.h's glow_cache_kind and glow_link_kind_bits, whose values are
+ * the format's (checked below). */
+_Static_assert(GLOW_CACHE_KIND_GRID == 1 && GLOW_CACHE_KIND_LIGHTMAP == 2, "cache kinds are format values");
+_Static_assert(GLOW_LINK_KIND_RUNTIME_PROJECTION == 1 && GLOW_LINK_KIND_FULL_SH == 2 && GLOW_LINK_KIND_SUBSETS == 4,
+               "link kinds are format values");
 
 #define GLOW_LINK_BLOCK 16u /* links per SoA block; caches own whole blocks */
 
