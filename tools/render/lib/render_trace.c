@@ -121,7 +121,7 @@ typedef struct render_ctx {
     float *indirect_near; /* NULL unless settings->near_split > 0 (reference only) */
     float near_split;
     /* scheduling */
-    atomic_uint next_row, rows_done;
+    atomic_uint rows_done;
     pthread_mutex_t progress_lock;
     glow_render_progress_fn progress;
     void *progress_user;
@@ -428,19 +428,12 @@ static void sample(const render_ctx *c, uint32_t x, uint32_t y, rng *rd, rng *rp
         for (int k = 0; k < 3; ++k) near[k] += rest[k];
 }
 
-typedef struct worker_arg {
-    render_ctx *c;
-    uint32_t index;
-} worker_arg;
-
-static void *worker(void *p) {
-    worker_arg *a = p;
-    render_ctx *c = a->c;
-    worker_stats local = {0}, *ws = &local; /* counted here, stored once: no false sharing between workers */
+/* Rows [begin, end) on the linker's pool (glow__parallel_for: the bake side's one thread pool). */
+static void render_rows(void *ctx, uint32_t begin, uint32_t end, uint32_t worker) {
+    render_ctx *c = ctx;
+    worker_stats local = {0}, *ws = &local; /* counted here, added once: no false sharing between workers */
     float coeffs[GLOW_MAX_SH_BANDS * GLOW_MAX_SH_BANDS * 3];
-    for (;;) {
-        uint32_t y = atomic_fetch_add(&c->next_row, 1u);
-        if (y >= c->h) break;
+    for (uint32_t y = begin; y < end; ++y) {
         for (uint32_t x = 0; x < c->w; ++x) {
             const uint64_t pixel = (uint64_t)y * c->w + x;
             rng rd, rp;
@@ -474,8 +467,12 @@ static void *worker(void *p) {
             pthread_mutex_unlock(&c->progress_lock);
         }
     }
-    c->ws[a->index] = local;
-    return NULL;
+    worker_stats *w = &c->ws[worker];
+    w->rays += local.rays;
+    w->lm += local.lm;
+    w->grid += local.grid;
+    w->missed += local.missed;
+    w->nonfinite += local.nonfinite;
 }
 
 static double now_s(void) {
@@ -558,9 +555,7 @@ static glow_result render(const glow_render_scene *sc, const glow_render_setting
     glow_result r = GLOW_OK;
     c.lights = sc->desc.light_count ? calloc(sc->desc.light_count, sizeof *c.lights) : NULL;
     c.ws = calloc(c.threads, sizeof *c.ws);
-    pthread_t *tid = calloc(c.threads, sizeof *tid);
-    worker_arg *args = calloc(c.threads, sizeof *args);
-    if ((sc->desc.light_count && !c.lights) || !c.ws || !tid || !args) {
+    if ((sc->desc.light_count && !c.lights) || !c.ws) {
         r = glow__render_fail(message, message_size, GLOW_ERROR_OUT_OF_MEMORY, "%s: out of memory", sc->path);
         goto done;
     }
@@ -582,19 +577,13 @@ static glow_result render(const glow_render_scene *sc, const glow_render_setting
     c.indirect = out->indirect.rgb;
     c.indirect_near = out->indirect_near.rgb; /* NULL unless allocated above */
     c.near_split = c.indirect_near ? st->near_split : 0.0f;
-    atomic_init(&c.next_row, 0u);
     atomic_init(&c.rows_done, 0u);
     pthread_mutex_init(&c.progress_lock, NULL);
     double t0 = now_s();
-    uint32_t started = 0;
-    for (uint32_t i = 1; i < c.threads; ++i) {
-        args[i] = (worker_arg){&c, i};
-        if (pthread_create(&tid[i], NULL, worker, &args[i]) != 0) break;
-        started = i;
-    }
-    args[0] = (worker_arg){&c, 0};
-    worker(&args[0]);
-    for (uint32_t i = 1; i <= started; ++i) pthread_join(tid[i], NULL);
+    glow__pool *pool = glow__pool_create(c.threads); /* NULL (no memory): glow__parallel_for runs serially */
+    const uint32_t ran = pool ? glow__pool_threads(pool) : 1u;
+    glow__parallel_for(pool, c.h, 1, render_rows, &c);
+    glow__pool_destroy(pool);
     double t1 = now_s();
     pthread_mutex_destroy(&c.progress_lock);
     size_t n = (size_t)c.w * c.h * 3;
@@ -602,7 +591,7 @@ static glow_result render(const glow_render_scene *sc, const glow_render_setting
     out->width = c.w;
     out->height = c.h;
     out->spp = c.spp;
-    out->threads = started + 1;
+    out->threads = ran;
     out->seconds = t1 - t0;
     for (uint32_t i = 0; i < c.threads; ++i) {
         out->rays += c.ws[i].rays;
@@ -619,8 +608,6 @@ static glow_result render(const glow_render_scene *sc, const glow_render_setting
 done:
     free(c.lights);
     free(c.ws);
-    free(tid);
-    free(args);
     if (r != GLOW_OK) glow_render_result_free(out);
     return r;
 }
