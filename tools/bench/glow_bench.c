@@ -18,6 +18,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "glow_cli.h"
 #include "glow_tool_json.h"
 #include "glow/glow.h"
 #include "glow/glow_host.h"
@@ -68,13 +69,6 @@ static void usage(FILE *f) {
             "                  are not ordered with compute work); default: timer queries\n");
 }
 
-static int parse_u32(const char *s, uint32_t *out) {
-    char *end;
-    unsigned long v = strtoul(s, &end, 10);
-    if (!*s || *end || v > 1000000000ul) return 0;
-    *out = (uint32_t)v;
-    return 1;
-}
 
 static int parse_args(int argc, char **argv, options *o) {
     memset(o, 0, sizeof *o);
@@ -87,7 +81,7 @@ static int parse_args(int argc, char **argv, options *o) {
         const char *a = argv[i];
         const char *v = i + 1 < argc ? argv[i + 1] : NULL;
 #define NEED_U32(field) \
-    do { if (!v || !parse_u32(v, &o->field)) { fprintf(stderr, "glow-bench: %s needs a number\n", a); return 0; } ++i; } while (0)
+    do { if (!v || !glow_cli_u32(v, 0, 1000000000u, &o->field)) { fprintf(stderr, "glow-bench: %s needs a number\n", a); return 0; } ++i; } while (0)
         if (!strcmp(a, "--frames")) NEED_U32(frames);
         else if (!strcmp(a, "--warmup")) NEED_U32(warmup);
         else if (!strcmp(a, "--threads")) NEED_U32(threads);
@@ -160,22 +154,7 @@ static int parse_args(int argc, char **argv, options *o) {
     return 1;
 }
 
-static void stderr_logger(void *user, glow_log_level level, glow_result code, const char *msg, const char *file, int line) {
-    (void)file; (void)line;
-    const options *o = user;
-    if (level == GLOW_LOG_ERROR || (level == GLOW_LOG_WARNING && !o->quiet))
-        fprintf(stderr, "glow-bench: %s: %s (%s)\n", level == GLOW_LOG_ERROR ? "error" : "warning", msg,
-                glow_result_string(code));
-}
 
-static int cmp_double(const void *a, const void *b) {
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
-static double median(double *v, uint32_t n) {
-    qsort(v, n, sizeof *v, cmp_double);
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 static double now_ms(void) {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
@@ -226,7 +205,8 @@ int main(int argc, char **argv) {
         usage(stderr);
         return 2;
     }
-    glow_logger logger = {stderr_logger, &o};
+    glow_cli_log log_state = {"glow-bench", o.quiet};
+    glow_logger logger = glow_cli_logger(&log_state);
     char msg[1024];
     glow_scene_desc scene;
     if (glow_scene_load(o.scene, &logger, &scene, msg, sizeof msg) != GLOW_OK) {
@@ -363,9 +343,9 @@ int main(int argc, char **argv) {
             v_total[i] = st.total_ms;
         }
     }
-    const double m_move = median(v_move, n), m_host = median(v_host, n), m_light = median(v_light, n),
-                 m_pull = median(v_pull, n), m_cache = median(v_cache, n), m_out = median(v_out, n),
-                 m_total = median(v_total, n);
+    const double m_move = glow_cli_median(v_move, n), m_host = glow_cli_median(v_host, n), m_light = glow_cli_median(v_light, n),
+                 m_pull = glow_cli_median(v_pull, n), m_cache = glow_cli_median(v_cache, n), m_out = glow_cli_median(v_out, n),
+                 m_total = glow_cli_median(v_total, n);
     const uint64_t links = (uint64_t)info.cache_count * info.links_per_cache * o.iterations;
     const double link_bytes = (double)links * 8.0;
     const double gbs = link_bytes / (m_cache * 1e-3) * 1e-9;

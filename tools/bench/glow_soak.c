@@ -27,6 +27,7 @@
 #include <time.h>
 
 #include "glow/glow.h"
+#include "glow_cli.h"
 
 typedef struct soak_light {
     float position[3], intensity[3]; /* W/sr, RGB; 0 = off */
@@ -74,10 +75,6 @@ static long rss_kib(void) {
     return kib;
 }
 
-static int cmp_double(const void *a, const void *b) {
-    const double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
 
 static void log_stderr(void *user, glow_log_level level, glow_result code, const char *msg, const char *file, int line) {
     (void)code, (void)file, (void)line;
@@ -96,13 +93,6 @@ static int usage(FILE *f, int code) {
     return code;
 }
 
-static int parse_u32(const char *s, uint32_t lo, uint32_t hi, uint32_t *out) {
-    char *end;
-    unsigned long v = strtoul(s, &end, 10);
-    if (!*s || *end || s[0] == '-' || v < lo || v > hi) return 0;
-    *out = (uint32_t)v;
-    return 1;
-}
 
 /* Converges the system under the fixed reference state and copies its caches' SH into `snap`. */
 static glow_result converge(glow_system *sys, soak_light *light, const float ref_pos[3], uint32_t M, float *snap,
@@ -132,13 +122,13 @@ int main(int argc, char **argv) {
             fprintf(stderr, "glow-soak: %s needs a value\n", a);
             return usage(stderr, 2);
         } else if (!strcmp(a, "--updates")) {
-            if (!parse_u32(argv[++i], 1, 100000000, &updates)) return usage(stderr, 2);
+            if (!glow_cli_u32(argv[++i], 1, 100000000, &updates)) return usage(stderr, 2);
         } else if (!strcmp(a, "--seed")) {
-            if (!parse_u32(argv[++i], 0, UINT32_MAX, &seed)) return usage(stderr, 2);
+            if (!glow_cli_u32(argv[++i], 0, UINT32_MAX, &seed)) return usage(stderr, 2);
         } else if (!strcmp(a, "--every")) {
-            if (!parse_u32(argv[++i], 1, 1000000, &every)) return usage(stderr, 2);
+            if (!glow_cli_u32(argv[++i], 1, 1000000, &every)) return usage(stderr, 2);
         } else if (!strcmp(a, "--threads")) {
-            if (!parse_u32(argv[++i], 1, 256, &threads)) return usage(stderr, 2);
+            if (!glow_cli_u32(argv[++i], 1, 256, &threads)) return usage(stderr, 2);
         } else if (!strcmp(a, "--csv")) {
             csv_path = argv[++i];
         } else if (a[0] == '-') {
@@ -277,7 +267,7 @@ int main(int argc, char **argv) {
         nonfinite += bad_here;
         if ((u + 1) % every == 0 || u + 1 == updates) {
             const uint32_t w = (u % every) + 1;
-            qsort(win, w, sizeof *win, cmp_double);
+            qsort(win, w, sizeof *win, glow_cli_cmp_double);
             const double med = win[w / 2];
             const long rss = rss_kib();
             double luma = 0.0;

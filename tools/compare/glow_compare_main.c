@@ -31,6 +31,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "glow_cli.h"
 #include "glow_eval.h"
 #include "glow_tool_json.h"
 
@@ -206,10 +207,8 @@ int main(int argc, char **argv) {
             if (i + 1 >= argc) return usage(stderr);
             blocks_csv = argv[++i];
         } else if (!strcmp(a, "--panel-exposure")) {
-            char *end = NULL;
             if (i + 1 >= argc) return usage(stderr);
-            panel_exposure = strtof(argv[++i], &end);
-            if (!end || *end || !isfinite(panel_exposure) || panel_exposure <= 0.0f) {
+            if (!glow_cli_float(argv[++i], &panel_exposure) || panel_exposure <= 0.0f) {
                 fprintf(stderr, "glow-compare: --panel-exposure needs a positive number, got '%s'\n", argv[i]);
                 return 2;
             }
@@ -219,26 +218,22 @@ int main(int argc, char **argv) {
             if (i + 1 >= argc) return usage(stderr);
             flip_map = argv[++i];
         } else if (!strcmp(a, "--block")) {
-            char *end = NULL;
             if (i + 1 >= argc) return usage(stderr);
-            block = strtoul(argv[++i], &end, 10);
-            if (!end || *end || argv[i][0] == '-' || block == 0 || block > 65536) {
+            uint32_t b32 = 0;
+            if (!glow_cli_u32(argv[++i], 1, 65536, &b32)) {
                 fprintf(stderr, "glow-compare: --block needs a whole number in [1, 65536], got '%s'\n", argv[i]);
                 return 2;
             }
+            block = b32;
         } else if (!strcmp(a, "--ppd")) {
-            char *end = NULL;
             if (i + 1 >= argc) return usage(stderr);
-            ppd = strtod(argv[++i], &end);
-            if (!end || *end || !isfinite(ppd) || ppd <= 0.0 || ppd > 10000.0) {
+            if (!glow_cli_double(argv[++i], &ppd) || ppd <= 0.0 || ppd > 10000.0) {
                 fprintf(stderr, "glow-compare: --ppd needs a number in (0, 10000], got '%s'\n", argv[i]);
                 return 2;
             }
         } else if (!strcmp(a, "--exposure")) {
-            char *end = NULL;
             if (i + 1 >= argc) return usage(stderr);
-            exposure = strtof(argv[++i], &end);
-            if (!end || *end || !isfinite(exposure) || exposure <= 0.0f) {
+            if (!glow_cli_float(argv[++i], &exposure) || exposure <= 0.0f) {
                 fprintf(stderr, "glow-compare: --exposure needs a positive number, got '%s'\n", argv[i]);
                 return 2;
             }

@@ -37,6 +37,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "glow_cli.h"
 #include "eval_internal.h"
 #include "glow_eval.h"
 
@@ -393,10 +394,6 @@ static double aces_inverse(double t) {
     return d1 + d2;
 }
 
-static int cmp_double(const void *a, const void *b) {
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
 
 /* Start and stop exposure from the reference's luminance (negatives clamped to 0) over the
  * unmasked pixels: Y_max and the median Y (the element at index n/2 of the sorted luminances, as
@@ -411,7 +408,7 @@ static glow_result exposures_from(const glow_eval_image *ref, const uint8_t *mas
         double r = p[0] > 0 ? p[0] : 0, g = p[1] > 0 ? p[1] : 0, b = p[2] > 0 ? p[2] : 0;
         lum[m++] = 0.2126 * r + 0.7152 * g + 0.0722 * b; /* FLIP.h linearRGBToLuminance */
     }
-    qsort(lum, m, sizeof(double), cmp_double);
+    qsort(lum, m, sizeof(double), glow_cli_cmp_double);
     double ymax = m ? lum[m - 1] : 0.0, ymed = m ? lum[m / 2] : 0.0;
     if (ymed <= 0.0 && ymax > 0.0) {
         /* Over half the pixels black: the reference implementation's stop exposure would be +inf.

@@ -14,6 +14,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "glow_cli.h"
 #include "glow_render.h"
 
 static void usage(FILE *f) {
@@ -46,25 +47,7 @@ static void usage(FILE *f) {
             "  --progress       progress bar on stderr even when it is not a terminal; -q: none, no summary\n");
 }
 
-static int parse_u64(const char *s, uint64_t max, uint64_t *out) {
-    if (!s || !*s || *s == '-' || *s == '+') return 0;
-    char *end;
-    errno = 0;
-    unsigned long long v = strtoull(s, &end, 10);
-    if (*end || errno || v > max) return 0;
-    *out = v;
-    return 1;
-}
 
-static int parse_float(const char *s, float *out) {
-    if (!s || !*s) return 0;
-    char *end;
-    errno = 0;
-    double v = strtod(s, &end);
-    if (*end || errno || !isfinite(v) || fabs(v) > 3.0e38) return 0;
-    *out = (float)v;
-    return 1;
-}
 
 typedef struct options {
     const char *scene, *out, *bake;
@@ -104,7 +87,7 @@ static int parse_args(int argc, char **argv, options *o) {
         uint64_t u;
 #define NEED_U(min, max, dst, what)                                                               \
     do {                                                                                          \
-        if (!parse_u64(v, max, &u) || u < (min)) {                                                \
+        if (!glow_cli_u64(v, 0, max, &u) || u < (min)) {                                                \
             fprintf(stderr, "glow-render: %s needs %s, not \"%s\"\n", a, what, v ? v : "nothing"); \
             return 0;                                                                             \
         }                                                                                         \
@@ -121,7 +104,7 @@ static int parse_args(int argc, char **argv, options *o) {
             ++i;
         } else if (!strcmp(a, "--spp")) NEED_U(1, 1u << 20, o->rs.spp, "a number of samples in 1..1048576");
         else if (!strcmp(a, "--seed")) {
-            if (!parse_u64(v, UINT64_MAX, &o->rs.seed)) {
+            if (!glow_cli_u64(v, 0, UINT64_MAX, &o->rs.seed)) {
                 fprintf(stderr, "glow-render: --seed needs a whole number >= 0, not \"%s\"\n", v ? v : "nothing");
                 return 0;
             }
@@ -146,19 +129,19 @@ static int parse_args(int argc, char **argv, options *o) {
             ++i;
         }
         else if (!strcmp(a, "--exposure")) {
-            if (!parse_float(v, &o->exposure) || o->exposure < 0.0f) {
+            if (!glow_cli_float(v, &o->exposure) || o->exposure < 0.0f) {
                 fprintf(stderr, "glow-render: --exposure needs a finite number >= 0, not \"%s\"\n", v ? v : "nothing");
                 return 0;
             }
             ++i;
         } else if (!strcmp(a, "--albedo-scale")) {
-            if (!parse_float(v, &o->rs.albedo_scale) || !(o->rs.albedo_scale > 0.0f)) {
+            if (!glow_cli_float(v, &o->rs.albedo_scale) || !(o->rs.albedo_scale > 0.0f)) {
                 fprintf(stderr, "glow-render: --albedo-scale needs a finite number > 0, not \"%s\"\n", v ? v : "nothing");
                 return 0;
             }
             ++i;
         } else if (!strcmp(a, "--near-split")) {
-            if (!parse_float(v, &o->rs.near_split) || !(o->rs.near_split > 0.0f)) {
+            if (!glow_cli_float(v, &o->rs.near_split) || !(o->rs.near_split > 0.0f)) {
                 fprintf(stderr, "glow-render: --near-split needs a finite distance > 0, not \"%s\"\n", v ? v : "nothing");
                 return 0;
             }

@@ -48,6 +48,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "glow_cli.h"
 #include "glow/glow.h"
 #include "glow/glow_backend.h"
 #include "glow/glow_host.h"
@@ -70,10 +71,6 @@ static int usage(FILE *f) {
     return f == stdout ? 0 : 2;
 }
 
-static void logger_fn(void *user, glow_log_level level, glow_result code, const char *msg, const char *file, int line) {
-    (void)user, (void)code, (void)file, (void)line;
-    if (level >= GLOW_LOG_WARNING) fprintf(stderr, "glow-stability: %s\n", msg);
-}
 
 typedef struct counts {
     double pairs, neg, neg_w;            /* (cache, direction) pairs */
@@ -96,7 +93,8 @@ static void radiance(const float *c, uint32_t L, const float *y, const float *wi
 
 static int ringing(const char *bake_path, const char *scene_path, uint32_t lmax, uint32_t ndirs, int json) {
     cJSON *jrows = NULL; /* --json: one object per band count, printed at the end */
-    glow_logger lg = {.log = logger_fn};
+    static glow_cli_log log_state = {"glow-stability", 0};
+    glow_logger lg = glow_cli_logger(&log_state);
     glow_scene_desc scene;
     char msg[512];
     if (glow_scene_load(scene_path, &lg, &scene, msg, sizeof msg) != GLOW_OK) {
@@ -252,7 +250,8 @@ static void session_free(session *s) {
 
 static int session_open(session *s, const char *bake_path, const char *scene_path, uint32_t iterations) {
     memset(s, 0, sizeof *s);
-    glow_logger lg = {.log = logger_fn};
+    static glow_cli_log log_state = {"glow-stability", 0};
+    glow_logger lg = glow_cli_logger(&log_state);
     char msg[512];
     if (glow_scene_load(scene_path, &lg, &s->scene, msg, sizeof msg) != GLOW_OK ||
         glow_render_scene_load(scene_path, &s->rs, msg, sizeof msg) != GLOW_OK) {
@@ -423,10 +422,6 @@ done:
 }
 
 /* ------------------------------------------------------------------ link-cut jumps */
-static int cmp_double(const void *a, const void *b) {
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
 
 static int jumps(const char *bake_path, const char *scene_path, uint32_t max_pairs, uint32_t samples, const char *csv_path) {
     session s;
@@ -503,8 +498,8 @@ static int jumps(const char *bake_path, const char *scene_path, uint32_t max_pai
                     luma(er + 6 * i), luma(er + 6 * i + 3));
     }
     mean /= n;
-    qsort(jg, n, sizeof *jg, cmp_double);
-    qsort(jr, n, sizeof *jr, cmp_double);
+    qsort(jg, n, sizeof *jg, glow_cli_cmp_double);
+    qsort(jr, n, sizeof *jr, glow_cli_cmp_double);
     const uint32_t p99 = (uint32_t)(0.99 * (n - 1));
     printf("jumps: %s, %u neighbouring cache pairs (of %u), %u paths per cache, mean irradiance %.4g W/m^2\n"
            "  largest jump / mean: Glow %.4f, reference %.4f; 99th percentile: Glow %.4f, reference %.4f; median: Glow %.4f, "
@@ -788,13 +783,10 @@ int main(int argc, char **argv) {
             radiance_out = v;
             ++i;
         } else if (dst && v) {
-            char *end = NULL;
-            unsigned long x = strtoul(v, &end, 10);
-            if (!end || *end || x == 0 || x > 1000000) {
+            if (!glow_cli_u32(v, 1, 1000000, dst)) {
                 fprintf(stderr, "glow-stability: %s needs a whole number in 1..1000000, not '%s'\n", a, v);
                 return 2;
             }
-            *dst = (uint32_t)x;
             ++i;
         } else {
             fprintf(stderr, "glow-stability: unknown option '%s'\n", a);

@@ -36,6 +36,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "glow_cli.h"
 #include "glow/glow.h"
 #include "glow/glow_host.h"
 #include "glow/glow_scene.h"
@@ -115,23 +116,7 @@ static void usage(FILE *f) {
             "Exit: 0 ok, 1 bad input or runtime failure, 2 bad command line.\n");
 }
 
-static int parse_u32(const char *s, uint32_t lo, uint32_t hi, uint32_t *out) {
-    char *end;
-    errno = 0;
-    unsigned long v = strtoul(s, &end, 10);
-    if (!*s || *end || errno || s[0] == '-' || v < lo || v > hi) return 0;
-    *out = (uint32_t)v;
-    return 1;
-}
 
-static int parse_double(const char *s, double *out) {
-    char *end;
-    errno = 0;
-    double v = strtod(s, &end);
-    if (!*s || *end || errno || !isfinite(v)) return 0;
-    *out = v;
-    return 1;
-}
 
 /* "a,b,c" -> floats in [0,1] */
 static int parse_bounce_list(const char *s, options *o) {
@@ -141,7 +126,7 @@ static int parse_bounce_list(const char *s, options *o) {
     o->bounce_count = 0;
     for (char *save = NULL, *tok = strtok_r(buf, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
         double v;
-        if (o->bounce_count == MAX_BOUNCES || !parse_double(tok, &v) || v < 0.0 || v > 1.0) return 0;
+        if (o->bounce_count == MAX_BOUNCES || !glow_cli_double(tok, &v) || v < 0.0 || v > 1.0) return 0;
         o->bounce[o->bounce_count++] = (float)v;
     }
     return o->bounce_count > 0 && s[strlen(s) - 1] != ',';
@@ -154,7 +139,7 @@ static int parse_per_update_list(const char *s, options *o) {
     o->per_update_count = 0;
     for (char *save = NULL, *tok = strtok_r(buf, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
         uint32_t v;
-        if (o->per_update_count == MAX_PER_UPDATE || !parse_u32(tok, 1, 64, &v)) return 0;
+        if (o->per_update_count == MAX_PER_UPDATE || !glow_cli_u32(tok, 1, 64, &v)) return 0;
         o->per_update[o->per_update_count++] = v;
     }
     return o->per_update_count > 0 && s[strlen(s) - 1] != ',';
@@ -173,11 +158,11 @@ static int parse_args(int argc, char **argv, options *o) {
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         int ok = 1, takes = 1;
-        if (!strcmp(a, "--iterations")) ok = v && parse_u32(v, 1, 10000, &o->iterations);
-        else if (!strcmp(a, "--threads")) ok = v && parse_u32(v, 0, 1024, &o->threads);
-        else if (!strcmp(a, "--luma")) ok = v && parse_u32(v, 1, GLOW_MAX_SH_BANDS, &o->luma);
-        else if (!strcmp(a, "--chroma")) ok = v && parse_u32(v, 1, GLOW_MAX_SH_BANDS, &o->chroma);
-        else if (!strcmp(a, "--epsilon")) ok = v && parse_double(v, &o->epsilon) && o->epsilon > 0.0 && o->epsilon < 1.0;
+        if (!strcmp(a, "--iterations")) ok = v && glow_cli_u32(v, 1, 10000, &o->iterations);
+        else if (!strcmp(a, "--threads")) ok = v && glow_cli_u32(v, 0, 1024, &o->threads);
+        else if (!strcmp(a, "--luma")) ok = v && glow_cli_u32(v, 1, GLOW_MAX_SH_BANDS, &o->luma);
+        else if (!strcmp(a, "--chroma")) ok = v && glow_cli_u32(v, 1, GLOW_MAX_SH_BANDS, &o->chroma);
+        else if (!strcmp(a, "--epsilon")) ok = v && glow_cli_double(v, &o->epsilon) && o->epsilon > 0.0 && o->epsilon < 1.0;
         else if (!strcmp(a, "--bounce")) ok = v && parse_bounce_list(v, o);
         else if (!strcmp(a, "--per-update")) ok = v && parse_per_update_list(v, o);
         else if (!strcmp(a, "--out")) {
@@ -232,26 +217,14 @@ static int parse_args(int argc, char **argv, options *o) {
     return 0;
 }
 
-static void stderr_logger(void *user, glow_log_level level, glow_result code, const char *msg, const char *file, int line) {
-    (void)file, (void)line;
-    const options *o = user;
-    if (level == GLOW_LOG_ERROR || (level == GLOW_LOG_WARNING && !o->quiet))
-        fprintf(stderr, "glow-tune: %s: %s (%s)\n", level == GLOW_LOG_ERROR ? "error" : "warning", msg,
-                glow_result_string(code));
-}
 
-static int cmp_double(const void *a, const void *b) {
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
 
+/* median of a copy (v is kept) */
 static double median_of(const double *v, uint32_t n) {
-    if (n == 0) return NAN;
-    double *t = malloc(sizeof(double) * n);
+    double *t = n ? malloc(sizeof(double) * n) : NULL;
     if (!t) return NAN;
     memcpy(t, v, sizeof(double) * n);
-    qsort(t, n, sizeof *t, cmp_double);
-    double m = n % 2 ? t[n / 2] : 0.5 * (t[n / 2 - 1] + t[n / 2]);
+    const double m = glow_cli_median(t, n);
     free(t);
     return m;
 }
@@ -861,7 +834,8 @@ int main(int argc, char **argv) {
         fprintf(stderr, "run 'glow-tune --help' for the options\n");
         return 2;
     }
-    glow_logger logger = {stderr_logger, &o};
+    glow_cli_log log_state = {"glow-tune", o.quiet};
+    glow_logger logger = glow_cli_logger(&log_state);
     char msg[1024];
     glow_scene_desc scene;
     if (glow_scene_load(o.scene, NULL, &scene, msg, sizeof msg) != GLOW_OK) {
