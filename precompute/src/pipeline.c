@@ -312,6 +312,38 @@ static glow_result serialise(const glow_pc_settings *set, const glow__scene *sc,
     if (sh) add_section(ss, GLOW_SECTION_SHLK, sh, (uint64_t)ca->count * blocks * shlk_block);
     if (lsub) add_section(ss, GLOW_SECTION_LSUB, lsub, (uint64_t)ca->count * blocks * GLOW_LINK_BLOCK * sizeof *lsub);
     add_section(ss, GLOW_SECTION_GEOM, tr, (uint64_t)sc->tri_count * sizeof *tr);
+    /* 1.1: material UVs and albedo texture paths, for hosts that draw the scene textured */
+    if (sc->uv0 && sc->tri_count) {
+        float *uv = malloc((size_t)sc->tri_count * 6u * sizeof *uv);
+        if (!uv) {
+            glow__errorf(log, "write: out of memory for the material UVs");
+            return GLOW_ERROR_OUT_OF_MEMORY;
+        }
+        for (uint32_t t = 0; t < sc->tri_count; ++t)
+            for (int k = 0; k < 3; ++k) {
+                const float u = sc->uv0[3 * (size_t)t + k][0], w = sc->uv0[3 * (size_t)t + k][1];
+                uv[6 * (size_t)t + 2 * k] = isfinite(u) ? u : 0.0f;
+                uv[6 * (size_t)t + 2 * k + 1] = isfinite(w) ? w : 0.0f;
+            }
+        add_section(ss, GLOW_SECTION_TUV0, uv, (uint64_t)sc->tri_count * 6u * sizeof *uv);
+    }
+    bool any_texture = false;
+    for (uint32_t i = 0; i < sc->material_count; ++i) any_texture |= sc->materials[i].texture >= 0;
+    if (any_texture) {
+        char *paths = calloc(sc->material_count, GLOW_BAKE_TEXTURE_PATH);
+        if (!paths) {
+            glow__errorf(log, "write: out of memory for the texture paths");
+            return GLOW_ERROR_OUT_OF_MEMORY;
+        }
+        for (uint32_t i = 0; i < sc->material_count; ++i) {
+            const int tx = sc->materials[i].texture;
+            if (tx < 0 || (uint32_t)tx >= sc->texture_count) continue;
+            const char *path = sc->textures[tx].path;
+            const size_t len = strnlen(path, sizeof sc->textures[tx].path);
+            if (len < GLOW_BAKE_TEXTURE_PATH) memcpy(paths + (size_t)i * GLOW_BAKE_TEXTURE_PATH, path, len); /* else "" */
+        }
+        add_section(ss, GLOW_SECTION_TEXP, paths, (uint64_t)sc->material_count * GLOW_BAKE_TEXTURE_PATH);
+    }
     return GLOW_OK;
 }
 

@@ -36,12 +36,13 @@
 #define BAKE_ENTRY_SIZE ((uint64_t)sizeof(glow_bake_section))
 #define MAX_SH_BANDS 16u
 
-enum { S_META, S_MATL, S_SURF, S_NODE, S_LEVL, S_CACH, S_GRID, S_LMAP, S_LINK, S_SHLK, S_GEOM, S_GVIS, S_LSUB, S_KNOWN_COUNT };
+enum { S_META, S_MATL, S_SURF, S_NODE, S_LEVL, S_CACH, S_GRID, S_LMAP, S_LINK, S_SHLK, S_GEOM, S_GVIS, S_LSUB, S_TUV0, S_TEXP,
+       S_KNOWN_COUNT };
 
 static const uint32_t known_fourcc[S_KNOWN_COUNT] = {
     GLOW_SECTION_META, GLOW_SECTION_MATL, GLOW_SECTION_SURF, GLOW_SECTION_NODE, GLOW_SECTION_LEVL, GLOW_SECTION_CACH,
     GLOW_SECTION_GRID, GLOW_SECTION_LMAP, GLOW_SECTION_LINK, GLOW_SECTION_SHLK, GLOW_SECTION_GEOM, GLOW_SECTION_GVIS,
-    GLOW_SECTION_LSUB,
+    GLOW_SECTION_LSUB, GLOW_SECTION_TUV0, GLOW_SECTION_TEXP,
 };
 
 typedef struct section_ref {
@@ -60,6 +61,8 @@ struct glow_bake {
     uint16_t major, minor;
     atomic_uint systems; /* live glow_systems using this bake */
 };
+
+static const void *known_ptr(const glow_bake *b, int k); /* a known section's payload, or NULL */
 
 /* Offset of the file image inside the allocation. */
 #define BAKE_DATA_OFFSET (((sizeof(struct glow_bake) + GLOW_BAKE_ALIGN - 1u) / GLOW_BAKE_ALIGN) * GLOW_BAKE_ALIGN)
@@ -320,6 +323,15 @@ static glow_result check_meta(const vstate *v, const glow_bake_meta *m, section_
     if (sec[S_LSUB].present && (r = check_section_size(v, &sec[S_LSUB], GLOW_SECTION_LSUB, d->link_blocks,
                                                        GLOW_LINK_BLOCK * sizeof(uint16_t), "link blocks x 16 lanes")))
         return r;
+    /* TUV0 (optional, 1.1): 6 floats per GEOM triangle; TEXP (optional, 1.1): one path per material */
+    if (sec[S_TUV0].present && !sec[S_GEOM].present)
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "section 'TUV0' (material UVs) without 'GEOM' (the triangles they belong to)");
+    if (sec[S_TUV0].present && (r = check_section_size(v, &sec[S_TUV0], GLOW_SECTION_TUV0, m->triangle_count,
+                                                       6u * sizeof(float), "triangle_count x 6 floats")))
+        return r;
+    if (sec[S_TEXP].present && (r = check_section_size(v, &sec[S_TEXP], GLOW_SECTION_TEXP, m->material_count,
+                                                       GLOW_BAKE_TEXTURE_PATH, "material_count x path")))
+        return r;
     /* GVIS (optional): 8 octant masks per grid cell; any byte value is valid */
     if (sec[S_GVIS].present &&
         (r = check_section_size(v, &sec[S_GVIS], GLOW_SECTION_GVIS, d->grid_cells, 8u, "grid cells x 8 octants")))
@@ -523,6 +535,16 @@ static glow_result check_geom(const vstate *v, const glow_bake_meta *m, const gl
     return GLOW_OK;
 }
 
+/* TUV0: finite UVs (a host samples textures with them); TEXP: every path NUL-terminated in its slot. */
+static glow_result check_textures(const vstate *v, const glow_bake_meta *m, const float *uv, const char *paths) {
+    for (uint64_t i = 0; uv && i < 6ull * m->triangle_count; i++)
+        if (!isfinite(uv[i])) FAIL(GLOW_ERROR_CORRUPT_DATA, "TUV0 triangle %u: non-finite material UV", (uint32_t)(i / 6));
+    for (uint32_t k = 0; paths && k < m->material_count; k++)
+        if (!memchr(paths + (size_t)k * GLOW_BAKE_TEXTURE_PATH, 0, GLOW_BAKE_TEXTURE_PATH))
+            FAIL(GLOW_ERROR_CORRUPT_DATA, "TEXP material %u: the texture path is not NUL-terminated", k);
+    return GLOW_OK;
+}
+
 /* Validates v's bytes (which must be GLOW_BAKE_ALIGN-aligned) and fills the bake's views. */
 static glow_result validate(const vstate *v, struct glow_bake *b) {
     glow_result r;
@@ -567,6 +589,10 @@ static glow_result validate(const vstate *v, struct glow_bake *b) {
     if ((r = check_links(v, &m, &d, payload(v, &sec[S_LINK])))) return r;
     if (sec[S_SHLK].present && (r = check_shlk(v, &m, &d, payload(v, &sec[S_SHLK])))) return r;
     if (sec[S_GEOM].present && (r = check_geom(v, &m, payload(v, &sec[S_GEOM])))) return r;
+    if ((sec[S_TUV0].present || sec[S_TEXP].present) &&
+        (r = check_textures(v, &m, sec[S_TUV0].present ? (const float *)payload(v, &sec[S_TUV0]) : NULL,
+                            sec[S_TEXP].present ? (const char *)payload(v, &sec[S_TEXP]) : NULL)))
+        return r;
 
     b->data = v->data;
     b->size = v->size;
@@ -795,6 +821,7 @@ glow_result glow_bake_get_geometry(const glow_bake *bake, glow_bake_geometry *ou
     out->positions = t[0].position;
     out->lightmap_uv = t[0].lm_uv;
     out->materials = &t[0].material;
+    out->material_uv = known_ptr(bake, S_TUV0);
     return GLOW_OK;
 }
 
@@ -807,6 +834,8 @@ glow_result glow_bake_get_material(const glow_bake *bake, uint32_t index, glow_m
     memcpy(out->albedo, m->albedo, sizeof out->albedo);
     memcpy(out->emission, m->emission, sizeof out->emission);
     out->has_albedo_texture = m->flags & 1u;
+    const char *paths = known_ptr(bake, S_TEXP);
+    if (paths) snprintf(out->albedo_texture, sizeof out->albedo_texture, "%s", paths + (size_t)index * GLOW_BAKE_TEXTURE_PATH);
     return GLOW_OK;
 }
 

@@ -243,9 +243,49 @@ static void test_sh_links_roundtrip(void **state) {
     unlink(path);
 }
 
+/* format 1.1: a textured OBJ's bake carries its material UVs and albedo texture paths (TUV0, TEXP), the
+ * UVs of every kept triangle matching one of the file's corners' texture coordinates */
+static void test_textured_roundtrip(void **state) {
+    (void)state;
+    glow_pc_settings s = {.surfels = 256, .links = 16, .bands = 2, .grid_spacing = 0.5f, .texel_density = 2.0f,
+                          .threads = 1};
+    glow_pc_stats st;
+    glow_context *ctx;
+    glow_bake *bake;
+    char path[256];
+    bake_and_load(GLOW_TEST_DATA_DIR "/scenes/texcase/texcase.obj", &s, &st, &ctx, &bake, path, sizeof path);
+    glow_bake_geometry g;
+    assert_int_equal(glow_bake_get_geometry(bake, &g), GLOW_OK);
+    assert_true(g.triangle_count > 0);
+    assert_non_null(g.material_uv);
+    for (uint32_t i = 0; i < 6 * g.triangle_count; ++i) assert_true(isfinite(g.material_uv[i]));
+    float lo = INFINITY, hi = -INFINITY; /* the file's UVs are not all equal */
+    for (uint32_t i = 0; i < 6 * g.triangle_count; ++i) lo = fminf(lo, g.material_uv[i]), hi = fmaxf(hi, g.material_uv[i]);
+    assert_true(hi > lo);
+    glow_bake_info in;
+    assert_int_equal(glow_bake_get_info(bake, &in), GLOW_OK);
+    assert_int_equal(in.format_minor, GLOW_BAKE_FORMAT_VERSION_MINOR);
+    uint32_t textured = 0;
+    for (uint32_t m = 0; m < in.material_count; ++m) {
+        glow_material_info mi;
+        assert_int_equal(glow_bake_get_material(bake, m, &mi), GLOW_OK);
+        if (!mi.has_albedo_texture) continue;
+        textured++;
+        assert_non_null(strstr(mi.albedo_texture, "texcase/"));
+        FILE *f = fopen(mi.albedo_texture, "rb"); /* a path a host on this machine can open */
+        assert_non_null(f);
+        fclose(f);
+    }
+    assert_true(textured > 0);
+    glow_bake_destroy(bake);
+    glow_context_destroy(ctx);
+    remove(path);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_cornell_roundtrip),
+        cmocka_unit_test(test_textured_roundtrip),
         cmocka_unit_test(test_sh_links_roundtrip),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

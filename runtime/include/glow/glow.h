@@ -59,7 +59,7 @@ extern "C" {
 /* The bake format this runtime reads and glow-bake writes: a bake of another major is refused
  * (GLOW_ERROR_VERSION_MISMATCH); a newer minor loads, its unknown sections skipped. */
 #define GLOW_BAKE_FORMAT_VERSION_MAJOR 1u
-#define GLOW_BAKE_FORMAT_VERSION_MINOR 0u
+#define GLOW_BAKE_FORMAT_VERSION_MINOR 1u /* 1.1: material UVs and texture paths (TUV0, TEXP) */
 #define GLOW_BAKE_FORMAT_MAJOR 1 /* the bake major this runtime reads */
 
 /* GLOW_API marks the public functions. A shared build (BUILD_SHARED_LIBS) compiles the libraries with
@@ -191,6 +191,9 @@ typedef struct glow_bake_geometry {
     const float *positions;     /* per triangle: 9 floats, corners p0 p1 p2 (front face counter-clockwise) */
     const uint16_t *lightmap_uv;/* per triangle: 6 unorm16 (u0 v0 u1 v1 u2 v2) of [0,1] */
     const uint32_t *materials;  /* per triangle: material index */
+    const float *material_uv;   /* NOT strided: [triangle_count * 6] floats, the mesh's first UV set per
+                                   corner (u0 v0 u1 v1 u2 v2; v = 1 is a texture's top row), or NULL
+                                   (a mesh without UVs, or a bake before format 1.1) */
 } glow_bake_geometry;
 /** Fills `out_geometry` (triangle_count 0 when the bake carries no geometry). \threadsafety Any
  * thread. \since 0.1 */
@@ -239,6 +242,9 @@ typedef struct glow_material_info {
     float albedo[3];   /* linear RGB (a texture, when flagged, is folded into the surfels) */
     float emission[3]; /* emitted radiance W/(m²·sr), front face only */
     uint32_t has_albedo_texture;
+    char albedo_texture[512]; /* the albedo texture's path as the linker opened it (for drawing the scene
+                                 textured: sample it at glow_bake_geometry.material_uv); "" when there is
+                                 none, it was embedded in the mesh, or the bake predates format 1.1 */
 } glow_material_info;
 /** Material `index` of the bake. \returns GLOW_ERROR_INVALID_ARGUMENT for NULL or a bad index.
  * \threadsafety Any thread. \since 0.1 */

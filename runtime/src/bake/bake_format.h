@@ -49,6 +49,10 @@
 #define GLOW_SECTION_SHLK GLOW_FOURCC('S', 'H', 'L', 'K') /* full-SH links (optional), see below */
 #define GLOW_SECTION_GEOM GLOW_FOURCC('G', 'E', 'O', 'M') /* glow_bake_triangle[triangle_count] */
 #define GLOW_SECTION_LSUB GLOW_FOURCC('L', 'S', 'U', 'B') /* uint16_t[cache_count*blocks][16] link subsets (optional, link_kind bit 2), see below */
+/* Since 1.1 (optional; 1.0 readers skip them): what a host needs to draw the scene textured. */
+#define GLOW_SECTION_TUV0 GLOW_FOURCC('T', 'U', 'V', '0') /* float[triangle_count][6] material UVs per corner, GEOM order (with GEOM) */
+#define GLOW_SECTION_TEXP GLOW_FOURCC('T', 'E', 'X', 'P') /* char[material_count][GLOW_BAKE_TEXTURE_PATH] albedo texture paths */
+#define GLOW_BAKE_TEXTURE_PATH 512u /* bytes per TEXP entry: a NUL-terminated path as the linker opened it, "" for none */
 #define GLOW_SECTION_GVIS GLOW_FOURCC('G', 'V', 'I', 'S') /* uint8_t[dx*dy*dz][8] grid cell visibility (optional; readers that predate it skip it) */
 
 /* Cache-map entries (GRID and LMAP): the low 31 bits index the cache array. */
