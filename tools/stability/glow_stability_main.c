@@ -189,6 +189,7 @@ static int ringing(const char *bake_path, const char *scene_path, uint32_t lmax,
                 k.lm_neg_irr_w += fmin(ew[0], fmin(ew[1], ew[2])) < -1e-6 * mean;
             }
         }
+        free(caches);
         glow_system_destroy(sys);
         const double sh_neg = k.pairs ? k.neg / k.pairs : 0.0, sh_neg_w = k.pairs ? k.neg_w / k.pairs : 0.0;
         const double irr = k.lm ? k.lm_neg_irr / k.lm : 0.0, irr_w = k.lm ? k.lm_neg_irr_w / k.lm : 0.0;
