@@ -34,8 +34,11 @@
  * --torch auto (default) lights it while the sun is below 4 degrees; on / off force it.
  * Keys (window), besides the GL samples' ones (samples/common/sample_gl.h): T torch on/off, B / N one
  * hour back / on. P pauses the day.
- * Every frame prints (in a window: the title) the hour, the sun's elevation, the torch, Glow's GPU ms
- * per stage and the bounce intensity; headless also the frame's mean display luminance (0..1).
+ * The atrium is drawn with its albedo textures (the bake names them; --no-textures: base colours) under
+ * the sky. In a window a HUD shows the hour, the sun's elevation, the torch, Glow's GPU ms per stage,
+ * the bounces and the view with its legend (H hides it; --hud on|off); headless runs print the same
+ * per frame, with the frame's mean display luminance (0..1), and write PNGs without the HUD unless
+ * --hud on.
  * Exit: 0 ok, 1 file or runtime error, 2 usage, 77 no OpenGL 4.5 context. */
 #include <math.h>
 #include <stdio.h>
@@ -314,6 +317,7 @@ int main(int argc, char **argv) {
                  (int)hour, (int)(60.0f * (hour - floorf(hour))), (double)elevation, (double)luma(sky.irradiance),
                  (double)luma(sky.environment), lit ? "on" : "off", mode == TORCH_AUTO ? "auto" : "manual");
         snprintf(a.title, sizeof a.title, "Glow 02_sponza  %s", state); /* the window's title starts with it */
+        memcpy(a.sky, sky.environment, sizeof a.sky); /* the final view's background: the same sky */
         status = sample_app_frame(&a, f, NULL, 0, NULL);
         if (!a.window && status != 1)
             printf("time %s  mean luminance %.4f  (frame %ld)\n", state, mean_luminance(&a, rgba), f);

@@ -13,9 +13,13 @@
  *     emission = the material's (front faces), through an optional GLSL hook (animated emitters)
  * albedo and emission are the bake's materials (glow_bake_get_material) times the CPU system's scales
  * (glow_system_params.emission_scale, glow_system_set_material; effective albedo clamped to 0.999 as
- * the solver does). Textures are folded into the surfels at bake time only, so the screen shows the
- * materials' base albedo. Then exposure, Reinhard x/(1+x) and the sRGB curve, in the shader
- * (sample_png.h's sample_tonemap, in GLSL), into an RGBA8 target.
+ * the solver does), times the material's albedo texture at the pixel (desc.textures: the paths and
+ * material UVs a format-1.1 bake carries, glow_material_info.albedo_texture and
+ * glow_bake_geometry.material_uv; loaded with stb_image into one sRGB texture array). Glow's surfels
+ * hold the texture's mean over each surfel, so the bounce sees the same colours. Then exposure,
+ * Reinhard x/(1+x) and the sRGB curve, in the shader (sample_png.h's sample_tonemap, in GLSL), into an
+ * RGBA8 target. Behind the scene, the final view shows sample_gl_frame.sky (the scene's sky radiance).
+ * sample_gl_hud writes text (stats, the view's legend: sample_view_legend) over the display target.
  *
  * VIEWS (sample_view_parse, `--view NAME`):
  *   final     the sum above (direct and indirect can be switched off: sample_gl_frame.direct/indirect)
@@ -64,10 +68,16 @@
 #include <glow/glow_gl.h>
 #include <glow/glow_glfns.h>
 #include <glow/glow_scene.h>
+#include <stb/stb_image.h>        /* albedo textures (Debian's libstb) */
+#include <stb/stb_image_resize.h> /* ... resized to one texture array */
+
+#include "sample_png.h" /* sample_tonemap: the sky behind the scene */
+#include <stb/stb_easy_font.h> /* the HUD's text: quads of a small bitmap font (header-only, public domain) */
 
 #define SAMPLE_GL_PI 3.14159265358979323846f
 #define SAMPLE_GL_MATERIAL_BINDING 12 /* SSBO binding of the material table (Glow's kernels use 0-7) */
 #define SAMPLE_GL_TARGETS 5           /* colour + hdr + aux0..2 */
+#define SAMPLE_GL_TEXTURE_SIZE 512    /* albedo textures are resampled to this square, one array layer each */
 
 typedef enum sample_view {
     SAMPLE_VIEW_FINAL = 0,
@@ -151,6 +161,9 @@ typedef struct sample_gl_desc {
     bool aux_targets;               /* also the four RGBA32F targets (see TARGETS) */
     bool no_cull;                   /* draw back faces too (default: culled, so a closed room seen from
                                        outside shows its inside) */
+    bool textures;                  /* draw the albedo textures the bake names (format 1.1: TEXP, TUV0),
+                                       loaded from those paths; materials whose file cannot be read keep
+                                       their base albedo (a warning in r->warning) */
 } sample_gl_desc;
 
 typedef struct sample_gl_sphere {
@@ -167,6 +180,8 @@ typedef struct sample_gl_frame {
     float pick[3];                   /* links view: the cache nearest this point */
     uint32_t cluster_level;          /* clusters view: hierarchy level (clamped) */
     float time;                      /* seconds, uniform u_time of the emission hook */
+    float sky[3];                    /* final view: radiance (W/(m²·sr)) behind the scene, brighter towards
+                                        the zenith; 0 = black */
 } sample_gl_frame;
 
 typedef struct sample_gl {
@@ -181,9 +196,14 @@ typedef struct sample_gl {
     GLuint vao_scene, vbo_scene, vao_sphere, vbo_sphere, ibo_sphere, vao_points, vbo_points[5], vao_lines, vbo_lines;
     GLuint ssbo_materials, query[2], sampler;
     GLuint sky_tex;             /* R32F lightmap-space sky visibility for the screen (0 = none: S = 1) */
+    GLuint albedo_tex, albedo_sampler; /* SRGB8_ALPHA8 array, one layer per textured material (0 = none) */
+    GLuint prog_hud, vao_hud, vbo_hud;  /* sample_gl_hud, created on first use */
+    uint32_t textured_materials;
+    char warning[512];          /* the first texture that could not be loaded, "" when none */
     uint32_t vertex_count, sphere_index_count, material_count, surfel_count;
     float scene_size, bounds_min[3], bounds_max[3];
     float *material_base;   /* [M][6] the bake's albedo, emission */
+    int *material_layer;    /* [M] albedo texture layer, -1 none */
     float *staging;         /* [S][3] */
     uint64_t direct_revision_seen;
     /* hierarchy (links, clusters), built on first use */
@@ -235,13 +255,15 @@ static const char sample_gl__scene_vs[] =
     "layout(location = 1) in vec3 a_nrm;\n"
     "layout(location = 2) in vec2 a_uv;\n"
     "layout(location = 3) in uint a_mat;\n"
+    "layout(location = 4) in vec2 a_uv0;\n"
     "uniform mat4 u_view_proj;\n"
     "uniform vec4 u_sphere;\n"      /* xyz centre, w radius; w = 0: bake triangles */
-    "out vec3 v_pos;\nout vec3 v_nrm;\nout vec2 v_uv;\nflat out uint v_mat;\n"
+    "out vec3 v_pos;\nout vec3 v_nrm;\nout vec2 v_uv;\nout vec2 v_uv0;\nflat out uint v_mat;\n"
     "void main() {\n"
     "    v_pos = u_sphere.w > 0.0 ? u_sphere.xyz + u_sphere.w * a_pos : a_pos;\n"
     "    v_nrm = a_nrm;\n"
     "    v_uv = a_uv;\n"
+    "    v_uv0 = a_uv0;\n"
     "    v_mat = u_sphere.w > 0.0 ? 0u : a_mat;\n"
     "    gl_Position = u_view_proj * vec4(v_pos, 1.0);\n"
     "}\n";
@@ -258,14 +280,18 @@ static const char sample_gl__scene_fs[] =
     "uniform float u_grid_spacing;\n"
     "uniform uvec3 u_grid_dims;\n"
     "layout(binding = 4) uniform sampler2D u_sky;\n"
-    "uniform int u_has_sky;\n"
-    "in vec3 v_pos;\nin vec3 v_nrm;\nin vec2 v_uv;\nflat in uint v_mat;\n"
+    "layout(binding = 5) uniform sampler2DArray u_albedo_tex;\n" /* material albedo textures (sRGB, linear when read) */
+    "uniform int u_has_sky, u_textures;\n"
+    "in vec3 v_pos;\nin vec3 v_nrm;\nin vec2 v_uv;\nin vec2 v_uv0;\nflat in uint v_mat;\n"
     "void main() {\n"
     /* the sky's visible fraction at this pixel, for the light hook's sky term (GLOW_GL_LIGHTS_PIXEL_SKY) */
     "    if (u_has_sky != 0 && u_object == 0) sample_pixel_sky = textureLod(u_sky, v_uv, 0.0).r;\n"
     "    vec3 n = normalize(v_nrm);\n"
     "    if (!gl_FrontFacing) n = -n;\n"
     "    vec3 albedo = u_object != 0 ? u_object_albedo : sample_mat[v_mat].albedo.rgb;\n"
+    /* albedo.w: the material's texture layer, -1 none; v = 1 is the image's top row (the linker's convention) */
+    "    if (u_object == 0 && u_textures != 0 && sample_mat[v_mat].albedo.w >= 0.0)\n"
+    "        albedo *= texture(u_albedo_tex, vec3(v_uv0.x, 1.0 - v_uv0.y, sample_mat[v_mat].albedo.w)).rgb;\n"
     "    vec3 emission = vec3(0.0);\n"
     "    if (u_object == 0 && gl_FrontFacing) emission = sample_emission(v_pos, n, v_mat, sample_mat[v_mat].emission.rgb);\n"
     "    vec4 sh[GLOW_SH_PLANES];\n"
@@ -442,6 +468,7 @@ typedef struct sample_gl__vertex {
     float pos[3], nrm[3];
     uint16_t uv[2];
     uint32_t mat;
+    float uv0[2]; /* material UV (glow_bake_geometry.material_uv), 0 when the bake has none */
 } sample_gl__vertex;
 
 static inline int sample_gl__upload_scene(sample_gl *r) {
@@ -468,6 +495,7 @@ static inline int sample_gl__upload_scene(sample_gl *r) {
             memcpy(o->nrm, n, sizeof n);
             o->uv[0] = uv[2 * k], o->uv[1] = uv[2 * k + 1];
             o->mat = mat < info.material_count ? mat : 0;
+            if (g.material_uv) o->uv0[0] = g.material_uv[6 * (size_t)t + 2 * k], o->uv0[1] = g.material_uv[6 * (size_t)t + 2 * k + 1];
         }
     }
     gl->CreateBuffers(1, &r->vbo_scene);
@@ -475,10 +503,11 @@ static inline int sample_gl__upload_scene(sample_gl *r) {
     free(v);
     gl->CreateVertexArrays(1, &r->vao_scene);
     gl->VertexArrayVertexBuffer(r->vao_scene, 0, r->vbo_scene, 0, sizeof(sample_gl__vertex));
-    for (GLuint a = 0; a < 4; a++) {
+    for (GLuint a = 0; a < 5; a++) {
         gl->EnableVertexArrayAttrib(r->vao_scene, a);
         gl->VertexArrayAttribBinding(r->vao_scene, a, 0);
     }
+    gl->VertexArrayAttribFormat(r->vao_scene, 4, 2, GL_FLOAT, GL_FALSE, offsetof(sample_gl__vertex, uv0));
     gl->VertexArrayAttribFormat(r->vao_scene, 0, 3, GL_FLOAT, GL_FALSE, offsetof(sample_gl__vertex, pos));
     gl->VertexArrayAttribFormat(r->vao_scene, 1, 3, GL_FLOAT, GL_FALSE, offsetof(sample_gl__vertex, nrm));
     gl->VertexArrayAttribFormat(r->vao_scene, 2, 2, GL_UNSIGNED_SHORT, GL_TRUE, offsetof(sample_gl__vertex, uv));
@@ -592,6 +621,12 @@ static inline void sample_gl_destroy(sample_gl *r) {
     if (r->query[0]) gl->DeleteQueries(2, r->query);
     if (r->sampler) gl->DeleteSamplers(1, &r->sampler);
     if (r->sky_tex) gl->DeleteTextures(1, &r->sky_tex);
+    if (r->albedo_tex) gl->DeleteTextures(1, &r->albedo_tex);
+    if (r->prog_hud) gl->DeleteProgram(r->prog_hud);
+    if (r->vbo_hud) gl->DeleteBuffers(1, &r->vbo_hud);
+    if (r->vao_hud) gl->DeleteVertexArrays(1, &r->vao_hud);
+    if (r->albedo_sampler) gl->DeleteSamplers(1, &r->albedo_sampler);
+    free(r->material_layer);
     free(r->material_base);
     free(r->staging);
     free(r->node_parent);
@@ -641,6 +676,62 @@ static inline int sample_gl_set_sky_visibility(sample_gl *r, const float *S, uin
 
 /* Loads the GL functions, compiles the programs, uploads the bake's triangles and surfels and creates
  * the targets. 0 on success; -1 with the reason in r->error (r is then destroyed). */
+/* The materials' albedo textures (glow_material_info.albedo_texture), each resampled to
+ * SAMPLE_GL_TEXTURE_SIZE² in sRGB and stored as one layer of an SRGB8_ALPHA8 array with mipmaps;
+ * materials naming the same file share a layer. A file that cannot be read leaves its material
+ * untextured and is named in r->warning. */
+static inline int sample_gl__load_textures(sample_gl *r) {
+    const uint32_t M = r->material_count, T = SAMPLE_GL_TEXTURE_SIZE;
+    r->material_layer = malloc(((size_t)M + 1) * sizeof *r->material_layer);
+    if (!r->material_layer) return sample_gl__fail(r, "out of memory");
+    for (uint32_t m = 0; m < M; m++) r->material_layer[m] = -1;
+    glow_material_info *mi = calloc((size_t)M + 1, sizeof *mi);
+    unsigned char *layers = NULL;
+    uint32_t count = 0;
+    if (!mi) return sample_gl__fail(r, "out of memory");
+    for (uint32_t m = 0; m < M; m++) {
+        if (glow_bake_get_material(r->bake, m, &mi[m]) != GLOW_OK || !mi[m].albedo_texture[0]) continue;
+        for (uint32_t k = 0; k < m && r->material_layer[m] < 0; k++)
+            if (r->material_layer[k] >= 0 && !strcmp(mi[k].albedo_texture, mi[m].albedo_texture))
+                r->material_layer[m] = r->material_layer[k];
+        if (r->material_layer[m] >= 0) continue;
+        int w = 0, h = 0, n = 0;
+        unsigned char *px = stbi_load(mi[m].albedo_texture, &w, &h, &n, 4);
+        unsigned char *grown = px ? realloc(layers, ((size_t)count + 1) * T * T * 4) : NULL;
+        if (!px || !grown) {
+            if (!r->warning[0])
+                snprintf(r->warning, sizeof r->warning, "%s: cannot read the albedo texture (%s); material '%s' drawn untextured",
+                         mi[m].albedo_texture, px ? "out of memory" : stbi_failure_reason(), mi[m].name);
+            stbi_image_free(px);
+            continue;
+        }
+        layers = grown;
+        stbir_resize_uint8_srgb(px, w, h, 0, layers + (size_t)count * T * T * 4, (int)T, (int)T, 0, 4, 3, 0);
+        stbi_image_free(px);
+        r->material_layer[m] = (int)count++;
+    }
+    free(mi);
+    r->textured_materials = 0;
+    for (uint32_t m = 0; m < M; m++) r->textured_materials += r->material_layer[m] >= 0;
+    if (count) {
+        glow_glfns *gl = &r->gl;
+        GLsizei levels = 1;
+        while ((T >> levels) > 0) levels++;
+        gl->CreateTextures(GL_TEXTURE_2D_ARRAY, 1, &r->albedo_tex);
+        gl->TextureStorage3D(r->albedo_tex, levels, GL_SRGB8_ALPHA8, (GLsizei)T, (GLsizei)T, (GLsizei)count);
+        gl->TextureSubImage3D(r->albedo_tex, 0, 0, 0, 0, (GLsizei)T, (GLsizei)T, (GLsizei)count, GL_RGBA, GL_UNSIGNED_BYTE,
+                              layers);
+        gl->GenerateTextureMipmap(r->albedo_tex);
+        gl->CreateSamplers(1, &r->albedo_sampler);
+        gl->SamplerParameteri(r->albedo_sampler, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+        gl->SamplerParameteri(r->albedo_sampler, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+        gl->SamplerParameteri(r->albedo_sampler, GL_TEXTURE_WRAP_S, GL_REPEAT);
+        gl->SamplerParameteri(r->albedo_sampler, GL_TEXTURE_WRAP_T, GL_REPEAT);
+    }
+    free(layers);
+    return 0;
+}
+
 static inline int sample_gl_create(sample_gl *r, const sample_gl_desc *d) {
     memset(r, 0, sizeof *r);
     if (!d || !d->loader || !d->bake || !d->system || !d->outputs)
@@ -661,6 +752,7 @@ static inline int sample_gl_create(sample_gl *r, const sample_gl_desc *d) {
         !(r->prog_lines = sample_gl__program(r, sample_gl__lines_vs, sample_gl__lines_fs, hook, d->emission_glsl, "lines")))
         rc = -1;
     if (rc == 0) rc = sample_gl__upload_scene(r);
+    if (rc == 0 && d->textures) rc = sample_gl__load_textures(r);
     if (rc == 0) rc = sample_gl__upload_surfels(r);
     if (rc == 0) {
         sample_gl__upload_sphere(r);
@@ -812,7 +904,8 @@ static inline void sample_gl__upload_materials(sample_gl *r, const glow_solver_t
             m[8 * (size_t)i + (size_t)c] = fminf(fmaxf(base[c] * as, 0.0f), 0.999f);
             m[8 * (size_t)i + 4 + (size_t)c] = base[3 + c] * es * prm.emission_scale;
         }
-        m[8 * (size_t)i + 3] = m[8 * (size_t)i + 7] = 0.0f;
+        m[8 * (size_t)i + 3] = r->material_layer && r->material_layer[i] >= 0 ? (float)r->material_layer[i] : -1.0f;
+        m[8 * (size_t)i + 7] = 0.0f;
     }
     r->gl.NamedBufferSubData(r->ssbo_materials, 0, (GLsizeiptr)((size_t)r->material_count * 8 * sizeof(float)), m);
     free(m);
@@ -845,6 +938,110 @@ static inline void sample_gl__set_common(sample_gl *r, GLuint prog, const sample
     gl->Uniform1f(gl->GetUniformLocation(prog, "u_time"), f->time);
 }
 
+/* The legend of each view, for the HUD. */
+static inline const char *sample_view_legend(int view) {
+    switch (view) {
+    case SAMPLE_VIEW_FINAL: return "final: emission + direct (the lights' hook) + indirect (albedo x Glow's SH)";
+    case SAMPLE_VIEW_INDIRECT: return "indirect: albedo x Glow's SH alone, unclamped (SH ringing below 0 shows black)";
+    case SAMPLE_VIEW_DIRECT: return "direct: the lights' hook alone (shadow-mapped sun, point and spot lights, sky)";
+    case SAMPLE_VIEW_SURFELS: return "surfels: each dot the light its surfel starts the bounce with (E/pi + emission)";
+    case SAMPLE_VIEW_CHARTS: return "charts: red = lightmap u, green = v, checker = texels; magenta = a texel without a cache";
+    case SAMPLE_VIEW_LINKS: return "links: one cache (white dot) to the nodes it gathers from; blue = one surfel ... red = large clusters";
+    case SAMPLE_VIEW_CLUSTERS: return "clusters: surfels coloured by their ancestor at level K (K / L: down / up)";
+    case SAMPLE_VIEW_LIT_CLUSTERS: return "lit-clusters: each cluster's radiance after the last GPU update";
+    default: return "";
+    }
+}
+
+/* Draws `text` (lines split at '\n') at the top left of the display target (colour 0 of the
+ * renderer's framebuffer, also in the PNGs), white on a translucent dark box, through stb_easy_font's
+ * quads scaled 2x. Leaves blending and depth test off. 0, or -1 with r->error. */
+static inline int sample_gl_hud(sample_gl *r, const char *text) {
+    glow_glfns *gl = &r->gl;
+    if (!r->prog_hud) {
+        static const char vs[] = "#version 450 core\n"
+                                 "layout(location = 0) in vec2 a_px;\n"
+                                 "uniform vec2 u_size;\n"
+                                 "void main() { gl_Position = vec4(a_px.x / u_size.x * 2.0 - 1.0, 1.0 - a_px.y / u_size.y * 2.0, 0.0, 1.0); }\n";
+        static const char fs[] = "#version 450 core\n"
+                                 "uniform vec4 u_color;\n"
+                                 "layout(location = 0) out vec4 o_color;\n"
+                                 "void main() { o_color = u_color; }\n";
+        GLuint sh[2] = {gl->CreateShader(GL_VERTEX_SHADER), gl->CreateShader(GL_FRAGMENT_SHADER)};
+        const char *src[2] = {vs, fs};
+        r->prog_hud = gl->CreateProgram();
+        for (int i = 0; i < 2; i++) {
+            gl->ShaderSource(sh[i], 1, &src[i], NULL);
+            gl->CompileShader(sh[i]);
+            gl->AttachShader(r->prog_hud, sh[i]);
+        }
+        gl->LinkProgram(r->prog_hud);
+        for (int i = 0; i < 2; i++) gl->DeleteShader(sh[i]);
+        GLint ok = 0;
+        gl->GetProgramiv(r->prog_hud, GL_LINK_STATUS, &ok);
+        if (!ok) return sample_gl__fail(r, "the HUD program does not link");
+        gl->CreateVertexArrays(1, &r->vao_hud);
+        gl->CreateBuffers(1, &r->vbo_hud);
+        gl->NamedBufferData(r->vbo_hud, 1 << 20, NULL, GL_STREAM_DRAW);
+        gl->VertexArrayVertexBuffer(r->vao_hud, 0, r->vbo_hud, 0, 2 * sizeof(float));
+        gl->EnableVertexArrayAttrib(r->vao_hud, 0);
+        gl->VertexArrayAttribBinding(r->vao_hud, 0, 0);
+        gl->VertexArrayAttribFormat(r->vao_hud, 0, 2, GL_FLOAT, GL_FALSE, 0);
+    }
+    enum { MAX_QUADS = 8192 };
+    static char quads[MAX_QUADS * 64];   /* stb_easy_font: 4 vertices of 16 bytes per quad */
+    static float tri[MAX_QUADS * 12 + 12]; /* 2 triangles per quad, 2 floats a vertex; the box first */
+    const float scale = r->height >= 480 ? 2.0f : 1.0f, margin = 6.0f;
+    char buf[4096];
+    snprintf(buf, sizeof buf, "%s", text);
+    /* the box: the widest line x the line count */
+    float wmax = 0.0f, y = margin;
+    uint32_t nq = 0, nv = 6;
+    for (char *line = buf, *next; line; line = next) {
+        next = strchr(line, '\n');
+        if (next) *next++ = 0;
+        const float lw = (float)stb_easy_font_width(line) * scale;
+        if (lw > wmax) wmax = lw;
+        const int q = stb_easy_font_print(0.0f, 0.0f, line, NULL, quads + (size_t)nq * 64, (int)((MAX_QUADS - nq) * 64));
+        for (int k = 0; k < q; k++) { /* quad corners 0 1 2 3 -> triangles 0 1 2, 0 2 3; scaled and placed */
+            const float *v = (const float *)(quads + ((size_t)nq + (size_t)k) * 64);
+            static const int order[6] = {0, 1, 2, 0, 2, 3};
+            for (int c = 0; c < 6; c++) {
+                tri[2 * nv] = margin + scale * v[4 * order[c]];
+                tri[2 * nv + 1] = y + scale * v[4 * order[c] + 1];
+                nv++;
+            }
+        }
+        nq += (uint32_t)q;
+        y += 10.0f * scale;
+        if (nq + 256 > MAX_QUADS) break;
+    }
+    const float x0 = margin - 3.0f, y0 = margin - 3.0f, x1 = margin + wmax + 3.0f, y1 = y + 1.0f;
+    const float box[12] = {x0, y0, x1, y0, x1, y1, x0, y0, x1, y1, x0, y1};
+    memcpy(tri, box, sizeof box);
+    gl->NamedBufferSubData(r->vbo_hud, 0, (GLsizeiptr)((size_t)nv * 2 * sizeof(float)), tri);
+    gl->BindFramebuffer(GL_FRAMEBUFFER, r->fbo);
+    gl->NamedFramebufferDrawBuffer(r->fbo, GL_COLOR_ATTACHMENT0); /* the display target only */
+    gl->Viewport(0, 0, (GLsizei)r->width, (GLsizei)r->height);
+    gl->Disable(GL_DEPTH_TEST);
+    gl->Disable(GL_CULL_FACE);
+    gl->Enable(GL_BLEND);
+    gl->BlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+    gl->UseProgram(r->prog_hud);
+    gl->Uniform2f(gl->GetUniformLocation(r->prog_hud, "u_size"), (float)r->width, (float)r->height);
+    const GLint col = gl->GetUniformLocation(r->prog_hud, "u_color");
+    gl->BindVertexArray(r->vao_hud);
+    gl->Uniform4f(col, 0.0f, 0.0f, 0.0f, 0.55f);
+    gl->DrawArrays(GL_TRIANGLES, 0, 6);
+    gl->Uniform4f(col, 1.0f, 1.0f, 0.92f, 1.0f);
+    gl->DrawArrays(GL_TRIANGLES, 6, (GLsizei)(nv - 6));
+    gl->Disable(GL_BLEND);
+    GLenum bufs[SAMPLE_GL_TARGETS];
+    for (int i = 0; i < SAMPLE_GL_TARGETS; i++) bufs[i] = (r->aux || i == 0) ? GL_COLOR_ATTACHMENT0 + (GLenum)i : GL_NONE;
+    gl->NamedFramebufferDrawBuffers(r->fbo, SAMPLE_GL_TARGETS, bufs);
+    return gl->GetError() == GL_NO_ERROR ? 0 : sample_gl__fail(r, "GL error while drawing the HUD");
+}
+
 /* Draws one frame into the targets. Call after the GL system's update (and glow_gl_lights_bind when a
  * light hook was given). 0 on success; -1 with r->error on a GL error. */
 static inline int sample_gl_draw(sample_gl *r, const sample_gl_frame *f) {
@@ -861,6 +1058,14 @@ static inline int sample_gl_draw(sample_gl *r, const sample_gl_frame *f) {
     gl->Viewport(0, 0, (GLsizei)r->width, (GLsizei)r->height);
     const float zero[4] = {0, 0, 0, 0}, one = 1.0f;
     for (int i = 0; i < (r->aux ? SAMPLE_GL_TARGETS : 1); i++) gl->ClearNamedFramebufferfv(r->fbo, GL_COLOR, i, zero);
+    if (f->view == SAMPLE_VIEW_FINAL && (f->sky[0] > 0.0f || f->sky[1] > 0.0f || f->sky[2] > 0.0f)) {
+        /* the sky behind the scene: its radiance, tone-mapped as the pixels are (display target, and
+         * the hdr target with the radiance itself) */
+        float disp[4] = {0, 0, 0, 1}, hdr[4] = {f->sky[0], f->sky[1], f->sky[2], 1};
+        for (int c = 0; c < 3; c++) disp[c] = (float)sample_tonemap(f->sky[c], f->exposure) / 255.0f;
+        gl->ClearNamedFramebufferfv(r->fbo, GL_COLOR, 0, disp);
+        if (r->aux) gl->ClearNamedFramebufferfv(r->fbo, GL_COLOR, 1, hdr);
+    }
     gl->ClearNamedFramebufferfv(r->fbo, GL_DEPTH, 0, &one);
     gl->Enable(GL_DEPTH_TEST);
     gl->DepthFunc(GL_LEQUAL);
@@ -889,6 +1094,8 @@ static inline int sample_gl_draw(sample_gl *r, const sample_gl_frame *f) {
     gl->BindTextureUnit(2, o->lightmap_texture);
     gl->BindTextureUnit(3, o->lightmap_valid_texture);
     gl->BindTextureUnit(4, r->sky_tex);
+    gl->BindTextureUnit(5, r->albedo_tex);
+    gl->BindSampler(5, r->albedo_sampler);
     gl->BindSampler(4, 0);
     for (GLuint u = 0; u < 4; u++) gl->BindSampler(u, r->sampler); /* NEAREST: see sample_gl_create */
 
@@ -899,6 +1106,7 @@ static inline int sample_gl_draw(sample_gl *r, const sample_gl_frame *f) {
     gl->Uniform1i(gl->GetUniformLocation(p, "u_has_grid"), o->grid_texture != 0);
     gl->Uniform1i(gl->GetUniformLocation(p, "u_has_lightmap"), o->lightmap_texture != 0);
     gl->Uniform1i(gl->GetUniformLocation(p, "u_has_sky"), r->sky_tex ? 1 : 0);
+    gl->Uniform1i(gl->GetUniformLocation(p, "u_textures"), r->albedo_tex ? 1 : 0);
     gl->Uniform3fv(gl->GetUniformLocation(p, "u_grid_origin"), 1, o->grid_origin);
     gl->Uniform1f(gl->GetUniformLocation(p, "u_grid_spacing"), o->grid_spacing);
     gl->Uniform3ui(gl->GetUniformLocation(p, "u_grid_dims"), o->grid_dims[0], o->grid_dims[1], o->grid_dims[2]);
@@ -1019,6 +1227,8 @@ typedef struct sample_app_options {
     float exposure, bounce;
     uint32_t iterations;
     bool direct, indirect, has_pick;
+    bool textures;     /* draw the bake's albedo textures (default; --no-textures) */
+    int hud;           /* on-screen text: -1 default (on in a window, off headless), 0 off, 1 on (--hud on|off) */
     float pick[3];
     int cluster_level; /* -1: a third of the levels */
 } sample_app_options;
@@ -1042,6 +1252,7 @@ typedef struct sample_app {
     unsigned char key_latch[GLFW_KEY_LAST + 1]; /* set by GLFW's key callback, cleared when read */
     uint32_t levels;
     char title[512];
+    float sky[3]; /* the final view's background radiance (W/(m²·sr)); the sample sets it (0 = black) */
 } sample_app;
 
 static inline double sample_app_now_ms(void) {
@@ -1054,11 +1265,13 @@ static inline void sample_app_usage(FILE *f, const char *argv0) {
     fprintf(f,
             "usage: %s BAKE [--headless] [--frames N] [--out DIR] [--view NAME] [--width W] [--height H]\n"
             "       [--scene JSON] [--exposure E] [--bounce B] [--iterations N] [--no-direct] [--no-indirect]\n"
-            "       [--pick X,Y,Z] [--level L]\n"
+            "       [--pick X,Y,Z] [--level L] [--no-textures] [--hud on|off]\n"
             "  --view      final (default), indirect, direct, surfels, charts, links, clusters, lit-clusters\n"
             "  --width/--height  image size (default 320x240 headless, 1280x720 in a window)\n"
             "  --scene     a scene JSON (docs/scene-format.md): camera, lights, environment, emission_scale\n"
             "  --exposure  multiplies radiance before the tone map (default 1)\n"
+            "  --no-textures  draw the materials' base albedo, not the textures the bake names (format 1.1)\n"
+            "  --hud       on-screen stats, view name and legend (default: on in a window, off headless; H toggles)\n"
             "  --bounce    bounce intensity 0..1 (default 1); --iterations: bounce iterations per update (default 1)\n"
             "  --pick      links view: the cache nearest this point; --level: clusters view level\n"
             "keys (window): 1-8 views, D direct, I indirect, Z/X bounce -/+, C/V exposure -/+, K/L level -/+,\n"
@@ -1075,7 +1288,7 @@ static inline int sample_app__bad(const char *argv0, const char *opt, const char
 /* Parses the command line. -1 to go on, else the exit status. */
 static inline int sample_app_parse(int argc, char **argv, sample_app_options *o) {
     *o = (sample_app_options){.view = SAMPLE_VIEW_FINAL, .exposure = 1.0f, .bounce = 1.0f, .iterations = 1,
-                              .direct = true, .indirect = true, .cluster_level = -1};
+                              .direct = true, .indirect = true, .textures = true, .hud = -1, .cluster_level = -1};
     long w = 0, h = 0;
     for (int i = 1; i < argc; i++) {
         int took = sample_arg_common(argc, argv, &i, &o->args);
@@ -1085,6 +1298,11 @@ static inline int sample_app_parse(int argc, char **argv, sample_app_options *o)
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) return sample_app_usage(stdout, argv[0]), 0;
         if (!strcmp(a, "--no-direct")) { o->direct = false; continue; }
         if (!strcmp(a, "--no-indirect")) { o->indirect = false; continue; }
+        if (!strcmp(a, "--no-textures")) { o->textures = false; continue; }
+        if (!strcmp(a, "--hud") && i + 1 < argc && (!strcmp(argv[i + 1], "on") || !strcmp(argv[i + 1], "off"))) {
+            o->hud = !strcmp(argv[++i], "on");
+            continue;
+        }
         static const char *const valued[] = {"--view", "--width", "--height", "--scene", "--exposure", "--bounce",
                                              "--iterations", "--pick", "--level"};
         int k = -1;
@@ -1275,12 +1493,13 @@ static inline int sample_app_init(sample_app *a, int argc, char **argv, const ch
     if (a->window) glow_glctx_framebuffer_size(a->glctx, &fw, &fh);
     sample_gl_desc rd = {.loader = load, .bake = a->bake, .system = a->sys, .outputs = glow_gl_system_outputs(a->gsys),
                          .light_hook = glow_gl_lights_hook_source(a->lights), .emission_glsl = emission_glsl,
-                         .width = fw, .height = fh};
+                         .width = fw, .height = fh, .textures = a->opt.textures};
     if (sample_gl_create(&a->r, &rd) != 0) {
         fprintf(stderr, "%s: renderer: %s\n", a->name, a->r.error);
         sample_app_destroy(a);
         return 1;
     }
+    if (a->r.warning[0]) fprintf(stderr, "%s: warning: %s\n", a->name, a->r.warning);
     { /* the sky's visible fraction per surfel, traced once on the CPU (glow_host, Embree) as the CPU host does: for
        * the GPU hook (Glow's surfels) and, through a lightmap-space texture, for the screen; without it the sky
        * would light arcades and room interiors as if they were open (S = 1) */
@@ -1352,6 +1571,7 @@ static inline void sample_app__keys(sample_app *a) {
     if (sample_app__pressed(a, GLFW_KEY_L) && a->opt.cluster_level + 1 < (int)a->levels) a->opt.cluster_level++;
     if (sample_app__pressed(a, GLFW_KEY_P)) a->paused = !a->paused;
     if (sample_app__pressed(a, GLFW_KEY_R)) a->reset = true;
+    if (sample_app__pressed(a, GLFW_KEY_H)) a->opt.hud = a->opt.hud < 0 ? 0 : !a->opt.hud;
     int db = sample_app__pressed(a, GLFW_KEY_X) - sample_app__pressed(a, GLFW_KEY_Z);
     if (db) {
         glow_system_params p;
@@ -1402,7 +1622,8 @@ static inline int sample_app_frame(sample_app *a, long frame, const sample_gl_sp
     sample_gl_frame f = {.view = a->opt.view, .direct = a->opt.direct, .indirect = a->opt.indirect,
                          .exposure = a->opt.exposure, .camera = &a->camera, .spheres = spheres,
                          .sphere_count = sphere_count, .cluster_level = (uint32_t)a->opt.cluster_level,
-                         .time = (float)(a->window ? a->anim_time : 0.1 * (double)frame)};
+                         .time = (float)(a->window ? a->anim_time : 0.1 * (double)frame),
+                         .sky = {a->sky[0], a->sky[1], a->sky[2]}};
     memcpy(f.pick, a->opt.has_pick ? a->opt.pick : default_pick ? default_pick : a->centre, sizeof f.pick);
     if (sample_gl_draw(&a->r, &f) != 0) {
         fprintf(stderr, "%s: frame %ld: %s\n", a->name, frame, a->r.error);
@@ -1414,6 +1635,26 @@ static inline int sample_app_frame(sample_app *a, long frame, const sample_gl_sp
     glow_system_get_params(a->sys, &p);
     const uint64_t bounces = p.bounce_intensity > 0.0f ? st.updates * p.bounce_iterations : 1u;
     int status = -1;
+    const bool hud = a->opt.hud < 0 ? a->window : a->opt.hud != 0;
+    if (hud) { /* the on-screen HUD: what the sample shows, Glow's GPU stages, the view and its legend */
+        char text[2048];
+        snprintf(text, sizeof text,
+                 "%s\n"
+                 "Glow GPU ms: surfels %.2f (hook %.2f)  pull %.2f  caches %.2f  outputs %.2f  total %.2f  |  draw %.2f\n"
+                 "bounces %llu  intensity %.2f  iterations %u per update  exposure %.2f  textures %u%s%s\n"
+                 "view %d %s\n%s",
+                 a->title[0] ? a->title : a->name, st.surfel_lighting_ms, st.host_ms, st.pull_ms, st.cache_lighting_ms,
+                 st.output_ms, st.total_ms, a->r.draw_ms, (unsigned long long)bounces, p.bounce_intensity,
+                 p.bounce_iterations, a->opt.exposure, a->r.textured_materials, a->opt.direct ? "" : "  direct off",
+                 a->opt.indirect ? "" : "  indirect off", a->opt.view + 1, sample_view_legend(a->opt.view),
+                 a->window ? "keys: 1-8 view  D direct  I indirect  Z/X bounce  C/V exposure  K/L level  R reset  P pause  "
+                             "H HUD  Esc quit"
+                           : "");
+        if (sample_gl_hud(&a->r, text) != 0) {
+            fprintf(stderr, "%s: frame %ld: %s\n", a->name, frame, a->r.error);
+            return 1;
+        }
+    }
     if (a->opt.args.out_dir && sample_app_write_png(a, frame) != 0) status = 1;
     const double ms = sample_app_now_ms() - t0;
     char line[512];
@@ -1426,7 +1667,8 @@ static inline int sample_app_frame(sample_app *a, long frame, const sample_gl_sp
     if (a->window) {
         sample_gl_blit(&a->r, a->r.width, a->r.height);
         char title[sizeof a->title + 520];
-        snprintf(title, sizeof title, "%s  |  %s", a->title, line);
+        if (hud) snprintf(title, sizeof title, "%s", a->title[0] ? a->title : a->name); /* the stats are on screen */
+        else snprintf(title, sizeof title, "%s  |  %s", a->title, line);
         glfwSetWindowTitle((GLFWwindow *)glow_glctx_window(a->glctx), title);
         glow_glctx_swap(a->glctx);
         sample_app__keys(a);

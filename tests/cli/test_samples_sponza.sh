@@ -104,6 +104,18 @@ is_png "$T/v/frame_000.png" 96 54 && pass "  96x54 PNG" || fail "  no 96x54 PNG"
 expect 0 "--torch-at outside the bounds: a warning" "$S" "$T/s.glow" --headless --frames 1 --torch-at 0,100,0 --width 32 --height 32
 grep -q 'OUTSIDE' "$T/out" && pass "  warned" || fail "  no warning"
 
+# Textures (bake format 1.1 names them; the sample loads them) and the HUD (off headless by default)
+N=(--headless --frames 1 --start-hour 12 --width 160 --height 90)
+expect 0 "textured (default)" "$S" "$T/s.glow" "${N[@]}" --out "$T/tex"
+grep -q "cannot read the albedo texture" "$T/err" && fail "  a texture could not be read: $(head -1 "$T/err")" || pass "  every albedo texture read"
+expect 0 "--no-textures" "$S" "$T/s.glow" "${N[@]}" --no-textures --out "$T/notex"
+cmp -s "$T/tex/frame_000.png" "$T/notex/frame_000.png" && fail "  --no-textures draws the same image" || pass "  textures change the image"
+expect 0 "--hud off (the default headless)" "$S" "$T/s.glow" "${N[@]}" --hud off --out "$T/hudoff"
+cmp -s "$T/tex/frame_000.png" "$T/hudoff/frame_000.png" && pass "  headless PNGs have no HUD by default" || fail "  the default headless PNG differs from --hud off"
+expect 0 "--hud on" "$S" "$T/s.glow" "${N[@]}" --hud on --out "$T/hudon"
+cmp -s "$T/hudon/frame_000.png" "$T/hudoff/frame_000.png" && fail "  --hud on draws nothing" || pass "  --hud on draws the HUD into the image"
+expect 2 "bad --hud" "$S" "$T/s.glow" --headless --hud maybe; err_has "hud"
+
 # Errors: a missing or corrupt bake is exit 1 naming the file; bad command lines are exit 2
 expect 1 "missing bake" "$S" "$T/nope.glow" --headless --frames 1; err_has "nope.glow"
 head -c 5000 "$T/s.glow" > "$T/cut.glow"
