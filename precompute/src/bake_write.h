@@ -8,7 +8,7 @@
 
 #include <stdint.h>
 
-#include "bake/bake_format.h"
+#include "bake_format.h"
 #include "pc_internal.h"
 
 typedef struct glow__section_data {

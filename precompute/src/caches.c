@@ -30,7 +30,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bake/bake_format.h"
+#include "bake_format.h"
 #include "charts.h"
 #include "pc_internal.h"
 

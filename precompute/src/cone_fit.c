@@ -12,7 +12,8 @@
 #include <math.h>
 
 #include "cone_fit.h"
-#include "runtime_internal.h"
+#include "glow/glow.h" /* glow_sh_lobe_factor */
+#include "sh_seam.h"
 
 #define PI_D 3.14159265358979323846
 

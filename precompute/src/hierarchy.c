@@ -64,7 +64,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bake/bake_format.h"
+#include "bake_format.h"
 #include "hierarchy.h"
 #include "pc_internal.h"
 

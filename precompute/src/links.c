@@ -32,7 +32,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bake/bake_format.h"
+#include "bake_format.h"
 #include "cone_fit.h"
 #include "pc_internal.h"
 

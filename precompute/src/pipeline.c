@@ -7,7 +7,7 @@
 #include <string.h>
 #include <time.h>
 
-#include "bake/bake_format.h"
+#include "bake_format.h"
 #include "bake_write.h"
 #include "hierarchy.h"
 #include "pc_internal.h"

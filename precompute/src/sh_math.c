@@ -5,7 +5,7 @@
 #include <math.h>
 
 #include "pc_internal.h"
-#include "runtime_internal.h"
+#include "sh_seam.h"
 
 /* The runtime's basis evaluation (DESIGN §3: one routine shared by every caller). */
 void glow__sh_eval(uint32_t bands, const float dir[3], float *out) { glow_sh_eval(bands, dir, out); }

@@ -58,11 +58,7 @@ void glow__ctx_run(glow_context *ctx, glow_task_fn fn, void *data, uint32_t coun
 struct glow__taskpool *glow__ctx_start_pool(glow_context *ctx);
 
 /* ---------------------------------------------------------------- SH helpers (sh.c) */
-/* Legendre polynomials P_0..P_n at x into p[0..n] (n <= 9), in double. Shared by the runtime and
- * the linker (cone factors, lobe convolutions) so there is one recurrence. */
-void glow__legendre_all(uint32_t n, double x, double *p);
-/* Cone factor k_l from 1 - cos α directly, in double (no rounding of cos α to float first). */
-double glow__cone_factor_omc(uint32_t l, double one_minus_cos);
+#include "bake/sh_seam.h" /* glow__legendre_all, glow__cone_factor_omc: shared with the linker */
 
 /* ---------------------------------------------------------------- built-in pool (pool.c) */
 typedef struct glow__taskpool glow__taskpool;
