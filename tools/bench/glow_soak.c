@@ -222,7 +222,7 @@ int main(int argc, char **argv) {
             if (which == 0) bad.emission_scale = NAN;
             else if (which == 1) bad.bounce_intensity = -1.0f;
             else if (which == 2) bad.emission_scale = 2.0f * GLOW_MAX_SCALE;
-            else bad.bounce_iterations = 0;
+            else bad.bounce_iterations = 65; /* above the 64 limit (0 is the default, 1) */
             quiet_invalid = 1;
             const glow_result br = glow_system_set_params(sys, &bad);
             quiet_invalid = 0;
