@@ -533,6 +533,12 @@ glow_result glow_gl_system_update(glow_gl_system *s, const glow_update_desc *des
         LOG_ERR(s, GLOW_ERROR_INVALID_ARGUMENT, "glow_gl_system_update: unknown flags 0x%x", flags);
         return GLOW_ERROR_INVALID_ARGUMENT;
     }
+    if (desc && (desc->max_caches || desc->budget_ms != 0.0f || desc->converged_epsilon != 0.0f || desc->focus_count)) {
+        /* issue 17, item 4: the GL backend gets the budgets later; refused rather than ignored */
+        LOG_ERR(s, GLOW_ERROR_UNSUPPORTED,
+                "glow_gl_system_update: budgets (max_caches, budget_ms, converged_epsilon, focus) are CPU-only so far");
+        return GLOW_ERROR_UNSUPPORTED;
+    }
     glow_glfns *gl = &s->gl;
     glow_system_params prm;
     glow_system_get_params(s->sys, &prm);

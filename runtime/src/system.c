@@ -98,6 +98,19 @@ struct glow_system {
     uint32_t pull_first, pull_count;
     uint64_t emission_revision, direct_revision, material_revision;
     float cl_scale[GLOW__CL_SCALE_FLOATS]; /* glow__cl_coeff_scale(luma, chroma) */
+    /* budgets (glow_update_desc): groups of GLOW_BUDGET_GROUP caches, all allocated at create */
+    uint32_t groups;
+    uint32_t *grp_age;     /* updates since the group was last gathered */
+    float *grp_delta;      /* relative luma change of its last gather (INFINITY: never, or reset) */
+    double *grp_drift_at;  /* the input drift counter when it was last gathered */
+    float *grp_centre;     /* [groups][3] mean cache position */
+    uint64_t *grp_pack;    /* scratch: candidates as (~priority bits) << 32 | group: ascending = best first */
+    uint32_t *grp_sel;     /* scratch: the selection, in group order */
+    uint32_t sel_count;
+    float *rad_prev;       /* [N] node luma at the last update, for the drift */
+    double drift;          /* Σ over updates of the node luma's relative L1 change */
+    double ema_other_ms, ema_cache_ms_per_group; /* recent stage times, for budget_ms (0 = none yet) */
+    float scene_diag;
 };
 
 /* ------------------------------------------------------------------------------------------ */
@@ -273,6 +286,25 @@ static void task_caches(void *data, uint32_t k, uint32_t worker) {
     glow__cl_light_caches(&a, first, count);
 }
 
+/* cache lighting of the budget's selection: task k gathers group grp_sel[k] and records how much it
+ * changed the caches' luma (DC): the convergence test of later updates */
+static void task_caches_sel(void *data, uint32_t k, uint32_t worker) {
+    glow_system *s = data;
+    const uint32_t g = s->grp_sel[k], first = g * GLOW_BUDGET_GROUP;
+    const uint32_t count = s->C - first < GLOW_BUDGET_GROUP ? s->C - first : GLOW_BUDGET_GROUP;
+    float before[GLOW_BUDGET_GROUP];
+    for (uint32_t i = 0; i < count; ++i) before[i] = s->cache_sh[(size_t)(first + i) * s->coeffs];
+    _Static_assert(GLOW_BUDGET_GROUP == CACHE_CHUNK, "a group is one cache-lighting task");
+    task_caches(data, g, worker);
+    double d = 0.0, v = 0.0;
+    for (uint32_t i = 0; i < count; ++i) {
+        const float now = s->cache_sh[(size_t)(first + i) * s->coeffs];
+        d += fabs((double)now - before[i]);
+        v += fabs((double)now);
+    }
+    s->grp_delta[g] = v > 0.0 ? (float)(d / v) : (d > 0.0 ? INFINITY : 0.0f);
+}
+
 /* outputs: tasks [0, g) fill the grid planes (g = coeffs with a grid, else 0), the rest the
  * lightmap's. Each writes its whole plane in order, empty cells/texels as 0 (glow__cl_write_plane:
  * masked gathers, plain stores: streaming ones measured slower, the planes stay in L3): 0.62-0.70x the time of writing only the non-empty entries
@@ -362,7 +394,8 @@ static void free_system(glow_system *s) {
                     s->direct, s->direct_spare, s->fb_w, s->rho_ind_max, s->flux, s->rad, s->inv_pi_area,
                     s->cache_sh, s->grid_sh, s->lm_sh, s->grid_map, s->lm_map, s->mat_emis_scale,
                     s->mat_albedo_scale, s->batch_status, s->batch_negative, s->out_index, s->out_cache,
-                    s->xblocks, s->slots, s->sub_ratio};
+                    s->xblocks, s->slots, s->sub_ratio, s->grp_age, s->grp_delta, s->grp_drift_at, s->grp_centre,
+                    s->grp_pack, s->grp_sel, s->rad_prev};
     for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; ++i) glow__ctx_free(ctx, bufs[i]);
     glow__ctx_free(ctx, s);
 }
@@ -499,6 +532,15 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     if (glow__bake_link_subsets(desc->bake))
         s->slots = alloc_array(s, N, 4 * sizeof(uint32_t), &ok);
     if (s->slots) s->sub_ratio = alloc_array(s, N, 4 * sizeof(uint16_t), &ok);
+    s->groups = div_up(s->C, GLOW_BUDGET_GROUP);
+    const size_t G = s->groups ? s->groups : 1u;
+    s->grp_age = alloc_array(s, G, sizeof(uint32_t), &ok);
+    s->grp_delta = alloc_array(s, G, sizeof(float), &ok);
+    s->grp_drift_at = alloc_array(s, G, sizeof(double), &ok);
+    s->grp_centre = alloc_array(s, G, 3 * sizeof(float), &ok);
+    s->grp_pack = alloc_array(s, G, sizeof(uint64_t), &ok);
+    s->grp_sel = alloc_array(s, G, sizeof(uint32_t), &ok);
+    s->rad_prev = alloc_array(s, N ? N : 1u, sizeof(float), &ok);
     if (!ok) {
         GLOW__LOG_ERROR(ctx, GLOW_ERROR_OUT_OF_MEMORY, "glow_system_create(%s): out of memory (%u surfels, %u caches)",
                         label, s->S, s->C);
@@ -535,6 +577,23 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
         }
     }
     memset(s->cache_sh, 0, (size_t)s->C * s->coeffs * sizeof(float));
+    { /* budget state: every group stale and unconverged; centres for the focus */
+        const glow_bake_cache *cc = glow__bake_caches(desc->bake);
+        for (uint32_t g = 0; g < s->groups; ++g) {
+            const uint32_t first = g * GLOW_BUDGET_GROUP, end = first + GLOW_BUDGET_GROUP < s->C ? first + GLOW_BUDGET_GROUP : s->C;
+            double c[3] = {0, 0, 0};
+            for (uint32_t i = first; i < end; ++i)
+                for (int k = 0; k < 3; ++k) c[k] += cc[i].position[k];
+            for (int k = 0; k < 3; ++k) s->grp_centre[3 * (size_t)g + (size_t)k] = (float)(c[k] / (double)(end - first));
+            s->grp_age[g] = 0;
+            s->grp_delta[g] = INFINITY;
+            s->grp_drift_at[g] = 0.0;
+        }
+        memset(s->rad_prev, 0, (N ? N : 1u) * sizeof(float));
+        double d2 = 0.0;
+        for (int k = 0; k < 3; ++k) d2 += (double)(m->bounds_max[k] - m->bounds_min[k]) * (m->bounds_max[k] - m->bounds_min[k]);
+        s->scene_diag = (float)sqrt(d2);
+    }
     for (size_t i = 0; i < 3 * (size_t)(s->M ? s->M : 1u); ++i) s->mat_emis_scale[i] = s->mat_albedo_scale[i] = 1.0f;
     for (size_t i = 0; i < s->grid_cells; ++i) s->grid_map[i] = gmap[i] == GLOW_MAP_EMPTY ? GLOW_MAP_EMPTY : (gmap[i] & GLOW_MAP_INDEX_MASK);
     for (size_t i = 0; i < s->lm_texels; ++i) s->lm_map[i] = lmap[i] == GLOW_MAP_EMPTY ? GLOW_MAP_EMPTY : (lmap[i] & GLOW_MAP_INDEX_MASK);
@@ -752,6 +811,86 @@ glow_result glow_system_update(glow_system *s, const glow_update_desc *desc) {
     return r;
 }
 
+static int cmp_u64(const void *a, const void *b) {
+    const uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return (x > y) - (x < y);
+}
+static int cmp_u32(const void *a, const void *b) {
+    const uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    return (x > y) - (x < y);
+}
+
+/* Chooses the groups this update gathers (s->grp_sel[0..sel_count), in index order). No allocation. */
+static void schedule(glow_system *s, const glow_update_desc *d, glow_update_stats *st) {
+    const uint32_t G = s->groups;
+    /* the input drift: relative L1 change of the node luma since the last update */
+    double dn = 0.0, dv = 0.0;
+    for (uint32_t n = 0; n < s->N; ++n) {
+        const float y = s->rad[4 * (size_t)n];
+        dn += fabs((double)y - s->rad_prev[n]);
+        dv += fabs((double)y);
+        s->rad_prev[n] = y;
+    }
+    s->drift += dv > 0.0 ? dn / dv : (dn > 0.0 ? 1.0 : 0.0);
+    const double eps = d->converged_epsilon;
+    const float r = d->focus_radius > 0.0f ? d->focus_radius : 0.1f * s->scene_diag;
+    const float inv_r2 = r > 0.0f ? 1.0f / (r * r) : 0.0f;
+    uint32_t n = 0, converged = 0;
+    for (uint32_t g = 0; g < G; ++g) {
+        if (eps > 0.0 && s->grp_delta[g] < eps && s->drift - s->grp_drift_at[g] < eps) {
+            converged++;
+            continue;
+        }
+        float f = 0.0f;
+        for (uint32_t p = 0; p < d->focus_count; ++p) {
+            const float *c = s->grp_centre + 3 * (size_t)g, *q = d->focus + 3 * (size_t)p;
+            const float dx = c[0] - q[0], dy = c[1] - q[1], dz = c[2] - q[2];
+            const float w = 1.0f / (1.0f + (dx * dx + dy * dy + dz * dz) * inv_r2);
+            if (w > f) f = w;
+        }
+        const float key = ((float)s->grp_age[g] + 1.0f) * (1.0f + 4.0f * f); /* >= 1: its bits order as it does */
+        uint32_t bits;
+        memcpy(&bits, &key, sizeof bits);
+        s->grp_pack[n++] = ((uint64_t)(0xFFFFFFFFu - bits) << 32) | g; /* highest priority, then lowest index, first */
+    }
+    uint32_t k = n;
+    if (d->max_caches) {
+        const uint32_t kc = div_up(d->max_caches, GLOW_BUDGET_GROUP);
+        if (kc < k) k = kc;
+    }
+    if (d->budget_ms > 0.0f && s->ema_cache_ms_per_group > 0.0) {
+        const double left = (double)d->budget_ms - s->ema_other_ms;
+        const double per = s->ema_cache_ms_per_group * (double)s->params.bounce_iterations;
+        double kt = left > 0.0 ? floor(left / per) : 0.0;
+        if (kt < 1.0) kt = 1.0; /* always some progress */
+        if (kt < (double)k) k = (uint32_t)kt;
+    }
+    if (k < n) qsort(s->grp_pack, n, sizeof *s->grp_pack, cmp_u64);
+    for (uint32_t i = 0; i < k; ++i) s->grp_sel[i] = (uint32_t)(s->grp_pack[i] & 0xFFFFFFFFu);
+    qsort(s->grp_sel, k, sizeof *s->grp_sel, cmp_u32); /* memory order for the gather */
+    s->sel_count = k;
+    for (uint32_t g = 0; g < G; ++g) s->grp_age[g]++;
+    for (uint32_t i = 0; i < k; ++i) {
+        s->grp_age[s->grp_sel[i]] = 0;
+        s->grp_drift_at[s->grp_sel[i]] = s->drift;
+    }
+    uint32_t gathered = 0;
+    for (uint32_t i = 0; i < k; ++i) {
+        const uint32_t first = s->grp_sel[i] * GLOW_BUDGET_GROUP;
+        gathered += s->C - first < GLOW_BUDGET_GROUP ? s->C - first : GLOW_BUDGET_GROUP;
+    }
+    uint32_t conv_caches = 0;
+    for (uint32_t g = 0; g < G && eps > 0.0; ++g)
+        if (s->grp_delta[g] < eps && s->drift - s->grp_drift_at[g] < eps && s->grp_age[g] > 0) {
+            const uint32_t first = g * GLOW_BUDGET_GROUP;
+            conv_caches += s->C - first < GLOW_BUDGET_GROUP ? s->C - first : GLOW_BUDGET_GROUP;
+        }
+    (void)converged;
+    st->caches_gathered = gathered;
+    st->caches_skipped_converged = conv_caches;
+    st->caches_skipped_budget = s->C - gathered - conv_caches;
+}
+
 static glow_result system_update(glow_system *s, const glow_update_desc *desc) {
     const uint32_t flags = desc ? desc->flags : 0u;
     if (flags & ~(GLOW_UPDATE_FLAG_RESET_BOUNCE | GLOW_UPDATE_FLAG_KEEP_LIGHTING)) {
@@ -759,6 +898,24 @@ static glow_result system_update(glow_system *s, const glow_update_desc *desc) {
                         flags);
         return GLOW_ERROR_INVALID_ARGUMENT;
     }
+    const glow_update_desc none = {0};
+    const glow_update_desc *d = desc ? desc : &none;
+    if (!(d->budget_ms >= 0.0f) || !isfinite(d->budget_ms) || !(d->focus_radius >= 0.0f) || !isfinite(d->focus_radius) ||
+        !(d->converged_epsilon >= 0.0f) || !isfinite(d->converged_epsilon) || (d->focus_count && !d->focus)) {
+        GLOW__LOG_ERROR(s->ctx, GLOW_ERROR_INVALID_ARGUMENT,
+                        "glow_system_update(%s): budget_ms %g, focus_radius %g and converged_epsilon %g must be finite "
+                        "and >= 0, and focus_count %u needs focus points",
+                        s->label, (double)d->budget_ms, (double)d->focus_radius, (double)d->converged_epsilon,
+                        d->focus_count);
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    for (uint32_t i = 0; i < 3 * d->focus_count; ++i)
+        if (!isfinite(d->focus[i])) {
+            GLOW__LOG_ERROR(s->ctx, GLOW_ERROR_INVALID_ARGUMENT, "glow_system_update(%s): focus point %u is not finite",
+                            s->label, i / 3);
+            return GLOW_ERROR_INVALID_ARGUMENT;
+        }
+    const bool budgeted = d->max_caches || d->budget_ms > 0.0f || d->converged_epsilon > 0.0f;
     glow_update_stats st = s->stats;
     st.surfel_lighting_ms = st.host_ms = st.pull_ms = st.cache_lighting_ms = st.output_ms = 0.0;
     st.links = 0;
@@ -791,7 +948,10 @@ static glow_result system_update(glow_system *s, const glow_update_desc *desc) {
         s->direct_spare = t;
         s->direct_revision++;
     }
-    if (flags & GLOW_UPDATE_FLAG_RESET_BOUNCE) memset(s->cache_sh, 0, (size_t)s->C * s->coeffs * sizeof(float));
+    if (flags & GLOW_UPDATE_FLAG_RESET_BOUNCE) {
+        memset(s->cache_sh, 0, (size_t)s->C * s->coeffs * sizeof(float));
+        for (uint32_t g = 0; g < s->groups; ++g) s->grp_delta[g] = INFINITY; /* nothing is converged now */
+    }
     double t = now_ms();
     st.surfel_lighting_ms += t - t_begin;
     st.host_ms = t - t_begin;
@@ -802,12 +962,21 @@ static glow_result system_update(glow_system *s, const glow_update_desc *desc) {
         double t1 = now_ms();
         pull(s);
         double t2 = now_ms();
-        glow__ctx_run(s->ctx, task_caches, s, div_up(s->C, CACHE_CHUNK));
+        if (!budgeted) {
+            glow__ctx_run(s->ctx, task_caches, s, div_up(s->C, CACHE_CHUNK));
+        } else {
+            if (it == 0) schedule(s, d, &st); /* after the first pull: the drift of this update's light */
+            glow__ctx_run(s->ctx, task_caches_sel, s, s->sel_count);
+        }
         double t3 = now_ms();
         st.surfel_lighting_ms += t1 - t0;
         st.pull_ms += t2 - t1;
         st.cache_lighting_ms += t3 - t2;
-        st.links += (uint64_t)s->C * s->meta->links_per_cache;
+        st.links += (uint64_t)(budgeted ? st.caches_gathered : s->C) * s->meta->links_per_cache;
+    }
+    if (!budgeted) {
+        st.caches_gathered = s->C;
+        st.caches_skipped_budget = st.caches_skipped_converged = 0;
     }
     double t4 = now_ms();
     glow__ctx_run(s->ctx, task_output, s, (s->grid_cells ? s->coeffs : 0u) + (s->lm_texels ? s->coeffs : 0u));
@@ -815,6 +984,20 @@ static glow_result system_update(glow_system *s, const glow_update_desc *desc) {
     st.output_ms = t5 - t4;
     st.total_ms = t5 - t_begin;
     st.updates++;
+    if (budgeted) { /* recent times, for the next budget_ms: the other stages, and cache lighting per group */
+        const double other = st.total_ms - st.cache_lighting_ms, per = s->sel_count ? st.cache_lighting_ms / s->sel_count : 0.0;
+        /* the system's first update pays first touches (the host's, the pages'): not a sample; later
+         * outliers (a descheduled thread) count at most twice the average */
+        if (st.updates > 1)
+            s->ema_other_ms = s->ema_other_ms > 0.0 ? 0.8 * s->ema_other_ms + 0.2 * fmin(other, 2.0 * s->ema_other_ms) : other;
+        /* Only selections large enough to amortise the dispatch teach the cost per group: from a few
+         * groups the per-group time is mostly the workers' wake-up (Sponza moderate, 2 threads: 66 ns a
+         * link for one group against 3.8 for all), and learning from them would shrink the next
+         * selection, raise the per-group time again and collapse the budget. */
+        const uint32_t enough = s->groups / 8u > 32u ? s->groups / 8u : (s->groups < 32u ? s->groups : 32u);
+        if (per > 0.0 && s->sel_count >= enough)
+            s->ema_cache_ms_per_group = s->ema_cache_ms_per_group > 0.0 ? 0.8 * s->ema_cache_ms_per_group + 0.2 * per : per;
+    }
     s->stats = st;
     s->out.update_index = st.updates;
     return GLOW_OK;

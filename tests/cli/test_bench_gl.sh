@@ -18,6 +18,8 @@ fi
 [ $rc -eq 0 ] && pass "glow-bench --backend gl runs" || { fail "glow-bench --backend gl: exit $rc"; cat "$T/gl.err"; }
 expect 0 "glow-bench cpu (shadow-map host)" "$BIN/glow-bench" "$T/c.glow" "$SCENE" --host shadow-map --frames 4 --warmup 1 --json --no-machine
 cp "$T/out" "$T/cpu.json"
+expect 2 "glow-bench --backend gl --budget-ms: CPU-only so far" "$BIN/glow-bench" "$T/c.glow" "$SCENE" --backend gl --budget-ms 5
+grep -q "CPU-only" "$T/err" && pass "  says so" || fail "  no reason given"
 python3 - "$T/gl.json" "$T/cpu.json" <<'PY' && pass "stages timed, probes agree with the CPU solver" || fail "GL bench output"
 import json, sys
 g = json.load(open(sys.argv[1])); c = json.load(open(sys.argv[2]))

@@ -63,6 +63,14 @@ expect 0 "render: Glow's view" "$BIN/glow-render" "$SCENE" --glow "$T/cornell.gl
 # glow-bench's CPU path runs under ASan here (cli/test_bench_gl runs only in the release pass)
 expect 0 "bench: cpu, exact host" "$BIN/glow-bench" "$T/cornell.glow" "$SCENE" --frames 3 --warmup 1 --no-machine --json
 grep -q '"total' "$T/out" && pass "  bench JSON has the update total" || fail "  bench JSON lacks the update total"
+# budgets: a caches cap with an unbudgeted twin; the report holds the gathered count and the error
+expect 0 "bench: --budget-caches 64" "$BIN/glow-bench" "$T/cornell.glow" "$SCENE" --frames 4 --warmup 1 --no-machine --json --budget-caches 64
+python3 -c "import json,sys; b=json.load(open(sys.argv[1]))['budget']; assert 64 <= b['median_caches_gathered'] <= 79 and 0 < b['luma_error_max'] < 1, b" "$T/out" \
+  && pass "  64 caches (4 groups) gathered, error against the twin reported" || fail "  budget JSON: $(head -c 300 "$T/out")"
+expect 0 "bench: --still --converge" "$BIN/glow-bench" "$T/cornell.glow" "$SCENE" --frames 4 --warmup 40 --no-machine --json --still --converge 0.01
+python3 -c "import json,sys; b=json.load(open(sys.argv[1]))['budget']; assert b['median_caches_gathered'] == 0, b" "$T/out" \
+  && pass "  still light: converged caches cost nothing" || fail "  converge JSON: $(head -c 300 "$T/out")"
+expect 2 "bench: --budget-ms 0" "$BIN/glow-bench" "$T/cornell.glow" "$SCENE" --budget-ms 0
 expect 0 "render: Glow's indirect only" "$BIN/glow-render" "$SCENE" --glow "$T/cornell.glow" --out "$T/gi" "${R[@]}" --bounces 64 --indirect-only
 cmp -s "$T/glow_indirect.exr" "$T/gi_indirect.exr" && pass "  indirect-only gives the same indirect image" || fail "  indirect images differ"
 cmp -s "$T/glow_direct.exr" "$T/ref_direct.exr" && pass "  Glow's direct image is the reference's" || fail "  direct images differ"

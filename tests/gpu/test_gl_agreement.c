@@ -273,6 +273,8 @@ static void test_bad_hooks(void **state) {
     gd.hook_glsl = nan_hook;
     glow_gl_system *g = NULL;
     assert_int_equal(glow_gl_system_create(&gd, &g), GLOW_OK);
+    /* budgets are CPU-only so far: refused, not ignored */
+    assert_int_equal(glow_gl_system_update(g, &(glow_update_desc){.max_caches = 16}), GLOW_ERROR_UNSUPPORTED);
     assert_int_equal(glow_gl_system_update(g, NULL), GLOW_OK);
     glow_gl_stats st;
     assert_int_equal(glow_gl_system_get_stats(g, &st), GLOW_OK);

@@ -562,12 +562,12 @@ static void test_hook_failures(void **state) {
         assert_int_equal(glow_system_get_stats(s, &st1), GLOW_OK);
         assert_int_equal(st1.updates, st0.updates);
         /* fails again with RESET_BOUNCE: the reset must not happen either */
-        EXPECT_LOGGED(&e.log, glow_system_update(s, &(glow_update_desc){GLOW_UPDATE_FLAG_RESET_BOUNCE}),
+        EXPECT_LOGGED(&e.log, glow_system_update(s, &(glow_update_desc){.flags = GLOW_UPDATE_FLAG_RESET_BOUNCE}),
                       GLOW_ERROR_HOST_CALLBACK, GLOW_LOG_ERROR);
         assert_true(snap_equal(&before, s));
         /* KEEP_LIGHTING reuses the last *good* irradiance */
-        assert_int_equal(glow_system_update(s, &(glow_update_desc){GLOW_UPDATE_FLAG_KEEP_LIGHTING}), GLOW_OK);
-        assert_int_equal(glow_system_update(ref, &(glow_update_desc){GLOW_UPDATE_FLAG_KEEP_LIGHTING}), GLOW_OK);
+        assert_int_equal(glow_system_update(s, &(glow_update_desc){.flags = GLOW_UPDATE_FLAG_KEEP_LIGHTING}), GLOW_OK);
+        assert_int_equal(glow_system_update(ref, &(glow_update_desc){.flags = GLOW_UPDATE_FLAG_KEEP_LIGHTING}), GLOW_OK);
         assert_true(systems_equal(s, ref));
         /* a good update with new lighting: identical to the system that never failed */
         h.mode = MODE_OK;
@@ -652,7 +652,7 @@ static void test_push_api(void **state) {
     assert_true(systems_equal(s, ref));
     /* pushed values persist: a KEEP_LIGHTING-free update without a new push uses them again */
     assert_int_equal(glow_system_update(s, NULL), GLOW_OK);
-    assert_int_equal(glow_system_update(ref, &(glow_update_desc){GLOW_UPDATE_FLAG_KEEP_LIGHTING}), GLOW_OK);
+    assert_int_equal(glow_system_update(ref, &(glow_update_desc){.flags = GLOW_UPDATE_FLAG_KEEP_LIGHTING}), GLOW_OK);
     assert_true(systems_equal(s, ref));
     /* partial pushes touch only their range: push E into [0, S/2) of a zeroed system, in two halves
      * with the other system, and compare */
@@ -734,7 +734,7 @@ static void test_unknown_flags(void **state) {
     const uint32_t calls = atomic_load(&h.calls);
     const uint32_t flags[] = {4u, 8u, 0x80000000u, GLOW_UPDATE_FLAG_RESET_BOUNCE | 0x100u};
     for (size_t i = 0; i < 4; ++i) {
-        EXPECT_LOGGED(&e.log, glow_system_update(s, &(glow_update_desc){flags[i]}), GLOW_ERROR_INVALID_ARGUMENT, GLOW_LOG_ERROR);
+        EXPECT_LOGGED(&e.log, glow_system_update(s, &(glow_update_desc){.flags = flags[i]}), GLOW_ERROR_INVALID_ARGUMENT, GLOW_LOG_ERROR);
         assert_true(snap_equal(&before, s));
         assert_int_equal(glow_system_outputs(s)->update_index, before.update_index);
     }
@@ -803,14 +803,14 @@ static void test_no_allocation_in_update(void **state) {
     assert_int_equal(glow_system_set_params(s, &(glow_system_params){1.0f, 1.0f, 3}), GLOW_OK);
     const unsigned long long a0 = atomic_load(&c.allocs), f0 = atomic_load(&c.frees);
     assert_true(a0 > 0); /* the counter sees the runtime's allocations at all */
-    for (int k = 0; k < 5; ++k) assert_int_equal(glow_system_update(s, k == 3 ? &(glow_update_desc){GLOW_UPDATE_FLAG_KEEP_LIGHTING} : NULL), GLOW_OK);
+    for (int k = 0; k < 5; ++k) assert_int_equal(glow_system_update(s, k == 3 ? &(glow_update_desc){.flags = GLOW_UPDATE_FLAG_KEEP_LIGHTING} : NULL), GLOW_OK);
     /* the failure path and the push path allocate nothing either */
     h.mode = MODE_NAN;
     h.bad_surfel = 5;
     assert_int_equal(glow_system_update(s, NULL), GLOW_ERROR_HOST_CALLBACK);
     float rgb[6] = {1, 2, 3, -1, 0, 0};
     assert_int_equal(glow_system_set_surfel_irradiance(p, 10, 2, rgb), GLOW_OK);
-    assert_int_equal(glow_system_update(p, &(glow_update_desc){GLOW_UPDATE_FLAG_RESET_BOUNCE}), GLOW_OK);
+    assert_int_equal(glow_system_update(p, &(glow_update_desc){.flags = GLOW_UPDATE_FLAG_RESET_BOUNCE}), GLOW_OK);
     float out[3 * 64];
     const float pos[3] = {0, 1, 0};
     const glow_cache_outputs *o = glow_system_outputs(p);
@@ -953,7 +953,7 @@ static void test_emission_override(void **state) {
     assert_true(systems_equal(a, b));
     assert_true(max_abs(a) == 0.0); /* the light was the only source */
     assert_int_equal(glow_system_set_surfel_emission(a, 0, S, NULL), GLOW_OK);
-    assert_int_equal(glow_system_update(a, &(glow_update_desc){GLOW_UPDATE_FLAG_RESET_BOUNCE}), GLOW_OK);
+    assert_int_equal(glow_system_update(a, &(glow_update_desc){.flags = GLOW_UPDATE_FLAG_RESET_BOUNCE}), GLOW_OK);
     assert_int_equal(glow_system_update(orig, NULL), GLOW_OK);
     assert_true(systems_equal(a, orig));
     free(em);
@@ -1143,7 +1143,7 @@ static void test_update_flags(void **state) {
     assert_int_equal(glow_system_update(ref, NULL), GLOW_OK);
     /* KEEP_LIGHTING: no hook call, the previous irradiance (the hook now returns 4x) */
     h.scale = 4.0f;
-    assert_int_equal(glow_system_update(s, &(glow_update_desc){GLOW_UPDATE_FLAG_KEEP_LIGHTING}), GLOW_OK);
+    assert_int_equal(glow_system_update(s, &(glow_update_desc){.flags = GLOW_UPDATE_FLAG_KEEP_LIGHTING}), GLOW_OK);
     assert_int_equal(atomic_load(&h.calls), nbatches);
     assert_int_equal(glow_system_update(ref, NULL), GLOW_OK);
     assert_true(systems_equal(s, ref));
@@ -1155,14 +1155,14 @@ static void test_update_flags(void **state) {
         snap_take(fresh, &first);
         glow_system_destroy(fresh);
     }
-    for (int k = 0; k < 3; ++k) assert_int_equal(glow_system_update(s, &(glow_update_desc){GLOW_UPDATE_FLAG_KEEP_LIGHTING}), GLOW_OK);
+    for (int k = 0; k < 3; ++k) assert_int_equal(glow_system_update(s, &(glow_update_desc){.flags = GLOW_UPDATE_FLAG_KEEP_LIGHTING}), GLOW_OK);
     assert_false(snap_equal(&first, s)); /* the bounce has accumulated */
-    assert_int_equal(glow_system_update(s, &(glow_update_desc){GLOW_UPDATE_FLAG_KEEP_LIGHTING | GLOW_UPDATE_FLAG_RESET_BOUNCE}),
+    assert_int_equal(glow_system_update(s, &(glow_update_desc){.flags = GLOW_UPDATE_FLAG_KEEP_LIGHTING | GLOW_UPDATE_FLAG_RESET_BOUNCE}),
                      GLOW_OK);
     assert_int_equal(atomic_load(&h.calls), nbatches);
     assert_true(snap_equal(&first, s));
     /* RESET_BOUNCE with the hook: the 4x lighting, no history = a fresh system's first update at 4x */
-    assert_int_equal(glow_system_update(s, &(glow_update_desc){GLOW_UPDATE_FLAG_RESET_BOUNCE}), GLOW_OK);
+    assert_int_equal(glow_system_update(s, &(glow_update_desc){.flags = GLOW_UPDATE_FLAG_RESET_BOUNCE}), GLOW_OK);
     assert_int_equal(atomic_load(&h.calls), 2 * nbatches);
     {
         hook_ctl h4;
@@ -1516,12 +1516,118 @@ static void test_bake_logger(void **state) {
     remove(out);
 }
 
+/* glow_update_desc budgets: a caches cap gathers exactly that many (whole groups), the stalest first
+ * (round robin under steady light), the focus first, deterministic; converged groups are skipped until
+ * the light changes; a steady budgeted run converges to the unbudgeted one; bad budgets are refused;
+ * and a budget allocates nothing per update. */
+static void test_budget(void **state) {
+    (void)state;
+    env e;
+    env_open(&e);
+    hook_ctl h, h2;
+    hook_init(&h, 2);
+    hook_init(&h2, 2);
+    glow_system *s = make_system(&e, &h, 0), *ref = make_system(&e, &h2, 0);
+    const uint32_t C = e.meta->cache_count, G = (C + GLOW_BUDGET_GROUP - 1) / GLOW_BUDGET_GROUP;
+    assert_true(G >= 8);
+    glow_update_stats st;
+    /* bad budgets */
+    const glow_update_desc bad[] = {{.budget_ms = -1.0f}, {.budget_ms = NAN}, {.converged_epsilon = -0.1f},
+                                    {.focus_radius = INFINITY}, {.focus_count = 1}};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; ++i)
+        EXPECT_LOGGED(&e.log, glow_system_update(s, &bad[i]), GLOW_ERROR_INVALID_ARGUMENT, GLOW_LOG_ERROR);
+    const float nan_focus[3] = {0.0f, NAN, 0.0f};
+    EXPECT_LOGGED(&e.log, glow_system_update(s, &(glow_update_desc){.focus = nan_focus, .focus_count = 1}),
+                  GLOW_ERROR_INVALID_ARGUMENT, GLOW_LOG_ERROR);
+    /* a cap of a quarter of the groups: that many caches, each group once in 4 updates */
+    const uint32_t quarter = (G / 4) * GLOW_BUDGET_GROUP;
+    const glow_update_desc cap = {.max_caches = quarter};
+    uint32_t *seen = calloc(G, sizeof *seen);
+    float *prev = malloc((size_t)C * sizeof *prev);
+    assert_true(seen && prev);
+    for (int u = 0; u < 4; ++u) {
+        const glow_cache_outputs *o = glow_system_outputs(s);
+        for (uint32_t c = 0; c < C; ++c) prev[c] = o->cache_sh[(size_t)c * o->coeff_count];
+        assert_int_equal(glow_system_update(s, &cap), GLOW_OK);
+        assert_int_equal(glow_system_get_stats(s, &st), GLOW_OK);
+        assert_true(st.caches_gathered <= quarter && st.caches_gathered > quarter - GLOW_BUDGET_GROUP);
+        assert_int_equal(st.caches_gathered + st.caches_skipped_budget + st.caches_skipped_converged, C);
+        assert_int_equal(st.links, (uint64_t)st.caches_gathered * e.meta->links_per_cache);
+        for (uint32_t g = 0; g < G; ++g) { /* a group changed iff it was gathered (they all receive light) */
+            bool changed = false;
+            for (uint32_t c = g * GLOW_BUDGET_GROUP; c < C && c < (g + 1) * GLOW_BUDGET_GROUP; ++c)
+                changed |= o->cache_sh[(size_t)c * o->coeff_count] != prev[c];
+            seen[g] += changed;
+        }
+    }
+    uint32_t once = 0;
+    for (uint32_t g = 0; g < 4 * (G / 4); ++g) once += seen[g] == 1;
+    assert_true(once >= 4 * (G / 4) - 4); /* round robin: (nearly) every group exactly once */
+    /* focus: from a fresh system, the first capped update takes the groups nearest the focus */
+    glow_system *f = make_system(&e, &h, 0);
+    const glow_bake_cache *cc = glow__bake_caches(e.bake);
+    float target[3] = {0, 0, 0}; /* the centre of the last group: the nearest to itself */
+    const uint32_t lg = (G - 1) * GLOW_BUDGET_GROUP;
+    for (uint32_t c = lg; c < C; ++c)
+        for (int k = 0; k < 3; ++k) target[k] += cc[c].position[k] / (float)(C - lg);
+    const uint32_t one = GLOW_BUDGET_GROUP;
+    assert_int_equal(glow_system_update(f, &(glow_update_desc){.max_caches = one, .focus = target, .focus_count = 1,
+                                                               .focus_radius = 0.05f}),
+                     GLOW_OK);
+    const glow_cache_outputs *fo = glow_system_outputs(f);
+    double last = 0.0, first = 0.0;
+    for (uint32_t c = (G - 1) * GLOW_BUDGET_GROUP; c < C; ++c) last += fabs(fo->cache_sh[(size_t)c * fo->coeff_count]);
+    for (uint32_t c = 0; c < GLOW_BUDGET_GROUP; ++c) first += fabs(fo->cache_sh[(size_t)c * fo->coeff_count]);
+    assert_true(last > 0.0 && first == 0.0);
+    glow_system_destroy(f);
+    /* steady light: the capped system converges to the unbudgeted one */
+    for (int u = 0; u < 400; ++u) {
+        assert_int_equal(glow_system_update(s, &cap), GLOW_OK);
+        if (u < 100) assert_int_equal(glow_system_update(ref, NULL), GLOW_OK);
+    }
+    const glow_cache_outputs *a = glow_system_outputs(s), *b = glow_system_outputs(ref);
+    double num = 0.0, den = 0.0;
+    for (size_t i = 0; i < (size_t)C * a->coeff_count; ++i) {
+        num += fabs((double)a->cache_sh[i] - b->cache_sh[i]);
+        den += fabs((double)b->cache_sh[i]);
+    }
+    print_message("budget: a quarter of the caches per update, 404 updates against 100 full ones: rel. L1 %.2e\n",
+                  num / den);
+    assert_true(num <= 1e-4 * den);
+    /* converged: with an epsilon, nothing is gathered while the light stays; a change wakes them */
+    const glow_update_desc conv = {.converged_epsilon = 1e-3f};
+    assert_int_equal(glow_system_update(s, &conv), GLOW_OK); /* first: measures every group */
+    assert_int_equal(glow_system_update(s, &conv), GLOW_OK);
+    assert_int_equal(glow_system_get_stats(s, &st), GLOW_OK);
+    assert_int_equal(st.caches_gathered, 0);
+    assert_int_equal(st.caches_skipped_converged, C);
+    h.scale = 2.0f; /* the light doubles */
+    assert_int_equal(glow_system_update(s, &conv), GLOW_OK);
+    assert_int_equal(glow_system_get_stats(s, &st), GLOW_OK);
+    assert_int_equal(st.caches_gathered, C);
+    /* no allocation per budgeted update (the context's counter) */
+    const uint64_t live = glow__ctx_live_allocations(e.ctx);
+    for (int u = 0; u < 3; ++u) {
+        assert_int_equal(glow_system_update(s, &(glow_update_desc){.max_caches = 40, .budget_ms = 0.5f,
+                                                                   .converged_epsilon = 1e-4f, .focus = target,
+                                                                   .focus_count = 1}),
+                         GLOW_OK);
+    }
+    assert_int_equal(glow__ctx_live_allocations(e.ctx), live);
+    free(seen);
+    free(prev);
+    glow_system_destroy(s);
+    glow_system_destroy(ref);
+    env_close(&e);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_null_arguments),
         cmocka_unit_test(test_bake_presets),
         cmocka_unit_test(test_bake_logger),
         cmocka_unit_test(test_solver_tables),
+        cmocka_unit_test(test_budget),
         cmocka_unit_test(test_bake_caches_sections),
         cmocka_unit_test(test_null_out_pointers_logged),
         cmocka_unit_test(test_band_counts),

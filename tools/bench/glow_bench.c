@@ -40,6 +40,11 @@ typedef struct options {
     int json, quiet, no_probe_machine, gl, gl_finish;
     uint32_t probe_count;
     float probes[MAX_PROBES][3];
+    /* budgets (glow_update_desc): 0 = none */
+    float budget_ms, converge;
+    uint32_t budget_caches;
+    int has_focus, still;
+    float focus[3];
 } options;
 
 static const char *link_mode_name(uint32_t mode) {
@@ -51,6 +56,7 @@ static void usage(FILE *f) {
             "usage: glow-bench BAKE SCENE [--frames N] [--warmup N] [--threads N] [--luma L] [--chroma C]\n"
             "                  [--iterations K] [--host exact|shadow-map] [--link-mode compact|expanded|sh]\n"
             "                  [--probe X,Y,Z]... [--no-machine] [--backend cpu|gl]\n"
+            "                  [--budget-ms MS] [--budget-caches N] [--converge EPS] [--focus X,Y,Z] [--still]\n"
             "                  [--json] [-q]\n"
             "  BAKE   a bake written by glow-bake;  SCENE  its scene description JSON (docs/scene-format.md)\n"
             "  --frames N      timed updates (default 60); --warmup N untimed first (default 5)\n"
@@ -66,7 +72,14 @@ static void usage(FILE *f) {
             "                  surfels lit by the GPU shadow-map hook (glow_gl_lights.h); per-stage GPU times from timer\n"
             "                  queries (--threads, --host and --link-mode do not apply)\n"
             "  --gl-timing finish  time GL stages with glFinish + the CPU clock (for llvmpipe, whose timestamps\n"
-            "                  are not ordered with compute work); default: timer queries\n");
+            "                  are not ordered with compute work); default: timer queries\n"
+            "  --budget-ms MS  aim each update at MS ms (glow_update_desc.budget_ms; CPU backend); with any budget\n"
+            "                  an unbudgeted twin system runs the same frames (untimed) and the report gives the\n"
+            "                  budget's cost: the caches' luma error against the twin, per frame\n"
+            "  --budget-caches N  at most N caches gathered per update (max_caches)\n"
+            "  --converge EPS  skip converged caches (converged_epsilon)\n"
+            "  --focus X,Y,Z   caches near this point first (default: the scene's camera, when it has one)\n"
+            "  --still         keep the lights still (default: the first light moves every update)\n");
 }
 
 
@@ -127,7 +140,31 @@ static int parse_args(int argc, char **argv, options *o) {
             }
             o->gl_finish = !strcmp(v, "finish");
             ++i;
-        } else if (!strcmp(a, "--no-machine")) o->no_probe_machine = 1;
+        } else if (!strcmp(a, "--budget-ms") || !strcmp(a, "--converge")) {
+            float x;
+            if (!v || !glow_cli_float(v, &x) || !(x > 0.0f)) {
+                fprintf(stderr, "glow-bench: %s needs a positive number\n", a);
+                return 0;
+            }
+            if (!strcmp(a, "--budget-ms")) o->budget_ms = x;
+            else o->converge = x;
+            ++i;
+        } else if (!strcmp(a, "--budget-caches")) {
+            if (!v || !glow_cli_u32(v, 1, 1u << 30, &o->budget_caches)) {
+                fprintf(stderr, "glow-bench: --budget-caches needs a whole number >= 1\n");
+                return 0;
+            }
+            ++i;
+        } else if (!strcmp(a, "--focus")) {
+            if (!v || sscanf(v, "%f,%f,%f", &o->focus[0], &o->focus[1], &o->focus[2]) != 3 || !isfinite(o->focus[0]) ||
+                !isfinite(o->focus[1]) || !isfinite(o->focus[2])) {
+                fprintf(stderr, "glow-bench: --focus needs X,Y,Z\n");
+                return 0;
+            }
+            o->has_focus = 1;
+            ++i;
+        } else if (!strcmp(a, "--still")) o->still = 1;
+        else if (!strcmp(a, "--no-machine")) o->no_probe_machine = 1;
         else if (!strcmp(a, "--json")) o->json = 1;
         else if (!strcmp(a, "-q")) o->quiet = 1;
         else if (!strcmp(a, "-h") || !strcmp(a, "--help")) { usage(stdout); exit(0); }
@@ -139,6 +176,10 @@ static int parse_args(int argc, char **argv, options *o) {
     }
     if (pos != 2) {
         fprintf(stderr, "glow-bench: need BAKE and SCENE\n");
+        return 0;
+    }
+    if (o->gl && (o->budget_ms > 0.0f || o->budget_caches || o->converge > 0.0f)) {
+        fprintf(stderr, "glow-bench: budgets are CPU-only so far (--backend gl)\n");
         return 0;
     }
 #ifndef GLOW_BENCH_HAVE_GL
@@ -216,7 +257,8 @@ int main(int argc, char **argv) {
     glow_context *ctx = NULL;
     glow_bake *bake = NULL;
     glow_host *host = NULL;
-    glow_system *sys = NULL;
+    glow_system *sys = NULL, *twin = NULL; /* twin: unbudgeted, the reference of a budgeted run */
+    double *v_err = NULL, *v_gath = NULL;
 #ifdef GLOW_BENCH_HAVE_GL
     glow_glctx *glc = NULL;
     glow_gl_lights *gll = NULL;
@@ -245,6 +287,23 @@ int main(int argc, char **argv) {
                                                                 .bounce_iterations = o.iterations})) != GLOW_OK)
         goto done;
     const glow_cache_outputs *out = glow_system_outputs(sys);
+    const bool budget = o.budget_ms > 0.0f || o.budget_caches || o.converge > 0.0f;
+    glow_update_desc ud = {0};
+    if (budget) {
+        sd.label = "twin";
+        if ((r = glow_system_create(ctx, &sd, &twin)) != GLOW_OK) goto done;
+        if ((r = glow_system_set_params(twin, &(glow_system_params){.bounce_intensity = 1.0f,
+                                                                     .emission_scale = scene.emission_scale,
+                                                                     .bounce_iterations = o.iterations})) != GLOW_OK)
+            goto done;
+        if (!o.has_focus && scene.has_camera) {
+            memcpy(o.focus, scene.camera.position, sizeof o.focus);
+            o.has_focus = 1;
+        }
+        ud = (glow_update_desc){.max_caches = o.budget_caches, .budget_ms = o.budget_ms,
+                                .converged_epsilon = o.converge, .focus = o.has_focus ? o.focus : NULL,
+                                .focus_count = o.has_focus ? 1u : 0u};
+    }
 #ifdef GLOW_BENCH_HAVE_GL
     if (o.gl) {
         if ((r = glow_glctx_create(&(glow_glctx_desc){.kind = GLOW_GLCTX_HEADLESS}, &glc, msg, sizeof msg)) != GLOW_OK) {
@@ -292,12 +351,15 @@ int main(int argc, char **argv) {
     v_host = calloc(n, sizeof(double)); v_light = calloc(n, sizeof(double)); v_pull = calloc(n, sizeof(double));
     v_cache = calloc(n, sizeof(double)); v_out = calloc(n, sizeof(double)); v_total = calloc(n, sizeof(double));
     v_move = calloc(n, sizeof(double));
-    if (!v_host || !v_light || !v_pull || !v_cache || !v_out || !v_total || !v_move) goto done;
+    v_err = calloc(n, sizeof(double));
+    v_gath = calloc(n, sizeof(double));
+    if (!v_host || !v_light || !v_pull || !v_cache || !v_out || !v_total || !v_move || !v_err || !v_gath) goto done;
     glow_update_stats st = {0};
     for (uint32_t f = 0; f < total; ++f) {
         double t0 = now_ms();
         /* move the first light (or pulse the emission) */
-        if (scene.light_count > 0) {
+        if (o.still) {
+        } else if (scene.light_count > 0) {
             glow_scene_light l;
             animate(&scene.lights[0], &l, f, total, 0.05f * diag);
 #ifdef GLOW_BENCH_HAVE_GL
@@ -310,6 +372,7 @@ int main(int argc, char **argv) {
         } else {
             float pulse = scene.emission_scale * (0.75f + 0.25f * (float)cos(6.283185307 * f / total));
             glow_system_set_params(sys, &(glow_system_params){1.0f, pulse, o.iterations});
+            if (twin) glow_system_set_params(twin, &(glow_system_params){1.0f, pulse, o.iterations});
         }
         double t1 = now_ms();
         /* one update; the GL backend's stage times go into the CPU stats' fields */
@@ -329,8 +392,9 @@ int main(int argc, char **argv) {
         } else
 #endif
         {
-            if ((r = glow_system_update(sys, NULL)) != GLOW_OK) goto done;
+            if ((r = glow_system_update(sys, budget ? &ud : NULL)) != GLOW_OK) goto done;
             glow_system_get_stats(sys, &st);
+            if (twin && (r = glow_system_update(twin, NULL)) != GLOW_OK) goto done; /* untimed reference */
         }
         if (f >= o.warmup) {
             uint32_t i = f - o.warmup;
@@ -341,16 +405,33 @@ int main(int argc, char **argv) {
             v_cache[i] = st.cache_lighting_ms;
             v_out[i] = st.output_ms;
             v_total[i] = st.total_ms;
+            v_gath[i] = st.caches_gathered;
+            if (twin) { /* the budget's cost this frame: the caches' luma (DC) against the unbudgeted twin */
+                const glow_cache_outputs *a = glow_system_outputs(sys), *b = glow_system_outputs(twin);
+                double num = 0.0, den = 0.0;
+                for (uint32_t c = 0; c < a->cache_count; ++c) {
+                    const double x = a->cache_sh[(size_t)c * a->coeff_count], y = b->cache_sh[(size_t)c * b->coeff_count];
+                    num += fabs(x - y);
+                    den += fabs(y);
+                }
+                v_err[i] = den > 0.0 ? num / den : 0.0;
+            }
         }
     }
     const double m_move = glow_cli_median(v_move, n), m_host = glow_cli_median(v_host, n), m_light = glow_cli_median(v_light, n),
                  m_pull = glow_cli_median(v_pull, n), m_cache = glow_cli_median(v_cache, n), m_out = glow_cli_median(v_out, n),
                  m_total = glow_cli_median(v_total, n);
-    const uint64_t links = (uint64_t)info.cache_count * info.links_per_cache * o.iterations;
+    double e_mean = 0.0, e_max = 0.0;
+    for (uint32_t i = 0; i < n; ++i) {
+        e_mean += v_err[i] / n;
+        if (v_err[i] > e_max) e_max = v_err[i];
+    }
+    const double e_med = glow_cli_median(v_err, n), m_gath = glow_cli_median(v_gath, n);
+    const uint64_t links = (uint64_t)(budget ? m_gath : (double)info.cache_count) * info.links_per_cache * o.iterations;
     const double link_bytes = (double)links * 8.0;
-    const double gbs = link_bytes / (m_cache * 1e-3) * 1e-9;
+    const double gbs = links ? link_bytes / (m_cache * 1e-3) * 1e-9 : 0.0; /* links 0: a converged budget */
     const double fpl = flops_per_link(out->sh_bands_luma, out->sh_bands_chroma);
-    const double gflops = (double)links * fpl / (m_cache * 1e-3) * 1e-9;
+    const double gflops = links ? (double)links * fpl / (m_cache * 1e-3) * 1e-9 : 0.0;
     double triad = -1.0, peak = -1.0;
     const char *fma_isa = "-";
     if (!o.no_probe_machine && !o.gl) { /* the CPU's limits say nothing about a GPU */
@@ -435,7 +516,7 @@ int main(int argc, char **argv) {
         glow_json_num(jc, "gb_per_s", gbs);
         glow_json_num(jc, "flops_per_link", fpl);
         glow_json_num(jc, "gflop_per_s", gflops);
-        glow_json_num(jc, "ns_per_link", m_cache * 1e6 / (double)links);
+        glow_json_num(jc, "ns_per_link", links ? m_cache * 1e6 / (double)links : 0.0);
         jmach = cJSON_AddObjectToObject(jo, "machine");
         glow_json_num(jmach, "stream_triad_gb_per_s", triad);
         glow_json_num(jmach, "fma_peak_gflop_per_s", peak);
@@ -452,6 +533,16 @@ int main(int argc, char **argv) {
             glow_json_array3(pr, "position", pos);
             cJSON_AddBoolToObject(pr, "ok", probe_ok[k]);
             glow_json_array3(pr, "diffuse_up_rgb", rgb);
+        }
+        if (budget) {
+            cJSON *jb = cJSON_AddObjectToObject(jo, "budget");
+            glow_json_num(jb, "budget_ms", o.budget_ms);
+            cJSON_AddNumberToObject(jb, "budget_caches", o.budget_caches);
+            glow_json_num(jb, "converge", o.converge);
+            glow_json_num(jb, "median_caches_gathered", m_gath);
+            glow_json_num(jb, "luma_error_mean", e_mean);
+            glow_json_num(jb, "luma_error_median", e_med);
+            glow_json_num(jb, "luma_error_max", e_max);
         }
         if (glow_json_print(jo) != 0) goto done;
     } else {
@@ -470,9 +561,13 @@ int main(int argc, char **argv) {
         printf("  light move (host, outside update) %8.3f%s\n", m_move, o.gl ? "  (GPU shadow maps: CPU time to submit)" : "");
         printf("  surfel lighting                   %8.3f  (host hook %.3f)\n", m_light, m_host);
         printf("  pull                              %8.3f\n", m_pull);
-        printf("  cache lighting                    %8.3f  (%.2f ns/link)\n", m_cache, m_cache * 1e6 / (double)links);
+        printf("  cache lighting                    %8.3f  (%.2f ns/link)\n", m_cache, links ? m_cache * 1e6 / (double)links : 0.0);
         printf("  outputs                           %8.3f\n", m_out);
         printf("  total update                      %8.3f  (without host hook %.3f)\n", m_total, m_total - m_host);
+        if (budget)
+            printf("budget (%.3g ms, %u caches, converge %.3g): median %.0f of %u caches gathered per update; their luma "
+                   "against an unbudgeted twin: error mean %.4f, median %.4f, max %.4f (relative L1)\n",
+                   (double)o.budget_ms, o.budget_caches, (double)o.converge, m_gath, info.cache_count, e_mean, e_med, e_max);
         printf("cache lighting: %.2f GB/s of links (8 B each), %.1f GFLOP/s (%.0f FLOPs per link)\n", gbs, gflops, fpl);
         if (triad > 0)
             printf("machine (%u threads): STREAM triad %.2f GB/s, fp32 FMA peak %.1f GFLOP/s [%s]\n"
@@ -494,7 +589,10 @@ done:
     glow_glctx_destroy(glc);
 #endif
     free(v_host); free(v_light); free(v_pull); free(v_cache); free(v_out); free(v_total); free(v_move);
+    glow_system_destroy(twin);
     glow_system_destroy(sys);
+    free(v_err);
+    free(v_gath);
     glow_host_destroy(host);
     glow_bake_destroy(bake);
     glow_context_destroy(ctx);

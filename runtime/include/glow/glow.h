@@ -403,8 +403,28 @@ typedef enum glow_update_flags {
     GLOW_UPDATE_FLAGS_FORCE_U32 = 0x7FFFFFFF
 } glow_update_flags;
 
+/* Caches are scheduled in groups of this many neighbours (bake order), the unit of a budget. */
+#define GLOW_BUDGET_GROUP 16u
+
+/* Zero everywhere = no budget: every cache is gathered every update (bit-identical to 0.1).
+ * A budget gathers some groups of GLOW_BUDGET_GROUP caches and keeps the others' last values (the
+ * outputs always show every cache). Which: the stalest first, each group's staleness (updates since it
+ * was last gathered, + 1) weighted by 1 + 4 f, f = max over the focus points of 1 / (1 + d² / r²), d
+ * the distance to the group's centre; ties by group index, so a caches budget is deterministic
+ * (a time budget depends on the measured times). See docs/runtime.md, "Budgets". */
 typedef struct glow_update_desc {
-    uint32_t flags; /* glow_update_flags, OR-ed; 0 = none */
+    uint32_t flags;          /* glow_update_flags, OR-ed; 0 = none */
+    uint32_t max_caches;     /* at most this many caches gathered (rounded up to whole groups); 0 = no cap */
+    float budget_ms;         /* aim the whole update at this many ms: the caches that fit after the other
+                                stages, from the last updates' times (the first update gathers all); 0 = none.
+                                With max_caches too, the smaller wins */
+    const float *focus;      /* focus_count points (x, y, z: the camera, points of interest), or NULL */
+    uint32_t focus_count;
+    float focus_radius;      /* r above, m; 0 = a tenth of the bake's bounds diagonal */
+    float converged_epsilon; /* > 0: skip groups whose last gather changed their caches by less than this
+                                (relative, luma) while the node radiance they read drifted by less than this
+                                since (relative, summed over updates): converged light costs nothing until
+                                it changes. 0 = off */
 } glow_update_desc;
 
 /* Wall-clock milliseconds of the last successful update, per stage (summed over bounce iterations). */
@@ -415,7 +435,10 @@ typedef struct glow_update_stats {
     double cache_lighting_ms;
     double output_ms;          /* grid and lightmap textures, seam/gutter copies */
     double total_ms;
-    uint64_t links;            /* links gathered (cache_count * links_per_cache * iterations) */
+    uint64_t links;            /* links gathered (caches gathered * links_per_cache * iterations) */
+    uint32_t caches_gathered;  /* caches gathered in the last update (per bounce iteration) */
+    uint32_t caches_skipped_budget;    /* ... left at their last value by the budget */
+    uint32_t caches_skipped_converged; /* ... skipped as converged (converged_epsilon) */
     uint64_t updates;          /* successful updates since create */
     uint64_t memory_bytes;     /* everything the system allocated (the bake not included) */
     uint32_t link_mode;        /* the glow_link_mode in use (resolved, never DEFAULT) */
@@ -434,6 +457,8 @@ typedef struct glow_update_stats {
  * overlapping calls are detected on a best-effort basis, not serialised.
  * \since 0.1 */
 GLOW_API glow_result glow_system_update(glow_system *system, const glow_update_desc *desc);
+/* (glow_update_desc budgets: \since 0.1; GLOW_ERROR_INVALID_ARGUMENT for a negative or non-finite
+ * budget_ms, focus_radius or converged_epsilon, or focus_count > 0 with a NULL or non-finite focus.) */
 /** The last successful update's timings and counters. \threadsafety Between updates, from any thread.
  * \since 0.1 */
 GLOW_API glow_result glow_system_get_stats(const glow_system *system, glow_update_stats *out_stats);

@@ -125,7 +125,9 @@ GLOW_API glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_sys
 /** Deletes every GL object it made (NULL is a no-op). The CPU system is not touched. */
 GLOW_API void glow_gl_system_destroy(glow_gl_system *system);
 /** One frame on the GPU (flags: GLOW_UPDATE_FLAG_RESET_BOUNCE, GLOW_UPDATE_FLAG_KEEP_LIGHTING), x the CPU
- * system's bounce_iterations. Allocates nothing; does not wait for the GPU (unless CHECK_HOOK). */
+ * system's bounce_iterations. Allocates nothing; does not wait for the GPU (unless CHECK_HOOK).
+ * The desc's budgets (max_caches, budget_ms, focus, converged_epsilon) are CPU-only so far:
+ * GLOW_ERROR_UNSUPPORTED. */
 GLOW_API glow_result glow_gl_system_update(glow_gl_system *system, const glow_update_desc *desc);
 /** Waits for the last update's queries and fills `out`. */
 GLOW_API glow_result glow_gl_system_get_stats(glow_gl_system *system, glow_gl_stats *out);
