@@ -72,6 +72,7 @@ struct glow_system {
     float *albedo, *emis_base, *emis;
     float *direct, *direct_spare;
     float *fb_w;       /* [S][luma²] π s_l(1) y_lm(n_s) */
+    float *uv0;        /* [S][2] material UV at each surfel (bakes with TUV0), else NULL */
     float *rho_ind_max;/* [S] 0.999 π / G_s (cap of the albedo applied to indirect light) */
     /* nodes */
     float *flux; /* 3 planes of N */
@@ -395,7 +396,7 @@ static void free_system(glow_system *s) {
                     s->cache_sh, s->grid_sh, s->lm_sh, s->grid_map, s->lm_map, s->mat_emis_scale,
                     s->mat_albedo_scale, s->batch_status, s->batch_negative, s->out_index, s->out_cache,
                     s->xblocks, s->slots, s->sub_ratio, s->grp_age, s->grp_delta, s->grp_drift_at, s->grp_centre,
-                    s->grp_pack, s->grp_sel, s->rad_prev};
+                    s->grp_pack, s->grp_sel, s->rad_prev, s->uv0};
     for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; ++i) glow__ctx_free(ctx, bufs[i]);
     glow__ctx_free(ctx, s);
 }
@@ -541,6 +542,9 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     s->grp_pack = alloc_array(s, G, sizeof(uint64_t), &ok);
     s->grp_sel = alloc_array(s, G, sizeof(uint32_t), &ok);
     s->rad_prev = alloc_array(s, N ? N : 1u, sizeof(float), &ok);
+    glow_bake_geometry geo;
+    glow_bake_get_geometry(desc->bake, &geo);
+    if (geo.material_uv) s->uv0 = alloc_array(s, S, 2 * sizeof(float), &ok);
     if (!ok) {
         GLOW__LOG_ERROR(ctx, GLOW_ERROR_OUT_OF_MEMORY, "glow_system_create(%s): out of memory (%u surfels, %u caches)",
                         label, s->S, s->C);
@@ -561,6 +565,28 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
         memcpy(s->emis_base + 3 * i, sf[i].emission, 3 * sizeof(float));
     }
     memcpy(s->emis, s->emis_base, S * 3 * sizeof(float));
+    if (s->uv0) { /* each surfel's material UV: its position's barycentrics on its triangle, clamped into it */
+        for (size_t i = 0; i < S; ++i) {
+            const uint32_t t = s->tri[i] < geo.triangle_count ? s->tri[i] : 0u;
+            const float *p = (const float *)((const unsigned char *)geo.positions + (size_t)t * geo.stride);
+            const float *q = s->pos4 + 4 * i, *uv = geo.material_uv + 6 * (size_t)t;
+            double e1[3], e2[3], w[3];
+            for (int k = 0; k < 3; ++k) {
+                e1[k] = (double)p[3 + k] - p[k];
+                e2[k] = (double)p[6 + k] - p[k];
+                w[k] = (double)q[k] - p[k];
+            }
+            const double d11 = e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2], d12 = e1[0] * e2[0] + e1[1] * e2[1] + e1[2] * e2[2],
+                         d22 = e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2], w1 = w[0] * e1[0] + w[1] * e1[1] + w[2] * e1[2],
+                         w2 = w[0] * e2[0] + w[1] * e2[1] + w[2] * e2[2], det = d11 * d22 - d12 * d12;
+            double b1 = det > 0.0 ? (d22 * w1 - d12 * w2) / det : 1.0 / 3.0, b2 = det > 0.0 ? (d11 * w2 - d12 * w1) / det : 1.0 / 3.0;
+            b1 = b1 < 0.0 ? 0.0 : b1 > 1.0 ? 1.0 : b1;
+            b2 = b2 < 0.0 ? 0.0 : b2 > 1.0 - b1 ? 1.0 - b1 : b2;
+            const double b0 = 1.0 - b1 - b2;
+            s->uv0[2 * i] = (float)(b0 * uv[0] + b1 * uv[2] + b2 * uv[4]);
+            s->uv0[2 * i + 1] = (float)(b0 * uv[1] + b1 * uv[3] + b2 * uv[5]);
+        }
+    }
     memset(s->direct, 0, S * 3 * sizeof(float));
     memset(s->direct_spare, 0, S * 3 * sizeof(float));
     memset(s->flux, 0, N * 3 * sizeof(float));
@@ -723,6 +749,69 @@ glow_result glow_system_set_surfel_emission(glow_system *s, uint32_t first, uint
     return r;
 }
 
+/* Bilinear, wrapped, rows from the top: v = 1 is row 0 (the linker's and the samples' convention). */
+static void sample_rgb(const float *rgb, uint32_t w, uint32_t h, float u, float v, float out[3]) {
+    u -= floorf(u);
+    v -= floorf(v);
+    const float x = u * (float)w - 0.5f, y = (1.0f - v) * (float)h - 0.5f;
+    const float fx0 = floorf(x), fy0 = floorf(y), fx = x - fx0, fy = y - fy0;
+    int64_t x0 = (int64_t)fx0 % (int64_t)w, y0 = (int64_t)fy0 % (int64_t)h;
+    if (x0 < 0) x0 += w;
+    if (y0 < 0) y0 += h;
+    const int64_t x1 = x0 + 1 == (int64_t)w ? 0 : x0 + 1, y1 = y0 + 1 == (int64_t)h ? 0 : y0 + 1;
+    const float *a = rgb + 3 * ((size_t)y0 * w + (size_t)x0), *b = rgb + 3 * ((size_t)y0 * w + (size_t)x1);
+    const float *c = rgb + 3 * ((size_t)y1 * w + (size_t)x0), *d = rgb + 3 * ((size_t)y1 * w + (size_t)x1);
+    for (int k = 0; k < 3; ++k) {
+        const float top = a[k] + (b[k] - a[k]) * fx, bottom = c[k] + (d[k] - c[k]) * fx;
+        out[k] = top + (bottom - top) * fy;
+    }
+}
+
+glow_result glow_system_set_emission_texture(glow_system *s, uint32_t material, const float *rgb, uint32_t width,
+                                             uint32_t height, float scale) {
+    const char *fn = "glow_system_set_emission_texture";
+    if (!s) return GLOW_ERROR_INVALID_ARGUMENT;
+    if (busy(s, fn)) return GLOW_ERROR_INVALID_OPERATION;
+    if (material >= s->M || (rgb && (width == 0 || height == 0)) || !(scale >= 0.0f) || !isfinite(scale)) {
+        GLOW__LOG_ERROR(s->ctx, GLOW_ERROR_INVALID_ARGUMENT,
+                        "%s(%s): material %u (of %u), a %ux%u texture and scale %g: the material must exist, the "
+                        "texture be at least 1x1 and the scale finite and >= 0",
+                        fn, s->label, material, s->M, width, height, (double)scale);
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    if (!s->uv0) {
+        GLOW__LOG_ERROR(s->ctx, GLOW_ERROR_UNSUPPORTED,
+                        "%s(%s): the bake has no material UVs (bake format 1.1 with a textured mesh)", fn, s->label);
+        return GLOW_ERROR_UNSUPPORTED;
+    }
+    if (rgb) /* check every value this call would store before storing any */
+        for (uint32_t i = 0; i < s->S; ++i) {
+            if (s->mat[i] != material) continue;
+            float e[3];
+            sample_rgb(rgb, width, height, s->uv0[2 * (size_t)i], s->uv0[2 * (size_t)i + 1], e);
+            for (int k = 0; k < 3; ++k)
+                if (!isfinite(e[k] * scale) || e[k] * scale > GLOW_MAX_IRRADIANCE) {
+                    GLOW__LOG_ERROR(s->ctx, GLOW_ERROR_HOST_CALLBACK,
+                                    "%s(%s): surfel %u samples a non-finite value or one above GLOW_MAX_IRRADIANCE; nothing "
+                                    "stored",
+                                    fn, s->label, i);
+                    return GLOW_ERROR_HOST_CALLBACK;
+                }
+        }
+    for (uint32_t i = 0; i < s->S; ++i) {
+        if (s->mat[i] != material) continue;
+        float *e = s->emis + 3 * (size_t)i;
+        if (!rgb) {
+            memcpy(e, s->emis_base + 3 * (size_t)i, 3 * sizeof(float));
+            continue;
+        }
+        sample_rgb(rgb, width, height, s->uv0[2 * (size_t)i], s->uv0[2 * (size_t)i + 1], e);
+        for (int k = 0; k < 3; ++k) e[k] = e[k] > 0.0f ? e[k] * scale : 0.0f;
+    }
+    s->emission_revision++;
+    return GLOW_OK;
+}
+
 static glow_result null_arg(const glow_system *s, const char *fn) {
     if (s) GLOW__LOG_ERROR(s->ctx, GLOW_ERROR_INVALID_ARGUMENT, "%s(%s): NULL argument", fn, s->label);
     return GLOW_ERROR_INVALID_ARGUMENT;
@@ -730,7 +819,8 @@ static glow_result null_arg(const glow_system *s, const char *fn) {
 
 glow_result glow_system_get_surfels(const glow_system *s, glow_surfel_view *v) {
     if (!s || !v) return null_arg(s, "glow_system_get_surfels");
-    *v = (glow_surfel_view){.count = s->S, .positions = s->pos4, .normals = s->nrm4, .materials = s->mat, .triangles = s->tri};
+    *v = (glow_surfel_view){.count = s->S, .positions = s->pos4, .normals = s->nrm4, .materials = s->mat, .triangles = s->tri,
+                            .uv0 = s->uv0};
     return GLOW_OK;
 }
 

@@ -1621,12 +1621,92 @@ static void test_budget(void **state) {
     env_close(&e);
 }
 
+/* glow_system_set_emission_texture: surfels of a material take scale x the host's texture at their
+ * material UV (glow_surfel_view.uv0); NULL restores; bad input changes nothing; bakes without material
+ * UVs refuse. */
+static void test_emission_texture(void **state) {
+    (void)state;
+    char out[256];
+    snprintf(out, sizeof out, "/tmp/glow_test_emtex_%d.glow", (int)getpid());
+    glow_pc_settings ps = {.surfels = 256, .links = 16, .bands = 2, .grid_spacing = 0.5f, .texel_density = 2.0f, .threads = 1};
+    glow_pc_stats pst;
+    assert_int_equal(glow_pc_bake(GLOW_TEST_DATA_DIR "/scenes/texcase/texcase.obj", out, &ps, &pst), GLOW_OK);
+    static log_rec log;
+    pthread_mutex_init(&log.mu, NULL);
+    glow_context *ctx = NULL;
+    assert_int_equal(glow_context_create(&(glow_context_desc){.api_version = GLOW_VERSION, .logger = {rec_log, &log}}, &ctx), GLOW_OK);
+    glow_bake *bake = NULL;
+    assert_int_equal(glow_bake_load_file(ctx, out, &bake), GLOW_OK);
+    glow_system *s = NULL;
+    assert_int_equal(glow_system_create(ctx, &(glow_system_desc){.bake = bake}, &s), GLOW_OK);
+    glow_surfel_view v;
+    assert_int_equal(glow_system_get_surfels(s, &v), GLOW_OK);
+    assert_non_null(v.uv0);
+    for (uint32_t i = 0; i < v.count; ++i) /* the quads' UVs span [0, 1] */
+        assert_true(v.uv0[2 * i] >= -1e-4f && v.uv0[2 * i] <= 1.0001f && v.uv0[2 * i + 1] >= -1e-4f && v.uv0[2 * i + 1] <= 1.0001f);
+    const uint32_t m = v.materials[0];
+    /* 4 x 1: red, red, green, green: u in [0.125, 0.375] reads pure red, [0.625, 0.875] pure green */
+    const float tex[12] = {1, 0, 0, 1, 0, 0, 0, 1, 0, 0, 1, 0};
+    assert_int_equal(glow_system_set_emission_texture(s, m, tex, 4, 1, 2.5f), GLOW_OK);
+    glow_solver_tables t;
+    assert_int_equal(glow_system_get_solver_tables(s, &t), GLOW_OK);
+    uint32_t red = 0, green = 0, others_lit = 0;
+    for (uint32_t i = 0; i < v.count; ++i) {
+        const float *e = t.emission + 3 * (size_t)i, u = v.uv0[2 * i];
+        if (v.materials[i] != m) {
+            others_lit += e[0] + e[1] + e[2] > 0.0f;
+            continue;
+        }
+        if (u >= 0.13f && u <= 0.37f) {
+            assert_true(fabsf(e[0] - 2.5f) < 1e-5f && e[1] == 0.0f && e[2] == 0.0f);
+            red++;
+        } else if (u >= 0.63f && u <= 0.87f) {
+            assert_true(e[0] == 0.0f && fabsf(e[1] - 2.5f) < 1e-5f && e[2] == 0.0f);
+            green++;
+        }
+    }
+    print_message("emission texture: %u surfels read red, %u green\n", red, green);
+    assert_true(red > 0 && green > 0);
+    assert_int_equal(others_lit, 0); /* other materials untouched */
+    /* bad input: nothing changes */
+    const uint64_t rev = t.emission_revision;
+    float nan_tex[12];
+    memcpy(nan_tex, tex, sizeof nan_tex);
+    for (int k = 0; k < 12; k += 3) nan_tex[k] = NAN;
+    EXPECT_LOGGED(&log, glow_system_set_emission_texture(s, m, nan_tex, 4, 1, 1.0f), GLOW_ERROR_HOST_CALLBACK, GLOW_LOG_ERROR);
+    EXPECT_LOGGED(&log, glow_system_set_emission_texture(s, 999, tex, 4, 1, 1.0f), GLOW_ERROR_INVALID_ARGUMENT, GLOW_LOG_ERROR);
+    EXPECT_LOGGED(&log, glow_system_set_emission_texture(s, m, tex, 0, 1, 1.0f), GLOW_ERROR_INVALID_ARGUMENT, GLOW_LOG_ERROR);
+    EXPECT_LOGGED(&log, glow_system_set_emission_texture(s, m, tex, 4, 1, NAN), GLOW_ERROR_INVALID_ARGUMENT, GLOW_LOG_ERROR);
+    assert_int_equal(glow_system_get_solver_tables(s, &t), GLOW_OK);
+    assert_true(t.emission_revision == rev);
+    /* NULL: the bake's emission again (none here) */
+    assert_int_equal(glow_system_set_emission_texture(s, m, NULL, 0, 0, 1.0f), GLOW_OK);
+    assert_int_equal(glow_system_get_solver_tables(s, &t), GLOW_OK);
+    for (uint32_t i = 0; i < v.count; ++i) assert_true(t.emission[3 * (size_t)i] == 0.0f && t.emission[3 * (size_t)i + 1] == 0.0f);
+    assert_true(t.emission_revision > rev);
+    glow_system_destroy(s);
+    glow_bake_destroy(bake);
+    remove(out);
+    /* a bake without material UVs: no uv0, and the call refuses */
+    assert_int_equal(glow_pc_bake("builtin:cornell", out, &ps, &pst), GLOW_OK);
+    assert_int_equal(glow_bake_load_file(ctx, out, &bake), GLOW_OK);
+    assert_int_equal(glow_system_create(ctx, &(glow_system_desc){.bake = bake}, &s), GLOW_OK);
+    assert_int_equal(glow_system_get_surfels(s, &v), GLOW_OK);
+    assert_null(v.uv0);
+    EXPECT_LOGGED(&log, glow_system_set_emission_texture(s, 0, tex, 4, 1, 1.0f), GLOW_ERROR_UNSUPPORTED, GLOW_LOG_ERROR);
+    glow_system_destroy(s);
+    glow_bake_destroy(bake);
+    glow_context_destroy(ctx);
+    remove(out);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_null_arguments),
         cmocka_unit_test(test_bake_presets),
         cmocka_unit_test(test_bake_logger),
         cmocka_unit_test(test_solver_tables),
+        cmocka_unit_test(test_emission_texture),
         cmocka_unit_test(test_budget),
         cmocka_unit_test(test_bake_caches_sections),
         cmocka_unit_test(test_null_out_pointers_logged),

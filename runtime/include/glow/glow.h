@@ -353,6 +353,19 @@ GLOW_API glow_result glow_system_set_surfel_irradiance(glow_system *system, uint
 GLOW_API glow_result glow_system_set_surfel_emission(glow_system *system, uint32_t first, uint32_t count,
                                                      const float *radiance_rgb);
 
+/** Sets the emitted radiance of every surfel of `material` from an RGB texture the host owns and
+ * animates (a video screen, a flickering sign): W/(m²·sr) = scale x the texture, sampled bilinearly
+ * (wrapping) at each surfel's material UV (glow_surfel_view.uv0). `rgb` is width x height x 3 floats,
+ * rows from the top. The sample is one point per surfel, so detail finer than the surfels averages out
+ * only by chance: filter the texture to about the surfel spacing first (sqrt of the bake's surfel area)
+ * for a steady result. NULL rgb restores the bake's emission for the material's surfels.
+ * \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT (NULL system, a bad material, width or height 0,
+ * scale negative or not finite); GLOW_ERROR_UNSUPPORTED when the bake has no material UVs;
+ * GLOW_ERROR_HOST_CALLBACK when a sampled value is NaN, Inf or above GLOW_MAX_IRRADIANCE (nothing is
+ * stored). Allocates nothing. \threadsafety As glow_system_set_surfel_emission. \since 0.1 */
+GLOW_API glow_result glow_system_set_emission_texture(glow_system *system, uint32_t material, const float *rgb,
+                                                      uint32_t width, uint32_t height, float scale);
+
 /** Read-only view of the bake's surfels in the layout the hook receives (for hosts that push). */
 typedef struct glow_surfel_view {
     uint32_t count;
@@ -360,6 +373,9 @@ typedef struct glow_surfel_view {
     const float *normals;      /* count x {x, y, z, 0} */
     const uint32_t *materials; /* count */
     const uint32_t *triangles; /* count: the bake triangle (GEOM) each surfel lies on */
+    const float *uv0;          /* count x {u, v}: the material UV at each surfel (interpolated on its
+                                  triangle; v = 1 is a texture's top row), or NULL when the bake has no
+                                  material UVs (format 1.0, or a mesh without UVs). \since 0.1 */
 } glow_surfel_view;
 /** Fills `out_view`; valid until the system is destroyed. \threadsafety Any thread; the view is
  * immutable. \since 0.1 */
