@@ -154,6 +154,7 @@ static glow_result finalize_materials(glow__scene *s, glow__log *log) {
             }
         }
         if (m->texture < -1 || m->texture >= (int)s->texture_count) m->texture = -1;
+        if (m->emission_texture < -1 || m->emission_texture >= (int)s->texture_count) m->emission_texture = -1;
     }
     if (nonfinite)
         glow__warnf(log, "%s: %u non-finite material colour values (first in material '%s') replaced by 0", s->source,
@@ -501,6 +502,7 @@ static glow_result import_materials(import_ctx *c) {
     for (uint32_t i = 0; i < count; i++) {
         glow__material *m = &s->materials[i];
         m->texture = -1;
+        m->emission_texture = -1;
         m->albedo[0] = m->albedo[1] = m->albedo[2] = 0.5f;
         snprintf(m->name, sizeof m->name, "material%u", i);
         if (!ai->mNumMaterials) {
@@ -553,6 +555,22 @@ static glow_result import_materials(import_ctx *c) {
              * double-tint every surface to 0.2..0.5. Kd remains the fallback when the map
              * is missing or undecodable. */
             if (t >= 0 && !pbr) m->albedo[0] = m->albedo[1] = m->albedo[2] = ALBEDO_MAX;
+        }
+        /* Emission texture (MTL map_Ke, glTF emissiveTexture): emission = factor x texture. glTF's factor
+         * is the multiplier it defines (0 keeps it dark); OBJ exporters leave Ke black beside map_Ke, so
+         * for OBJ a black or absent Ke means the texture alone. */
+        if (aiGetMaterialTextureCount(am, aiTextureType_EMISSIVE) > 0 &&
+            aiGetMaterialTexture(am, aiTextureType_EMISSIVE, 0, &tpath, NULL, NULL, NULL, NULL, NULL, NULL) == aiReturn_SUCCESS &&
+            tpath.length) {
+            char tname[sizeof tpath.data];
+            size_t tl = tpath.length < sizeof tname - 1 ? tpath.length : sizeof tname - 1;
+            memcpy(tname, tpath.data, tl);
+            tname[tl] = 0;
+            int t = load_texture(c, tname, m->name);
+            if (t == -2) return GLOW_ERROR_OUT_OF_MEMORY;
+            m->emission_texture = t;
+            if (t >= 0 && !pbr && !(m->emission[0] > 0.0f || m->emission[1] > 0.0f || m->emission[2] > 0.0f))
+                m->emission[0] = m->emission[1] = m->emission[2] = 1.0f;
         }
     }
     return GLOW_OK;

@@ -63,6 +63,7 @@ typedef struct glow__material {
     float albedo[3];          /* linear RGB reflectance (Kd / baseColorFactor), clamped to [0,1) */
     float emission[3];        /* emitted radiance W/(m²·sr) (Ke / emissiveFactor*strength) */
     int texture;              /* index into scene->textures, or -1 */
+    int emission_texture;     /* emission = emission x this texture (map_Ke / emissiveTexture), or -1 */
 } glow__material;
 
 typedef struct glow__scene {

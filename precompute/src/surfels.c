@@ -105,7 +105,16 @@ static void surfel_eval(const glow__scene *scene, double surfel_area, glow__surf
     uint32_t m = scene->tri_material[t];
     s->material = m;
     const glow__material *mat = &scene->materials[m];
-    float tex[3] = {1.0f, 1.0f, 1.0f};
+    float tex[3] = {1.0f, 1.0f, 1.0f}, etex[3] = {1.0f, 1.0f, 1.0f};
+    if (mat->emission_texture >= 0 && (uint32_t)mat->emission_texture < scene->texture_count && scene->uv0) {
+        const float *u0 = scene->uv0[3 * t], *u1 = scene->uv0[3 * t + 1], *u2 = scene->uv0[3 * t + 2];
+        double uv_area = 0.5 * fabs(((double)u1[0] - u0[0]) * ((double)u2[1] - u0[1]) -
+                                    ((double)u2[0] - u0[0]) * ((double)u1[1] - u0[1]));
+        double ta = tri_area_d(scene, t);
+        double footprint = ta > 0.0 ? sqrt(surfel_area * uv_area / ta) : 0.0;
+        glow__texture_sample(&scene->textures[mat->emission_texture], (float)(b0 * u0[0] + b1 * u1[0] + b2 * u2[0]),
+                             (float)(b0 * u0[1] + b1 * u1[1] + b2 * u2[1]), (float)footprint, etex);
+    }
     if (mat->texture >= 0 && (uint32_t)mat->texture < scene->texture_count && scene->uv0) {
         const float *u0 = scene->uv0[3 * t], *u1 = scene->uv0[3 * t + 1], *u2 = scene->uv0[3 * t + 2];
         double u = b0 * u0[0] + b1 * u1[0] + b2 * u2[0];
@@ -118,7 +127,7 @@ static void surfel_eval(const glow__scene *scene, double surfel_area, glow__surf
     }
     for (int k = 0; k < 3; ++k) {
         s->albedo[k] = mat->albedo[k] * tex[k];
-        s->emission[k] = mat->emission[k];
+        s->emission[k] = mat->emission[k] * etex[k]; /* the emission texture's mean over the surfel */
     }
 }
 

@@ -79,7 +79,25 @@ static void test_cornell_files_finite(void **state) {
     glow_render_scene_destroy(sc);
 }
 
+/* An emission texture (map_Ke) in the path tracer: under a screen whose left half is white and right
+ * half black, the floor under the white half receives more light than the floor under the black half
+ * (with a constant emission the two points would be symmetric). */
+static void test_emission_texture_render(void **state) {
+    (void)state;
+    char msg[512];
+    glow_render_scene *sc = NULL;
+    assert_int_equal(glow_render_scene_load(GLOW_TEST_DATA_DIR "/scenes/emissive/emissive.json", &sc, msg, sizeof msg), GLOW_OK);
+    glow_render_settings st = {.seed = 5, .threads = 2, .max_depth = 1};
+    const float pts[12] = {0.3f, 0.01f, 1.0f, 0, 1, 0, 1.7f, 0.01f, 1.0f, 0, 1, 0};
+    float e[6];
+    assert_int_equal(glow_render_irradiance(sc, NULL, 0, &st, pts, 2, 2048, 0, e, NULL, msg, sizeof msg), GLOW_OK);
+    printf("emission texture: E under the white half %.4f, under the black half %.4f W/m2\n", e[0], e[3]);
+    assert_true(e[3] > 0.0f && e[0] > 1.5f * e[3]);
+    glow_render_scene_destroy(sc);
+}
+
 int main(void) {
-    const struct CMUnitTest tests[] = {cmocka_unit_test(test_cornell_files_finite)};
+    const struct CMUnitTest tests[] = {cmocka_unit_test(test_emission_texture_render),
+        cmocka_unit_test(test_cornell_files_finite)};
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

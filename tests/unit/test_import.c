@@ -783,6 +783,50 @@ static void check_checker(const glow__texture *t) {
     assert_true(fabsf(rgb[0] - 0.5f * (1.0f + avg[0])) < 1e-5f);
 }
 
+/* Emission textures (issue 18): MTL map_Ke with no Ke is the texture alone; surfels carry the
+ * texture's value where they sit (screen.png: left texel white, right black, u = x / 2). */
+static void test_emission_texture_import(void **state) {
+    (void)state;
+    glow__log log = {0};
+    glow__scene sc;
+    assert_int_equal(glow__scene_load(SCENES "/emissive/emissive.obj", &log, &sc), GLOW_OK);
+    int screen = -1;
+    for (uint32_t m = 0; m < sc.material_count; ++m)
+        if (!strcmp(sc.materials[m].name, "screen")) screen = (int)m;
+    assert_true(screen >= 0);
+    const glow__material *mat = &sc.materials[screen];
+    assert_true(mat->emission_texture >= 0);
+    assert_true(mat->emission[0] == 1.0f && mat->emission[1] == 1.0f && mat->emission[2] == 1.0f);
+    glow__surfel_settings set = {.count = 1024, .seed = 1};
+    glow__surfels s;
+    assert_int_equal(glow__surfels_place(&sc, &set, NULL, NULL, &s), GLOW_OK);
+    uint32_t left = 0, right = 0, n = 0;
+    double mean = 0.0;
+    for (uint32_t i = 0; i < s.count; ++i) {
+        const glow__surfel *u = &s.s[i];
+        if (u->material != (uint32_t)screen) {
+            assert_true(u->emission[0] == 0.0f); /* the floor emits nothing */
+            continue;
+        }
+        n++;
+        mean += u->emission[1];
+        if (u->pos[0] > 0.4f && u->pos[0] < 0.6f) { /* u 0.2..0.3: the white texel */
+            assert_true(u->emission[0] > 0.8f);
+            left++;
+        }
+        if (u->pos[0] > 1.4f && u->pos[0] < 1.6f) { /* u 0.7..0.8: the black texel */
+            assert_true(u->emission[0] < 0.2f);
+            right++;
+        }
+    }
+    mean /= n;
+    print_message("emission texture: %u screen surfels, mean %.3f; %u on the white side, %u on the black\n", n, mean, left, right);
+    assert_true(left > 0 && right > 0);
+    assert_true(mean > 0.35 && mean < 0.65);
+    glow__surfels_free(&s);
+    glow__scene_free(&sc);
+}
+
 static void test_texture_case_and_sampling(void **state) {
     (void)state;
     capture c;
@@ -1004,6 +1048,7 @@ static void test_sponza(void **state) {
 
 int main(void) {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_emission_texture_import),
         cmocka_unit_test(test_builtin_cornell),
         cmocka_unit_test(test_builtin_furnace),
         cmocka_unit_test(test_builtin_two_rooms),

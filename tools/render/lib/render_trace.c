@@ -172,13 +172,24 @@ static void make_surf(const render_ctx *c, const glow__hit *h, surf *s) {
     for (int k = 0; k < 3; ++k) s->rho[k] = fminf(fmaxf(mat->albedo[k] * tex[k] * c->albedo_scale, 0.0f), 0.999f);
 }
 
-/* Emitted radiance of triangle t towards a ray that hit it (front face only). */
-static bool emission_of(const render_ctx *c, uint32_t t, bool back, float le[3]) {
+/* Emitted radiance of triangle t at barycentrics (b1, b2) towards a ray that hit it (front face only):
+ * the material's emission times its emission texture there (map_Ke / emissiveTexture), as the linker
+ * folds it into the surfels. Emitters are still chosen for NEE by their material emission and area:
+ * the texture only changes the estimator's value, never makes a texel emit where that pdf is 0. */
+static bool emission_of(const render_ctx *c, uint32_t t, float b1, float b2, bool back, float le[3]) {
     if (back || !(c->emission_scale > 0.0f)) return false;
     const glow__scene *m = &c->sc->mesh;
-    const float *e = m->materials[m->tri_material[t]].emission;
+    const glow__material *mat = &m->materials[m->tri_material[t]];
+    const float *e = mat->emission;
     if (!(e[0] > 0.0f || e[1] > 0.0f || e[2] > 0.0f)) return false;
-    for (int k = 0; k < 3; ++k) le[k] = e[k] * c->emission_scale;
+    float tex[3] = {1.0f, 1.0f, 1.0f};
+    if (mat->emission_texture >= 0 && (uint32_t)mat->emission_texture < m->texture_count && m->uv0) {
+        const float *u0 = m->uv0[3 * (size_t)t], *u1 = m->uv0[3 * (size_t)t + 1], *u2 = m->uv0[3 * (size_t)t + 2];
+        const float b0 = 1.0f - b1 - b2;
+        glow__texture_sample(&m->textures[mat->emission_texture], b0 * u0[0] + b1 * u1[0] + b2 * u2[0],
+                             b0 * u0[1] + b1 * u1[1] + b2 * u2[1], 0.0f, tex);
+    }
+    for (int k = 0; k < 3; ++k) le[k] = e[k] * tex[k] * c->emission_scale;
     return true;
 }
 
@@ -265,7 +276,7 @@ static void emitter_nee(const render_ctx *c, rng *rp, const surf *s, float out[3
     float cos_l = -glow__dot(sc->ng[t], w);
     if (!(cos_l > 0.0f)) return;
     float le[3];
-    if (!emission_of(c, t, false, le)) return;
+    if (!emission_of(c, t, b1, b2, false, le)) return;
     float v[3];
     glow__sub(q, s->o, v);
     float vl = sqrtf(glow__dot(v, v)), tfar = vl - sc->eps;
@@ -321,7 +332,7 @@ static void continue_path(const render_ctx *c, rng *rp, glow__hit h, const float
     surf s;
     for (uint32_t depth = 2;; ++depth) {
         make_surf(c, &h, &s);
-        if (emission_of(c, s.tri, s.back, le)) { /* BSDF-sampled emitter hit, MIS against NEE */
+        if (emission_of(c, s.tri, s.b1, s.b2, s.back, le)) { /* BSDF-sampled emitter hit, MIS against NEE */
             float wgt = 1.0f;
             if (pdf_prev > 0.0f) {
                 float d[3];
@@ -386,7 +397,7 @@ static void sample(const render_ctx *c, uint32_t x, uint32_t y, rng *rd, rng *rp
         return;
     }
     float le[3];
-    if (emission_of(c, s.tri, s.back, le))
+    if (emission_of(c, s.tri, s.b1, s.b2, s.back, le))
         for (int k = 0; k < 3; ++k) direct[k] += le[k];
     /* ---- the host's lights at the first hit */
     float E[3];
