@@ -212,6 +212,10 @@ expect 0 "stability: ringing" "$BIN/glow-stability" ringing "$T/cornell.glow" "$
 python3 -c "import json,sys; r=json.load(open(sys.argv[1])); sys.exit(0 if len(r)==2 and all(0<=x['negative_share']<=1 and x['negative_share_windowed']<=x['negative_share'] for x in r) else 1)" "$T/out" \
   && pass "  ringing JSON: bands 2, 3, windowed share <= plain" || fail "  ringing JSON wrong"
 expect 0 "stability: flicker" "$BIN/glow-stability" flicker "$T/cornell.glow" "$SCN/cornell-builtin-moving.json" --frames 4 --probes 8 --samples 16 --csv "$T/flicker.csv"
+cp "$T/out" "$T/flicker_full.txt"
+expect 0 "stability: flicker --budget-caches 64" "$BIN/glow-stability" flicker "$T/cornell.glow" "$SCN/cornell-builtin-moving.json" --frames 4 --probes 8 --samples 16 --budget-caches 64
+grep -q "at most 64 of" "$T/out" && pass "  the budget is named" || fail "  no budget line"
+[ "$(grep 'mean |Glow' "$T/out")" != "$(grep 'mean |Glow' "$T/flicker_full.txt")" ] && pass "  a budget changes what Glow shows" || fail "  the budget changed nothing"
 [ "$(wc -l < "$T/flicker.csv")" = 6 ] && pass "  flicker CSV: header + 5 frames" || fail "  flicker CSV"
 expect 0 "stability: jumps" "$BIN/glow-stability" jumps "$T/cornell.glow" "$SCN/cornell-builtin-spot.json" --pairs 20 --samples 16
 grep -q "largest jump" "$T/out" && pass "  jumps reported" || fail "  jumps output"

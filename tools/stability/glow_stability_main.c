@@ -62,6 +62,7 @@
 static int usage(FILE *f) {
     fprintf(f, "usage: glow-stability ringing BAKE SCENE.json [--bands-max L] [--dirs N] [--json]\n"
                "       glow-stability flicker BAKE SCENE.json [--frames N] [--iterations K] [--probes P] [--samples S]\n"
+               "                              [--budget-caches N]\n"
                "                              [--csv FILE]\n"
                "       glow-stability jumps   BAKE SCENE.json [--pairs P] [--samples S] [--csv FILE]\n"
                "       glow-stability audit   BAKE SCENE.json [--probes P] [--samples S] [--csv FILE] [--json]\n"
@@ -315,7 +316,10 @@ static void cache_point(const session *s, uint32_t c, float *pt) {
 
 /* ------------------------------------------------------------------ flicker */
 static int flicker(const char *bake_path, const char *scene_path, uint32_t frames, uint32_t iterations, uint32_t nprobes,
-                   uint32_t samples, const char *csv_path) {
+                   uint32_t samples, const char *csv_path, uint32_t budget_caches) {
+    /* --budget-caches: every update after the converged first frame gathers at most that many caches
+     * (glow_update_desc.max_caches), to measure a budget's lag and flicker against the reference */
+    const glow_update_desc budget = {.max_caches = budget_caches};
     session s;
     int rc = 1;
     float *pts = NULL, *eg = NULL, *er = NULL, *pg = NULL, *pr = NULL;
@@ -363,7 +367,7 @@ static int flicker(const char *bake_path, const char *scene_path, uint32_t frame
             glow_system_set_params(s.sys, &(glow_system_params){.bounce_intensity = 1.0f,
                                                                 .emission_scale = s.scene.emission_scale,
                                                                 .bounce_iterations = iterations});
-        } else if (glow_system_update(s.sys, NULL) != GLOW_OK) {
+        } else if (glow_system_update(s.sys, budget_caches ? &budget : NULL) != GLOW_OK) {
             goto done;
         }
         for (uint32_t i = 0; i < nprobes; ++i) glow_irradiance(&s, first + (uint32_t)((uint64_t)i * lm / nprobes), eg + 3 * i);
@@ -404,6 +408,7 @@ static int flicker(const char *bake_path, const char *scene_path, uint32_t frame
         memcpy(pg, eg, sizeof(float) * 3 * nprobes);
         memcpy(pr, er, sizeof(float) * 3 * nprobes);
     }
+    if (budget_caches) printf("budget: at most %u of %u caches gathered per update\n", budget_caches, s.info.cache_count);
     printf("flicker: %s, %u frames, %u iteration(s) per frame, %u probes x %u paths\n"
            "  mean frame-to-frame change: Glow %.4f, reference %.4f (ratio %.2f); largest: Glow %.4f, reference %.4f\n"
            "  change of Glow beyond the reference's (per frame, mean): %.4f; mean |Glow - reference| %.4f (all relative to "
@@ -767,14 +772,16 @@ int main(int argc, char **argv) {
     if (argc < 4 || (strcmp(argv[1], "ringing") && strcmp(argv[1], "flicker") && strcmp(argv[1], "jumps") &&
                       strcmp(argv[1], "audit")))
         return usage(stderr);
-    uint32_t lmax = GLOW_MAX_SH_BANDS, ndirs = 256, frames = 240, iterations = 1, probes = 96, samples = 1024, pairs = 3000;
+    uint32_t lmax = GLOW_MAX_SH_BANDS, ndirs = 256, frames = 240, iterations = 1, probes = 96, samples = 1024, pairs = 3000,
+             budget_caches = 0;
     const char *csv = NULL, *radiance_out = NULL;
     int json = 0;
     for (int i = 4; i < argc; ++i) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         uint32_t *dst = !strcmp(a, "--bands-max") ? &lmax : !strcmp(a, "--dirs") ? &ndirs : !strcmp(a, "--frames") ? &frames
                       : !strcmp(a, "--iterations") ? &iterations : !strcmp(a, "--probes") ? &probes
-                      : !strcmp(a, "--samples") ? &samples : !strcmp(a, "--pairs") ? &pairs : NULL;
+                      : !strcmp(a, "--samples") ? &samples : !strcmp(a, "--pairs") ? &pairs
+                      : !strcmp(a, "--budget-caches") ? &budget_caches : NULL;
         if (!strcmp(a, "--json")) {
             json = 1;
         } else if (!strcmp(a, "--csv") && v) {
@@ -800,6 +807,6 @@ int main(int argc, char **argv) {
     }
     if (!strcmp(argv[1], "ringing")) return ringing(argv[2], argv[3], lmax, ndirs, json);
     if (!strcmp(argv[1], "audit")) return audit(argv[2], argv[3], probes, samples, csv, radiance_out, json);
-    if (!strcmp(argv[1], "flicker")) return flicker(argv[2], argv[3], frames, iterations, probes, samples, csv);
+    if (!strcmp(argv[1], "flicker")) return flicker(argv[2], argv[3], frames, iterations, probes, samples, csv, budget_caches);
     return jumps(argv[2], argv[3], pairs, samples, csv);
 }
