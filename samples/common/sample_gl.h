@@ -199,7 +199,7 @@ typedef struct sample_gl {
     GLuint albedo_tex, albedo_sampler; /* SRGB8_ALPHA8 array, one layer per textured material (0 = none) */
     GLuint prog_hud, vao_hud, vbo_hud;  /* sample_gl_hud, created on first use */
     uint32_t textured_materials;
-    char warning[512];          /* the first texture that could not be loaded, "" when none */
+    char warning[640];          /* the first texture that could not be loaded, "" when none */
     uint32_t vertex_count, sphere_index_count, material_count, surfel_count;
     float scene_size, bounds_min[3], bounds_max[3];
     float *material_base;   /* [M][6] the bake's albedo, emission */
@@ -700,7 +700,7 @@ static inline int sample_gl__load_textures(sample_gl *r) {
         unsigned char *grown = px ? realloc(layers, ((size_t)count + 1) * T * T * 4) : NULL;
         if (!px || !grown) {
             if (!r->warning[0])
-                snprintf(r->warning, sizeof r->warning, "%s: cannot read the albedo texture (%s); material '%s' drawn untextured",
+                snprintf(r->warning, sizeof r->warning, "%.400s: cannot read the albedo texture (%.40s); material '%.31s' drawn untextured",
                          mi[m].albedo_texture, px ? "out of memory" : stbi_failure_reason(), mi[m].name);
             stbi_image_free(px);
             continue;

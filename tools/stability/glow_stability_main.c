@@ -55,7 +55,7 @@
 #include "glow/glow_scene.h"
 #include "glow_render.h"
 #include "glow_tool_json.h"
-#include "bake/bake_format.h" /* the link block layout (audit: visible solid angle), the format seam */
+#include "bake_format.h" /* the link block layout (audit: visible solid angle), the format seam */
 
 #define PI_D 3.14159265358979323846
 

@@ -6,7 +6,7 @@
 #include <stdbool.h>
 
 #include "glow_render.h"
-#include "pc_internal.h"
+#include "glow/glow_pc_kit.h" /* the linker's scene kit: scene, rays, pool (not precompute/src) */
 
 struct glow_render_scene {
     char path[512];            /* the scene description file, as given */
