@@ -492,6 +492,21 @@ static int load_texture(import_ctx *c, const char *name, const char *material) {
     return (int)s->texture_count++;
 }
 
+/* The first texture of slot `type` of material am: load_texture's index (-1: named but not loaded,
+ * -2: out of memory), or -3 when the slot names none. File names keep their bytes (UTF-8 names must
+ * still resolve); they are only bounded. */
+static int slot_texture(import_ctx *c, const struct aiMaterial *am, enum aiTextureType type, const char *material) {
+    struct aiString tpath;
+    if (type == aiTextureType_NONE ||
+        aiGetMaterialTexture(am, type, 0, &tpath, NULL, NULL, NULL, NULL, NULL, NULL) != aiReturn_SUCCESS || !tpath.length)
+        return -3;
+    char tname[sizeof tpath.data];
+    size_t tl = tpath.length < sizeof tname - 1 ? tpath.length : sizeof tname - 1;
+    memcpy(tname, tpath.data, tl);
+    tname[tl] = 0;
+    return load_texture(c, tname, material);
+}
+
 static glow_result import_materials(import_ctx *c) {
     glow__scene *s = c->s;
     const struct aiScene *ai = c->ai;
@@ -535,17 +550,9 @@ static glow_result import_materials(import_ctx *c) {
         enum aiTextureType type = aiTextureType_NONE;
         if (aiGetMaterialTextureCount(am, aiTextureType_BASE_COLOR) > 0) type = aiTextureType_BASE_COLOR;
         else if (aiGetMaterialTextureCount(am, aiTextureType_DIFFUSE) > 0) type = aiTextureType_DIFFUSE;
-        struct aiString tpath;
-        if (type != aiTextureType_NONE &&
-            aiGetMaterialTexture(am, type, 0, &tpath, NULL, NULL, NULL, NULL, NULL, NULL) == aiReturn_SUCCESS &&
-            tpath.length) {
-            /* file names keep their bytes (UTF-8 names must still resolve); just bound them */
-            char tname[sizeof tpath.data];
-            size_t tl = tpath.length < sizeof tname - 1 ? tpath.length : sizeof tname - 1;
-            memcpy(tname, tpath.data, tl);
-            tname[tl] = 0;
-            int t = load_texture(c, tname, m->name);
-            if (t == -2) return GLOW_ERROR_OUT_OF_MEMORY;
+        int t = slot_texture(c, am, type, m->name);
+        if (t == -2) return GLOW_ERROR_OUT_OF_MEMORY;
+        if (t != -3) {
             m->texture = t;
             /* Albedo = factor x texture. glTF defines the factor as a multiplier. For OBJ/MTL we
              * use the texture alone (factor 1, kept just below 1 by ALBEDO_MAX) and ignore Kd
@@ -559,15 +566,10 @@ static glow_result import_materials(import_ctx *c) {
         /* Emission texture (MTL map_Ke, glTF emissiveTexture): emission = factor x texture. glTF's factor
          * is the multiplier it defines (0 keeps it dark); OBJ exporters leave Ke black beside map_Ke, so
          * for OBJ a black or absent Ke means the texture alone. */
-        if (aiGetMaterialTextureCount(am, aiTextureType_EMISSIVE) > 0 &&
-            aiGetMaterialTexture(am, aiTextureType_EMISSIVE, 0, &tpath, NULL, NULL, NULL, NULL, NULL, NULL) == aiReturn_SUCCESS &&
-            tpath.length) {
-            char tname[sizeof tpath.data];
-            size_t tl = tpath.length < sizeof tname - 1 ? tpath.length : sizeof tname - 1;
-            memcpy(tname, tpath.data, tl);
-            tname[tl] = 0;
-            int t = load_texture(c, tname, m->name);
-            if (t == -2) return GLOW_ERROR_OUT_OF_MEMORY;
+        t = aiGetMaterialTextureCount(am, aiTextureType_EMISSIVE) > 0 ? slot_texture(c, am, aiTextureType_EMISSIVE, m->name)
+                                                                       : -3;
+        if (t == -2) return GLOW_ERROR_OUT_OF_MEMORY;
+        if (t != -3) {
             m->emission_texture = t;
             if (t >= 0 && !pbr && !(m->emission[0] > 0.0f || m->emission[1] > 0.0f || m->emission[2] > 0.0f))
                 m->emission[0] = m->emission[1] = m->emission[2] = 1.0f;

@@ -77,6 +77,21 @@ static double tri_area_d(const glow__scene *scene, uint32_t t) {
 }
 
 /* Fills every field of s that follows from (tri, bary): position, normal, albedo, emission, material. */
+
+/* Texture `tex` (an index into scene->textures; < 0: none, out stays) at barycentrics (b0, b1, b2) of
+ * triangle t, from the mip level of a surfel's footprint: the texture's mean over the surfel. */
+static void surfel_texture(const glow__scene *scene, uint32_t t, int tex, double b0, double b1, double b2,
+                           double surfel_area, float out[3]) {
+    if (tex < 0 || (uint32_t)tex >= scene->texture_count || !scene->uv0) return;
+    const float *u0 = scene->uv0[3 * t], *u1 = scene->uv0[3 * t + 1], *u2 = scene->uv0[3 * t + 2];
+    const double u = b0 * u0[0] + b1 * u1[0] + b2 * u2[0], v = b0 * u0[1] + b1 * u1[1] + b2 * u2[1];
+    const double uv_area = 0.5 * fabs(((double)u1[0] - u0[0]) * ((double)u2[1] - u0[1]) -
+                                      ((double)u2[0] - u0[0]) * ((double)u1[1] - u0[1]));
+    const double ta = tri_area_d(scene, t);
+    const double footprint = ta > 0.0 ? sqrt(surfel_area * uv_area / ta) : 0.0;
+    glow__texture_sample(&scene->textures[tex], (float)u, (float)v, (float)footprint, out);
+}
+
 static void surfel_eval(const glow__scene *scene, double surfel_area, glow__surfel *s) {
     uint32_t t = s->tri;
     double b1 = s->bary[0], b2 = s->bary[1], b0 = 1.0 - b1 - b2;
@@ -106,25 +121,8 @@ static void surfel_eval(const glow__scene *scene, double surfel_area, glow__surf
     s->material = m;
     const glow__material *mat = &scene->materials[m];
     float tex[3] = {1.0f, 1.0f, 1.0f}, etex[3] = {1.0f, 1.0f, 1.0f};
-    if (mat->emission_texture >= 0 && (uint32_t)mat->emission_texture < scene->texture_count && scene->uv0) {
-        const float *u0 = scene->uv0[3 * t], *u1 = scene->uv0[3 * t + 1], *u2 = scene->uv0[3 * t + 2];
-        double uv_area = 0.5 * fabs(((double)u1[0] - u0[0]) * ((double)u2[1] - u0[1]) -
-                                    ((double)u2[0] - u0[0]) * ((double)u1[1] - u0[1]));
-        double ta = tri_area_d(scene, t);
-        double footprint = ta > 0.0 ? sqrt(surfel_area * uv_area / ta) : 0.0;
-        glow__texture_sample(&scene->textures[mat->emission_texture], (float)(b0 * u0[0] + b1 * u1[0] + b2 * u2[0]),
-                             (float)(b0 * u0[1] + b1 * u1[1] + b2 * u2[1]), (float)footprint, etex);
-    }
-    if (mat->texture >= 0 && (uint32_t)mat->texture < scene->texture_count && scene->uv0) {
-        const float *u0 = scene->uv0[3 * t], *u1 = scene->uv0[3 * t + 1], *u2 = scene->uv0[3 * t + 2];
-        double u = b0 * u0[0] + b1 * u1[0] + b2 * u2[0];
-        double v = b0 * u0[1] + b1 * u1[1] + b2 * u2[1];
-        double uv_area = 0.5 * fabs(((double)u1[0] - u0[0]) * ((double)u2[1] - u0[1]) -
-                                    ((double)u2[0] - u0[0]) * ((double)u1[1] - u0[1]));
-        double ta = tri_area_d(scene, t);
-        double footprint = ta > 0.0 ? sqrt(surfel_area * uv_area / ta) : 0.0;
-        glow__texture_sample(&scene->textures[mat->texture], (float)u, (float)v, (float)footprint, tex);
-    }
+    surfel_texture(scene, t, mat->texture, b0, b1, b2, surfel_area, tex);
+    surfel_texture(scene, t, mat->emission_texture, b0, b1, b2, surfel_area, etex);
     for (int k = 0; k < 3; ++k) {
         s->albedo[k] = mat->albedo[k] * tex[k];
         s->emission[k] = mat->emission[k] * etex[k]; /* the emission texture's mean over the surfel */
