@@ -162,6 +162,9 @@ typedef struct glow__link_settings {
     const float *audit_radiance; /* optional [surfel count]: a radiance per surfel (any lighting); the
                                     links then also fill glow__links.audit (links.c, "Audit") */
     bool link_subsets;         /* fill glow__link.subsets (LSUB, bake_format.h) */
+    float cluster_tau;         /* > 0: clustered visibility (links.c cluster_nodes): nodes smaller than
+                                  this many radians seen from the cache share cluster_samples rays */
+    uint32_t cluster_samples;
 } glow__link_settings;
 
 typedef struct glow__link {
@@ -178,6 +181,7 @@ typedef struct glow__links {
     float *sh;                /* full-SH: [cache_count * per_cache * bands²] or NULL */
     uint32_t sh_bands;
     double visible_solid_angle_total;  /* sum over caches of visible solid angle (diagnostic) */
+    uint64_t visibility_rays;          /* leaf and cluster visibility rays cast, all caches (diagnostic) */
     /* with audit_radiance: per cache [GLOW__AUDIT_FIELDS] = the exact gather through the visible leaves,
      * the gather through the cut, the gather through the cut with each node's visible part's mean, the
      * linked nodes' visible fraction (ω-weighted), the visible solid angle, the gather with each link

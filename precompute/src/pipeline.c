@@ -19,6 +19,11 @@ enum { ST_IMPORT, ST_BVH, ST_SURFELS, ST_HIER, ST_CACHES, ST_LINKS, ST_WRITE };
 
 const char *glow_pc_stage_name(uint32_t stage) { return stage < GLOW_PC_STAGE_COUNT ? stage_names[stage] : "?"; }
 
+/* Clustered link visibility (links.c cluster_nodes; docs/linker.md "Clustered visibility"): the
+ * largest a cluster may look from a cache (bounding radius / distance) and the rays it shares */
+#define GLOW_PC_CLUSTER_ANGLE 0.3f
+#define GLOW_PC_CLUSTER_RAYS 4u
+
 typedef struct preset {
     uint32_t surfels, links, bands, grid, lightmap, relax;
 } preset;
@@ -52,6 +57,9 @@ glow_pc_settings glow_pc_settings_resolve(const glow_pc_settings *in) {
     if (!s.relax_iterations) s.relax_iterations = p->relax;
     if (!s.lightmap_caches) s.lightmap_caches = p->lightmap;
     if (!s.rays_per_surfel) s.rays_per_surfel = 1;
+    if (s.link_visibility == GLOW_PC_LINK_VISIBILITY_DEFAULT) s.link_visibility = GLOW_PC_LINK_VISIBILITY_CLUSTERED;
+    if (s.link_cluster_angle == 0.0f) s.link_cluster_angle = GLOW_PC_CLUSTER_ANGLE;
+    if (!s.link_cluster_rays) s.link_cluster_rays = GLOW_PC_CLUSTER_RAYS;
     return s;
 }
 
@@ -71,6 +79,11 @@ glow_result glow_pc_settings_validate(const glow_pc_settings *s, char *msg, size
     if (s->lightmap_caches > (1u << 24)) BAD("--lightmap-caches %u is out of range (1..16777216)", s->lightmap_caches);
     if (s->rays_per_surfel > 256) BAD("rays per surfel %u is out of range (1..256)", s->rays_per_surfel);
     if (s->relax_iterations > 1000) BAD("relaxation iterations %u is out of range", s->relax_iterations);
+    if ((unsigned)s->link_visibility > GLOW_PC_LINK_VISIBILITY_EXACT)
+        BAD("link visibility %u is not clustered or exact", (unsigned)s->link_visibility);
+    if (s->link_cluster_angle != 0.0f && !(s->link_cluster_angle > 0.0f && s->link_cluster_angle <= 1.0f))
+        BAD("--link-cluster-angle %g is out of range (0..1 radians)", (double)s->link_cluster_angle);
+    if (s->link_cluster_rays > 64) BAD("--link-cluster-rays %u is out of range (1..64)", s->link_cluster_rays);
 #undef BAD
     return GLOW_OK;
 }
@@ -612,7 +625,9 @@ static glow_result bake(const char *scene_path, const char *out_path, const glow
     glow__link_settings slink = {.links_per_cache = set.links, .sh_bands = set.bands, .full_sh = set.sh_links,
                                  .rays_per_surfel = set.rays_per_surfel, .seed = set.seed,
                                  .no_normalize = set.no_link_normalize, .cut_error = !set.cut_solid_angle,
-                                 .audit_radiance = audit_radiance, .link_subsets = !set.no_link_subsets};
+                                 .audit_radiance = audit_radiance, .link_subsets = !set.no_link_subsets,
+                                 .cluster_tau = set.link_visibility == GLOW_PC_LINK_VISIBILITY_CLUSTERED ? set.link_cluster_angle : 0.0f,
+                                 .cluster_samples = set.link_cluster_rays};
     res = glow__links_build(&scene, rt, &surfels, &hier, &caches, &slink, pool, &log, stage_progress, &pc, &links);
     STAGE_END(ST_LINKS);
     if (res != GLOW_OK) goto done;

@@ -60,6 +60,11 @@ static const char *usage_text =
     "  --link-subsets on|off  on (default): a partly visible link reads the light of the part of its\n"
     "                         node the cache sees (four weights per link, 2 bytes, LSUB); off: the\n"
     "                         node's mean, as PIC\n"
+    "  --link-visibility clustered|exact  clustered (default): clusters beyond the near field that look\n"
+    "                         small from a cache share a few rays (the rays per cache barely grow with\n"
+    "                         the surfels); exact: one ray per (cache, surfel)\n"
+    "  --link-cluster-angle A clustered: the largest a cluster may look, radius / distance (default 0.3)\n"
+    "  --link-cluster-rays K  clustered: rays per cluster, one per run of its leaves (default 4)\n"
     "  --audit-radiance FILE  audit the cuts under a lighting: FILE holds one float32 radiance per surfel\n"
     "                         (glow-stability audit --radiance-out, for a bake with the same settings);\n"
     "                         logs each cut's gather against the exact gather through visible surfels\n"
@@ -454,6 +459,21 @@ int main(int argc, char **argv) {
             if (!strcmp(v, "off")) s.no_link_subsets = true;
             else if (!strcmp(v, "on")) s.no_link_subsets = false;
             else return usage_error("--link-subsets '%s': expected on or off", v);
+        } else if (!strcmp(a, "--link-visibility")) {
+            NEED_VALUE();
+            if (!strcmp(v, "clustered")) s.link_visibility = GLOW_PC_LINK_VISIBILITY_CLUSTERED;
+            else if (!strcmp(v, "exact")) s.link_visibility = GLOW_PC_LINK_VISIBILITY_EXACT;
+            else return usage_error("--link-visibility '%s': expected clustered or exact", v);
+        } else if (!strcmp(a, "--link-cluster-angle")) {
+            NEED_VALUE();
+            char *end = NULL;
+            double x = strtod(v, &end);
+            if (!end || *end || !(x > 0.0 && x <= 1.0))
+                return usage_error("--link-cluster-angle '%s': expected radians in (0, 1]", v);
+            s.link_cluster_angle = (float)x;
+        } else if (!strcmp(a, "--link-cluster-rays")) {
+            NEED_VALUE();
+            if (!parse_u32(v, 1, 64, &s.link_cluster_rays)) return usage_error("--link-cluster-rays '%s': expected an integer in 1..64", v);
         } else if (!strcmp(a, "--no-link-normalize")) {
             s.no_link_normalize = true;
         } else if (!strcmp(a, "--sh-links")) {

@@ -71,6 +71,13 @@ cmp -s "$T/c1.glow" "$T/ce.glow" && pass "  the default cut is the error cut" ||
 expect 0 "bake --cut solid-angle" "$BIN" builtin:cornell -o "$T/cs.glow" "${SMALL[@]}" --cut solid-angle
 cmp -s "$T/c1.glow" "$T/cs.glow" && fail "  --cut solid-angle changes nothing" || pass "  --cut solid-angle gives other links"
 expect 2 "bad cut" "$BIN" builtin:cornell -o "$T/a.glow" --cut fast; err_has "cut"
+expect 0 "bake --link-visibility exact" "$BIN" builtin:cornell -o "$T/cx.glow" "${SMALL[@]}" --link-visibility exact
+cmp -s "$T/c1.glow" "$T/cx.glow" && fail "  --link-visibility exact changes nothing" || pass "  clustered visibility (the default) gives other links"
+expect 0 "bake --link-visibility clustered" "$BIN" builtin:cornell -o "$T/cc.glow" "${SMALL[@]}" --link-visibility clustered
+cmp -s "$T/c1.glow" "$T/cc.glow" && pass "  the default is clustered visibility" || fail "  default differs from --link-visibility clustered"
+expect 2 "bad link visibility" "$BIN" builtin:cornell -o "$T/a.glow" --link-visibility fast; err_has "link-visibility"
+expect 2 "bad cluster angle" "$BIN" builtin:cornell -o "$T/a.glow" --link-cluster-angle 2; err_has "link-cluster-angle"
+expect 2 "bad cluster rays" "$BIN" builtin:cornell -o "$T/a.glow" --link-cluster-rays 0; err_has "link-cluster-rays"
 expect 0 "bake other seed" "$BIN" builtin:cornell -o "$T/c3.glow" "${SMALL[@]}" --seed 7
 if cmp -s "$T/c1.glow" "$T/c3.glow"; then fail "seed has no effect"; else pass "seed changes the bake"; fi
 

@@ -41,6 +41,15 @@ enum { GLOW_PC_STAGE_COUNT = 7 };
 /* "import", "surfels", "hierarchy", "caches", "links", "write", ... */
 GLOW_API const char *glow_pc_stage_name(uint32_t stage);
 
+/* How the linker decides which surfels a cache sees (docs/linker.md, "Clustered visibility"). */
+typedef enum glow_pc_link_visibility {
+    GLOW_PC_LINK_VISIBILITY_DEFAULT = 0, /* clustered */
+    GLOW_PC_LINK_VISIBILITY_CLUSTERED,   /* far, small clusters share a few sampled rays: rays per cache
+                                            about constant in the surfel count (--link-visibility clustered) */
+    GLOW_PC_LINK_VISIBILITY_EXACT,       /* one ray per (cache, surfel): caches x surfels rays (exact) */
+    GLOW_PC_LINK_VISIBILITY_FORCE_U32 = 0x7FFFFFFF
+} glow_pc_link_visibility;
+
 typedef struct glow_pc_settings {
     glow_pc_quality quality;  /* presets below; 0 = moderate */
     uint32_t surfels;         /* n_S, 0 = preset */
@@ -85,6 +94,11 @@ typedef struct glow_pc_settings {
                                    both: warnings and info as they happen (code GLOW_OK), the error
                                    once, when glow_pc_bake returns, with the code it returns (the text
                                    of stats.error); file NULL, line 0. Replaces log. */
+    /* new fields go last, so that code built against older headers keeps its layout */
+    glow_pc_link_visibility link_visibility; /* 0 = clustered (--link-visibility) */
+    float link_cluster_angle;   /* clustered: a cluster looks at most this many radians (bounding radius
+                                   over distance) from the cache; 0 = default (--link-cluster-angle) */
+    uint32_t link_cluster_rays; /* clustered: sampled rays per cluster; 0 = default (--link-cluster-rays) */
 } glow_pc_settings;
 
 typedef struct glow_pc_stats {
