@@ -446,21 +446,14 @@ static void hac_free(hac *h) {
 }
 
 /* Runs the clustering; clusters [0, n) are the surfels, the root is cluster 2n-2. */
+static glow_result hac_cluster(hac *h, uint32_t n, double inv_e2, const glow__rt *rt, float ray_eps, glow__pool *pool);
+
 static glow_result hac_run(hac *h, const glow__surfels *surfels, double inv_e2, const glow__rt *rt, float ray_eps,
                            glow__pool *pool) {
     const uint32_t n = surfels->count;
     const uint32_t total = 2 * n - 1;
-    h->inv_e2 = inv_e2;
-    h->rt = rt;
-    h->ray_eps = ray_eps;
     h->c = calloc(total, sizeof *h->c);
-    /* median splits: leaves hold > HAC_LEAF_MAX/2 clusters when split, so < 2*(n/(LEAF/2)+1) nodes */
-    h->tcap = 2u * (n / (HAC_LEAF_MAX / 2u) + 1u) + 1u;
-    h->t = malloc((size_t)h->tcap * sizeof *h->t);
-    h->ids = malloc((size_t)n * sizeof *h->ids);
-    h->hkey = malloc((size_t)n * sizeof *h->hkey);
-    h->hid = malloc((size_t)n * sizeof *h->hid);
-    if (!h->c || !h->t || !h->ids || !h->hkey || !h->hid) return GLOW_ERROR_OUT_OF_MEMORY;
+    if (!h->c) return GLOW_ERROR_OUT_OF_MEMORY;
     const double a = surfels->area;
     for (uint32_t i = 0; i < n; ++i) {
         cluster *c = &h->c[i];
@@ -470,9 +463,29 @@ static glow_result hac_run(hac *h, const glow__surfels *surfels, double inv_e2, 
             c->nsum[k] = a * s->nrm[k];
         }
         c->area = a;
+        c->emissive = s->emission[0] > 0.0f || s->emission[1] > 0.0f || s->emission[2] > 0.0f;
+    }
+    return hac_cluster(h, n, inv_e2, rt, ray_eps, pool);
+}
+
+/* Clusters h->c[0, n) (allocated for 2n - 1, with pos, nsum, area and emissive set) into one tree:
+ * clusters [0, n) are the leaves, the root is cluster 2n-2. */
+static glow_result hac_cluster(hac *h, uint32_t n, double inv_e2, const glow__rt *rt, float ray_eps, glow__pool *pool) {
+    const uint32_t total = 2 * n - 1;
+    h->inv_e2 = inv_e2;
+    h->rt = rt;
+    h->ray_eps = ray_eps;
+    /* median splits: leaves hold > HAC_LEAF_MAX/2 clusters when split, so < 2*(n/(LEAF/2)+1) nodes */
+    h->tcap = 2u * (n / (HAC_LEAF_MAX / 2u) + 1u) + 1u;
+    h->t = malloc((size_t)h->tcap * sizeof *h->t);
+    h->ids = malloc((size_t)n * sizeof *h->ids);
+    h->hkey = malloc((size_t)n * sizeof *h->hkey);
+    h->hid = malloc((size_t)n * sizeof *h->hid);
+    if (!h->c || !h->t || !h->ids || !h->hkey || !h->hid) return GLOW_ERROR_OUT_OF_MEMORY;
+    for (uint32_t i = 0; i < n; ++i) {
+        cluster *c = &h->c[i];
         c->child[0] = c->child[1] = NONE;
         c->alive = 1;
-        c->emissive = s->emission[0] > 0.0f || s->emission[1] > 0.0f || s->emission[2] > 0.0f;
         set_mean_normal(c);
     }
     h->cluster_count = n;
@@ -530,6 +543,177 @@ static glow_result hac_run(hac *h, const glow__surfels *surfels, double inv_e2, 
     return h->cluster_count == total ? GLOW_OK : GLOW_ERROR_INVALID_OPERATION;
 }
 
+/* ------------------------------------------------------------------ chunked clustering
+ * The clustering above is serial: 23 s of Sponza's 68 s bake at 524,288 surfels (2 threads), as much
+ * as the links once they stopped costing caches x surfels. Above HAC_CHUNK_FROM surfels the surfels
+ * are split in space (median cuts across the longest axis of their centres, ties by index) into
+ * chunks of at most HAC_CHUNK, each chunk is clustered on its own, in parallel, with the same metric
+ * (the scene's extent, the visibility and emitter terms), and the chunks' roots are then clustered
+ * into one tree. No cluster spans two chunks below the top, which a cut (128 links of a tree with
+ * thousands of nodes above the chunks' roots) always opens. Same bytes for any thread count (each
+ * chunk is serial and writes only its own result). Bakes of at most HAC_CHUNK_FROM surfels (every
+ * preset) do not change. */
+#define HAC_CHUNK 65536u
+#define HAC_CHUNK_FROM 131072u
+
+typedef struct chunk_job {
+    const glow__surfels *surfels;
+    uint32_t chunk;        /* at most this many surfels a chunk */
+    const uint32_t *idx;   /* surfel indices, chunk c is idx[start[c], start[c + 1]) */
+    const uint32_t *start;
+    hac *sub;              /* per chunk */
+    glow_result *res;      /* per chunk */
+    double inv_e2;
+    const glow__rt *rt;
+    float ray_eps;
+} chunk_job;
+
+static void chunk_range(void *vctx, uint32_t begin, uint32_t end, uint32_t worker) {
+    (void)worker;
+    chunk_job *j = vctx;
+    for (uint32_t c = begin; c < end; ++c) {
+        const uint32_t m = j->start[c + 1] - j->start[c];
+        hac *h = &j->sub[c];
+        h->c = calloc(2u * m - 1u, sizeof *h->c);
+        if (!h->c) { j->res[c] = GLOW_ERROR_OUT_OF_MEMORY; continue; }
+        const double a = j->surfels->area;
+        for (uint32_t l = 0; l < m; ++l) {
+            const glow__surfel *s = &j->surfels->s[j->idx[j->start[c] + l]];
+            cluster *cl = &h->c[l];
+            for (int k = 0; k < 3; ++k) {
+                cl->pos[k] = s->pos[k];
+                cl->nsum[k] = a * s->nrm[k];
+            }
+            cl->area = a;
+            cl->emissive = s->emission[0] > 0.0f || s->emission[1] > 0.0f || s->emission[2] > 0.0f;
+        }
+        j->res[c] = hac_cluster(h, m, j->inv_e2, j->rt, j->ray_eps, NULL);
+        /* keep the clusters, free the search structures now (the other chunks still run) */
+        free(h->t);
+        free(h->ids);
+        free(h->hkey);
+        free(h->hid);
+        h->t = NULL;
+        h->ids = h->hid = NULL;
+        h->hkey = NULL;
+    }
+}
+
+typedef struct key_index {
+    float x;
+    uint32_t i;
+} key_index;
+static int cmp_key_index(const void *pa, const void *pb) {
+    const key_index *a = pa, *b = pb;
+    return a->x < b->x ? -1 : (a->x > b->x ? 1 : (a->i < b->i ? -1 : (a->i > b->i)));
+}
+
+/* idx[lo, hi) split into chunks of at most HAC_CHUNK; their starts appended to start[*count] */
+static void chunk_split(const glow__surfels *S, uint32_t *idx, key_index *keys, uint32_t lo, uint32_t hi, uint32_t chunk,
+                        uint32_t *start, uint32_t *count) {
+    if (hi - lo <= chunk) {
+        start[(*count)++] = lo;
+        return;
+    }
+    float bl[3] = {INFINITY, INFINITY, INFINITY}, bh[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (uint32_t i = lo; i < hi; ++i)
+        for (int k = 0; k < 3; ++k) {
+            const float x = S->s[idx[i]].pos[k];
+            bl[k] = x < bl[k] ? x : bl[k];
+            bh[k] = x > bh[k] ? x : bh[k];
+        }
+    int axis = 0;
+    for (int k = 1; k < 3; ++k)
+        if (bh[k] - bl[k] > bh[axis] - bl[axis]) axis = k;
+    for (uint32_t i = lo; i < hi; ++i) keys[i] = (key_index){S->s[idx[i]].pos[axis], idx[i]};
+    qsort(keys + lo, hi - lo, sizeof *keys, cmp_key_index);
+    for (uint32_t i = lo; i < hi; ++i) idx[i] = keys[i].i;
+    const uint32_t mid = lo + (hi - lo) / 2;
+    chunk_split(S, idx, keys, lo, mid, chunk, start, count);
+    chunk_split(S, idx, keys, mid, hi, chunk, start, count);
+}
+
+/* The chunked clustering into out->c (2n - 1 clusters: the surfels, then internal clusters children
+ * first, the root last), as hac_run leaves it. */
+static glow_result hac_run_chunked(hac *out, const glow__surfels *surfels, double inv_e2, const glow__rt *rt, float ray_eps,
+                                   uint32_t chunk, glow__pool *pool, glow__log *log) {
+    const uint32_t n = surfels->count, total = 2u * n - 1u;
+    const uint32_t max_chunks = 2u * (n / (chunk / 2u) + 1u);
+    key_index *keys = malloc((size_t)n * sizeof *keys);
+    uint32_t *idx = malloc((size_t)n * sizeof *idx), *start = malloc(((size_t)max_chunks + 1u) * sizeof *start);
+    uint32_t *roots = malloc((size_t)max_chunks * sizeof *roots);
+    hac *sub = calloc(max_chunks, sizeof *sub);
+    glow_result *res = calloc(max_chunks, sizeof *res);
+    hac top;
+    memset(&top, 0, sizeof top);
+    glow_result r = GLOW_OK;
+    uint32_t P = 0;
+    out->c = calloc(total, sizeof *out->c);
+    if (!keys || !idx || !start || !roots || !sub || !res || !out->c) { r = GLOW_ERROR_OUT_OF_MEMORY; goto done; }
+    for (uint32_t i = 0; i < n; ++i) idx[i] = i;
+    chunk_split(surfels, idx, keys, 0, n, chunk, start, &P);
+    free(keys);
+    keys = NULL;
+    start[P] = n;
+    chunk_job job = {.surfels = surfels, .chunk = chunk, .idx = idx, .start = start, .sub = sub, .res = res, .inv_e2 = inv_e2,
+                     .rt = rt, .ray_eps = ray_eps};
+    glow__parallel_for(pool, P, 1, chunk_range, &job);
+    for (uint32_t c = 0; c < P; ++c)
+        if (res[c] != GLOW_OK) { r = res[c]; goto done; }
+    /* the chunks' clusters into the global numbering: leaves are their surfels, internal clusters
+     * chunk by chunk in creation order */
+    uint32_t base = n;
+    for (uint32_t c = 0; c < P; ++c) {
+        const uint32_t m = start[c + 1] - start[c], first = start[c];
+#define CHUNK_GLOBAL(l) ((l) < m ? idx[first + (l)] : base + ((l) - m))
+        for (uint32_t l = 0; l < 2u * m - 1u; ++l) {
+            cluster x = sub[c].c[l];
+            if (l >= m) {
+                x.child[0] = CHUNK_GLOBAL(x.child[0]);
+                x.child[1] = CHUNK_GLOBAL(x.child[1]);
+            }
+            x.nn = NONE;
+            out->c[CHUNK_GLOBAL(l)] = x;
+        }
+        roots[c] = CHUNK_GLOBAL(2u * m - 2u);
+#undef CHUNK_GLOBAL
+        base += m - 1u;
+        free(sub[c].c);
+        sub[c].c = NULL;
+    }
+    /* the roots into one tree */
+    top.c = calloc(2u * P - 1u, sizeof *top.c);
+    if (!top.c) { r = GLOW_ERROR_OUT_OF_MEMORY; goto done; }
+    for (uint32_t c = 0; c < P; ++c) {
+        const cluster *x = &out->c[roots[c]];
+        memcpy(top.c[c].pos, x->pos, sizeof x->pos);
+        memcpy(top.c[c].nsum, x->nsum, sizeof x->nsum);
+        top.c[c].area = x->area;
+        top.c[c].emissive = x->emissive;
+    }
+    r = hac_cluster(&top, P, inv_e2, rt, ray_eps, pool);
+    if (r != GLOW_OK) goto done;
+    for (uint32_t l = P; l < 2u * P - 1u; ++l) {
+        cluster x = top.c[l];
+        for (int k = 0; k < 2; ++k) x.child[k] = x.child[k] < P ? roots[x.child[k]] : base + (x.child[k] - P);
+        x.nn = NONE;
+        out->c[base + (l - P)] = x;
+    }
+    out->cluster_count = total;
+    glow__infof(log, "hierarchy: %u surfels clustered in %u spatial chunks of at most %u (in parallel), then their roots",
+                n, P, chunk);
+done:
+    for (uint32_t c = 0; sub && c < P; ++c) hac_free(&sub[c]);
+    hac_free(&top);
+    free(keys);
+    free(idx);
+    free(start);
+    free(roots);
+    free(sub);
+    free(res);
+    return r;
+}
+
 /* ------------------------------------------------------------------ output */
 glow_result glow__hierarchy_build(glow__surfels *surfels, const float scene_min[3], const float scene_max[3],
                                   glow__pool *pool, glow__log *log, glow__hierarchy *out) {
@@ -538,7 +722,14 @@ glow_result glow__hierarchy_build(glow__surfels *surfels, const float scene_min[
 
 glow_result glow__hierarchy_build_rt(glow__surfels *surfels, const float scene_min[3], const float scene_max[3],
                                      const glow__rt *rt, glow__pool *pool, glow__log *log, glow__hierarchy *out) {
+    return glow__hierarchy_build_chunked(surfels, scene_min, scene_max, rt, HAC_CHUNK_FROM, HAC_CHUNK, pool, log, out);
+}
+
+glow_result glow__hierarchy_build_chunked(glow__surfels *surfels, const float scene_min[3], const float scene_max[3],
+                                          const glow__rt *rt, uint32_t chunk_from, uint32_t chunk, glow__pool *pool,
+                                          glow__log *log, glow__hierarchy *out) {
     if (!out) return GLOW_ERROR_INVALID_ARGUMENT;
+    if (chunk < 2u) chunk = 2u;
     memset(out, 0, sizeof *out);
     if (!surfels || surfels->count == 0 || !surfels->s) {
         glow__errorf(log, "hierarchy: no surfels to cluster");
@@ -591,7 +782,8 @@ glow_result glow__hierarchy_build_rt(glow__surfels *surfels, const float scene_m
     glow_result res = GLOW_OK;
 
     if (n > 1) {
-        res = hac_run(&h, surfels, 1.0 / e2, rt, (float)(1e-4 * sqrt(e2)), pool);
+        res = n > chunk_from && n > chunk ? hac_run_chunked(&h, surfels, 1.0 / e2, rt, (float)(1e-4 * sqrt(e2)), chunk, pool, log)
+                                 : hac_run(&h, surfels, 1.0 / e2, rt, (float)(1e-4 * sqrt(e2)), pool);
         if (res != GLOW_OK) {
             if (res == GLOW_ERROR_OUT_OF_MEMORY) glow__errorf(log, "hierarchy: out of memory clustering %u surfels", n);
             else glow__errorf(log, "hierarchy: clustering of %u surfels stopped early", n);

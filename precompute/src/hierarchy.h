@@ -15,4 +15,11 @@
 glow_result glow__hierarchy_build_rt(glow__surfels *surfels, const float scene_min[3], const float scene_max[3],
                                      const glow__rt *rt, glow__pool *pool, glow__log *log, glow__hierarchy *out);
 
+/* glow__hierarchy_build_rt with the chunking explicit (hierarchy.c, "chunked clustering"): above
+ * chunk_from surfels, spatial chunks of at most `chunk` are clustered in parallel, then their roots.
+ * The pipeline uses 131072 and 65536; UINT32_MAX clusters in one piece (tests). */
+glow_result glow__hierarchy_build_chunked(glow__surfels *surfels, const float scene_min[3], const float scene_max[3],
+                                          const glow__rt *rt, uint32_t chunk_from, uint32_t chunk, glow__pool *pool,
+                                          glow__log *log, glow__hierarchy *out);
+
 #endif /* GLOW_PC_HIERARCHY_H */
