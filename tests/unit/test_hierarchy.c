@@ -483,21 +483,7 @@ static double tree_cost_upto(const glow__hierarchy *h, double inv_e2, uint32_t m
     return cost;
 }
 
-static double tree_cost(const glow__hierarchy *h, double inv_e2) {
-    double cost = 0.0;
-    for (uint32_t i = h->leaf_count; i < h->node_count; ++i) {
-        const glow__node *a = &h->nodes[h->nodes[i].child[0]], *b = &h->nodes[h->nodes[i].child[1]];
-        double xa[3], xb[3], ma[3], mb[3];
-        for (int k = 0; k < 3; ++k) {
-            xa[k] = a->pos[k];
-            xb[k] = b->pos[k];
-            ma[k] = a->nrm[k];
-            mb[k] = b->nrm[k];
-        }
-        cost += pic_metric(xa, ma, a->area, xb, mb, b->area, inv_e2);
-    }
-    return cost;
-}
+static double tree_cost(const glow__hierarchy *h, double inv_e2) { return tree_cost_upto(h, inv_e2, UINT32_MAX); }
 
 /* The locally-ordered clustering merges nearest-neighbour pairs; on small inputs its total merge cost
  * is close to the exact greedy HAC's (the metric is not reducible, so they need not be identical). */
