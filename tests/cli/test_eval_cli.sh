@@ -71,6 +71,10 @@ expect 0 "bench: --still --converge" "$BIN/glow-bench" "$T/cornell.glow" "$SCENE
 python3 -c "import json,sys; b=json.load(open(sys.argv[1]))['budget']; assert b['median_caches_gathered'] == 0, b" "$T/out" \
   && pass "  still light: converged caches cost nothing" || fail "  converge JSON: $(head -c 300 "$T/out")"
 expect 2 "bench: --budget-ms 0" "$BIN/glow-bench" "$T/cornell.glow" "$SCENE" --budget-ms 0
+expect 0 "bench: --walk" "$BIN/glow-bench" "$T/cornell.glow" "$SCENE" --frames 8 --warmup 1 --no-machine --json --budget-caches 64 --walk
+python3 -c "import json,sys; b=json.load(open(sys.argv[1]))['budget']; assert b['walk_near_radius'] > 0 and 0 <= b['walk_near_error_mean'] <= b['walk_near_error_max'], b" "$T/out" \
+  && pass "  the walk reports the error near its focus" || fail "  walk JSON: $(head -c 300 "$T/out")"
+expect 2 "bench: --walk without a budget" "$BIN/glow-bench" "$T/cornell.glow" "$SCENE" --walk
 expect 0 "render: Glow's indirect only" "$BIN/glow-render" "$SCENE" --glow "$T/cornell.glow" --out "$T/gi" "${R[@]}" --bounces 64 --indirect-only
 cmp -s "$T/glow_indirect.exr" "$T/gi_indirect.exr" && pass "  indirect-only gives the same indirect image" || fail "  indirect images differ"
 cmp -s "$T/glow_direct.exr" "$T/ref_direct.exr" && pass "  Glow's direct image is the reference's" || fail "  direct images differ"

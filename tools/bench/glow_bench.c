@@ -43,7 +43,7 @@ typedef struct options {
     /* budgets (glow_update_desc): 0 = none */
     float budget_ms, converge;
     uint32_t budget_caches;
-    int has_focus, still;
+    int has_focus, still, walk;
     float focus[3];
 } options;
 
@@ -79,7 +79,10 @@ static void usage(FILE *f) {
             "  --budget-caches N  at most N caches gathered per update (max_caches)\n"
             "  --converge EPS  skip converged caches (converged_epsilon)\n"
             "  --focus X,Y,Z   caches near this point first (default: the scene's camera, when it has one)\n"
-            "  --still         keep the lights still (default: the first light moves every update)\n");
+            "  --still         keep the lights still (default: the first light moves every update)\n"
+            "  --walk          with a budget: the focus walks across the scene's longest horizontal extent\n"
+            "                  over the run (at the scene camera's height), and the report adds the error of\n"
+            "                  the caches within a tenth of the scene's diagonal of it (the camera's view)\n");
 }
 
 
@@ -164,6 +167,7 @@ static int parse_args(int argc, char **argv, options *o) {
             o->has_focus = 1;
             ++i;
         } else if (!strcmp(a, "--still")) o->still = 1;
+        else if (!strcmp(a, "--walk")) o->walk = 1;
         else if (!strcmp(a, "--no-machine")) o->no_probe_machine = 1;
         else if (!strcmp(a, "--json")) o->json = 1;
         else if (!strcmp(a, "-q")) o->quiet = 1;
@@ -176,6 +180,10 @@ static int parse_args(int argc, char **argv, options *o) {
     }
     if (pos != 2) {
         fprintf(stderr, "glow-bench: need BAKE and SCENE\n");
+        return 0;
+    }
+    if (o->walk && !(o->budget_ms > 0.0f || o->budget_caches || o->converge > 0.0f)) {
+        fprintf(stderr, "glow-bench: --walk measures a budget: give --budget-ms, --budget-caches or --converge\n");
         return 0;
     }
     if (o->gl && (o->budget_ms > 0.0f || o->budget_caches || o->converge > 0.0f)) {
@@ -258,7 +266,9 @@ int main(int argc, char **argv) {
     glow_bake *bake = NULL;
     glow_host *host = NULL;
     glow_system *sys = NULL, *twin = NULL; /* twin: unbudgeted, the reference of a budgeted run */
-    double *v_err = NULL, *v_gath = NULL;
+    double *v_err = NULL, *v_gath = NULL, *v_errn = NULL;
+    glow_cache_info *cinfo = NULL; /* --walk: cache positions */
+    float walk_a[3] = {0, 0, 0}, walk_b[3] = {0, 0, 0};
 #ifdef GLOW_BENCH_HAVE_GL
     glow_glctx *glc = NULL;
     glow_gl_lights *gll = NULL;
@@ -353,9 +363,29 @@ int main(int argc, char **argv) {
     v_move = calloc(n, sizeof(double));
     v_err = calloc(n, sizeof(double));
     v_gath = calloc(n, sizeof(double));
-    if (!v_host || !v_light || !v_pull || !v_cache || !v_out || !v_total || !v_move || !v_err || !v_gath) goto done;
+    v_errn = calloc(n, sizeof(double));
+    if (!v_host || !v_light || !v_pull || !v_cache || !v_out || !v_total || !v_move || !v_err || !v_gath || !v_errn) goto done;
+    const bool walk = o.walk && twin;
+    const float near_r = 0.1f * diag;
+    if (walk) { /* from 5 % in at one end of the longest horizontal extent to 5 % in at the other */
+        cinfo = malloc(((size_t)info.cache_count + 1) * sizeof *cinfo);
+        if (!cinfo || (r = glow_bake_get_caches(bake, 0, info.cache_count, cinfo)) != GLOW_OK) goto done;
+        const int ax = info.bounds_max[0] - info.bounds_min[0] >= info.bounds_max[2] - info.bounds_min[2] ? 0 : 2;
+        for (int k = 0; k < 3; ++k) walk_a[k] = walk_b[k] = 0.5f * (info.bounds_min[k] + info.bounds_max[k]);
+        if (scene.has_camera) walk_a[1] = walk_b[1] = scene.camera.position[1];
+        const float ext = info.bounds_max[ax] - info.bounds_min[ax];
+        walk_a[ax] = info.bounds_min[ax] + 0.05f * ext;
+        walk_b[ax] = info.bounds_max[ax] - 0.05f * ext;
+        o.has_focus = 1;
+        ud.focus = o.focus;
+        ud.focus_count = 1;
+    }
     glow_update_stats st = {0};
     for (uint32_t f = 0; f < total; ++f) {
+        if (walk) {
+            const float u = total > 1 ? (float)f / (float)(total - 1) : 0.0f;
+            for (int k = 0; k < 3; ++k) o.focus[k] = walk_a[k] + u * (walk_b[k] - walk_a[k]);
+        }
         double t0 = now_ms();
         /* move the first light (or pulse the emission) */
         if (o.still) {
@@ -408,13 +438,22 @@ int main(int argc, char **argv) {
             v_gath[i] = st.caches_gathered;
             if (twin) { /* the budget's cost this frame: the caches' luma (DC) against the unbudgeted twin */
                 const glow_cache_outputs *a = glow_system_outputs(sys), *b = glow_system_outputs(twin);
-                double num = 0.0, den = 0.0;
+                double num = 0.0, den = 0.0, numn = 0.0, denn = 0.0;
                 for (uint32_t c = 0; c < a->cache_count; ++c) {
                     const double x = a->cache_sh[(size_t)c * a->coeff_count], y = b->cache_sh[(size_t)c * b->coeff_count];
                     num += fabs(x - y);
                     den += fabs(y);
+                    if (walk) {
+                        float d[3];
+                        for (int k = 0; k < 3; ++k) d[k] = cinfo[c].position[k] - o.focus[k];
+                        if (d[0] * d[0] + d[1] * d[1] + d[2] * d[2] <= near_r * near_r) {
+                            numn += fabs(x - y);
+                            denn += fabs(y);
+                        }
+                    }
                 }
                 v_err[i] = den > 0.0 ? num / den : 0.0;
+                v_errn[i] = denn > 0.0 ? numn / denn : 0.0;
             }
         }
     }
@@ -427,6 +466,14 @@ int main(int argc, char **argv) {
         if (v_err[i] > e_max) e_max = v_err[i];
     }
     const double e_med = glow_cli_median(v_err, n), m_gath = glow_cli_median(v_gath, n);
+    double en_mean = 0.0, en_max = 0.0, en_last = 0.0; /* --walk: near the focus; the last quarter of the walk */
+    const uint32_t q0 = n - n / 4;
+    for (uint32_t i = 0; i < n; ++i) {
+        en_mean += v_errn[i] / n;
+        if (v_errn[i] > en_max) en_max = v_errn[i];
+        if (i >= q0 && n / 4) en_last += v_errn[i] / (n / 4);
+    }
+    const double en_med = glow_cli_median(v_errn, n);
     const uint64_t links = (uint64_t)(budget ? m_gath : (double)info.cache_count) * info.links_per_cache * o.iterations;
     const double link_bytes = (double)links * 8.0;
     const double gbs = links ? link_bytes / (m_cache * 1e-3) * 1e-9 : 0.0; /* links 0: a converged budget */
@@ -543,6 +590,13 @@ int main(int argc, char **argv) {
             glow_json_num(jb, "luma_error_mean", e_mean);
             glow_json_num(jb, "luma_error_median", e_med);
             glow_json_num(jb, "luma_error_max", e_max);
+            if (walk) {
+                glow_json_num(jb, "walk_near_radius", near_r);
+                glow_json_num(jb, "walk_near_error_mean", en_mean);
+                glow_json_num(jb, "walk_near_error_median", en_med);
+                glow_json_num(jb, "walk_near_error_max", en_max);
+                glow_json_num(jb, "walk_near_error_last_quarter", en_last);
+            }
         }
         if (glow_json_print(jo) != 0) goto done;
     } else {
@@ -568,6 +622,11 @@ int main(int argc, char **argv) {
             printf("budget (%.3g ms, %u caches, converge %.3g): median %.0f of %u caches gathered per update; their luma "
                    "against an unbudgeted twin: error mean %.4f, median %.4f, max %.4f (relative L1)\n",
                    (double)o.budget_ms, o.budget_caches, (double)o.converge, m_gath, info.cache_count, e_mean, e_med, e_max);
+        if (walk)
+            printf("walk: the focus crosses the scene (%.3g, %.3g, %.3g) -> (%.3g, %.3g, %.3g); caches within %.3g of it: "
+                   "error mean %.4f, median %.4f, max %.4f, last quarter of the walk %.4f\n",
+                   walk_a[0], walk_a[1], walk_a[2], walk_b[0], walk_b[1], walk_b[2], (double)near_r, en_mean, en_med, en_max,
+                   en_last);
         printf("cache lighting: %.2f GB/s of links (8 B each), %.1f GFLOP/s (%.0f FLOPs per link)\n", gbs, gflops, fpl);
         if (triad > 0)
             printf("machine (%u threads): STREAM triad %.2f GB/s, fp32 FMA peak %.1f GFLOP/s [%s]\n"
@@ -593,6 +652,8 @@ done:
     glow_system_destroy(sys);
     free(v_err);
     free(v_gath);
+    free(v_errn);
+    free(cinfo);
     glow_host_destroy(host);
     glow_bake_destroy(bake);
     glow_context_destroy(ctx);
