@@ -74,7 +74,7 @@ typedef struct trav_node {
     uint32_t id;           /* node index; TRAV_EMISSIVE: holds an emissive leaf */
     uint32_t first, end;   /* leaf range */
     uint32_t skip;         /* the preorder index after this subtree */
-    uint32_t pad;
+    uint32_t child0_low;   /* 1: the node's child[0] is its first child here (the lower leaves) */
 } trav_node;
 #define TRAV_EMISSIVE 0x80000000u
 
@@ -619,34 +619,37 @@ static uint32_t clustered_runs(link_job *job, const glow__cache *cache, uint32_t
             if (m >= 2u * K && rad <= tau * dist && !(tn->id & TRAV_EMISSIVE) && (whole || m <= CLUSTER_SUM_LEAVES)) {
                 /* the runs: K subtrees of v (split the one with the most leaves until there are K),
                  * in leaf order */
+                /* sub[] holds preorder indices (trav_node): a node's children are the next entry and
+                 * the one after its subtree, and preorder is leaf order, so no node array is read */
+                const trav_node *T = job->trav;
                 uint32_t sub[64], ns = 1;
-                sub[0] = v;
+                sub[0] = t;
                 while (ns < K) {
                     uint32_t best = UINT32_MAX, bm = 1;
                     for (uint32_t q = 0; q < ns; ++q) {
-                        const uint32_t mq = job->leaf_end[sub[q]] - job->leaf_first[sub[q]];
+                        const uint32_t mq = T[sub[q]].end - T[sub[q]].first;
                         if (mq > bm) { bm = mq; best = q; }
                     }
                     if (best == UINT32_MAX) break;
-                    const glow__node *nb = &h->nodes[sub[best]];
-                    sub[best] = nb->child[0];
-                    sub[ns++] = nb->child[1];
+                    const uint32_t lo = sub[best] + 1, hi = T[lo].skip; /* lower and higher leaves */
+                    const bool c0_low = T[sub[best]].child0_low != 0; /* keep the node's child order */
+                    sub[best] = c0_low ? lo : hi;
+                    sub[ns++] = c0_low ? hi : lo;
                 }
                 for (uint32_t q = 1; q < ns; ++q)
-                    for (uint32_t y = q; y > 0 && job->leaf_first[sub[y - 1]] > job->leaf_first[sub[y]]; --y) {
+                    for (uint32_t y = q; y > 0 && sub[y - 1] > sub[y]; --y) {
                         const uint32_t x = sub[y]; sub[y] = sub[y - 1]; sub[y - 1] = x;
                     }
                 for (uint32_t k = 0; k < ns; ++k) {
-                    const uint32_t sa = job->leaf_first[sub[k]], sb = job->leaf_end[sub[k]];
+                    const uint32_t sa = T[sub[k]].first, sb = T[sub[k]].end;
                     uint32_t pick = sa + (sb - sa) / 2;
                     float w = 0.0f, dsum[3] = {0.0f, 0.0f, 0.0f};
                     if (whole) { /* the subtree's aggregate from its own centre */
-                        const float *sp_ = sub[k] < h->leaf_count ? S->s[sub[k]].pos : h->nodes[sub[k]].pos;
                         float dk[3];
-                        glow__sub(sp_, cache->pos, dk);
+                        glow__sub(T[sub[k]].pos, cache->pos, dk);
                         const float lk = sqrtf(glow__dot(dk, dk));
                         for (int q = 0; q < 3; ++q) dsum[q] = dk[q] / lk;
-                        w = S->area * -glow__dot(&job->nsum[3 * sub[k]], dsum) / (lk * lk);
+                        w = S->area * -glow__dot(T[sub[k]].nsum, dsum) / (lk * lk);
                         if (!(w > 0.0f)) continue;
                     } else {
                         float best = INFINITY;
@@ -1182,10 +1185,11 @@ glow_result glow__links_build(const glow__scene *scene, const glow__rt *rt, cons
             tn->first = job.leaf_first[v];
             tn->end = job.leaf_end[v];
             tn->skip = t + 2u * (tn->end - tn->first) - 1u; /* a full binary tree: 2 m - 1 nodes */
-            tn->pad = 0;
+            tn->child0_low = 0;
             t++;
             if (leaf) continue;
             uint32_t c0 = h->nodes[v].child[0], c1 = h->nodes[v].child[1];
+            tn->child0_low = job.leaf_first[c0] < job.leaf_first[c1];
             if (job.leaf_first[c0] < job.leaf_first[c1]) { const uint32_t x = c0; c0 = c1; c1 = x; }
             stack[sp++] = c0; /* the higher leaves, popped after the lower ones' subtree */
             stack[sp++] = c1;
