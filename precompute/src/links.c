@@ -100,7 +100,6 @@ typedef struct link_job {
     float **prio;                    /* [workers][node_count]: split priority of the nodes pushed (cut_priority) */
     uint32_t **heap;                 /* [workers][node_count] */
     struct cl_runs *runs;            /* [workers]: clustered visibility's runs (cl_runs) */
-    uint32_t **stack;                /* [workers][level_count + 4]: the clustering's descent */
     float *radius;                   /* per node: bounding sphere radius about its centre (leaves: a surfel's) */
     float *cone;                     /* per node: half-angle (rad) of a cone about nrm holding its leaves' normals */
     float *nsum;                     /* per node [3]: the sum of its leaves' normals */
@@ -1066,7 +1065,6 @@ glow_result glow__links_build(const glow__scene *scene, const glow__rt *rt, cons
     job.prio = calloc(job.workers, sizeof *job.prio);
     job.heap = calloc(job.workers, sizeof *job.heap);
     job.runs = calloc(job.workers, sizeof *job.runs);
-    job.stack = calloc(job.workers, sizeof *job.stack);
     job.radius = malloc((size_t)h->node_count * sizeof(float));
     job.cone = malloc((size_t)h->node_count * sizeof(float));
     job.nsum = malloc((size_t)h->node_count * 3 * sizeof(float));
@@ -1078,7 +1076,7 @@ glow_result glow__links_build(const glow__scene *scene, const glow__rt *rt, cons
     job.leaf_first = malloc((size_t)h->node_count * sizeof(uint32_t));
     job.leaf_end = malloc((size_t)h->node_count * sizeof(uint32_t));
     bool ok = out->links && (!settings->full_sh || out->sh) && (!settings->audit_radiance || out->audit) && job.omega && job.dirsum && job.kappa && job.prio && job.heap &&
-              job.runs && job.stack && job.radius && job.cone && job.nsum && job.emissive &&
+              job.runs && job.radius && job.cone && job.nsum && job.emissive &&
               (settings->cluster_tau <= 0.0f || job.trav) &&
               job.visible_total && job.norm_scale && job.norm_clamped && job.leaf_first && job.leaf_end;
     for (uint32_t w = 0; ok && w < job.workers; ++w) {
@@ -1088,8 +1086,7 @@ glow_result glow__links_build(const glow__scene *scene, const glow__rt *rt, cons
         job.prio[w] = malloc((size_t)h->node_count * sizeof(float));
         /* heap (nl + 2) + leaf cut (nl) + sorted cut (<= nl + 2) */
         job.heap[w] = malloc(((size_t)3u * nl + 8u) * sizeof(uint32_t));
-        job.stack[w] = malloc(((size_t)h->level_count + 4u) * sizeof(uint32_t));
-        ok = job.omega[w] && job.dirsum[w] && job.kappa[w] && job.prio[w] && job.heap[w] && job.stack[w];
+        ok = job.omega[w] && job.dirsum[w] && job.kappa[w] && job.prio[w] && job.heap[w];
         if (ok && settings->cluster_tau > 0.0f) {
             cl_runs *r = &job.runs[w];
             const size_t nr = (size_t)h->leaf_count + 1;
@@ -1170,7 +1167,12 @@ glow_result glow__links_build(const glow__scene *scene, const glow__rt *rt, cons
             }
     }
     if (settings->cluster_tau > 0.0f) { /* the preorder copy (trav_node) */
-        uint32_t *stack = job.stack[0], sp = 0, t = 0;
+        uint32_t *stack = malloc(((size_t)h->level_count + 4u) * sizeof *stack), sp = 0, t = 0;
+        if (!stack) {
+            glow__errorf(log, "links: out of memory for the hierarchy's preorder");
+            res = GLOW_ERROR_OUT_OF_MEMORY;
+            goto done;
+        }
         stack[sp++] = h->node_count - 1;
         while (sp) {
             const uint32_t v = stack[--sp];
@@ -1194,6 +1196,7 @@ glow_result glow__links_build(const glow__scene *scene, const glow__rt *rt, cons
             stack[sp++] = c0; /* the higher leaves, popped after the lower ones' subtree */
             stack[sp++] = c1;
         }
+        free(stack);
     }
     {
         float ext[3];
@@ -1267,7 +1270,6 @@ done:
         if (job.kappa) free(job.kappa[w]);
         if (job.prio) free(job.prio[w]);
         if (job.heap) free(job.heap[w]);
-        if (job.stack) free(job.stack[w]);
         if (job.runs) {
             cl_runs *r = &job.runs[w];
             free(r->a); free(r->b); free(r->w); free(r->k); free(r->d);
@@ -1275,7 +1277,6 @@ done:
         }
     }
     free(job.runs);
-    free(job.stack);
     free(job.radius);
     free(job.cone);
     free(job.nsum);
