@@ -677,6 +677,67 @@ static glow_result import_meshes(import_ctx *c) {
     return GLOW_OK;
 }
 
+/* Assimp 5.2.4 (Debian 12) dereferences NULL in its glTF 2 importer when an image's media type
+ * (a data URI's, or "mimeType") is not empty and has no '/' ("data:imagepng;base64,..."): a one-bit
+ * change the fuzz smoke found. Such a media type is malformed (RFC 2046 type/subtype), so glTF text
+ * (.gltf, or a .glb's JSON chunk) is scanned for "uri" and "mimeType" string values first and
+ * refused with a message before assimp reads it. A plain scan, not a JSON parse: the library does
+ * not link cJSON, and only these two keys' string values matter. Returns false when one is bad. */
+static bool gltf_media_types_ok(const char *path, const unsigned char *buf, size_t n, glow__log *log) {
+    const char *keys[2] = {"\"uri\"", "\"mimeType\""};
+    for (int k = 0; k < 2; ++k) {
+        const size_t kl = strlen(keys[k]);
+        for (size_t i = 0; i + kl <= n; ++i) {
+            if (memcmp(buf + i, keys[k], kl) != 0) continue;
+            size_t j = i + kl;
+            while (j < n && (buf[j] == ' ' || buf[j] == '\t' || buf[j] == '\r' || buf[j] == '\n')) ++j;
+            if (j >= n || buf[j] != ':') continue;
+            ++j;
+            while (j < n && (buf[j] == ' ' || buf[j] == '\t' || buf[j] == '\r' || buf[j] == '\n')) ++j;
+            if (j >= n || buf[j] != '"') continue;
+            size_t a = ++j;
+            if (k == 0) {
+                if (n - a < 5 || memcmp(buf + a, "data:", 5) != 0) continue;
+                a += 5;
+            }
+            size_t b = a;
+            bool slash = false;
+            while (b < n && buf[b] != '"' && buf[b] != ';' && buf[b] != ',') slash |= buf[b++] == '/';
+            if (b > a && !slash) {
+                const int len = (int)(b - a < 40 ? b - a : 40);
+                glow__errorf(log, "%s: glTF %s media type '%.*s' has no '/': malformed (type/subtype)", path,
+                             k == 0 ? "data URI" : "mimeType", len, (const char *)(buf + a));
+                return false;
+            }
+        }
+    }
+    return true;
+}
+
+/* The glTF text of path (all of a .gltf, the JSON chunk of a .glb), checked by gltf_media_types_ok. */
+static glow_result gltf_precheck(const char *path, FILE *f, int first, glow__log *log) {
+    if (first != '{' && first != 'g') return GLOW_OK;
+    if (fseek(f, 0, SEEK_END) != 0) return GLOW_OK;
+    const long size = ftell(f);
+    if (size <= 0 || fseek(f, 0, SEEK_SET) != 0) return GLOW_OK;
+    unsigned char *buf = malloc((size_t)size);
+    if (!buf) {
+        glow__errorf(log, "%s: out of memory", path);
+        return GLOW_ERROR_OUT_OF_MEMORY;
+    }
+    const size_t n = fread(buf, 1, (size_t)size, f);
+    bool ok = true;
+    if (n >= 20 && !memcmp(buf, "glTF", 4)) {
+        const uint32_t len = (uint32_t)buf[12] | (uint32_t)buf[13] << 8 | (uint32_t)buf[14] << 16 | (uint32_t)buf[15] << 24;
+        const size_t json = len < n - 20 ? len : n - 20;
+        ok = gltf_media_types_ok(path, buf + 20, json, log);
+    } else if (buf[0] == '{') {
+        ok = gltf_media_types_ok(path, buf, n, log);
+    }
+    free(buf);
+    return ok ? GLOW_OK : GLOW_ERROR_UNSUPPORTED;
+}
+
 static glow_result load_file(const char *path, glow__log *log, glow__scene *out) {
     struct stat st;
     if (stat(path, &st) != 0) {
@@ -699,7 +760,9 @@ static glow_result load_file(const char *path, glow__log *log, glow__scene *out)
     }
     int byte = fgetc(f);
     bool read_error = ferror(f) != 0;
+    const glow_result pre = read_error || byte == EOF ? GLOW_OK : gltf_precheck(path, f, byte, log);
     fclose(f);
+    if (pre != GLOW_OK) return pre;
     if (read_error) {
         glow__errorf(log, "%s: cannot read", path);
         return GLOW_ERROR_IO;

@@ -75,6 +75,11 @@ expect 0 "bake --link-visibility exact" "$BIN" builtin:cornell -o "$T/cx.glow" "
 cmp -s "$T/c1.glow" "$T/cx.glow" && fail "  --link-visibility exact changes nothing" || pass "  clustered visibility (the default) gives other links"
 expect 0 "bake --link-visibility clustered" "$BIN" builtin:cornell -o "$T/cc.glow" "${SMALL[@]}" --link-visibility clustered
 cmp -s "$T/c1.glow" "$T/cc.glow" && pass "  the default is clustered visibility" || fail "  default differs from --link-visibility clustered"
+# a glTF image whose data-URI media type has no '/' crashed assimp 5.2.4 (the fuzz smoke found it):
+# refused with a message before assimp reads it
+sed 's#data:image/png;base64#data:imageopng;base64#' "$(dirname "$0")/../data/scenes/quad_uv1.gltf" > "$T/badmime.gltf"
+expect 1 "glTF with a malformed image media type" "$BIN" "$T/badmime.gltf" -o "$T/badmime.glow" "${SMALL[@]}"; err_has "media type"
+no_file "$T/badmime.glow"
 expect 2 "bad link visibility" "$BIN" builtin:cornell -o "$T/a.glow" --link-visibility fast; err_has "link-visibility"
 expect 2 "bad cluster angle" "$BIN" builtin:cornell -o "$T/a.glow" --link-cluster-angle 2; err_has "link-cluster-angle"
 expect 2 "bad cluster rays" "$BIN" builtin:cornell -o "$T/a.glow" --link-cluster-rays 0; err_has "link-cluster-rays"
