@@ -29,10 +29,11 @@
 extern const char glow__shading_glsl[];
 extern const struct { const char *name, *source; } glow__kernels[];
 
-enum { K_DIRECT, K_FLUX, K_PULL, K_PULL_TAIL, K_CACHE, K_OUTPUT, K_COUNT };
+enum { K_DIRECT, K_FLUX, K_PULL, K_PULL_TAIL, K_CACHE, K_OUTPUT, K_DETAIL, K_COUNT };
 static const char *const kernel_names[K_COUNT] = {"surfel_direct", "surfel_flux", "pull", "pull_tail", "cache_light",
-                                                  "outputs"};
-enum { B_GEOM, B_MAT, B_DIRECT, B_FBW, B_CACHE, B_NODES, B_FLUX, B_LINKS, B_PAIRS, B_STATUS, B_PARAMS, B_LEVELS, B_SUBSETS, B_COUNT };
+                                                  "outputs", "detail"};
+enum { B_GEOM, B_MAT, B_DIRECT, B_FBW, B_CACHE, B_NODES, B_FLUX, B_LINKS, B_PAIRS, B_STATUS, B_PARAMS, B_LEVELS, B_SUBSETS,
+       B_DET_TEXELS, B_DET_LINKS, B_COUNT };
 enum { T_BEGIN, T_DIRECT, T_FLUX, T_PULL, T_CACHE, T_OUTPUT, T_COUNT };
 
 struct glow_gl_system {
@@ -47,7 +48,7 @@ struct glow_gl_system {
     GLint level_loc, tail_loc;
     uint32_t tail_level; /* levels [tail_level, levels) run in one pull_tail dispatch */
     GLuint buf[B_COUNT];
-    GLuint grid_tex, grid_mask_tex, lm_tex, lm_valid_tex;
+    GLuint grid_tex, grid_mask_tex, lm_tex, lm_valid_tex, det_tex;
     int own_grid, own_lm;
     GLuint queries[T_COUNT];
     double cpu_ts[T_COUNT]; /* GLOW_GL_FLAG_FINISH_TIMERS */
@@ -199,8 +200,9 @@ static void free_system(glow_gl_system *s) {
             if (s->prog[k]) gl->DeleteProgram(s->prog[k]);
     if (gl->DeleteBuffers) gl->DeleteBuffers(B_COUNT, s->buf);
     if (gl->DeleteTextures) {
-        GLuint tex[4] = {s->own_grid ? s->grid_tex : 0u, s->grid_mask_tex, s->own_lm ? s->lm_tex : 0u, s->lm_valid_tex};
-        gl->DeleteTextures(4, tex);
+        GLuint tex[5] = {s->own_grid ? s->grid_tex : 0u, s->grid_mask_tex, s->own_lm ? s->lm_tex : 0u, s->lm_valid_tex,
+                         s->det_tex};
+        gl->DeleteTextures(5, tex);
     }
     if (gl->DeleteQueries && s->queries[0]) gl->DeleteQueries(T_COUNT, s->queries);
     free(s->mat_staging);
@@ -309,7 +311,7 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
     /* programs */
     glow_result err = GLOW_OK;
     for (int k = 0; k < K_COUNT; ++k) {
-        if (k == K_DIRECT && !desc->hook_glsl) continue;
+        if ((k == K_DIRECT && !desc->hook_glsl) || (k == K_DETAIL && !t->detail_texels)) continue;
         s->prog[k] = build_program(s, k, desc->hook_glsl, &err);
         if (!s->prog[k]) {
             free_system(s);
@@ -371,6 +373,27 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
     s->buf[B_LEVELS] = make_buffer(s, ((size_t)s->levels + 1u) * 4u, t->level_starts, 0);
     if (t->link_subsets) s->buf[B_SUBSETS] = make_buffer(s, links_bytes / 4u, t->link_subsets, 0); /* 2 of 8 bytes per link */
     free(geom), free(nodes), free(pairs);
+    if (t->detail_texels) { /* the lightmap detail's tables (glow_shared.h GLOW_BINDING_DETAIL_*) */
+        uint32_t *dt = malloc(((size_t)t->detail_texels + 1u) * 2u * sizeof(uint32_t));
+        uint32_t *dl = malloc(((size_t)t->detail_links + 1u) * 2u * sizeof(uint32_t));
+        if (!dt || !dl) {
+            free(dt), free(dl);
+            free_system(s);
+            return GLOW_ERROR_OUT_OF_MEMORY;
+        }
+        for (uint32_t i = 0; i <= t->detail_texels; ++i) {
+            dt[2 * (size_t)i] = i < t->detail_texels ? t->detail_texel[i] : 0u;
+            dt[2 * (size_t)i + 1] = t->detail_first[i];
+        }
+        for (uint32_t k = 0; k < t->detail_links; ++k) {
+            dl[2 * (size_t)k] = t->detail_surfel[k];
+            memcpy(&dl[2 * (size_t)k + 1], &t->detail_weight[k], 4);
+        }
+        dl[2 * (size_t)t->detail_links] = dl[2 * (size_t)t->detail_links + 1] = 0u; /* no empty buffer */
+        s->buf[B_DET_TEXELS] = make_buffer(s, ((size_t)t->detail_texels + 1u) * 8u, dt, 0);
+        s->buf[B_DET_LINKS] = make_buffer(s, ((size_t)t->detail_links + 1u) * 8u, dl, 0);
+        free(dt), free(dl);
+    }
     const float zero = 0.0f;
     gl->ClearNamedBufferData(s->buf[B_DIRECT], GL_R32F, GL_RED, GL_FLOAT, &zero);
     gl->ClearNamedBufferData(s->buf[B_CACHE], GL_R32F, GL_RED, GL_FLOAT, &zero);
@@ -477,6 +500,16 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
         s->out.lightmap_texture = s->lm_tex;
         s->out.lightmap_valid_texture = s->lm_valid_tex;
     }
+    if (t->detail_texels) { /* RGBA32F, (0, 0, 0, 0) where no detail texel covers a surface */
+        gl->CreateTextures(GL_TEXTURE_2D, 1, &s->det_tex);
+        gl->TextureStorage2D(s->det_tex, 1, GL_RGBA32F, (GLsizei)t->detail_width, (GLsizei)t->detail_height);
+        gl->ClearTexImage(s->det_tex, 0, GL_RGBA, GL_FLOAT, zero4);
+        s->gpu_bytes += (size_t)t->detail_width * t->detail_height * 16u;
+        nearest(s, s->det_tex);
+        s->out.lightmap_detail_texture = s->det_tex;
+        s->out.detail_width = t->detail_width;
+        s->out.detail_height = t->detail_height;
+    }
     if (!(s->flags & (GLOW_GL_FLAG_NO_TIMERS | GLOW_GL_FLAG_FINISH_TIMERS))) gl->CreateQueries(GL_TIMESTAMP, T_COUNT, s->queries);
     GLenum e = gl->GetError();
     if (e != GL_NO_ERROR) {
@@ -498,6 +531,8 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
                                  .grid_dz = co->grid_dims[2],
                                  .lightmap_width = co->lightmap_width,
                                  .lightmap_height = co->lightmap_height,
+                                 .detail_texels = t->detail_texels,
+                                 .detail_width = t->detail_width,
                                  .surfel_area = t->surfel_area};
     *out = s;
     return GLOW_OK;
@@ -654,6 +689,16 @@ glow_result glow_gl_system_update(glow_gl_system *s, const glow_update_desc *des
         dispatch(s, (t->grid_used + t->lightmap_used + GLOW_OUTPUT_GROUP - 1u) / GLOW_OUTPUT_GROUP);
         gl->MemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT |
                           GL_TEXTURE_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+    }
+    if (s->prog[K_DETAIL]) { /* the lightmap detail, from the leaves' flux */
+        gl->UseProgram(s->prog[K_DETAIL]);
+        bind(s, GLOW_BINDING_DETAIL_TEXELS, B_DET_TEXELS);
+        bind(s, GLOW_BINDING_DETAIL_LINKS, B_DET_LINKS);
+        bind(s, GLOW_BINDING_FLUX, B_FLUX);
+        gl->BindImageTexture(GLOW_IMAGE_DETAIL, s->det_tex, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+        dispatch(s, (t->detail_texels + GLOW_DETAIL_GROUP - 1u) / GLOW_DETAIL_GROUP);
+        gl->MemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT |
+                          GL_TEXTURE_UPDATE_BARRIER_BIT);
     }
     stamp(s, T_OUTPUT);
     gl->UseProgram(0);

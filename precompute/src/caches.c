@@ -563,6 +563,9 @@ void glow__caches_free(glow__caches *c) {
     free(c->lm_map);
     free(c->lm_uv);
     free(c->surfel_feedback);
+    free(c->detail_texel);
+    free(c->detail_pos);
+    free(c->detail_nrm);
     memset(c, 0, sizeof *c);
 }
 
@@ -732,6 +735,94 @@ static glow_result build_lightmap_layout(const glow__scene *scene, const glow__r
     return GLOW_OK;
 }
 
+/* Lightmap detail texels (links.c "Lightmap detail"): the atlas rasterised again at factor x its
+ * resolution, each covered texel's point placed as a lightmap cache's (the centroid of its
+ * footprint, off the edges, lifted) and kept when it sees no back faces. They are no caches: the
+ * linker gives each a few links to the surfels near it. Returns GLOW_OK with no detail texels when
+ * the fine grid would exceed MAX_DETAIL_TEXELS (warned). */
+#define MAX_DETAIL_TEXELS (32u << 20)
+static glow_result build_detail(const glow__scene *scene, const glow__rt *rt, glow__pool *pool, glow__log *log,
+                                uint32_t factor, float offset, glow__caches *out) {
+    const uint64_t fw = (uint64_t)out->lm_width * factor, fh = (uint64_t)out->lm_height * factor;
+    if (fw * fh > MAX_DETAIL_TEXELS) {
+        glow__warnf(log, "%s: caches: a lightmap detail of %llux%llu texels is too large; no detail", scene->source,
+                    (unsigned long long)fw, (unsigned long long)fh);
+        return GLOW_OK;
+    }
+    const size_t n = (size_t)(fw * fh);
+    const uint32_t tris = scene->tri_count;
+    uint32_t *owner = malloc(n * sizeof *owner), *cand = NULL;
+    float *dist = malloc(n * sizeof *dist);
+    double(*ref)[2] = malloc(n * sizeof *ref), (*foot)[3] = malloc(n * sizeof *foot);
+    lm_job j = {0};
+    glow_result r = GLOW_OK;
+    if (!owner || !dist || !ref || !foot) goto oom;
+    rasterise(tris, (const float(*)[2])out->lm_uv, (uint32_t)fw, (uint32_t)fh, NULL, owner, dist, foot);
+    for (size_t i = 0; i < n; ++i) {
+        if (foot[i][0] > 0.0) {
+            ref[i][0] = foot[i][1] / foot[i][0];
+            ref[i][1] = foot[i][2] / foot[i][0];
+        } else {
+            ref[i][0] = (double)(i % fw) + 0.5;
+            ref[i][1] = (double)(i / fw) + 0.5;
+        }
+    }
+    const uint32_t covered = rasterise(tris, (const float(*)[2])out->lm_uv, (uint32_t)fw, (uint32_t)fh,
+                                       (const double(*)[2])ref, owner, dist, NULL);
+    cand = malloc(((size_t)covered + 1) * sizeof *cand);
+    j.pos = malloc(((size_t)covered + 1) * sizeof *j.pos);
+    j.nrm = malloc(((size_t)covered + 1) * sizeof *j.nrm);
+    j.valid = malloc((size_t)covered + 1);
+    if (!cand || !j.pos || !j.nrm || !j.valid) goto oom;
+    uint32_t m = 0;
+    for (size_t i = 0; i < n; ++i)
+        if (owner[i] != NONE) cand[m++] = (uint32_t)i;
+    j.scene = scene;
+    j.rt = rt;
+    j.uv = (const float(*)[2])out->lm_uv;
+    j.w = (uint32_t)fw;
+    j.h = (uint32_t)fh;
+    j.texel = cand;
+    j.owner = owner;
+    j.ref = (const double(*)[2])ref;
+    j.offset = offset;
+    fibonacci_hemisphere(LM_RAYS, j.dirs);
+    glow__parallel_for(pool, m, 64, lm_range, &j);
+    uint32_t k = 0;
+    for (uint32_t i = 0; i < m; ++i) k += j.valid[i];
+    out->detail_texel = malloc(((size_t)k + 1) * sizeof *out->detail_texel);
+    out->detail_pos = malloc(((size_t)k + 1) * sizeof *out->detail_pos);
+    out->detail_nrm = malloc(((size_t)k + 1) * sizeof *out->detail_nrm);
+    if (!out->detail_texel || !out->detail_pos || !out->detail_nrm) goto oom;
+    for (uint32_t i = 0, q = 0; i < m; ++i) {
+        if (!j.valid[i]) continue;
+        out->detail_texel[q] = cand[i];
+        memcpy(out->detail_pos[q], j.pos[i], sizeof out->detail_pos[q]);
+        memcpy(out->detail_nrm[q], j.nrm[i], sizeof out->detail_nrm[q]);
+        q++;
+    }
+    out->detail_factor = factor;
+    out->detail_width = (uint32_t)fw;
+    out->detail_height = (uint32_t)fh;
+    out->detail_count = k;
+    glow__infof(log, "%s: caches: lightmap detail %ux%u (%u per texel side): %u texels cover a surface, %u invalid",
+                scene->source, out->detail_width, out->detail_height, factor, k, m - k);
+    goto done;
+oom:
+    glow__errorf(log, "%s: caches: out of memory for the lightmap detail", scene->source);
+    r = GLOW_ERROR_OUT_OF_MEMORY;
+done:
+    free(owner);
+    free(dist);
+    free(ref);
+    free(foot);
+    free(cand);
+    free(j.pos);
+    free(j.nrm);
+    free(j.valid);
+    return r;
+}
+
 glow_result glow__caches_build(const glow__scene *scene, const glow__rt *rt, const glow__surfels *surfels,
                                const glow__cache_settings *settings, glow__pool *pool, glow__log *log,
                                glow__caches *out) {
@@ -844,6 +935,10 @@ glow_result glow__caches_build(const glow__scene *scene, const glow__rt *rt, con
         out->shared_texels = st.pack.shared;
         out->lm_uv = st.uv;
         st.uv = NULL;
+        if (settings->detail_factor >= 2 && out->lm_cache_count) {
+            r = build_detail(scene, rt, pool, log, settings->detail_factor, lj.offset, out);
+            if (r != GLOW_OK) goto fail;
+        }
     }
 
     if (surfels && surfels->count) {

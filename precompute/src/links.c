@@ -269,6 +269,61 @@ static uint32_t runs_start_from(const cl_runs *r, uint32_t x) {
     return lo;
 }
 
+/* The surfel a near-field hit is credited to (near_field; the lightmap detail): the nearest surfel to
+ * the hit point, among NEAR_KNN (then NEAR_KNN_MORE) candidates, whose centre lies within R of the
+ * ray's origin, that faces the ray, stands for the surface hit (NEAR_CREDIT_COS, within a surfel
+ * radius of its plane), is not below the origin's horizon (hemi_nrm, NULL for the whole sphere) and
+ * that nothing separates from the hit point (surfel_reaches_hit). With active runs (clustered
+ * visibility), only a leaf that is a run of its own, and the run's index is returned. CREDIT_NONE
+ * when nobody may take it. */
+#define CREDIT_NONE 0xFFFFFFFFu
+static uint32_t credit_hit(const link_job *job, const float origin[3], const float *hemi_nrm, float R, const float dir[3],
+                           const glow__hit *hit, const cl_runs *runs, float max_d2) {
+    const glow__surfels *S = job->surfels;
+    const float eps = job->ray_eps, plane_tol = job->near_radius / NEAR_RADII; /* one surfel radius */
+    float p[3], hn[3];
+    for (int k = 0; k < 3; ++k) p[k] = origin[k] + hit->t * dir[k];
+    {
+        const float(*P)[3] = job->scene->pos + 3 * (size_t)hit->tri;
+        float e1[3], e2[3];
+        glow__sub(P[1], P[0], e1);
+        glow__sub(P[2], P[0], e2);
+        glow__cross(e1, e2, hn);
+        const float hl = sqrtf(glow__dot(hn, hn));
+        for (int k = 0; k < 3; ++k) hn[k] = hl > 0.0f ? hn[k] / hl : -dir[k];
+        if (glow__dot(hn, dir) > 0.0f) for (int k = 0; k < 3; ++k) hn[k] = -hn[k];
+    }
+    /* the NEAR_KNN surfels nearest to the hit point; when none of them may take the credit, the next ones */
+    uint32_t idx[NEAR_KNN_MORE];
+    float dist2[NEAR_KNN_MORE];
+    uint32_t found = glow__kdtree_knn(job->surfel_tree, p, NEAR_KNN, UINT32_MAX, idx, dist2);
+    for (uint32_t q = 0, round = 0; q < found; ++q) {
+        const glow__surfel *s = &S->s[idx[q]];
+        float d[3];
+        glow__sub(s->pos, origin, d);
+        float off[3];
+        glow__sub(s->pos, p, off);
+        if (!(dist2[q] <= max_d2)) break; /* the kNN are nearest first: the rest are farther */
+        bool ok = glow__dot(d, d) < R * R                         /* else a far surfel: the disc pass has it */
+                  && glow__dot(s->nrm, dir) < 0.0f                /* else it faces away: another surface */
+                  && glow__dot(s->nrm, hn) >= NEAR_CREDIT_COS     /* else it stands for another surface */
+                  && fabsf(glow__dot(off, hn)) <= plane_tol       /* ... or for one off the hit's plane */
+                  && !(hemi_nrm && glow__dot(hemi_nrm, d) <= -0.5f * eps)
+                  && (s->tri == hit->tri || surfel_reaches_hit(job, s, p, dir, hit->tri));
+        uint32_t unit = idx[q]; /* clustered: its run (every leaf in the near field has one of its own) */
+        if (ok && runs && runs->active) {
+            unit = runs_start_from(runs, idx[q]);
+            ok = unit < runs->count && runs->a[unit] == idx[q] && runs->b[unit] == idx[q] + 1;
+        }
+        if (ok) return unit;
+        if (q + 1 == found && round == 0 && found == NEAR_KNN) {
+            round = 1;
+            found = glow__kdtree_knn(job->surfel_tree, p, NEAR_KNN_MORE, UINT32_MAX, idx, dist2);
+        }
+    }
+    return CREDIT_NONE;
+}
+
 /* Near field: rays from the cache, each hit within the near radius credits its solid angle (and its
  * direction) to the nearest surfel that faces the cache on the hit surface. Only surfels whose
  * centre lies within the near radius are credited, the same surfels the disc pass skipped.
@@ -281,8 +336,6 @@ static uint32_t near_field(const link_job *job, const glow__cache *cache, const 
     const uint32_t count = hemi ? NEAR_RAYS / 2 : NEAR_RAYS;
     const float dw = (float)(4.0 * GLOW__PI / NEAR_RAYS);
     const float R = job->near_radius, eps = job->ray_eps;
-    const float plane_tol = R / NEAR_RADII; /* one surfel radius */
-    const glow__surfels *S = job->surfels;
     float t[3] = {0}, b[3] = {0};
     uint32_t front_hits = 0;
     if (hemi) tangent_frame(cache->nrm, t, b);
@@ -299,48 +352,10 @@ static uint32_t near_field(const link_job *job, const glow__cache *cache, const 
         front_hits++;
         if (hemi) *out_kappa_geom += dw * glow__irr_kernel(job->out->sh_bands, glow__dot(dir, cache->nrm));
         if (!(hit.t < R)) continue; /* beyond the near field: counted, not credited */
-        float p[3], hn[3];
-        for (int k = 0; k < 3; ++k) p[k] = cache->pos[k] + hit.t * dir[k];
-        {
-            const float(*P)[3] = job->scene->pos + 3 * (size_t)hit.tri;
-            float e1[3], e2[3];
-            glow__sub(P[1], P[0], e1);
-            glow__sub(P[2], P[0], e2);
-            glow__cross(e1, e2, hn);
-            const float hl = sqrtf(glow__dot(hn, hn));
-            for (int k = 0; k < 3; ++k) hn[k] = hl > 0.0f ? hn[k] / hl : -dir[k];
-            if (glow__dot(hn, dir) > 0.0f) for (int k = 0; k < 3; ++k) hn[k] = -hn[k];
-        }
-        /* the NEAR_KNN surfels nearest to the hit point; when none of them may take the credit, the next ones */
-        uint32_t idx[NEAR_KNN_MORE];
-        float dist2[NEAR_KNN_MORE];
-        uint32_t found = glow__kdtree_knn(job->surfel_tree, p, NEAR_KNN, UINT32_MAX, idx, dist2);
-        for (uint32_t q = 0, round = 0; q < found; ++q) {
-            const glow__surfel *s = &S->s[idx[q]];
-            float d[3];
-            glow__sub(s->pos, cache->pos, d);
-            float off[3];
-            glow__sub(s->pos, p, off);
-            bool ok = glow__dot(d, d) < R * R                         /* else a far surfel: the disc pass has it */
-                      && glow__dot(s->nrm, dir) < 0.0f                /* else it faces away: another surface */
-                      && glow__dot(s->nrm, hn) >= NEAR_CREDIT_COS     /* else it stands for another surface */
-                      && fabsf(glow__dot(off, hn)) <= plane_tol       /* ... or for one off the hit's plane */
-                      && !(hemi && glow__dot(cache->nrm, d) <= -0.5f * eps)
-                      && (s->tri == hit.tri || surfel_reaches_hit(job, s, p, dir, hit.tri));
-            uint32_t unit = idx[q]; /* clustered: its run (every leaf in the near field has one of its own) */
-            if (ok && runs->active) {
-                unit = runs_start_from(runs, idx[q]);
-                ok = unit < runs->count && runs->a[unit] == idx[q] && runs->b[unit] == idx[q] + 1;
-            }
-            if (ok) {
-                omega[unit] += dw;
-                for (int k = 0; k < 3; ++k) dirsum[3 * unit + k] += dw * dir[k];
-                break;
-            }
-            if (q + 1 == found && round == 0 && found == NEAR_KNN) {
-                round = 1;
-                found = glow__kdtree_knn(job->surfel_tree, p, NEAR_KNN_MORE, UINT32_MAX, idx, dist2);
-            }
+        const uint32_t unit = credit_hit(job, cache->pos, hemi ? cache->nrm : NULL, R, dir, &hit, runs, INFINITY);
+        if (unit != CREDIT_NONE) {
+            omega[unit] += dw;
+            for (int k = 0; k < 3; ++k) dirsum[3 * unit + k] += dw * dir[k];
         }
     }
     return front_hits;
@@ -1035,6 +1050,343 @@ static void link_range(void *ctx, uint32_t begin, uint32_t end, uint32_t worker)
     }
 }
 
+/* ------------------------------------------------------------------------------------------ */
+/* Lightmap detail (docs/linker.md "Lightmap detail").
+ *
+ * A lightmap cache stands for its whole texel (1.4 m on Sponza's default), so light that changes
+ * within a texel is lost: most of all light from surfaces a few decimetres away across a concave
+ * corner (the foot of a sunlit pillar, a capital's sunlit face), which the referee puts at most of
+ * Sponza's remaining block error (docs/results.md "Near light"). The detail texels (caches.c, a
+ * finer grid over the same atlas) each add what their own point receives from the surfels near it
+ * and remove what the interpolated caches already gather from those surfels:
+ *     correction(d) = sum_s [F_d(s) - sum_i b_i F_ci(s)] R(s)        s: surfels within rho of d
+ * F_x(s) = (1/pi) * the cosine-weighted solid angle of s seen from x about d's normal (the weight
+ * glow_shade_sh gives a source of radiance R in the cosine-lobe mean radiance), measured by rays
+ * with near_field's credit (credit_hit); b_i the bilinear weights with which a lookup at d's centre
+ * reads caches c_i (glow_sample_lightmap's, empty texels dropped and the rest renormalised). Where
+ * the caches see the near surfels as d does (a flat open floor) the two terms cancel and no link is
+ * kept. A cache's rays are cast once (phase A) and shared by the detail texels around it (phase B).
+ * The result is linear in the surfels' radiance, so the runtime evaluates it every update (a few
+ * signed weights per detail texel) and light that moves or changes stays right. */
+/* A detail hit is credited only to a surfel whose centre lies within this many surfel radii of the
+ * hit point. A point in a narrow gap (under a moulding, between a pier's base and the floor) sends
+ * most of its rays into the gap's walls; without the bound they went to a surfel whose centre stands
+ * outside the gap, in the sun, and single links carried up to 0.9 of the texel's response (Sponza,
+ * seed 0, 3 detail texels a side: block error 0.171 with no bound, 0.127 at 1.5, 0.129 at 2, 0.136
+ * at 1). */
+#define DETAIL_CREDIT_RADII 1.5f
+/* Rays over a cache's and a detail texel's hemisphere. Sponza (seed 0, 3 detail texels a side), block
+ * error against the referee: 0.1266 with 512 / 256, 0.1252 with 256 / 128 (seed 1: 0.1138 / 0.1143),
+ * and 0.1328 against 0.1333 with 2048 / 1024 before the credit bound: the difference of two estimates
+ * is not what limits it. 256 / 128 costs 2.6 s of a 2-thread bake there (5.1 s at 512 / 256). */
+#define DETAIL_CACHE_RAYS 256u
+#define DETAIL_RAYS 128u
+
+typedef struct detail_hit {
+    uint32_t surfel;
+    float d[3]; /* sum over the rays credited to the surfel of (2 / rays) x direction */
+} detail_hit;
+
+typedef struct detail_job {
+    const link_job *lj;
+    float rho, reach;              /* detail radius (m); a cache's credit radius: rho + its texels' reach */
+    float credit_d2;               /* a hit is credited only to a surfel within this squared distance */
+    float dirs[DETAIL_RAYS][3];    /* uniform hemisphere, z up */
+    float cdirs[DETAIL_CACHE_RAYS][3];
+    detail_hit **hits;             /* [lightmap caches] phase A */
+    uint32_t *hit_count;
+    float **acc_f, **acc_c;        /* [workers][surfels] */
+    uint32_t **touched;            /* [workers][surfels] */
+    uint8_t **mark;                /* [workers][surfels] */
+    uint32_t *out_s;               /* [detail_count][K] */
+    float *out_w;
+    uint32_t *out_n;               /* [detail_count] */
+    double *dropped, *kept;        /* [detail_count] */
+    uint32_t K;
+    bool oom;
+} detail_job;
+
+static void detail_cache_range(void *p, uint32_t begin, uint32_t end, uint32_t worker) {
+    detail_job *dj = p;
+    const link_job *job = dj->lj;
+    const glow__caches *ca = job->caches;
+    float *acc = dj->acc_f[worker];  /* [surfels][3]: here the direction sums */
+    uint32_t *touched = dj->touched[worker];
+    uint8_t *mark = dj->mark[worker];
+    const float wr = 2.0f / (float)DETAIL_CACHE_RAYS;
+    for (uint32_t li = begin; li < end; ++li) {
+        const glow__cache *c = &ca->caches[ca->grid_cache_count + li];
+        float t[3], b[3];
+        tangent_frame(c->nrm, t, b);
+        uint32_t n = 0;
+        for (uint32_t r = 0; r < DETAIL_CACHE_RAYS; ++r) {
+            const float *l = dj->cdirs[r];
+            float dir[3];
+            for (int k = 0; k < 3; ++k) dir[k] = l[0] * t[k] + l[1] * b[k] + l[2] * c->nrm[k];
+            glow__hit hit = glow__rt_intersect(job->rt, c->pos, dir, job->ray_eps, dj->reach);
+            if (hit.t == INFINITY || hit.back_face) continue;
+            const uint32_t s = credit_hit(job, c->pos, c->nrm, dj->reach, dir, &hit, NULL, dj->credit_d2);
+            if (s == CREDIT_NONE) continue;
+            if (!mark[s]) {
+                mark[s] = 1;
+                touched[n++] = s;
+                acc[3 * (size_t)s] = acc[3 * (size_t)s + 1] = acc[3 * (size_t)s + 2] = 0.0f;
+            }
+            for (int k = 0; k < 3; ++k) acc[3 * (size_t)s + k] += wr * dir[k];
+        }
+        detail_hit *h = malloc(((size_t)n + 1) * sizeof *h);
+        if (!h) dj->oom = true;
+        for (uint32_t i = 0; i < n; ++i) {
+            const uint32_t s = touched[i];
+            mark[s] = 0;
+            if (!h) continue;
+            h[i].surfel = s;
+            memcpy(h[i].d, &acc[3 * (size_t)s], sizeof h[i].d);
+        }
+        dj->hits[li] = h;
+        dj->hit_count[li] = h ? n : 0;
+    }
+}
+
+typedef struct detail_pick {
+    float mag;
+    uint32_t surfel;
+} detail_pick;
+
+/* larger magnitude first, ties by surfel */
+static int cmp_detail_pick(const void *a, const void *b) {
+    const detail_pick *x = a, *y = b;
+    if (x->mag != y->mag) return x->mag < y->mag ? 1 : -1;
+    return x->surfel < y->surfel ? -1 : (x->surfel > y->surfel);
+}
+
+static int cmp_u32(const void *a, const void *b) {
+    const uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    return x < y ? -1 : (x > y);
+}
+
+/* Does a surfel within the detail radius stand off the detail texel's plane (a wall beside a floor, a
+ * step, a moulding)? If every surfel near it lies in its own plane, its rays meet none of them and the
+ * caches' rays see them edge-on: the correction is zero, and the texel's rays are not cast (most of an
+ * open floor; 88 % of the Cornell box's detail texels). The DETAIL_RELIEF_KNN nearest surfels are
+ * looked at; a disc of the detail radius holds about 29 at Sponza's default. */
+#define DETAIL_RELIEF_KNN 64u
+static bool detail_sees_relief(const detail_job *dj, const float pd[3], const float nd[3]) {
+    const link_job *job = dj->lj;
+    uint32_t idx[DETAIL_RELIEF_KNN];
+    float dist2[DETAIL_RELIEF_KNN];
+    const uint32_t found = glow__kdtree_knn(job->surfel_tree, pd, DETAIL_RELIEF_KNN, UINT32_MAX, idx, dist2);
+    const float rho2 = dj->rho * dj->rho, tol = job->near_radius / NEAR_RADII; /* a surfel's radius */
+    for (uint32_t q = 0; q < found; ++q) {
+        if (dist2[q] >= rho2) return false; /* nearest first: the rest are beyond the radius */
+        const glow__surfel *s = &job->surfels->s[idx[q]];
+        float off[3];
+        glow__sub(s->pos, pd, off);
+        if (fabsf(glow__dot(off, nd)) > 0.25f * tol || glow__dot(s->nrm, nd) < 0.97f) return true;
+    }
+    return found == DETAIL_RELIEF_KNN; /* more surfels within the radius than looked at: cast the rays */
+}
+
+static void detail_texel_range(void *p, uint32_t begin, uint32_t end, uint32_t worker) {
+    detail_job *dj = p;
+    const link_job *job = dj->lj;
+    const glow__caches *ca = job->caches;
+    const glow__surfels *S = job->surfels;
+    float *accf = dj->acc_f[worker], *accc = dj->acc_c[worker];
+    uint32_t *touched = dj->touched[worker];
+    uint8_t *mark = dj->mark[worker];
+    const float rho2 = dj->rho * dj->rho, wr = 2.0f / (float)DETAIL_RAYS;
+    const uint32_t D = ca->detail_factor, W = ca->lm_width, H = ca->lm_height;
+    for (uint32_t d = begin; d < end; ++d) {
+        const float *pd = ca->detail_pos[d], *nd = ca->detail_nrm[d];
+        uint32_t n = 0;
+        dj->out_n[d] = 0;
+        dj->kept[d] = dj->dropped[d] = 0.0;
+        if (!detail_sees_relief(dj, pd, nd)) continue; /* only its own plane near it: nothing to correct */
+#define DETAIL_TOUCH(s)                                      \
+    do {                                                     \
+        if (!mark[s]) {                                      \
+            mark[s] = 1;                                     \
+            touched[n++] = (s);                              \
+            accf[s] = accc[s] = 0.0f;                        \
+        }                                                    \
+    } while (0)
+        /* what the interpolated caches gather from the surfels near d */
+        const uint32_t tx = ca->detail_texel[d] % ca->detail_width, ty = ca->detail_texel[d] / ca->detail_width;
+        const float fx = ((float)tx + 0.5f) / (float)D - 0.5f, fy = ((float)ty + 0.5f) / (float)D - 0.5f;
+        uint32_t x0, x1, y0, y1;
+        float ax, ay;
+        {
+            float f = fx < 0.0f ? 0.0f : (fx > (float)(W - 1) ? (float)(W - 1) : fx), fl = floorf(f);
+            x0 = (uint32_t)fl; x1 = x0 + 1 < W ? x0 + 1 : x0; ax = f - fl;
+            f = fy < 0.0f ? 0.0f : (fy > (float)(H - 1) ? (float)(H - 1) : fy); fl = floorf(f);
+            y0 = (uint32_t)fl; y1 = y0 + 1 < H ? y0 + 1 : y0; ay = f - fl;
+        }
+        const uint32_t m4[4] = {ca->lm_map[(size_t)y0 * W + x0], ca->lm_map[(size_t)y0 * W + x1],
+                                ca->lm_map[(size_t)y1 * W + x0], ca->lm_map[(size_t)y1 * W + x1]};
+        float b4[4] = {(1 - ax) * (1 - ay), ax * (1 - ay), (1 - ax) * ay, ax * ay}, bs = 0.0f;
+        for (int i = 0; i < 4; ++i) bs += m4[i] != GLOW_MAP_EMPTY && b4[i] > 0.0f ? b4[i] : 0.0f;
+        for (int i = 0; bs > 0.0f && i < 4; ++i) {
+            if (m4[i] == GLOW_MAP_EMPTY || !(b4[i] > 0.0f)) continue;
+            const uint32_t ci = m4[i] & GLOW_MAP_INDEX_MASK;
+            if (ci < ca->grid_cache_count) continue;
+            const uint32_t li = ci - ca->grid_cache_count;
+            const float bw = b4[i] / bs;
+            for (uint32_t q = 0; q < dj->hit_count[li]; ++q) {
+                const detail_hit *h = &dj->hits[li][q];
+                float off[3];
+                glow__sub(S->s[h->surfel].pos, pd, off);
+                if (glow__dot(off, off) >= rho2) continue;
+                const float c = glow__dot(h->d, nd);
+                if (!(c > 0.0f)) continue;
+                DETAIL_TOUCH(h->surfel);
+                accc[h->surfel] += bw * c;
+            }
+        }
+        /* what d's own point receives from them */
+        float t[3], b[3];
+        tangent_frame(nd, t, b);
+        for (uint32_t r = 0; r < DETAIL_RAYS; ++r) {
+            const float *l = dj->dirs[r];
+            float dir[3];
+            for (int k = 0; k < 3; ++k) dir[k] = l[0] * t[k] + l[1] * b[k] + l[2] * nd[k];
+            glow__hit hit = glow__rt_intersect(job->rt, pd, dir, job->ray_eps, dj->rho + job->near_radius);
+            if (hit.t == INFINITY || hit.back_face) continue;
+            const uint32_t s = credit_hit(job, pd, nd, dj->rho, dir, &hit, NULL, dj->credit_d2);
+            if (s == CREDIT_NONE) continue;
+            DETAIL_TOUCH(s);
+            accf[s] += wr * l[2];
+        }
+#undef DETAIL_TOUCH
+        /* the difference; the K largest in magnitude, then by surfel */
+        uint32_t m = 0;
+        double all = 0.0;
+        for (uint32_t i = 0; i < n; ++i) {
+            const uint32_t s = touched[i];
+            mark[s] = 0;
+            const float v = accf[s] - accc[s];
+            accf[s] = v;
+            all += fabs((double)v);
+            if (fabsf(v) > 1e-6f) touched[m++] = s;
+        }
+        if (m > dj->K) {
+            /* at most DETAIL_RAYS surfels from d's rays and 4 caches' hit lists */
+            detail_pick pick[DETAIL_RAYS + 4u * DETAIL_CACHE_RAYS];
+            for (uint32_t i = 0; i < m; ++i) pick[i] = (detail_pick){fabsf(accf[touched[i]]), touched[i]};
+            qsort(pick, m, sizeof *pick, cmp_detail_pick);
+            for (uint32_t i = 0; i < dj->K; ++i) touched[i] = pick[i].surfel;
+        }
+        const uint32_t keep = m < dj->K ? m : dj->K;
+        qsort(touched, keep, sizeof *touched, cmp_u32);
+        double kept = 0.0;
+        for (uint32_t i = 0; i < keep; ++i) {
+            dj->out_s[(size_t)d * dj->K + i] = touched[i];
+            dj->out_w[(size_t)d * dj->K + i] = accf[touched[i]];
+            kept += fabs((double)accf[touched[i]]);
+        }
+        dj->out_n[d] = keep;
+        dj->kept[d] = kept;
+        dj->dropped[d] = all - kept;
+    }
+}
+
+static glow_result detail_build(const link_job *job, glow__pool *pool, glow__log *log, glow__links *out) {
+    const glow__caches *ca = job->caches;
+    const glow__link_settings *set = job->settings;
+    const uint32_t S = job->surfels->count, Dn = ca->detail_count, L = ca->lm_cache_count;
+    detail_job dj = {.lj = job, .K = set->detail_links ? set->detail_links : 16u};
+    dj.rho = set->detail_radius / ca->texel_density;
+    /* a detail texel reads caches up to about 1.5 texels away on its chart */
+    dj.reach = dj.rho + 2.0f / ca->texel_density + job->near_radius;
+    {
+        const float rs = job->near_radius / NEAR_RADII; /* a surfel's radius */
+        dj.credit_d2 = DETAIL_CREDIT_RADII * rs * DETAIL_CREDIT_RADII * rs;
+    }
+    {
+        const double golden = GLOW__PI * (3.0 - sqrt(5.0));
+        for (uint32_t i = 0; i < DETAIL_RAYS; ++i) {
+            double z = 1.0 - (i + 0.5) / DETAIL_RAYS, r = sqrt(fmax(0.0, 1.0 - z * z)), phi = golden * i;
+            dj.dirs[i][0] = (float)(r * cos(phi));
+            dj.dirs[i][1] = (float)(r * sin(phi));
+            dj.dirs[i][2] = (float)z;
+        }
+        for (uint32_t i = 0; i < DETAIL_CACHE_RAYS; ++i) {
+            double z = 1.0 - (i + 0.5) / DETAIL_CACHE_RAYS, r = sqrt(fmax(0.0, 1.0 - z * z)), phi = golden * i;
+            dj.cdirs[i][0] = (float)(r * cos(phi));
+            dj.cdirs[i][1] = (float)(r * sin(phi));
+            dj.cdirs[i][2] = (float)z;
+        }
+    }
+    const uint32_t W = job->workers;
+    glow_result res = GLOW_OK;
+    dj.hits = calloc((size_t)L + 1, sizeof *dj.hits);
+    dj.hit_count = calloc((size_t)L + 1, sizeof *dj.hit_count);
+    dj.acc_f = calloc(W, sizeof *dj.acc_f);
+    dj.acc_c = calloc(W, sizeof *dj.acc_c);
+    dj.touched = calloc(W, sizeof *dj.touched);
+    dj.mark = calloc(W, sizeof *dj.mark);
+    dj.out_s = malloc(((size_t)Dn * dj.K + 1) * sizeof *dj.out_s);
+    dj.out_w = malloc(((size_t)Dn * dj.K + 1) * sizeof *dj.out_w);
+    dj.out_n = calloc((size_t)Dn + 1, sizeof *dj.out_n);
+    dj.dropped = calloc((size_t)Dn + 1, sizeof *dj.dropped);
+    dj.kept = calloc((size_t)Dn + 1, sizeof *dj.kept);
+    bool ok = dj.hits && dj.hit_count && dj.acc_f && dj.acc_c && dj.touched && dj.mark && dj.out_s && dj.out_w &&
+              dj.out_n && dj.dropped && dj.kept;
+    for (uint32_t w = 0; ok && w < W; ++w) {
+        dj.acc_f[w] = malloc(((size_t)S + 1) * 3 * sizeof(float));
+        dj.acc_c[w] = malloc(((size_t)S + 1) * sizeof(float));
+        dj.touched[w] = malloc(((size_t)S + 1) * sizeof(uint32_t));
+        dj.mark[w] = calloc((size_t)S + 1, 1);
+        ok = dj.acc_f[w] && dj.acc_c[w] && dj.touched[w] && dj.mark[w];
+    }
+    if (ok) {
+        glow__parallel_for(pool, L, 16, detail_cache_range, &dj);
+        ok = !dj.oom;
+    }
+    if (ok) glow__parallel_for(pool, Dn, 16, detail_texel_range, &dj);
+    if (ok) {
+        size_t total = 0;
+        for (uint32_t d = 0; d < Dn; ++d) total += dj.out_n[d];
+        out->detail_first = malloc(((size_t)Dn + 1) * sizeof *out->detail_first);
+        out->detail_surfel = malloc((total + 1) * sizeof *out->detail_surfel);
+        out->detail_weight = malloc((total + 1) * sizeof *out->detail_weight);
+        ok = out->detail_first && out->detail_surfel && out->detail_weight && total < UINT32_MAX;
+        if (ok) {
+            uint32_t k = 0, with = 0;
+            for (uint32_t d = 0; d < Dn; ++d) {
+                out->detail_first[d] = k;
+                memcpy(out->detail_surfel + k, dj.out_s + (size_t)d * dj.K, dj.out_n[d] * sizeof(uint32_t));
+                memcpy(out->detail_weight + k, dj.out_w + (size_t)d * dj.K, dj.out_n[d] * sizeof(float));
+                k += dj.out_n[d];
+                with += dj.out_n[d] > 0;
+                out->detail_kept += dj.kept[d];
+                out->detail_dropped += dj.dropped[d];
+            }
+            out->detail_first[Dn] = k;
+            out->detail_count = Dn;
+            glow__infof(log, "%s: links: lightmap detail: %u of %u detail texels correct their caches' near light "
+                        "(surfels within %.3g units), %.1f links each (at most %u; %.1f %% of the weight left out)",
+                        job->scene->source, with, Dn, (double)dj.rho, with ? (double)k / with : 0.0, dj.K,
+                        out->detail_kept + out->detail_dropped > 0.0
+                            ? 100.0 * out->detail_dropped / (out->detail_kept + out->detail_dropped) : 0.0);
+        }
+    }
+    if (!ok) {
+        glow__errorf(log, "links: out of memory for the lightmap detail");
+        res = GLOW_ERROR_OUT_OF_MEMORY;
+    }
+    for (uint32_t i = 0; dj.hits && i < L; ++i) free(dj.hits[i]);
+    for (uint32_t w = 0; w < W; ++w) {
+        if (dj.acc_f) free(dj.acc_f[w]);
+        if (dj.acc_c) free(dj.acc_c[w]);
+        if (dj.touched) free(dj.touched[w]);
+        if (dj.mark) free(dj.mark[w]);
+    }
+    free(dj.hits); free(dj.hit_count); free(dj.acc_f); free(dj.acc_c); free(dj.touched); free(dj.mark);
+    free(dj.out_s); free(dj.out_w); free(dj.out_n); free(dj.dropped); free(dj.kept);
+    return res;
+}
+
 glow_result glow__links_build(const glow__scene *scene, const glow__rt *rt, const glow__surfels *surfels,
                               const glow__hierarchy *h, const glow__caches *caches,
                               const glow__link_settings *settings, glow__pool *pool, glow__log *log,
@@ -1234,6 +1586,9 @@ glow_result glow__links_build(const glow__scene *scene, const glow__rt *rt, cons
         }
     }
     glow__parallel_for(pool, caches->count, 4, link_range, &job);
+    if (settings->detail_radius > 0.0f && caches->detail_count && caches->texel_density > 0.0f &&
+        (res = detail_build(&job, pool, log, out)) != GLOW_OK)
+        goto done;
     {
         uint32_t scaled = 0, clamped = 0;
         float lo = INFINITY, hi = 0.0f;
@@ -1301,5 +1656,8 @@ void glow__links_free(glow__links *l) {
     free(l->links);
     free(l->sh);
     free(l->audit);
+    free(l->detail_first);
+    free(l->detail_surfel);
+    free(l->detail_weight);
     memset(l, 0, sizeof *l);
 }

@@ -103,6 +103,8 @@ typedef struct glow__cache_settings {
     uint32_t target_grid;     /* used when grid_spacing == 0 */
     uint32_t target_lightmap; /* used when texel_density == 0 */
     uint32_t seed;
+    uint32_t detail_factor;   /* >= 2: also place the lightmap's detail texels, this many a texel side
+                                 (links.c "Lightmap detail"); 0 = none */
 } glow__cache_settings;
 
 typedef struct glow__caches {
@@ -128,6 +130,11 @@ typedef struct glow__caches {
     uint32_t shared_texels;   /* ... and the texels they share (a lone one keeps its own) */
     /* per surfel (in the hierarchy's surfel order): cache whose light it re-emits */
     uint32_t *surfel_feedback;
+    /* lightmap detail (cache settings' detail_factor): the texels of a detail_factor-times finer grid
+     * over the same atlas that cover a surface, each with a point and normal as a lightmap cache's */
+    uint32_t detail_factor, detail_width, detail_height, detail_count;
+    uint32_t *detail_texel;   /* [detail_count] y * detail_width + x, ascending */
+    float (*detail_pos)[3], (*detail_nrm)[3];
 } glow__caches;
 
 glow_result glow__caches_build(const glow__scene *scene, const glow__rt *rt, const glow__surfels *surfels,
@@ -165,6 +172,9 @@ typedef struct glow__link_settings {
     float cluster_tau;         /* > 0: clustered visibility (links.c cluster_nodes): nodes smaller than
                                   this many radians seen from the cache share cluster_samples rays */
     uint32_t cluster_samples;
+    float detail_radius;       /* > 0 with the caches' detail texels: their near light from surfels
+                                  within this many lightmap texels (links.c "Lightmap detail") */
+    uint32_t detail_links;     /* at most this many per detail texel */
 } glow__link_settings;
 
 typedef struct glow__link {
@@ -188,6 +198,15 @@ typedef struct glow__links {
      * reading its node's visible leaves' uniform mean, its visible children's means (weighted by their
      * own shares), its visible grandchildren's, and through its LSUB weights (what the runtime reads) */
     float *audit;
+    /* lightmap detail (links.c "Lightmap detail"): per detail texel d (the caches' detail_texel order),
+     * links [detail_first[d], detail_first[d + 1]) of (surfel, weight): the texel's near-light correction
+     * is sum weight * radiance(surfel), cosine-lobe mean radiance like glow_shade_sh's */
+    uint32_t detail_count;
+    uint32_t *detail_first;   /* [detail_count + 1] */
+    uint32_t *detail_surfel;
+    float *detail_weight;
+    double detail_dropped;    /* sum of |weight| left out by the detail_links cap, over all texels */
+    double detail_kept;       /* sum of |weight| kept */
 } glow__links;
 enum { GLOW__AUDIT_FIELDS = 9 };
 

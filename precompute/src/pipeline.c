@@ -23,6 +23,11 @@ const char *glow_pc_stage_name(uint32_t stage) { return stage < GLOW_PC_STAGE_CO
  * largest a cluster may look from a cache (bounding radius / distance) and the rays it shares */
 #define GLOW_PC_CLUSTER_ANGLE 0.3f
 #define GLOW_PC_CLUSTER_RAYS 4u
+/* The lightmap detail (links.c "Lightmap detail"; docs/results.md): detail texels per lightmap texel
+ * side, links per detail texel and the radius (lightmap texels) of the surfels they reach */
+#define GLOW_PC_LIGHTMAP_DETAIL 3u
+#define GLOW_PC_DETAIL_LINKS 16u
+#define GLOW_PC_DETAIL_RADIUS 1.0f
 
 typedef struct preset {
     uint32_t surfels, links, bands, grid, lightmap, relax;
@@ -60,6 +65,9 @@ glow_pc_settings glow_pc_settings_resolve(const glow_pc_settings *in) {
     if (s.link_visibility == GLOW_PC_LINK_VISIBILITY_DEFAULT) s.link_visibility = GLOW_PC_LINK_VISIBILITY_CLUSTERED;
     if (s.link_cluster_angle == 0.0f) s.link_cluster_angle = GLOW_PC_CLUSTER_ANGLE;
     if (!s.link_cluster_rays) s.link_cluster_rays = GLOW_PC_CLUSTER_RAYS;
+    if (!s.lightmap_detail) s.lightmap_detail = GLOW_PC_LIGHTMAP_DETAIL;
+    if (!s.detail_links) s.detail_links = GLOW_PC_DETAIL_LINKS;
+    if (s.detail_radius == 0.0f) s.detail_radius = GLOW_PC_DETAIL_RADIUS;
     return s;
 }
 
@@ -84,6 +92,10 @@ glow_result glow_pc_settings_validate(const glow_pc_settings *s, char *msg, size
     if (s->link_cluster_angle != 0.0f && !(s->link_cluster_angle > 0.0f && s->link_cluster_angle <= 1.0f))
         BAD("--link-cluster-angle %g is out of range (0..1 radians)", (double)s->link_cluster_angle);
     if (s->link_cluster_rays > 64) BAD("--link-cluster-rays %u is out of range (1..64)", s->link_cluster_rays);
+    if (s->lightmap_detail > 4) BAD("--lightmap-detail %u is out of range (1 = none, 2..4)", s->lightmap_detail);
+    if (s->detail_links > 256) BAD("--detail-links %u is out of range (1..256)", s->detail_links);
+    if (s->detail_radius != 0.0f && !(s->detail_radius > 0.0f && s->detail_radius <= 4.0f))
+        BAD("--detail-radius %g is out of range (0..4 lightmap texels)", (double)s->detail_radius);
 #undef BAD
     return GLOW_OK;
 }
@@ -134,9 +146,9 @@ static uint16_t unorm16(float x) {
 }
 
 typedef struct sections {
-    glow__section_data s[16];
+    glow__section_data s[24];
     uint32_t n;
-    void *owned[16];
+    void *owned[24];
 } sections;
 
 static void add_section(sections *ss, uint32_t fourcc, void *data, uint64_t size) {
@@ -325,6 +337,30 @@ static glow_result serialise(const glow_pc_settings *set, const glow__scene *sc,
     if (sh) add_section(ss, GLOW_SECTION_SHLK, sh, (uint64_t)ca->count * blocks * shlk_block);
     if (lsub) add_section(ss, GLOW_SECTION_LSUB, lsub, (uint64_t)ca->count * blocks * GLOW_LINK_BLOCK * sizeof *lsub);
     add_section(ss, GLOW_SECTION_GEOM, tr, (uint64_t)sc->tri_count * sizeof *tr);
+    if (lk->detail_count && ca->detail_count == lk->detail_count) { /* 1.2: LDET (bake_format.h) */
+        const uint32_t T = lk->detail_count, nlk = lk->detail_first[T];
+        const uint64_t size = sizeof(glow_bake_detail) + 4ull * T + 4ull * (T + 1ull) + 8ull * nlk;
+        uint8_t *buf = calloc(1, (size_t)size);
+        if (!buf) {
+            glow__errorf(log, "write: out of memory for the lightmap detail");
+            return GLOW_ERROR_OUT_OF_MEMORY;
+        }
+        glow_bake_detail *dh = (glow_bake_detail *)(void *)buf;
+        dh->factor = ca->detail_factor;
+        dh->width = ca->detail_width;
+        dh->height = ca->detail_height;
+        dh->texel_count = T;
+        dh->link_count = nlk;
+        uint8_t *q = buf + sizeof *dh;
+        memcpy(q, ca->detail_texel, 4ull * T);
+        q += 4ull * T;
+        memcpy(q, lk->detail_first, 4ull * (T + 1ull));
+        q += 4ull * (T + 1ull);
+        memcpy(q, lk->detail_surfel, 4ull * nlk);
+        q += 4ull * nlk;
+        memcpy(q, lk->detail_weight, 4ull * nlk);
+        add_section(ss, GLOW_SECTION_LDET, buf, size);
+    }
     /* 1.1: material UVs and albedo texture paths, for hosts that draw the scene textured */
     if (sc->uv0 && sc->tri_count) {
         float *uv = malloc((size_t)sc->tri_count * 6u * sizeof *uv);
@@ -571,7 +607,8 @@ static glow_result bake(const char *scene_path, const char *out_path, const glow
 
     STAGE_BEGIN(ST_CACHES);
     glow__cache_settings scache = {.grid_spacing = set.grid_spacing, .texel_density = set.texel_density,
-                                   .target_grid = p->grid, .target_lightmap = set.lightmap_caches, .seed = set.seed};
+                                   .target_grid = p->grid, .target_lightmap = set.lightmap_caches, .seed = set.seed,
+                                   .detail_factor = set.lightmap_detail >= 2 ? set.lightmap_detail : 0u};
     res = glow__caches_build(&scene, rt, &surfels, &scache, pool, &log, &caches);
     if (res == GLOW_OK && caches.grid_dims[0] && caches.grid_dims[1] && caches.grid_dims[2]) {
         /* which corners of each grid cell a lookup may blend (grid_vis.c) */
@@ -627,12 +664,20 @@ static glow_result bake(const char *scene_path, const char *out_path, const glow
                                  .no_normalize = set.no_link_normalize, .cut_error = !set.cut_solid_angle,
                                  .audit_radiance = audit_radiance, .link_subsets = !set.no_link_subsets,
                                  .cluster_tau = set.link_visibility == GLOW_PC_LINK_VISIBILITY_CLUSTERED ? set.link_cluster_angle : 0.0f,
-                                 .cluster_samples = set.link_cluster_rays};
+                                 .cluster_samples = set.link_cluster_rays,
+                                 .detail_radius = set.detail_radius, .detail_links = set.detail_links};
     res = glow__links_build(&scene, rt, &surfels, &hier, &caches, &slink, pool, &log, stage_progress, &pc, &links);
     STAGE_END(ST_LINKS);
     if (res != GLOW_OK) goto done;
     if (links.audit) report_audit(&caches, &links, audit_csv, set.audit_csv, &log);
     stats->links = (uint64_t)caches.count * set.links;
+    if (links.detail_count) {
+        stats->detail_factor = caches.detail_factor;
+        stats->detail_texels = links.detail_count;
+        stats->detail_links = links.detail_first[links.detail_count];
+        for (uint32_t d = 0; d < links.detail_count; ++d)
+            stats->detail_corrected += links.detail_first[d + 1] > links.detail_first[d];
+    }
     stats->links_per_cache = set.links;
     stats->bands = set.bands;
     stats->seed = set.seed;

@@ -65,6 +65,12 @@ static const char *usage_text =
     "                         the surfels); exact: one ray per (cache, surfel)\n"
     "  --link-cluster-angle A clustered: the largest a cluster may look, radius / distance (default 0.3)\n"
     "  --link-cluster-rays K  clustered: rays per cluster, one per run of its leaves (default 4)\n"
+    "  --lightmap-detail N    detail texels per lightmap texel side, each correcting its caches' near\n"
+    "                         light through a few links to the surfels beside it: 1 = none, 2..4\n"
+    "                         (default 3)\n"
+    "  --detail-links K       at most K links per detail texel (default 16)\n"
+    "  --detail-radius R      a detail texel corrects the light of surfels within R lightmap texels of\n"
+    "                         it (default 1)\n"
     "  --audit-radiance FILE  audit the cuts under a lighting: FILE holds one float32 radiance per surfel\n"
     "                         (glow-stability audit --radiance-out, for a bake with the same settings);\n"
     "                         logs each cut's gather against the exact gather through visible surfels\n"
@@ -242,6 +248,10 @@ static void print_summary(const char *scene, const char *out, const glow_pc_stat
         cJSON_AddNumberToObject(x, "charts", s->charts);
         cJSON_AddNumberToObject(x, "small_charts", s->small_charts);
         cJSON_AddNumberToObject(x, "shared_texels", s->shared_texels);
+        cJSON_AddNumberToObject(x, "detail_factor", s->detail_factor);
+        cJSON_AddNumberToObject(x, "detail_texels", s->detail_texels);
+        cJSON_AddNumberToObject(x, "detail_corrected", s->detail_corrected);
+        cJSON_AddNumberToObject(x, "detail_links", (double)s->detail_links);
         x = cJSON_AddObjectToObject(o, "links");
         cJSON_AddNumberToObject(x, "per_cache", s->links_per_cache);
         cJSON_AddNumberToObject(x, "total", (double)s->links);
@@ -279,6 +289,12 @@ static void print_summary(const char *scene, const char *out, const glow_pc_stat
                s->shared_texels);
     printf("  links     %llu (%u per cache, l=%u), %.2f bytes per link\n", (unsigned long long)s->links,
            s->links_per_cache, s->bands, s->bytes_per_link);
+    if (s->detail_factor)
+        printf("  detail    %u texels of %.3g units (%u per lightmap texel side) cover a surface; %u of them correct "
+               "the near light with %llu links (%.1f each)\n",
+               s->detail_texels, s->texel_density > 0.0f ? 1.0 / ((double)s->texel_density * s->detail_factor) : 0.0,
+               s->detail_factor, s->detail_corrected, (unsigned long long)s->detail_links,
+               s->detail_corrected ? (double)s->detail_links / s->detail_corrected : 0.0);
     printf("  file      %llu bytes:", (unsigned long long)s->file_size);
     for (uint32_t i = 0; i < s->section_count && i < 16; ++i) {
         fourcc_str(s->section_fourcc[i], fc);
@@ -474,6 +490,20 @@ int main(int argc, char **argv) {
         } else if (!strcmp(a, "--link-cluster-rays")) {
             NEED_VALUE();
             if (!parse_u32(v, 1, 64, &s.link_cluster_rays)) return usage_error("--link-cluster-rays '%s': expected an integer in 1..64", v);
+        } else if (!strcmp(a, "--lightmap-detail")) {
+            NEED_VALUE();
+            if (!parse_u32(v, 1, 4, &s.lightmap_detail))
+                return usage_error("--lightmap-detail '%s': expected 1 (none) or 2..4 detail texels per texel side", v);
+        } else if (!strcmp(a, "--detail-radius")) {
+            NEED_VALUE();
+            char *end = NULL;
+            double x = strtod(v, &end);
+            if (!end || *end || !(x > 0.0 && x <= 4.0))
+                return usage_error("--detail-radius '%s': expected lightmap texels in (0, 4]", v);
+            s.detail_radius = (float)x;
+        } else if (!strcmp(a, "--detail-links")) {
+            NEED_VALUE();
+            if (!parse_u32(v, 1, 256, &s.detail_links)) return usage_error("--detail-links '%s': expected an integer in 1..256", v);
         } else if (!strcmp(a, "--no-link-normalize")) {
             s.no_link_normalize = true;
         } else if (!strcmp(a, "--sh-links")) {

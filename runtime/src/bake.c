@@ -37,12 +37,12 @@
 #define MAX_SH_BANDS 16u
 
 enum { S_META, S_MATL, S_SURF, S_NODE, S_LEVL, S_CACH, S_GRID, S_LMAP, S_LINK, S_SHLK, S_GEOM, S_GVIS, S_LSUB, S_TUV0, S_TEXP,
-       S_KNOWN_COUNT };
+       S_LDET, S_KNOWN_COUNT };
 
 static const uint32_t known_fourcc[S_KNOWN_COUNT] = {
     GLOW_SECTION_META, GLOW_SECTION_MATL, GLOW_SECTION_SURF, GLOW_SECTION_NODE, GLOW_SECTION_LEVL, GLOW_SECTION_CACH,
     GLOW_SECTION_GRID, GLOW_SECTION_LMAP, GLOW_SECTION_LINK, GLOW_SECTION_SHLK, GLOW_SECTION_GEOM, GLOW_SECTION_GVIS,
-    GLOW_SECTION_LSUB, GLOW_SECTION_TUV0, GLOW_SECTION_TEXP,
+    GLOW_SECTION_LSUB, GLOW_SECTION_TUV0, GLOW_SECTION_TEXP, GLOW_SECTION_LDET,
 };
 
 typedef struct section_ref {
@@ -545,6 +545,50 @@ static glow_result check_textures(const vstate *v, const glow_bake_meta *m, cons
     return GLOW_OK;
 }
 
+/* LDET (optional, 1.2; bake_format.h glow_bake_detail): sizes, ascending texels inside the detail grid,
+ * link ranges, surfels in range, finite weights. */
+static glow_result check_detail(const vstate *v, const glow_bake_meta *m, const section_ref *s) {
+    glow_bake_detail dh;
+    if (s->size < sizeof dh) FAIL(GLOW_ERROR_CORRUPT_DATA, "section 'LDET' is %llu bytes, shorter than its header",
+                                  (unsigned long long)s->size);
+    read_at(v, s->offset, &dh, sizeof dh);
+    if (!m->lightmap_count) FAIL(GLOW_ERROR_CORRUPT_DATA, "section 'LDET' (lightmap detail) in a bake without a lightmap");
+    if (dh.factor < 2 || dh.factor > GLOW_BAKE_DETAIL_MAX_FACTOR || dh.width != (uint64_t)dh.factor * m->lightmap_width ||
+        dh.height != (uint64_t)dh.factor * m->lightmap_height)
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "LDET: detail %ux%u at factor %u does not fit the %ux%u lightmap (factor 2..%u)",
+             dh.width, dh.height, dh.factor, m->lightmap_width, m->lightmap_height, GLOW_BAKE_DETAIL_MAX_FACTOR);
+    const uint64_t T = dh.texel_count, Lk = dh.link_count;
+    if (T > (uint64_t)dh.width * dh.height)
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "LDET: %u detail texels in a %ux%u grid", dh.texel_count, dh.width, dh.height);
+    const uint64_t expect = sizeof dh + 4u * T + 4u * (T + 1u) + 8u * Lk;
+    if (s->size != expect)
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "section 'LDET' is %llu bytes; %u texels and %u links need %llu",
+             (unsigned long long)s->size, dh.texel_count, dh.link_count, (unsigned long long)expect);
+    const uint32_t *texel = (const uint32_t *)(const void *)(v->data + s->offset + sizeof dh);
+    const uint32_t *first = texel + T, *surfel = first + T + 1u;
+    const float *weight = (const float *)(const void *)(surfel + Lk);
+    for (uint64_t i = 0; i < T; i++) {
+        if (texel[i] >= (uint64_t)dh.width * dh.height || (i && texel[i] <= texel[i - 1]))
+            FAIL(GLOW_ERROR_CORRUPT_DATA, "LDET texel %llu: %u is outside the grid or not ascending", (unsigned long long)i,
+                 texel[i]);
+        if (first[i] > first[i + 1])
+            FAIL(GLOW_ERROR_CORRUPT_DATA, "LDET texel %llu: link range [%u, %u) is decreasing", (unsigned long long)i,
+                 first[i], first[i + 1]);
+    }
+    if (first[0] != 0 || first[T] != Lk)
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "LDET: link ranges run from %u to %u, not 0 to link_count %u", first[0], first[T],
+             dh.link_count);
+    for (uint64_t k = 0; k < Lk; k++) {
+        if (surfel[k] >= m->surfel_count)
+            FAIL(GLOW_ERROR_OUT_OF_RANGE, "LDET link %llu: surfel %u out of range (surfel_count %u)", (unsigned long long)k,
+                 surfel[k], m->surfel_count);
+        if (!isfinite(weight[k]) || fabsf(weight[k]) > 16.0f)
+            FAIL(GLOW_ERROR_CORRUPT_DATA, "LDET link %llu: weight %g is not finite or beyond +-16", (unsigned long long)k,
+                 (double)weight[k]);
+    }
+    return GLOW_OK;
+}
+
 /* Validates v's bytes (which must be GLOW_BAKE_ALIGN-aligned) and fills the bake's views. */
 static glow_result validate(const vstate *v, struct glow_bake *b) {
     glow_result r;
@@ -593,6 +637,7 @@ static glow_result validate(const vstate *v, struct glow_bake *b) {
         (r = check_textures(v, &m, sec[S_TUV0].present ? (const float *)payload(v, &sec[S_TUV0]) : NULL,
                             sec[S_TEXP].present ? (const char *)payload(v, &sec[S_TEXP]) : NULL)))
         return r;
+    if (sec[S_LDET].present && (r = check_detail(v, &m, &sec[S_LDET]))) return r;
 
     b->data = v->data;
     b->size = v->size;
@@ -877,6 +922,17 @@ const glow_bake_link_block *glow__bake_link_blocks(const glow_bake *b) { return 
 const void *glow__bake_shlk_blocks(const glow_bake *b) { return known_ptr(b, S_SHLK); }
 const uint16_t *glow__bake_link_subsets(const glow_bake *b) { return known_ptr(b, S_LSUB); }
 const glow_bake_triangle *glow__bake_triangles(const glow_bake *b) { return known_ptr(b, S_GEOM); }
+const glow_bake_detail *glow__bake_detail(const glow_bake *b, const uint32_t **texel, const uint32_t **first,
+                                          const uint32_t **surfel, const float **weight) {
+    const glow_bake_detail *dh = b->known[S_LDET].present ? known_ptr(b, S_LDET) : NULL;
+    if (!dh) return NULL;
+    const uint32_t *t = (const uint32_t *)(const void *)(dh + 1);
+    if (texel) *texel = t;
+    if (first) *first = t + dh->texel_count;
+    if (surfel) *surfel = t + 2u * (size_t)dh->texel_count + 1u;
+    if (weight) *weight = (const float *)(const void *)(t + 2u * (size_t)dh->texel_count + 1u + dh->link_count);
+    return dh;
+}
 
 const void *glow__bake_section(const glow_bake *b, uint32_t fourcc, uint64_t *out_size) {
     if (out_size) *out_size = 0;

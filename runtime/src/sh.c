@@ -155,3 +155,25 @@ glow_result glow_sample_lightmap(const glow_cache_outputs *o, float u, float v, 
     float w[4] = {(1 - tx) * (1 - ty), tx * (1 - ty), (1 - tx) * ty, tx * ty};
     return blend(o, idx, w, 4, out);
 }
+
+glow_result glow_sample_lightmap_detail(const glow_cache_outputs *o, float u, float v, float out[3]) {
+    if (!out) return GLOW_ERROR_INVALID_ARGUMENT;
+    out[0] = out[1] = out[2] = 0.0f;
+    if (!o || !o->lightmap_detail || o->detail_width == 0 || o->detail_height == 0) return GLOW_ERROR_INVALID_ARGUMENT;
+    uint32_t x0, x1, y0, y1;
+    float tx, ty;
+    axis_coord(u * (float)o->detail_width - 0.5f, o->detail_width, &x0, &x1, &tx);
+    axis_coord(v * (float)o->detail_height - 0.5f, o->detail_height, &y0, &y1, &ty);
+    const size_t W = o->detail_width;
+    const size_t idx[4] = {(size_t)y0 * W + x0, (size_t)y0 * W + x1, (size_t)y1 * W + x0, (size_t)y1 * W + x1};
+    const float w[4] = {(1 - tx) * (1 - ty), tx * (1 - ty), (1 - tx) * ty, tx * ty};
+    float rgb[3] = {0.0f, 0.0f, 0.0f}, a = 0.0f;
+    for (int i = 0; i < 4; ++i) {
+        const float *t = o->lightmap_detail + 4 * idx[i];
+        for (int k = 0; k < 3; ++k) rgb[k] += w[i] * t[k];
+        a += w[i] * t[3];
+    }
+    if (!(a > 1e-6f)) return GLOW_ERROR_OUT_OF_RANGE;
+    for (int k = 0; k < 3; ++k) out[k] = rgb[k] / a;
+    return GLOW_OK;
+}

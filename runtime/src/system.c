@@ -39,6 +39,7 @@
 #define SURFEL_CHUNK 2048u
 #define NODE_CHUNK 2048u
 #define CACHE_CHUNK 16u
+#define DETAIL_CHUNK 1024u
 #define MAX_ITERATIONS 64u
 #define ALBEDO_MAX 0.999f
 
@@ -87,6 +88,11 @@ struct glow_system {
      * the GL outputs kernel); the CPU output stage writes whole planes (task_output) */
     uint32_t *out_index, *out_cache;
     size_t grid_used, lm_used;
+    /* lightmap detail (LDET): the bake's tables, and the output plane [dh][dw][4] (RGB, coverage) */
+    const glow_bake_detail *det;
+    const uint32_t *det_texel, *det_first, *det_surfel;
+    const float *det_weight;
+    float *det_out;
     glow_cache_outputs out;
     /* controls */
     glow_system_params params;
@@ -311,9 +317,34 @@ static void task_caches_sel(void *data, uint32_t k, uint32_t worker) {
  * masked gathers, plain stores: streaming ones measured slower, the planes stay in L3): 0.62-0.70x the time of writing only the non-empty entries
  * (Sponza moderate, where 97 % of the lightmap is in use; paired runs, one thread). */
 _Static_assert(GLOW__CL_EMPTY == GLOW_MAP_EMPTY, "one empty marker");
+static void detail_range(glow_system *s, uint32_t first, uint32_t end) {
+    const float *restrict rad = s->rad, *restrict w = s->det_weight;
+    const uint32_t *restrict fi = s->det_first, *restrict sf = s->det_surfel, *restrict tx = s->det_texel;
+    float *restrict out = s->det_out;
+    for (uint32_t i = first; i < end; ++i) {
+        float y = 0.0f, co = 0.0f, cg = 0.0f;
+        for (uint32_t k = fi[i]; k < fi[i + 1]; ++k) {
+            const float *r = rad + 4 * (size_t)sf[k];
+            y += w[k] * r[0];
+            co += w[k] * r[1];
+            cg += w[k] * r[2];
+        }
+        float *o = out + 4 * (size_t)tx[i];
+        o[0] = y + co - cg; /* glow_ycocg_to_rgb */
+        o[1] = y + cg;
+        o[2] = y - co - cg;
+    }
+}
+
 static void task_output(void *data, uint32_t q, uint32_t worker) {
     (void)worker;
     glow_system *s = data;
+    const uint32_t planes = (s->grid_cells ? s->coeffs : 0u) + (s->lm_texels ? s->coeffs : 0u);
+    if (q >= planes) { /* the lightmap detail, DETAIL_CHUNK texels a task */
+        const uint32_t first = (q - planes) * DETAIL_CHUNK, T = s->det->texel_count;
+        detail_range(s, first, T - first < DETAIL_CHUNK ? T : first + DETAIL_CHUNK);
+        return;
+    }
     const uint32_t nc = s->coeffs, g = s->grid_cells ? nc : 0u;
     const bool grid = q < g;
     const uint32_t k = grid ? q : q - g;
@@ -396,7 +427,7 @@ static void free_system(glow_system *s) {
                     s->cache_sh, s->grid_sh, s->lm_sh, s->grid_map, s->lm_map, s->mat_emis_scale,
                     s->mat_albedo_scale, s->batch_status, s->batch_negative, s->out_index, s->out_cache,
                     s->xblocks, s->slots, s->sub_ratio, s->grp_age, s->grp_delta, s->grp_drift_at, s->grp_centre,
-                    s->grp_pack, s->grp_sel, s->rad_prev, s->uv0};
+                    s->grp_pack, s->grp_sel, s->rad_prev, s->uv0, s->det_out};
     for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; ++i) glow__ctx_free(ctx, bufs[i]);
     glow__ctx_free(ctx, s);
 }
@@ -545,6 +576,9 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     glow_bake_geometry geo;
     glow_bake_get_geometry(desc->bake, &geo);
     if (geo.material_uv) s->uv0 = alloc_array(s, S, 2 * sizeof(float), &ok);
+    s->det = s->lm_texels ? glow__bake_detail(desc->bake, &s->det_texel, &s->det_first, &s->det_surfel, &s->det_weight)
+                          : NULL;
+    if (s->det) s->det_out = alloc_array(s, (size_t)s->det->width * s->det->height, 4 * sizeof(float), &ok);
     if (!ok) {
         GLOW__LOG_ERROR(ctx, GLOW_ERROR_OUT_OF_MEMORY, "glow_system_create(%s): out of memory (%u surfels, %u caches)",
                         label, s->S, s->C);
@@ -635,6 +669,10 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
         }
     if (s->grid_cells) memset(s->grid_sh, 0, s->grid_cells * s->coeffs * sizeof(float));
     if (s->lm_texels) memset(s->lm_sh, 0, s->lm_texels * s->coeffs * sizeof(float));
+    if (s->det) { /* RGB 0 until the first update; A = 1 where a detail texel covers a surface */
+        memset(s->det_out, 0, (size_t)s->det->width * s->det->height * 4 * sizeof(float));
+        for (uint32_t i = 0; i < s->det->texel_count; ++i) s->det_out[4 * (size_t)s->det_texel[i] + 3] = 1.0f;
+    }
     glow__ctx_start_pool(ctx); /* threads start here, never in an update */
     glow__ctx_run(ctx, task_feedback_setup, s, div_up(s->S, SURFEL_CHUNK));
     if (s->xblocks) glow__ctx_run(ctx, task_expand, s, div_up(s->C, EXPAND_CHUNK));
@@ -665,6 +703,11 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     if (s->lm_texels) {
         s->out.lightmap_width = m->lightmap_width;
         s->out.lightmap_height = m->lightmap_height;
+    }
+    if (s->det) {
+        s->out.detail_width = s->det->width;
+        s->out.detail_height = s->det->height;
+        s->out.lightmap_detail = s->det_out;
     }
     glow__bake_retain(desc->bake);
     *out = s;
@@ -1069,7 +1112,8 @@ static glow_result system_update(glow_system *s, const glow_update_desc *desc) {
         st.caches_skipped_budget = st.caches_skipped_converged = 0;
     }
     double t4 = now_ms();
-    glow__ctx_run(s->ctx, task_output, s, (s->grid_cells ? s->coeffs : 0u) + (s->lm_texels ? s->coeffs : 0u));
+    glow__ctx_run(s->ctx, task_output, s, (s->grid_cells ? s->coeffs : 0u) + (s->lm_texels ? s->coeffs : 0u) +
+                                              (s->det ? div_up(s->det->texel_count, DETAIL_CHUNK) : 0u));
     double t5 = now_ms();
     st.output_ms = t5 - t4;
     st.total_ms = t5 - t_begin;
@@ -1142,5 +1186,15 @@ glow_result glow_system_get_solver_tables(const glow_system *s, glow_solver_tabl
                               .material_revision = s->material_revision,
                               .direct_irradiance = s->direct,
                               .direct_revision = s->direct_revision};
+    if (s->det) {
+        t->detail_width = s->det->width;
+        t->detail_height = s->det->height;
+        t->detail_texels = s->det->texel_count;
+        t->detail_links = s->det->link_count;
+        t->detail_texel = s->det_texel;
+        t->detail_first = s->det_first;
+        t->detail_surfel = s->det_surfel;
+        t->detail_weight = s->det_weight;
+    }
     return GLOW_OK;
 }

@@ -8,8 +8,9 @@
  *     radiance = emission + direct + indirect
  *     direct   = glow_host_surfel_irradiance(p, n, material) · albedo/π      (the lights' GLSL hook:
  *                glow_gl_lights_hook_source — the same function that lights Glow's surfels on the GPU)
- *     indirect = albedo · glow_shade_sh(SH, n, 1)                               (glow_shading.glsl: SH =
- *                glow_sample_lightmap at the triangle's lightmap uv; spheres: glow_sample_grid at p)
+ *     indirect = albedo · (glow_shade_sh(SH, n, 1) + detail)                    (glow_shading.glsl: SH =
+ *                glow_sample_lightmap at the triangle's lightmap uv, detail = glow_sample_lightmap_detail
+ *                there for bakes with a lightmap detail; spheres: glow_sample_grid at p, no detail)
  *     emission = the material's (front faces), through an optional GLSL hook (animated emitters)
  * albedo and emission are the bake's materials (glow_bake_get_material) times the CPU system's scales
  * (glow_system_params.emission_scale, glow_system_set_material; effective albedo clamped to 0.999 as
@@ -47,7 +48,7 @@
  *   3 aux1  (shading normal xyz, 1 when the SH lookup found caches else 0)
  *   4 aux2  (world position xyz, 1)
  *
- * GL STATE: sample_gl_draw binds its framebuffer, program, vertex arrays, texture units 0-3, the
+ * GL STATE: sample_gl_draw binds its framebuffer, program, vertex arrays, texture units 0-6, the
  * material SSBO at SAMPLE_GL_MATERIAL_BINDING and sets depth test, culling, polygon offset, viewport;
  * it leaves them so. The lights' hook resources (UBO 8, texture units 8 and 9) are the caller's to
  * bind (glow_gl_lights_bind) before drawing.
@@ -273,9 +274,10 @@ static const char sample_gl__scene_fs[] =
     "layout(binding = 1) uniform usampler3D u_grid_mask;\n"
     "layout(binding = 2) uniform sampler2DArray u_lightmap;\n"
     "layout(binding = 3) uniform usampler2D u_lightmap_valid;\n"
+    "layout(binding = 6) uniform sampler2D u_lightmap_detail;\n"
     "struct sample_material { vec4 albedo; vec4 emission; };\n"
     "layout(std430, binding = SAMPLE_GL_MATERIAL_BINDING) readonly buffer sample_materials { sample_material sample_mat[]; };\n"
-    "uniform int u_direct, u_indirect, u_object, u_has_grid, u_has_lightmap;\n"
+    "uniform int u_direct, u_indirect, u_object, u_has_grid, u_has_lightmap, u_has_detail;\n"
     "uniform vec3 u_object_albedo, u_grid_origin;\n"
     "uniform float u_grid_spacing;\n"
     "uniform uvec3 u_grid_dims;\n"
@@ -298,7 +300,9 @@ static const char sample_gl__scene_fs[] =
     "    bool has = false;\n"
     "    if (u_object != 0) { if (u_has_grid != 0) has = glow_sample_grid(u_grid, u_grid_mask, u_grid_origin, u_grid_spacing, ivec3(u_grid_dims), v_pos, sh); }\n"
     "    else if (u_has_lightmap != 0) has = glow_sample_lightmap(u_lightmap, u_lightmap_valid, v_uv, sh);\n"
-    "    vec3 indirect = has ? albedo * glow_shade_sh(sh, n, 1.0) : vec3(0.0);\n"
+    "    vec3 e_ind = has ? glow_shade_sh(sh, n, 1.0) : vec3(0.0);\n"
+    "    if (has && u_object == 0 && u_has_detail != 0) e_ind += glow_sample_lightmap_detail(u_lightmap_detail, v_uv);\n"
+    "    vec3 indirect = albedo * e_ind;\n"
     "    vec3 direct = vec3(0.0);\n"
     "    if (u_view == SAMPLE_VIEW_DIRECT || (u_view == SAMPLE_VIEW_FINAL && u_direct != 0))\n"
     "        direct = glow_host_surfel_irradiance(v_pos, n, v_mat) * albedo * (1.0 / GLOW_PI);\n"
@@ -1095,9 +1099,11 @@ static inline int sample_gl_draw(sample_gl *r, const sample_gl_frame *f) {
     gl->BindTextureUnit(3, o->lightmap_valid_texture);
     gl->BindTextureUnit(4, r->sky_tex);
     gl->BindTextureUnit(5, r->albedo_tex);
+    gl->BindTextureUnit(6, o->lightmap_detail_texture);
     gl->BindSampler(5, r->albedo_sampler);
     gl->BindSampler(4, 0);
     for (GLuint u = 0; u < 4; u++) gl->BindSampler(u, r->sampler); /* NEAREST: see sample_gl_create */
+    gl->BindSampler(6, r->sampler);
 
     GLuint p = r->prog_scene;
     sample_gl__set_common(r, p, f, vp);
@@ -1105,6 +1111,7 @@ static inline int sample_gl_draw(sample_gl *r, const sample_gl_frame *f) {
     gl->Uniform1i(gl->GetUniformLocation(p, "u_indirect"), f->indirect ? 1 : 0);
     gl->Uniform1i(gl->GetUniformLocation(p, "u_has_grid"), o->grid_texture != 0);
     gl->Uniform1i(gl->GetUniformLocation(p, "u_has_lightmap"), o->lightmap_texture != 0);
+    gl->Uniform1i(gl->GetUniformLocation(p, "u_has_detail"), o->lightmap_detail_texture != 0);
     gl->Uniform1i(gl->GetUniformLocation(p, "u_has_sky"), r->sky_tex ? 1 : 0);
     gl->Uniform1i(gl->GetUniformLocation(p, "u_textures"), r->albedo_tex ? 1 : 0);
     gl->Uniform3fv(gl->GetUniformLocation(p, "u_grid_origin"), 1, o->grid_origin);

@@ -20,9 +20,12 @@
  *   #define GLOW_SH_BANDS_CHROMA 3
  *   #include "glow_shading.glsl"
  *   vec4 sh[GLOW_SH_PLANES];
- *   if (glow_sample_lightmap(lm, lm_valid, uv, sh)) color += albedo * glow_shade_sh(sh, n, 1.0);
+ *   if (glow_sample_lightmap(lm, lm_valid, uv, sh))
+ *       color += albedo * max(glow_shade_sh(sh, n, 1.0) + glow_sample_lightmap_detail(detail, uv), 0.0);
  * glow_shade_sh(sh, n, 1) is the cosine-weighted mean incident radiance E/π, so a Lambertian surface of
  * albedo ρ reflects ρ · glow_shade_sh(...); for a glossy lobe pass the reflection vector and its exponent.
+ * The lightmap detail (bakes with one: glow_gl_outputs.lightmap_detail_texture) adds the light of
+ * surfaces beside the texel that the lightmap is too coarse for; leave it out for glossy lobes.
  */
 #ifndef GLOW_SHADING_GLSL
 #define GLOW_SHADING_GLSL
@@ -114,6 +117,25 @@ bool glow_sample_lightmap(sampler2DArray lightmap, usampler2D lightmap_valid, ve
     if (!(wsum > 0.0)) return false;
     for (int q = 0; q < GLOW_SH_PLANES; ++q) sh[q] /= wsum;
     return true;
+}
+
+/** The lightmap detail (glow_gl_outputs.lightmap_detail_texture, bakes made with glow-bake
+ * --lightmap-detail) at uv, the lightmap's UVs: bilinear, clamped to the edge, weighted by coverage (A)
+ * and renormalised, as glow.h glow_sample_lightmap_detail. Add it to glow_shade_sh(lightmap sample, n,
+ * 1.0) before clamping at 0 and multiplying by the albedo. vec3(0) where no neighbour covers a surface. */
+vec3 glow_sample_lightmap_detail(sampler2D detail, vec2 uv) {
+    ivec2 size = textureSize(detail, 0);
+    vec2 f = clamp(uv * vec2(size) - 0.5, vec2(0.0), vec2(size - 1));
+    vec2 fl = floor(f);
+    ivec2 i0 = ivec2(fl), i1 = min(i0 + 1, size - 1);
+    vec2 t = f - fl;
+    vec4 acc = vec4(0.0);
+    for (int c = 0; c < 4; ++c) {
+        ivec2 cc = ivec2((c & 1) != 0 ? i1.x : i0.x, (c & 2) != 0 ? i1.y : i0.y);
+        float w = ((c & 1) != 0 ? t.x : 1.0 - t.x) * ((c & 2) != 0 ? t.y : 1.0 - t.y);
+        acc += w * texelFetch(detail, cc, 0);
+    }
+    return acc.w > 1e-6 ? acc.xyz / acc.w : vec3(0.0);
 }
 
 #endif /* GLOW_SHADING_GLSL */

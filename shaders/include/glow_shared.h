@@ -5,7 +5,7 @@
  *
  * Bindings are per kernel (the backend binds before every dispatch); the HOST HOOK (surfel_direct.comp)
  * may use any texture unit and SSBO/UBO bindings >= GLOW_BINDING_HOST_FIRST. Glow's kernels use no
- * texture units and image units 0..1 only (outputs.comp).
+ * texture units and image units 0..2 only (outputs.comp, detail.comp).
  *
  *   kernel            SSBO bindings (see GLOW_BINDING_*)                         UBO 0
  *   surfel_direct     SURFEL_GEOM, DIRECT (w), STATUS (rw)                       params
@@ -14,6 +14,7 @@
  *   pull_tail         NODES, FLUX (rw), LEVELS                  uniform uvec2 glow_tail (first level, end)
  *   cache_light       LINKS, FLUX, CACHE_SH (w)                                  params
  *   outputs           OUTPUT_PAIRS, CACHE_SH; images 0 grid, 1 lightmap          params
+ *   detail            DETAIL_TEXELS, DETAIL_LINKS, FLUX; image 2 detail           params
  */
 #ifndef GLOW_SHARED_H
 #define GLOW_SHARED_H
@@ -44,12 +45,15 @@ typedef struct glow_vec4 { float x, y, z, w; } glow_vec4;
 #define GLOW_BINDING_LINKS 7        /* uint[]: the bake's link blocks (32 uints = 16 links each) */
 #define GLOW_BINDING_OUTPUT_PAIRS 7 /* outputs only: uvec2[grid_used + lightmap_used] (cell/texel, cache) */
 #define GLOW_BINDING_LEVELS 7       /* pull_tail only: uint[level_count + 1] level starts */
+#define GLOW_BINDING_DETAIL_TEXELS 0 /* detail only: uvec2[texels + 1] (texel y * width + x, first link) */
+#define GLOW_BINDING_DETAIL_LINKS 1  /* detail only: uvec2[links] (leaf surfel, floatBits(weight)) */
 #define GLOW_BINDING_HOST_FIRST 8   /* first SSBO/UBO binding the host hook may use */
 /* UBO binding of glow_gl_params */
 #define GLOW_BINDING_PARAMS 0
 /* image units of outputs.comp */
 #define GLOW_IMAGE_GRID 0     /* image3D rgba32f: plane p of cell (x,y,z) at (x, y, z + p * dz) */
 #define GLOW_IMAGE_LIGHTMAP 1 /* image2DArray rgba32f: plane p of texel (x,y) at layer p */
+#define GLOW_IMAGE_DETAIL 2   /* detail.comp: image2D rgba32f, the lightmap detail (RGB correction, coverage) */
 
 /* workgroup sizes (the kernels #error without them; the backend defines them from here) */
 #define GLOW_SURFEL_GROUP 64
@@ -57,6 +61,7 @@ typedef struct glow_vec4 { float x, y, z, w; } glow_vec4;
 #define GLOW_PULL_TAIL_MAX 256 /* levels of at most this many nodes (and all above them) go to pull_tail */
 #define GLOW_CACHE_GROUP 64   /* one workgroup per cache, threads across its links */
 #define GLOW_OUTPUT_GROUP 64
+#define GLOW_DETAIL_GROUP 64
 #define GLOW_REDUCE_CHUNK 32  /* coefficients reduced per shared-memory pass */
 #define GLOW_MAX_GROUPS_X 65535u /* dispatches wider than this use y (index = y * 65535 + x) */
 
@@ -87,7 +92,7 @@ GLOW_STRUCT(glow_gl_params) {
     glow_uint surfel_count, node_count, cache_count, coeff_count;
     glow_uint blocks_per_cache, grid_used, lightmap_used, planes;
     glow_uint grid_dx, grid_dy, grid_dz, lightmap_width;
-    glow_uint lightmap_height, reserved0, reserved1, reserved2;
+    glow_uint lightmap_height, detail_texels, detail_width, reserved2;
     glow_float surfel_area, bounce_intensity, reserved3, reserved4;
 };
 

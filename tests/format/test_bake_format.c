@@ -163,6 +163,11 @@ typedef struct test_bake {
     glow_bake_triangle tri[2];
     float tuv0[2][6];
     char texp[2][GLOW_BAKE_TEXTURE_PATH];
+    struct { /* LDET (1.2): two detail texels of a 4 x 4 detail over the 2 x 2 lightmap, three links */
+        glow_bake_detail h;
+        uint32_t texel[2], first[3], surfel[3];
+        float weight[3];
+    } ldet;
 } test_bake;
 
 #define OCT_UP 0x7FFF0000u /* (0, 1, 0): u = 0, v = 32767 */
@@ -292,10 +297,16 @@ static void build_golden(test_bake *b) {
     b->tri[1].material = 1;
     b->tri[1].source = 2;
     b->tri[1].normal_oct = OCT_UP;
+
+    b->ldet.h = (glow_bake_detail){.factor = 2, .width = 4, .height = 4, .texel_count = 2, .link_count = 3};
+    b->ldet.texel[0] = 1, b->ldet.texel[1] = 6;
+    b->ldet.first[0] = 0, b->ldet.first[1] = 2, b->ldet.first[2] = 3;
+    b->ldet.surfel[0] = 0, b->ldet.surfel[1] = 1, b->ldet.surfel[2] = 1;
+    b->ldet.weight[0] = 0.5f, b->ldet.weight[1] = -0.25f, b->ldet.weight[2] = 0.1f;
 }
 
 enum { WITH_SHLK = 1, NO_GEOM = 2, NO_GRID = 4, NO_LMAP = 8, EXTRA_UNKNOWN = 16, WITH_LSUB = 32, SHORT_LSUB = 64,
-       WITH_TEX = 128, SHORT_TUV0 = 256 };
+       WITH_TEX = 128, SHORT_TUV0 = 256, WITH_LDET = 512, SHORT_LDET = 1024 };
 
 static uint32_t sections_of(const test_bake *b, int flags, glow__section_data *s) {
     static const unsigned char unknown_payload[5] = {1, 2, 3, 4, 5};
@@ -319,6 +330,7 @@ static uint32_t sections_of(const test_bake *b, int flags, glow__section_data *s
         ADD(GLOW_SECTION_TUV0, b->tuv0, (flags & SHORT_TUV0) ? sizeof b->tuv0 - 4u : sizeof b->tuv0);
         ADD(GLOW_SECTION_TEXP, b->texp, sizeof b->texp);
     }
+    if (flags & (WITH_LDET | SHORT_LDET)) ADD(GLOW_SECTION_LDET, &b->ldet, (flags & SHORT_LDET) ? sizeof b->ldet - 4u : sizeof b->ldet);
 #undef ADD
     return n;
 }
@@ -449,6 +461,41 @@ static void test_load_valid(void **state) {
 
 static void test_load_variants(void **state) {
     (void)state;
+    /* lightmap detail (LDET, 1.2): sizes, ranges, order, finite weights */
+    _Static_assert(sizeof(((test_bake *)0)->ldet) == 32 + 4 * (2 + 3 + 3 + 3), "LDET payload without padding");
+    EXPECT_PATCHED(WITH_LDET, GLOW_OK, NULL, (void)b);
+    EXPECT_PATCHED(SHORT_LDET, GLOW_ERROR_CORRUPT_DATA, "section 'LDET' is", (void)b);
+    EXPECT_PATCHED(WITH_LDET, GLOW_ERROR_OUT_OF_RANGE, "LDET link 2: surfel 2", b->ldet.surfel[2] = 2);
+    EXPECT_PATCHED(WITH_LDET, GLOW_ERROR_CORRUPT_DATA, "not ascending", b->ldet.texel[1] = 1);
+    EXPECT_PATCHED(WITH_LDET, GLOW_ERROR_CORRUPT_DATA, "outside the grid", b->ldet.texel[1] = 16);
+    EXPECT_PATCHED(WITH_LDET, GLOW_ERROR_CORRUPT_DATA, "does not fit", b->ldet.h.width = 6);
+    EXPECT_PATCHED(WITH_LDET, GLOW_ERROR_CORRUPT_DATA, "does not fit", b->ldet.h.factor = 1; b->ldet.h.width = 2;
+                   b->ldet.h.height = 2);
+    EXPECT_PATCHED(WITH_LDET, GLOW_ERROR_CORRUPT_DATA, "decreasing", b->ldet.first[1] = 4);
+    EXPECT_PATCHED(WITH_LDET, GLOW_ERROR_CORRUPT_DATA, "not 0 to link_count", b->ldet.first[0] = 1);
+    EXPECT_PATCHED(WITH_LDET, GLOW_ERROR_CORRUPT_DATA, "weight", b->ldet.weight[1] = NAN);
+    {
+        test_bake tb;
+        build_golden(&tb);
+        size_t size;
+        unsigned char *img = write_bake(&tb, WITH_LDET, &size);
+        test_log log;
+        glow_context *ctx = make_ctx(&log);
+        glow_bake *bake = NULL;
+        assert_int_equal(glow_bake_load(ctx, img, size, &bake), GLOW_OK);
+        const uint32_t *texel, *first, *surfel;
+        const float *weight;
+        const glow_bake_detail *dh = glow__bake_detail(bake, &texel, &first, &surfel, &weight);
+        assert_non_null(dh);
+        assert_int_equal(dh->texel_count, 2);
+        assert_int_equal(texel[1], 6);
+        assert_int_equal(first[2], 3);
+        assert_int_equal(surfel[1], 1);
+        assert_true(weight[1] == -0.25f);
+        glow_bake_destroy(bake);
+        glow_context_destroy(ctx);
+        free(img);
+    }
     /* full-SH links */
     EXPECT_PATCHED(WITH_SHLK, GLOW_OK, NULL, b->meta.link_kind |= GLOW_LINK_KIND_FULL_SH);
     {

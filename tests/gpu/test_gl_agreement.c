@@ -114,6 +114,10 @@ static int make_fixture(fixture *f, const char *scene, const char *hook, uint32_
         fprintf(stderr, "%s: the bake has no link subsets (LSUB): the GPU's subset path would go untested\n", scene);
         return -1;
     }
+    if (!tables.detail_texels || !tables.detail_links) {
+        fprintf(stderr, "%s: the bake has no lightmap detail (LDET): the GPU's detail kernel would go untested\n", scene);
+        return -1;
+    }
     glow_gl_desc gd = {.system = f->cpu, .get_proc_address = glow_glctx_get_proc_address(g_gl), .hook_glsl = hook,
                        .flags = flags, .label = scene, .logger = {logger, NULL}};
     glow_result r = glow_gl_system_create(&gd, &f->gpu);
@@ -167,6 +171,40 @@ static double compare(fixture *f, const char *what) {
     return worst;
 }
 
+/* The lightmap detail texture against the CPU's detail plane (RGB and coverage), in units of the
+ * tolerance: 1e-3 of the largest |value| of the plane plus 1e-6 absolute. */
+static double compare_detail(fixture *f, const char *what) {
+    const glow_cache_outputs *o = glow_system_outputs(f->cpu);
+    const glow_gl_outputs *go = glow_gl_system_outputs(f->gpu);
+    assert_non_null(o->lightmap_detail);
+    assert_int_not_equal(go->lightmap_detail_texture, 0);
+    assert_int_equal(go->detail_width, o->detail_width);
+    assert_int_equal(go->detail_height, o->detail_height);
+    const size_t n = (size_t)o->detail_width * o->detail_height * 4u;
+    float *g = malloc(n * sizeof *g);
+    assert_non_null(g);
+    glow_glfns fns;
+    assert_true(glow_glfns_load(&fns, glow_glctx_get_proc_address(g_gl), NULL, 0));
+    fns.MemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT);
+    fns.GetTextureImage(go->lightmap_detail_texture, 0, GL_RGBA, GL_FLOAT, (GLsizei)(n * sizeof *g), g);
+    double scale = 0.0, worst = 0.0;
+    size_t covered = 0, wi = 0, nonzero = 0;
+    for (size_t i = 0; i < n; ++i) scale = fmax(scale, fabs(o->lightmap_detail[i]));
+    for (size_t i = 0; i < n; ++i) {
+        assert_true(isfinite(g[i]));
+        const double e = fabs((double)g[i] - o->lightmap_detail[i]) / (1e-3 * scale + 1e-6);
+        if (e > worst) worst = e, wi = i;
+        if (i % 4 == 3) covered += o->lightmap_detail[i] == 1.0f;
+        else nonzero += o->lightmap_detail[i] != 0.0f;
+    }
+    printf("  %-34s detail %ux%u, %zu texels cover a surface, %zu non-zero values: worst %.3f of tolerance "
+           "(value %zu: cpu %.6g gpu %.6g)\n",
+           what, o->detail_width, o->detail_height, covered, nonzero, worst, wi, o->lightmap_detail[wi], g[wi]);
+    free(g);
+    assert_true(covered > 0 && nonzero > 0); /* a comparison of zeros proves nothing */
+    return worst;
+}
+
 /* both solvers, `updates` updates with the same inputs */
 static void run_both(fixture *f, uint32_t updates, uint32_t flags) {
     for (uint32_t u = 0; u < updates; ++u) {
@@ -197,6 +235,7 @@ static void agree_scene(const char *scene, uint32_t luma, uint32_t chroma) {
     assert_true(compare(&f, "after 1 bounce update") <= 1.0);
     run_both(&f, 19, 0);
     assert_true(compare(&f, "after 20 bounce updates") <= 1.0);
+    assert_true(compare_detail(&f, "lightmap detail, 20 updates") <= 1.0);
     /* artist controls through the CPU system reach the GPU at the next update */
     glow_system_params p = {.bounce_intensity = 0.6f, .emission_scale = 3.0f, .bounce_iterations = 3};
     assert_int_equal(glow_system_set_params(f.cpu, &p), GLOW_OK);
@@ -204,6 +243,7 @@ static void agree_scene(const char *scene, uint32_t luma, uint32_t chroma) {
     push_light(&f, 0.5f);
     run_both(&f, 2, 0);
     assert_true(compare(&f, "params, material, new light") <= 1.0);
+    assert_true(compare_detail(&f, "lightmap detail, new light") <= 1.0);
     run_both(&f, 1, GLOW_UPDATE_FLAG_RESET_BOUNCE);
     assert_true(compare(&f, "after a bounce reset") <= 1.0);
     /* a material change alone: the GL side notices it by the tables' material_revision */

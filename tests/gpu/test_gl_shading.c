@@ -7,7 +7,8 @@
  *     Cornell box's grid (GVIS masks, empty cells, clamping at the border) vs glow_sample_grid +
  *     glow_shade_sh on the same caches (the GPU's, read back), and glow_sample_lightmap at 512 random
  *     uvs vs glow_sample_lightmap: |diff| <= 1e-4 · (max |result|) — the two blend the same texels with
- *     weights renormalised in a different order.
+ *     weights renormalised in a different order; glow_sample_lightmap_detail at the same uvs on the
+ *     GPU's lightmap detail vs glow_sample_lightmap_detail: |diff| <= 1e-5 · (max |result|).
  * Exits 77 (skipped) without a GL 4.5 context. */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -228,6 +229,49 @@ static void test_sampling(void **state) {
     assert_true(worst[0] <= 1e-4 * scale[0]);
     assert_true(worst[1] <= 1e-4 * scale[1]);
     free(coeffs);
+    /* the lightmap detail: glow_sample_lightmap_detail (GLSL) on the GPU's detail texture vs the C one on
+     * the same texels, read back */
+    {
+        assert_int_not_equal(go->lightmap_detail_texture, 0);
+        const size_t dn = (size_t)go->detail_width * go->detail_height * 4u;
+        float *det = malloc(dn * sizeof *det);
+        gl.GetTextureImage(go->lightmap_detail_texture, 0, GL_RGBA, GL_FLOAT, (GLsizei)(dn * sizeof *det), det);
+        co.lightmap_detail = det;
+        co.detail_width = go->detail_width;
+        co.detail_height = go->detail_height;
+        const char *dbody =
+            "layout(local_size_x = 64) in;\n"
+            "layout(std430, binding = 1) readonly buffer U { vec4 uvs[]; };\n"
+            "layout(std430, binding = 2) writeonly buffer R { vec4 res[]; };\n"
+            "layout(binding = 4) uniform sampler2D det;\n"
+            "void main() { uint i = gl_GlobalInvocationID.x; res[i] = vec4(glow_sample_lightmap_detail(det, uvs[i].xy), 0.0); }\n";
+        GLuint dp = compute_program(3, 2, dbody), dr = ssbo(N * 16, NULL);
+        gl.UseProgram(dp);
+        gl.BindTextureUnit(4, go->lightmap_detail_texture);
+        gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, bu);
+        gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, dr);
+        gl.DispatchCompute(N / 64, 1, 1);
+        gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+        static float dres[N * 4];
+        gl.GetNamedBufferSubData(dr, 0, sizeof dres, dres);
+        double dworst = 0.0, dscale = 0.0;
+        int dhits = 0;
+        for (int i = 0; i < N; ++i) {
+            float ref[3];
+            dhits += glow_sample_lightmap_detail(&co, uvs[4 * i], uvs[4 * i + 1], ref) == GLOW_OK;
+            for (int c = 0; c < 3; ++c) {
+                dworst = fmax(dworst, fabs((double)dres[4 * i + c] - ref[c]));
+                dscale = fmax(dscale, fabs(ref[c]));
+            }
+        }
+        printf("  lightmap detail %ux%u: %d/%d lookups cover a surface, worst |GLSL - C| %.2e (max %.3g)\n",
+               go->detail_width, go->detail_height, dhits, N, dworst, dscale);
+        assert_true(dhits > N / 10 && dscale > 0.0);
+        assert_true(dworst <= 1e-5 * dscale);
+        gl.DeleteBuffers(1, &dr);
+        gl.DeleteProgram(dp);
+        free(det);
+    }
     free(sh);
     /* host-owned output textures: a second GL system writing into textures the host made gives the same texels */
     {

@@ -3,7 +3,7 @@
  * backend's textures (glow_gl.h) in its `indirect` view; the image is read back (float target) with
  * each pixel's lightmap uv, material, normal and position (the renderer's aux targets), and every
  * covered pixel is shaded again on the CPU from the CPU system's outputs:
- *     bake triangles:  albedo · glow_shade_sh(glow_sample_lightmap(uv), n, 1)
+ *     bake triangles:  albedo · (glow_shade_sh(glow_sample_lightmap(uv), n, 1) + glow_sample_lightmap_detail(uv))
  *     the sphere:      albedo · glow_shade_sh(glow_sample_grid(p), n, 1)
  * Both systems are made from the same bake and lit by the same direct light (an analytic point light
  * pushed to the CPU system with glow_system_set_surfel_irradiance; the GL system has no hook and
@@ -161,8 +161,13 @@ static errors compare(const fixture *f, const glow_system *sys, const image *img
                 albedo[c] = fminf(mi.albedo[c] * t.material_albedo_scale[3 * m + (uint32_t)c], 0.999f);
                 emission[c] = mi.emission[c] * t.material_emission_scale[3 * m + (uint32_t)c] * prm.emission_scale;
             }
-            if (glow_sample_lightmap(o, a0[0], a0[1], coeffs) == GLOW_OK)
+            if (glow_sample_lightmap(o, a0[0], a0[1], coeffs) == GLOW_OK) {
                 glow_shade_sh(coeffs, o->sh_bands_luma, o->sh_bands_chroma, a1, 1.0f, rgb);
+                float det[3];
+                assert_non_null(o->lightmap_detail); /* the fixture's bake has a lightmap detail: it is drawn too */
+                if (glow_sample_lightmap_detail(o, a0[0], a0[1], det) == GLOW_OK)
+                    for (int c = 0; c < 3; c++) rgb[c] += det[c];
+            }
         } else {
             memcpy(albedo, SPHERE.albedo, sizeof albedo);
             if (glow_sample_grid(o, a2, coeffs) == GLOW_OK)

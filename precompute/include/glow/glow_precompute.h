@@ -99,6 +99,12 @@ typedef struct glow_pc_settings {
     float link_cluster_angle;   /* clustered: a cluster looks at most this many radians (bounding radius
                                    over distance) from the cache; 0 = default (--link-cluster-angle) */
     uint32_t link_cluster_rays; /* clustered: sampled rays per cluster; 0 = default (--link-cluster-rays) */
+    uint32_t lightmap_detail;   /* detail texels per lightmap texel side (2..4), each correcting its caches'
+                                   near light through a few links to the surfels beside it (LDET,
+                                   docs/linker.md "Lightmap detail"); 0 = default, 1 = none (--lightmap-detail) */
+    uint32_t detail_links;      /* at most this many links per detail texel; 0 = default (--detail-links) */
+    float detail_radius;        /* a detail texel corrects the light of surfels within this many lightmap
+                                   texels of it; 0 = default (--detail-radius) */
 } glow_pc_settings;
 
 typedef struct glow_pc_stats {
@@ -132,6 +138,11 @@ typedef struct glow_pc_stats {
     uint64_t section_size[16];
     double bytes_per_link;    /* LINK section bytes / links */
     char error[1024];         /* last error message, "" on success */
+    /* new fields go last. The lightmap detail (glow_pc_settings.lightmap_detail): */
+    uint32_t detail_factor;   /* detail texels per lightmap texel side, 0 = none */
+    uint32_t detail_texels;   /* detail texels that cover a surface */
+    uint32_t detail_corrected;/* ... of which correct their caches' near light (have links) */
+    uint64_t detail_links;
 } glow_pc_stats;
 
 /** Resolves presets: fills every zero field of `settings` from its quality. \since 0.1 */

@@ -59,7 +59,7 @@ extern "C" {
 /* The bake format this runtime reads and glow-bake writes: a bake of another major is refused
  * (GLOW_ERROR_VERSION_MISMATCH); a newer minor loads, its unknown sections skipped. */
 #define GLOW_BAKE_FORMAT_VERSION_MAJOR 1u
-#define GLOW_BAKE_FORMAT_VERSION_MINOR 1u /* 1.1: material UVs and texture paths (TUV0, TEXP) */
+#define GLOW_BAKE_FORMAT_VERSION_MINOR 2u /* 1.1: material UVs and texture paths (TUV0, TEXP); 1.2: lightmap detail (LDET) */
 #define GLOW_BAKE_FORMAT_MAJOR 1 /* the bake major this runtime reads */
 
 /* GLOW_API marks the public functions. A shared build (BUILD_SHARED_LIBS) compiles the libraries with
@@ -506,6 +506,14 @@ typedef struct glow_cache_outputs {
                                     octant's centre. glow_sample_grid blends only those corners, so a
                                     lookup does not read light through a wall thinner than the spacing */
     uint64_t update_index;       /* successful updates so far */
+    /* \since 0.2, bakes with a lightmap detail (glow-bake --lightmap-detail; 0 / NULL otherwise): a grid
+     * detail_width / lightmap_width times finer over the same atlas, sampled with the same UVs
+     * (glow_sample_lightmap_detail). RGB: the light from surfaces beside the texel (a few decimetres
+     * across a concave corner) that the lightmap's texels are too coarse to hold, as a correction to
+     * add to glow_shade_sh's diffuse result (cosine-lobe mean radiance about the surface normal; it may
+     * be negative, the sum is not); A: 1 where a detail texel covers a surface, else 0 (RGB 0). */
+    uint32_t detail_width, detail_height;
+    const float *lightmap_detail; /* [detail_height][detail_width][4] RGBA, row-major */
 } glow_cache_outputs;
 /** The outputs, owned by the system, valid (and unchanged) until the next update or destroy.
  * NULL for a NULL system. \threadsafety Read concurrently, but not during an update. \since 0.1 */
@@ -554,6 +562,13 @@ GLOW_API glow_result glow_sample_grid(const glow_cache_outputs *outputs, const f
  * row 0), clamped to the edge, empty texels weighted 0 and the rest renormalised.
  * \returns as glow_sample_grid. \since 0.1 */
 GLOW_API glow_result glow_sample_lightmap(const glow_cache_outputs *outputs, float u, float v, float *out_coeffs);
+/** Bilinear sample of the lightmap detail at (u, v) (the lightmap's UVs; texel centres at
+ * (i + 0.5)/detail_width), clamped to the edge, weighted by the coverage (A) and renormalised: RGB to
+ * add to glow_shade_sh(lightmap sample, normal, exponent 1) before clamping the sum at 0 and
+ * multiplying by the albedo. What a GPU gets from a filtered RGBA texture fetch as rgb / a.
+ * \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT (NULL, no detail); GLOW_ERROR_OUT_OF_RANGE when
+ * none of the 4 texels covers a surface (out_rgb zeroed). \since 0.2 */
+GLOW_API glow_result glow_sample_lightmap_detail(const glow_cache_outputs *outputs, float u, float v, float out_rgb[3]);
 
 #ifdef __cplusplus
 }

@@ -60,6 +60,12 @@ typedef struct glow_solver_tables {
                                           slot_i the node's grandchildren (children's children; a leaf
                                           child twice; a leaf itself four times), s = 1 where all q_i
                                           are 0 or Y[node] is 0; docs/bake-format.md "LSUB" */
+    /* the lightmap detail (the bake's LDET; all 0 / NULL without): texel i (detail_texel[i] = y *
+     * detail_width + x) holds sum over k in [detail_first[i], detail_first[i + 1]) of detail_weight[k]
+     * times the radiance of leaf detail_surfel[k], as RGB (glow_cache_outputs.lightmap_detail) */
+    uint32_t detail_width, detail_height, detail_texels, detail_links;
+    const uint32_t *detail_texel, *detail_first, *detail_surfel;
+    const float *detail_weight;
 } glow_solver_tables;
 /** Fills `out_tables`. \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT for NULL. \threadsafety Between
  * updates; the views change only through the setters and updates. \since 0.1 */

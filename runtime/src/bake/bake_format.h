@@ -55,6 +55,9 @@
 #define GLOW_BAKE_TEXTURE_PATH 512u /* bytes per TEXP entry: a NUL-terminated path as the linker opened it, "" for none */
 #define GLOW_SECTION_GVIS GLOW_FOURCC('G', 'V', 'I', 'S') /* uint8_t[dx*dy*dz][8] grid cell visibility (optional; readers that predate it skip it) */
 
+/* Since 1.2 (optional; 1.0 and 1.1 readers skip it): the lightmap detail, see glow_bake_detail. */
+#define GLOW_SECTION_LDET GLOW_FOURCC('L', 'D', 'E', 'T')
+
 /* Cache-map entries (GRID and LMAP): the low 31 bits index the cache array. */
 #define GLOW_MAP_EMPTY 0xFFFFFFFFu   /* no cache here; samples read zero */
 #define GLOW_MAP_COPY_BIT 0x80000000u /* not a cache of its own: a dilated copy of cache (v & ~bit) */
@@ -265,6 +268,26 @@ typedef struct glow_bake_triangle {
     /* 60 */ uint32_t reserved;
 } glow_bake_triangle; /* 64 */
 
+/* Lightmap detail (LDET, optional): a grid `factor` times finer than the lightmap over the same atlas
+ * (width = factor x lightmap_width, height likewise). Each detail texel that covers a surface
+ * corrects the near light the bilinear lightmap lookup at its centre misses (docs/linker.md
+ * "Lightmap detail"):
+ *     correction = sum_k weight[k] * R[surfel[k]]      k in [first[i], first[i + 1])
+ * with R a leaf's radiance (flux / (pi area), as for LINK), in the units of glow_shade_sh's result
+ * (cosine-lobe mean radiance about the texel's normal); weights are signed. Payload:
+ *     glow_bake_detail; uint32_t texel[texel_count] (y * width + x, ascending);
+ *     uint32_t first[texel_count + 1] (first[0] = 0, non-decreasing, first[texel_count] = link_count);
+ *     uint32_t surfel[link_count] (< surfel_count); float weight[link_count] (finite). */
+typedef struct glow_bake_detail {
+    /*  0 */ uint32_t factor;      /* 2..8 */
+    /*  4 */ uint32_t width, height;
+    /* 12 */ uint32_t texel_count; /* detail texels that cover a surface (the rest read nothing) */
+    /* 16 */ uint32_t link_count;
+    /* 20 */ uint32_t reserved[3];
+} glow_bake_detail; /* 32 */
+#define GLOW_BAKE_DETAIL_MAX_FACTOR 8u
+
+_Static_assert(sizeof(glow_bake_detail) == 32, "detail header is 32 bytes");
 _Static_assert(sizeof(glow_bake_header) == 64, "header is 64 bytes");
 _Static_assert(offsetof(glow_bake_header, file_size) == 16, "header layout");
 _Static_assert(offsetof(glow_bake_header, header_crc32) == 32, "header layout");

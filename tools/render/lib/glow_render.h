@@ -105,6 +105,7 @@ typedef struct glow_render_glow_settings {
                                    and the cache lookups only. Glow's direct image equals the reference's
                                    for the same seed, size and spp, so final = reference direct + this
                                    indirect (glow-compare --add): the sweeps of glow-eval run this way */
+    bool no_detail;             /* ignore the bake's lightmap detail (LDET): the lightmap alone */
 } glow_render_glow_settings;
 
 typedef struct glow_render_result {

@@ -96,6 +96,7 @@ typedef struct glow_view {
     glow_system *sys;
     const glow_cache_outputs *out;
     bool indirect_only; /* glow_render_glow_settings.indirect_only */
+    bool no_detail;     /* glow_render_glow_settings.no_detail */
     float (*lm_uv)[6]; /* [tri] the bake's lightmap UV per corner, or NULL without a lightmap */
 } glow_view;
 
@@ -294,6 +295,7 @@ static void emitter_nee(const render_ctx *c, rng *rp, const surf *s, float out[3
 /* Glow's indirect light at the first hit: ρ · (cosine-lobe mean incident radiance of the caches). */
 static void glow_indirect(const render_ctx *c, const surf *s, float *coeffs, worker_stats *ws, float out[3]) {
     out[0] = out[1] = out[2] = 0.0f;
+    float det[3] = {0.0f, 0.0f, 0.0f}; /* the lightmap detail's correction (bakes with LDET) */
     const glow_cache_outputs *o = c->gv->out;
     bool ok = false;
     if (!s->back && c->gv->lm_uv) {
@@ -303,6 +305,7 @@ static void glow_indirect(const render_ctx *c, const surf *s, float *coeffs, wor
         float v = b0 * uv[1] + s->b1 * uv[3] + s->b2 * uv[5];
         ok = glow_sample_lightmap(o, u, v, coeffs) == GLOW_OK;
         if (ok) ws->lm++;
+        if (ok && o->lightmap_detail && !c->gv->no_detail) glow_sample_lightmap_detail(o, u, v, det);
     }
     if (!ok && o->grid_sh) {
         ok = glow_sample_grid(o, s->p, coeffs) == GLOW_OK;
@@ -314,7 +317,7 @@ static void glow_indirect(const render_ctx *c, const surf *s, float *coeffs, wor
     }
     float e[3];
     glow_shade_sh(coeffs, o->sh_bands_luma, o->sh_bands_chroma, s->ns, 1.0f, e);
-    for (int k = 0; k < 3; ++k) out[k] = s->rho[k] * fmaxf(e[k], 0.0f);
+    for (int k = 0; k < 3; ++k) out[k] = s->rho[k] * fmaxf(e[k] + det[k], 0.0f);
 }
 
 /* The rest of a path from hit h (its vertex 2 onwards), reached from prev_p along wdir with throughput
@@ -778,6 +781,7 @@ glow_result glow_render_glow(const glow_render_scene *sc, const char *bake_path,
     double t1 = now_s();
     if (r == GLOW_OK) {
         gv.indirect_only = g.indirect_only;
+        gv.no_detail = g.no_detail;
         r = render(sc, st, &gv, out, message, message_size);
         if (r == GLOW_OK) out->solve_seconds = t1 - t0;
         glow_view_free(&gv);

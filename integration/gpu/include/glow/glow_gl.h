@@ -44,6 +44,7 @@
  *   grid_texture      GL_TEXTURE_3D (dx, dy, dz · planes): plane p of cell (x,y,z) at (x, y, z + p·dz)
  *   grid_mask_texture GL_TEXTURE_3D RG32UI (dx, dy, dz): per cell and octant, the corners a lookup blends
  *   lightmap_texture  GL_TEXTURE_2D_ARRAY (w, h, planes); lightmap_valid_texture GL_TEXTURE_2D R8UI
+ *   lightmap_detail_texture GL_TEXTURE_2D RGBA32F (bakes with a lightmap detail): RGB correction, A coverage
  *   cache_sh_buffer   SSBO float[cache_count][coeff_count] (the bounce state)
  *   flux_buffer       SSBO vec4[node_count]: node flux YCoCg, w = 1/(π area) (for debug views)
  * shaders/include/glow_shading.glsl samples them (glow_sample_grid / glow_sample_lightmap / glow_shade_sh).
@@ -104,6 +105,11 @@ typedef struct glow_gl_outputs {
     uint32_t cache_count;
     uint32_t hook_program;                /* the program running the hook (0 without one) */
     uint64_t update_index;
+    /* bakes with a lightmap detail (glow_cache_outputs.lightmap_detail; 0 otherwise): GL_TEXTURE_2D
+     * RGBA32F detail_width x detail_height, RGB the correction, A 1 where a detail texel covers a surface
+     * (glow_shading.glsl glow_sample_lightmap_detail) */
+    uint32_t lightmap_detail_texture;
+    uint32_t detail_width, detail_height;
 } glow_gl_outputs;
 
 /* GPU time of the last update, per stage, from GL timer queries (ms). */
