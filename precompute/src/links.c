@@ -1098,6 +1098,8 @@ typedef struct detail_job {
     float **acc_f, **acc_c;        /* [workers][surfels] */
     uint32_t **touched;            /* [workers][surfels] */
     uint8_t **mark;                /* [workers][surfels] */
+    uint8_t *relief;               /* [detail texels] detail_sees_relief: the texel has its rays cast */
+    uint8_t *need;                 /* [lightmap caches] read by a detail texel with relief: phase A casts */
     uint32_t *out_s;               /* [detail_count][K] */
     float *out_w;
     uint32_t *out_n;               /* [detail_count] */
@@ -1115,6 +1117,9 @@ static void detail_cache_range(void *p, uint32_t begin, uint32_t end, uint32_t w
     uint8_t *mark = dj->mark[worker];
     const float wr = 2.0f / (float)DETAIL_CACHE_RAYS;
     for (uint32_t li = begin; li < end; ++li) {
+        dj->hits[li] = NULL;
+        dj->hit_count[li] = 0;
+        if (!dj->need[li]) continue; /* no detail texel that corrects anything reads it */
         const glow__cache *c = &ca->caches[ca->grid_cache_count + li];
         float t[3], b[3];
         tangent_frame(c->nrm, t, b);
@@ -1187,6 +1192,42 @@ static bool detail_sees_relief(const detail_job *dj, const float pd[3], const fl
     return found == DETAIL_RELIEF_KNN; /* more surfels within the radius than looked at: cast the rays */
 }
 
+/* The caches a lightmap lookup at detail texel d's centre reads (lm_map entries, GLOW_MAP_EMPTY for
+ * none) and their weights, renormalised over the non-empty ones as glow_sample_lightmap does; false
+ * when all four are empty. */
+static bool detail_lookup(const glow__caches *ca, uint32_t d, uint32_t m4[4], float b4[4]) {
+    const uint32_t D = ca->detail_factor, W = ca->lm_width, H = ca->lm_height;
+    const uint32_t tx = ca->detail_texel[d] % ca->detail_width, ty = ca->detail_texel[d] / ca->detail_width;
+    const float fx = ((float)tx + 0.5f) / (float)D - 0.5f, fy = ((float)ty + 0.5f) / (float)D - 0.5f;
+    float f = fx < 0.0f ? 0.0f : (fx > (float)(W - 1) ? (float)(W - 1) : fx), fl = floorf(f);
+    const uint32_t x0 = (uint32_t)fl, x1 = x0 + 1 < W ? x0 + 1 : x0;
+    const float ax = f - fl;
+    f = fy < 0.0f ? 0.0f : (fy > (float)(H - 1) ? (float)(H - 1) : fy);
+    fl = floorf(f);
+    const uint32_t y0 = (uint32_t)fl, y1 = y0 + 1 < H ? y0 + 1 : y0;
+    const float ay = f - fl;
+    m4[0] = ca->lm_map[(size_t)y0 * W + x0], m4[1] = ca->lm_map[(size_t)y0 * W + x1];
+    m4[2] = ca->lm_map[(size_t)y1 * W + x0], m4[3] = ca->lm_map[(size_t)y1 * W + x1];
+    b4[0] = (1 - ax) * (1 - ay), b4[1] = ax * (1 - ay), b4[2] = (1 - ax) * ay, b4[3] = ax * ay;
+    float bs = 0.0f;
+    for (int i = 0; i < 4; ++i) {
+        if (m4[i] == GLOW_MAP_EMPTY || !(b4[i] > 0.0f) || (m4[i] & GLOW_MAP_INDEX_MASK) < ca->grid_cache_count) {
+            m4[i] = GLOW_MAP_EMPTY; /* (the lightmap's map names lightmap caches only) */
+            b4[i] = 0.0f;
+        }
+        bs += b4[i];
+    }
+    for (int i = 0; i < 4; ++i) b4[i] = bs > 0.0f ? b4[i] / bs : 0.0f;
+    return bs > 0.0f;
+}
+
+static void detail_relief_range(void *p, uint32_t begin, uint32_t end, uint32_t worker) {
+    (void)worker;
+    detail_job *dj = p;
+    const glow__caches *ca = dj->lj->caches;
+    for (uint32_t d = begin; d < end; ++d) dj->relief[d] = detail_sees_relief(dj, ca->detail_pos[d], ca->detail_nrm[d]);
+}
+
 static void detail_texel_range(void *p, uint32_t begin, uint32_t end, uint32_t worker) {
     detail_job *dj = p;
     const link_job *job = dj->lj;
@@ -1196,13 +1237,12 @@ static void detail_texel_range(void *p, uint32_t begin, uint32_t end, uint32_t w
     uint32_t *touched = dj->touched[worker];
     uint8_t *mark = dj->mark[worker];
     const float rho2 = dj->rho * dj->rho, wr = 2.0f / (float)DETAIL_RAYS;
-    const uint32_t D = ca->detail_factor, W = ca->lm_width, H = ca->lm_height;
     for (uint32_t d = begin; d < end; ++d) {
         const float *pd = ca->detail_pos[d], *nd = ca->detail_nrm[d];
         uint32_t n = 0;
         dj->out_n[d] = 0;
         dj->kept[d] = dj->dropped[d] = 0.0;
-        if (!detail_sees_relief(dj, pd, nd)) continue; /* only its own plane near it: nothing to correct */
+        if (!dj->relief[d]) continue; /* only its own plane near it: nothing to correct */
 #define DETAIL_TOUCH(s)                                      \
     do {                                                     \
         if (!mark[s]) {                                      \
@@ -1212,26 +1252,13 @@ static void detail_texel_range(void *p, uint32_t begin, uint32_t end, uint32_t w
         }                                                    \
     } while (0)
         /* what the interpolated caches gather from the surfels near d */
-        const uint32_t tx = ca->detail_texel[d] % ca->detail_width, ty = ca->detail_texel[d] / ca->detail_width;
-        const float fx = ((float)tx + 0.5f) / (float)D - 0.5f, fy = ((float)ty + 0.5f) / (float)D - 0.5f;
-        uint32_t x0, x1, y0, y1;
-        float ax, ay;
-        {
-            float f = fx < 0.0f ? 0.0f : (fx > (float)(W - 1) ? (float)(W - 1) : fx), fl = floorf(f);
-            x0 = (uint32_t)fl; x1 = x0 + 1 < W ? x0 + 1 : x0; ax = f - fl;
-            f = fy < 0.0f ? 0.0f : (fy > (float)(H - 1) ? (float)(H - 1) : fy); fl = floorf(f);
-            y0 = (uint32_t)fl; y1 = y0 + 1 < H ? y0 + 1 : y0; ay = f - fl;
-        }
-        const uint32_t m4[4] = {ca->lm_map[(size_t)y0 * W + x0], ca->lm_map[(size_t)y0 * W + x1],
-                                ca->lm_map[(size_t)y1 * W + x0], ca->lm_map[(size_t)y1 * W + x1]};
-        float b4[4] = {(1 - ax) * (1 - ay), ax * (1 - ay), (1 - ax) * ay, ax * ay}, bs = 0.0f;
-        for (int i = 0; i < 4; ++i) bs += m4[i] != GLOW_MAP_EMPTY && b4[i] > 0.0f ? b4[i] : 0.0f;
-        for (int i = 0; bs > 0.0f && i < 4; ++i) {
-            if (m4[i] == GLOW_MAP_EMPTY || !(b4[i] > 0.0f)) continue;
-            const uint32_t ci = m4[i] & GLOW_MAP_INDEX_MASK;
-            if (ci < ca->grid_cache_count) continue;
-            const uint32_t li = ci - ca->grid_cache_count;
-            const float bw = b4[i] / bs;
+        uint32_t m4[4];
+        float b4[4];
+        const bool any = detail_lookup(ca, d, m4, b4);
+        for (int i = 0; any && i < 4; ++i) {
+            if (m4[i] == GLOW_MAP_EMPTY) continue;
+            const uint32_t li = (m4[i] & GLOW_MAP_INDEX_MASK) - ca->grid_cache_count;
+            const float bw = b4[i];
             for (uint32_t q = 0; q < dj->hit_count[li]; ++q) {
                 const detail_hit *h = &dj->hits[li][q];
                 float off[3];
@@ -1339,7 +1366,18 @@ static glow_result detail_build(const link_job *job, glow__pool *pool, glow__log
         dj.mark[w] = calloc((size_t)S + 1, 1);
         ok = dj.acc_f[w] && dj.acc_c[w] && dj.touched[w] && dj.mark[w];
     }
-    if (ok) {
+    dj.relief = calloc((size_t)Dn + 1, 1);
+    dj.need = calloc((size_t)L + 1, 1);
+    ok = ok && dj.relief && dj.need;
+    if (ok) { /* which detail texels correct anything, and which caches they read */
+        glow__parallel_for(pool, Dn, 64, detail_relief_range, &dj);
+        for (uint32_t d = 0; d < Dn; ++d) {
+            uint32_t m4[4];
+            float b4[4];
+            if (!dj.relief[d] || !detail_lookup(ca, d, m4, b4)) continue;
+            for (int i = 0; i < 4; ++i)
+                if (m4[i] != GLOW_MAP_EMPTY) dj.need[(m4[i] & GLOW_MAP_INDEX_MASK) - ca->grid_cache_count] = 1;
+        }
         glow__parallel_for(pool, L, 16, detail_cache_range, &dj);
         ok = !dj.oom;
     }
@@ -1383,7 +1421,7 @@ static glow_result detail_build(const link_job *job, glow__pool *pool, glow__log
         if (dj.mark) free(dj.mark[w]);
     }
     free(dj.hits); free(dj.hit_count); free(dj.acc_f); free(dj.acc_c); free(dj.touched); free(dj.mark);
-    free(dj.out_s); free(dj.out_w); free(dj.out_n); free(dj.dropped); free(dj.kept);
+    free(dj.out_s); free(dj.out_w); free(dj.out_n); free(dj.dropped); free(dj.kept); free(dj.relief); free(dj.need);
     return res;
 }
 
