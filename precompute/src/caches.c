@@ -739,16 +739,23 @@ static glow_result build_lightmap_layout(const glow__scene *scene, const glow__r
  * resolution, each covered texel's point placed as a lightmap cache's (the centroid of its
  * footprint, off the edges, lifted) and kept when it sees no back faces. They are no caches: the
  * linker gives each a few links to the surfels near it. Returns GLOW_OK with no detail texels when
- * the fine grid would exceed MAX_DETAIL_TEXELS (warned). */
-#define MAX_DETAIL_TEXELS (32u << 20)
+ * the fine grid would exceed MAX_DETAIL_TEXELS even at 2 a side (warned). The runtime keeps the whole
+ * grid as one RGBA32F plane (16 bytes a texel, a texture on the GPU): 4M texels are 64 MB; Sponza's
+ * default is 0.35M. A larger grid takes fewer detail texels a side first. */
+#define MAX_DETAIL_TEXELS (4u << 20)
 static glow_result build_detail(const glow__scene *scene, const glow__rt *rt, glow__pool *pool, glow__log *log,
                                 uint32_t factor, float offset, glow__caches *out) {
+    const uint32_t asked = factor;
+    while (factor > 2 && (uint64_t)out->lm_width * factor * out->lm_height * factor > MAX_DETAIL_TEXELS) factor--;
     const uint64_t fw = (uint64_t)out->lm_width * factor, fh = (uint64_t)out->lm_height * factor;
     if (fw * fh > MAX_DETAIL_TEXELS) {
-        glow__warnf(log, "%s: caches: a lightmap detail of %llux%llu texels is too large; no detail", scene->source,
-                    (unsigned long long)fw, (unsigned long long)fh);
+        glow__warnf(log, "%s: caches: a lightmap detail of %llux%llu texels would exceed %u; no detail", scene->source,
+                    (unsigned long long)fw, (unsigned long long)fh, MAX_DETAIL_TEXELS);
         return GLOW_OK;
     }
+    if (factor != asked)
+        glow__warnf(log, "%s: caches: the %ux%u lightmap takes %u detail texels a side, not %u (at most %u detail texels)",
+                    scene->source, out->lm_width, out->lm_height, factor, asked, MAX_DETAIL_TEXELS);
     const size_t n = (size_t)(fw * fh);
     const uint32_t tris = scene->tri_count;
     uint32_t *owner = malloc(n * sizeof *owner), *cand = NULL;

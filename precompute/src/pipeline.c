@@ -40,12 +40,13 @@ static const preset presets[5] = {
      * +11.5 % update time: not taken (docs/results.md, "More budget"); --lightmap-caches sets it */
     /* moderate */ {32768, 128, 3, 2000, 8000, 6},
     /* high     */ {131072, 254, 4, 2000, 8000, 6},
-    /* fine: moderate's links and bands on 4x its surfels (0.24 m apart on Sponza) and 4x its lightmap
-     * caches. It resolves light from surfaces a fraction of a metre away (pillar feet next to a sunlit
-     * floor, capitals, arch rims), which neither density alone does: Sponza's block error 0.152 ->
-     * 0.079 (surfel seeds 0-2), at about 4x moderate's update time, 3.3x its bake and 6-10x its bake
-     * time (docs/results.md, "Near light") */
-    /* fine     */ {131072, 128, 3, 2000, 32000, 6},
+    /* fine: moderate's links, bands and lightmap on 4x its surfels (0.24 m apart on Sponza), with the
+     * lightmap detail (the default) for the receivers. It resolves light from surfaces a fraction of a
+     * metre away (pillar feet next to a sunlit floor, capitals): Sponza's block error 0.124 -> 0.088
+     * (surfel seeds 0-3), at about 1.8x moderate's update time and 2.3x its memory. Until 2026-11-27 it
+     * also had 4x moderate's lightmap caches (32000: 0.079 without the detail, 0.060 with it on seed 0,
+     * at about 4x the update): --lightmap-caches 32000 (docs/results.md, "Near light") */
+    /* fine     */ {131072, 128, 3, 2000, 8000, 6},
 };
 
 static const preset *preset_of(glow_pc_quality q) {

@@ -1441,7 +1441,7 @@ static void test_bake_presets(void **state) {
     const struct { glow_pc_quality q; uint32_t surfels, links, bands, lightmap; } want[] = {
         {GLOW_PC_QUALITY_DEFAULT, 32768, 128, 3, 8000}, {GLOW_PC_QUALITY_LOW, 8192, 64, 3, 2000},
         {GLOW_PC_QUALITY_MODERATE, 32768, 128, 3, 8000}, {GLOW_PC_QUALITY_HIGH, 131072, 254, 4, 8000},
-        {GLOW_PC_QUALITY_FINE, 131072, 128, 3, 32000}};
+        {GLOW_PC_QUALITY_FINE, 131072, 128, 3, 8000}};
     char msg[256];
     for (size_t i = 0; i < sizeof want / sizeof want[0]; ++i) {
         glow_pc_settings s = glow_pc_settings_resolve(&(glow_pc_settings){.quality = want[i].q});
