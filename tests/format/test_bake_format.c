@@ -1636,6 +1636,43 @@ static void test_atomic_write_failures(void **state) {
 }
 
 /* ------------------------------------------------------------------------------ golden v1 */
+/* A real format-1.2 bake with a lightmap detail (glow-bake builtin:cornell --surfels 16 --links 4
+ * --grid-spacing 2 --texel-density 0.5, 2026-11-27; also a fuzz seed): this reader loads it, finds
+ * the LDET section and the solver runs it. Never regenerated silently: a reader that stops loading
+ * it broke 1.2 files. */
+static void test_real_v1_2_detail(void **state) {
+    (void)state;
+    test_log log;
+    glow_context *ctx = make_ctx(&log);
+    glow_bake *bake = NULL;
+    assert_int_equal(glow_bake_load_file(ctx, GLOW_TEST_DATA_DIR "/seed_cornell_tiny_ldet.glow", &bake), GLOW_OK);
+    glow_bake_info info;
+    assert_int_equal(glow_bake_get_info(bake, &info), GLOW_OK);
+    assert_int_equal(info.format_major, 1);
+    assert_int_equal(info.format_minor, 2);
+    const uint32_t *texel, *first, *node;
+    const float *weight;
+    const glow_bake_detail *dh = glow__bake_detail(bake, &texel, &first, &node, &weight);
+    assert_non_null(dh);
+    assert_int_equal(dh->factor, 3);
+    assert_int_equal(dh->texel_count, 69);
+    assert_int_equal(dh->link_count, 396);
+    glow_system *sys = NULL;
+    assert_int_equal(glow_system_create(ctx, &(glow_system_desc){.bake = bake}, &sys), GLOW_OK);
+    assert_int_equal(glow_system_update(sys, NULL), GLOW_OK);
+    const glow_cache_outputs *o = glow_system_outputs(sys);
+    assert_non_null(o->lightmap_detail);
+    double sum = 0.0;
+    for (size_t i = 0; i < (size_t)o->detail_width * o->detail_height * 4u; ++i) {
+        assert_true(isfinite(o->lightmap_detail[i]));
+        sum += fabs(o->lightmap_detail[i]);
+    }
+    assert_true(sum > 69.0); /* the coverage alone is 69; the lamp lights the box, so some RGB is not 0 */
+    glow_system_destroy(sys);
+    glow_bake_destroy(bake);
+    glow_context_destroy(ctx);
+}
+
 static void test_golden_v1(void **state) {
     (void)state;
     test_bake tb;
@@ -1719,6 +1756,7 @@ int main(void) {
         cmocka_unit_test(test_file_round_trip),
         cmocka_unit_test(test_atomic_write_failures),
         cmocka_unit_test(test_golden_v1),
+        cmocka_unit_test(test_real_v1_2_detail),
     };
     return cmocka_run_group_tests(tests, setup_tmpdir, teardown_tmpdir);
 }
