@@ -1605,6 +1605,53 @@ static void test_budget(void **state) {
     assert_int_equal(glow_system_update(s, &conv), GLOW_OK);
     assert_int_equal(glow_system_get_stats(s, &st), GLOW_OK);
     assert_int_equal(st.caches_gathered, C);
+    /* skip-if-unchanged: once converged again, an update that gathers nothing leaves the outputs (and,
+     * with KEEP_LIGHTING, the surfel flux and pull) as they are, bit for bit; a change recomputes */
+    int settle = 0;
+    do {
+        assert_int_equal(glow_system_update(s, &conv), GLOW_OK);
+        assert_int_equal(glow_system_get_stats(s, &st), GLOW_OK);
+    } while ((st.caches_gathered > 0 || !st.outputs_skipped) && ++settle < 300);
+    print_message("skip-if-unchanged: converged again %d updates after the light doubled\n", settle);
+    assert_int_equal(st.caches_gathered, 0);
+    assert_int_equal(st.outputs_skipped, 1);
+    {
+        const glow_cache_outputs *o = glow_system_outputs(s);
+        const size_t nlm = (size_t)o->lightmap_width * o->lightmap_height * o->coeff_count;
+        float *keep = malloc(nlm * sizeof *keep);
+        assert_non_null(keep);
+        memcpy(keep, o->lightmap_sh, nlm * sizeof *keep);
+        const uint64_t calls = atomic_load(&h.calls);
+        const glow_update_desc still = {.converged_epsilon = 1e-3f, .flags = GLOW_UPDATE_FLAG_KEEP_LIGHTING};
+        assert_int_equal(glow_system_update(s, &still), GLOW_OK);
+        assert_int_equal(glow_system_get_stats(s, &st), GLOW_OK);
+        assert_int_equal(atomic_load(&h.calls), calls); /* no hook call */
+        assert_int_equal(st.caches_gathered, 0);
+        assert_int_equal(st.outputs_skipped, 1);
+        assert_memory_equal(o->lightmap_sh, keep, nlm * sizeof *keep);
+        /* the hook again, the same light: the flux is recomputed and is the same, so still nothing to do */
+        assert_int_equal(glow_system_update(s, &conv), GLOW_OK);
+        assert_int_equal(glow_system_get_stats(s, &st), GLOW_OK);
+        assert_int_equal(st.caches_gathered, 0);
+        assert_int_equal(st.outputs_skipped, 1);
+        assert_memory_equal(o->lightmap_sh, keep, nlm * sizeof *keep);
+        /* a change under KEEP_LIGHTING (the bounce intensity): recomputed, gathered, written */
+        assert_int_equal(glow_system_set_params(s, &(glow_system_params){.bounce_intensity = 0.5f, .emission_scale = 1.0f,
+                                                                         .bounce_iterations = 1}),
+                         GLOW_OK);
+        assert_int_equal(glow_system_update(s, &still), GLOW_OK);
+        assert_int_equal(glow_system_get_stats(s, &st), GLOW_OK);
+        assert_true(st.caches_gathered > 0);
+        assert_int_equal(st.outputs_skipped, 0);
+        bool changed = false;
+        for (size_t i = 0; i < nlm && !changed; ++i) changed = o->lightmap_sh[i] != keep[i];
+        assert_true(changed);
+        free(keep);
+    }
+    /* an unbudgeted update never skips */
+    assert_int_equal(glow_system_update(s, NULL), GLOW_OK);
+    assert_int_equal(glow_system_get_stats(s, &st), GLOW_OK);
+    assert_int_equal(st.outputs_skipped, 0);
     /* no allocation per budgeted update (the context's counter) */
     const uint64_t live = glow__ctx_live_allocations(e.ctx);
     for (int u = 0; u < 3; ++u) {

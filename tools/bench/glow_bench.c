@@ -43,7 +43,7 @@ typedef struct options {
     /* budgets (glow_update_desc): 0 = none */
     float budget_ms, converge;
     uint32_t budget_caches;
-    int has_focus, still, walk;
+    int has_focus, still, walk, keep_lighting;
     float focus[3];
 } options;
 
@@ -56,7 +56,7 @@ static void usage(FILE *f) {
             "usage: glow-bench BAKE SCENE [--frames N] [--warmup N] [--threads N] [--luma L] [--chroma C]\n"
             "                  [--iterations K] [--host exact|shadow-map] [--link-mode compact|expanded|sh]\n"
             "                  [--probe X,Y,Z]... [--no-machine] [--backend cpu|gl]\n"
-            "                  [--budget-ms MS] [--budget-caches N] [--converge EPS] [--focus X,Y,Z] [--still]\n"
+            "                  [--budget-ms MS] [--budget-caches N] [--converge EPS] [--focus X,Y,Z] [--still [--keep-lighting]]\n"
             "                  [--json] [-q]\n"
             "  BAKE   a bake written by glow-bake;  SCENE  its scene description JSON (docs/scene-format.md)\n"
             "  --frames N      timed updates (default 60); --warmup N untimed first (default 5)\n"
@@ -80,6 +80,8 @@ static void usage(FILE *f) {
             "  --converge EPS  skip converged caches (converged_epsilon)\n"
             "  --focus X,Y,Z   caches near this point first (default: the scene's camera, when it has one)\n"
             "  --still         keep the lights still (default: the first light moves every update)\n"
+            "  --keep-lighting with --still: after the first update, tell Glow the lights did not move\n"
+            "                  (GLOW_UPDATE_FLAG_KEEP_LIGHTING: the host hook is not called)\n"
             "  --walk          with a budget: the focus walks across the scene's longest horizontal extent\n"
             "                  over the run (at the scene camera's height), and the report adds the error of\n"
             "                  the caches within a tenth of the scene's diagonal of it (the camera's view)\n");
@@ -167,6 +169,7 @@ static int parse_args(int argc, char **argv, options *o) {
             o->has_focus = 1;
             ++i;
         } else if (!strcmp(a, "--still")) o->still = 1;
+        else if (!strcmp(a, "--keep-lighting")) o->keep_lighting = 1;
         else if (!strcmp(a, "--walk")) o->walk = 1;
         else if (!strcmp(a, "--no-machine")) o->no_probe_machine = 1;
         else if (!strcmp(a, "--json")) o->json = 1;
@@ -180,6 +183,10 @@ static int parse_args(int argc, char **argv, options *o) {
     }
     if (pos != 2) {
         fprintf(stderr, "glow-bench: need BAKE and SCENE\n");
+        return 0;
+    }
+    if (o->keep_lighting && !o->still) {
+        fprintf(stderr, "glow-bench: --keep-lighting goes with --still (a moving light must be relit)\n");
         return 0;
     }
     if (o->walk && !(o->budget_ms > 0.0f || o->budget_caches || o->converge > 0.0f)) {
@@ -422,7 +429,9 @@ int main(int argc, char **argv) {
         } else
 #endif
         {
-            if ((r = glow_system_update(sys, budget ? &ud : NULL)) != GLOW_OK) goto done;
+            glow_update_desc u = budget ? ud : (glow_update_desc){0};
+            if (o.keep_lighting && f > 0) u.flags |= GLOW_UPDATE_FLAG_KEEP_LIGHTING;
+            if ((r = glow_system_update(sys, &u)) != GLOW_OK) goto done;
             glow_system_get_stats(sys, &st);
             if (twin && (r = glow_system_update(twin, NULL)) != GLOW_OK) goto done; /* untimed reference */
         }

@@ -449,7 +449,7 @@ typedef struct glow_update_stats {
     double host_ms;            /* the part of surfel_lighting_ms spent in the host's hook */
     double pull_ms;
     double cache_lighting_ms;
-    double output_ms;          /* grid and lightmap textures, seam/gutter copies */
+    double output_ms;          /* grid and lightmap textures, seam/gutter copies, the lightmap detail */
     double total_ms;
     uint64_t links;            /* links gathered (caches gathered * links_per_cache * iterations) */
     uint32_t caches_gathered;  /* caches gathered in the last update (per bounce iteration) */
@@ -459,6 +459,10 @@ typedef struct glow_update_stats {
     uint64_t memory_bytes;     /* everything the system allocated (the bake not included) */
     uint32_t link_mode;        /* the glow_link_mode in use (resolved, never DEFAULT) */
     const char *kernel;        /* the cache-lighting kernel's instruction set: "avx512f", "avx2+fma+f16c", "generic" */
+    /* \since 0.2: 1 when the last update skipped its output stage because nothing the outputs read had
+     * changed since they were last written (a budgeted update that gathered no cache, with the node
+     * radiance bit for bit the same): the outputs are those of the update before, and output_ms 0 */
+    uint32_t outputs_skipped;
 } glow_update_stats;
 
 /** One frame: surfel lighting -> pull -> cache lighting -> outputs (x bounce_iterations).
