@@ -392,6 +392,28 @@ static uint32_t rasterise(uint32_t tri_count, const float (*uv)[2], uint32_t w, 
     return covered;
 }
 
+/* A texel's cache (or detail point) stands for the surface the texel covers: rasterise once to sum
+ * each texel's footprint (foot, scratch of w*h), take its area-weighted centroid as the texel's
+ * reference point (texels with no footprint area keep their centre), and rasterise again to find the
+ * triangle nearest to it. Returns the covered texel count; *footprint = the covered surface area in
+ * texels (overlapping charts' triangles count once). */
+static uint32_t place_texels(uint32_t tri_count, const float (*uv)[2], uint32_t w, uint32_t h, uint32_t *owner,
+                             float *dist, double (*ref)[2], double (*foot)[3], double *footprint) {
+    rasterise(tri_count, uv, w, h, NULL, owner, dist, foot);
+    *footprint = 0.0;
+    for (size_t i = 0; i < (size_t)w * h; ++i) {
+        *footprint += foot[i][0] < 1.0 ? foot[i][0] : 1.0;
+        if (foot[i][0] > 0.0) {
+            ref[i][0] = foot[i][1] / foot[i][0];
+            ref[i][1] = foot[i][2] / foot[i][0];
+        } else {
+            ref[i][0] = (double)(i % w) + 0.5;
+            ref[i][1] = (double)(i / w) + 0.5;
+        }
+    }
+    return rasterise(tri_count, uv, w, h, (const double(*)[2])ref, owner, dist, NULL);
+}
+
 /* Unorm16 rounding, as the bake stores lightmap UVs: rasterise what the host will sample. */
 static float quantise(float x) {
     if (!(x > 0.0f)) return 0.0f;
@@ -636,21 +658,9 @@ static glow_result lm_try(const glow__scene *scene, const glow__chart_set *cs, d
      * 4757 charts for 9245 texels in the Dabrovic Sponza most texels overhang their chart, and the
      * centre-nearest point lay on the chart's border, often a crease, whose irradiance is not the
      * texel's. Texels with no footprint area (slivers) keep their centre. */
-    rasterise(n, (const float(*)[2])st->uv, st->w, st->h, NULL, st->owner, st->dist, foot);
-    st->footprint = 0.0;
-    for (size_t i = 0; i < texels; ++i) {
-        st->footprint += foot[i][0] < 1.0 ? foot[i][0] : 1.0; /* overlapping charts' triangles count once */
-        if (foot[i][0] > 0.0) {
-            st->ref[i][0] = foot[i][1] / foot[i][0];
-            st->ref[i][1] = foot[i][2] / foot[i][0];
-        } else {
-            st->ref[i][0] = (double)(i % st->w) + 0.5;
-            st->ref[i][1] = (double)(i / st->w) + 0.5;
-        }
-    }
+    st->covered = place_texels(n, (const float(*)[2])st->uv, st->w, st->h, st->owner, st->dist, st->ref, foot,
+                               &st->footprint);
     free(foot);
-    st->covered = rasterise(n, (const float(*)[2])st->uv, st->w, st->h, (const double(*)[2])st->ref, st->owner,
-                            st->dist, NULL);
     return GLOW_OK;
 }
 
@@ -764,18 +774,9 @@ static glow_result build_detail(const glow__scene *scene, const glow__rt *rt, gl
     lm_job j = {0};
     glow_result r = GLOW_OK;
     if (!owner || !dist || !ref || !foot) goto oom;
-    rasterise(tris, (const float(*)[2])out->lm_uv, (uint32_t)fw, (uint32_t)fh, NULL, owner, dist, foot);
-    for (size_t i = 0; i < n; ++i) {
-        if (foot[i][0] > 0.0) {
-            ref[i][0] = foot[i][1] / foot[i][0];
-            ref[i][1] = foot[i][2] / foot[i][0];
-        } else {
-            ref[i][0] = (double)(i % fw) + 0.5;
-            ref[i][1] = (double)(i / fw) + 0.5;
-        }
-    }
-    const uint32_t covered = rasterise(tris, (const float(*)[2])out->lm_uv, (uint32_t)fw, (uint32_t)fh,
-                                       (const double(*)[2])ref, owner, dist, NULL);
+    double unused_footprint;
+    const uint32_t covered = place_texels(tris, (const float(*)[2])out->lm_uv, (uint32_t)fw, (uint32_t)fh, owner, dist,
+                                          ref, foot, &unused_footprint);
     cand = malloc(((size_t)covered + 1) * sizeof *cand);
     j.pos = malloc(((size_t)covered + 1) * sizeof *j.pos);
     j.nrm = malloc(((size_t)covered + 1) * sizeof *j.nrm);
