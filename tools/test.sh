@@ -2,9 +2,11 @@
 # The README's test command: installs dependencies, builds with warnings as errors, runs the test
 # suite under ASan+UBSan, the libFuzzer smoke (bake reader; load + updates; scene JSON; mesh import),
 # then the test suite on the optimised build and the installed SDK's consumer test
-# (tools/consumer-test.sh). Every stage runs even when an earlier one failed (a red sanitizer pass must not
-# hide what the fuzzer or the release pass would say); the exit status is non-zero when any failed,
-# and the last lines name the stages that did.
+# (tools/consumer-test.sh). The sanitizer build is -O1 (CMakeLists.txt, GLOW_SANITIZE: about half the
+# -O0 test time; the cache-lighting kernel stays -O0 there, which GCC compiles in seconds). Every stage
+# runs even when an earlier one failed (a red sanitizer pass must not hide what the fuzzer or the
+# release pass would say); the exit status is non-zero when any failed, and the last lines name the
+# stages that did.
 #   GLOW_FUZZ_SECONDS   fuzz smoke duration per target (default 20; 0 skips it)
 #   GLOW_SKIP_ASAN=1    skip the sanitizer pass
 set -uo pipefail
