@@ -27,10 +27,16 @@ typedef void (*run_fn)(const glow_bake_link_block *blocks, uint32_t bpc, const f
 #define X(n) void V##n##_run(const glow_bake_link_block *, uint32_t, const float *, uint32_t, uint32_t, float *, uint32_t, uint32_t);
 VLIST
 #undef X
+/* VRUNS, when given, lists the functions to time instead (CMake's prebuilt harness times its one
+ * compiled version twice: compiling the kernel once more took 1-2 min of each build) */
 static const run_fn fns[] = {
+#ifdef VRUNS
+    VRUNS
+#else
 #define X(n) V##n##_run,
     VLIST
 #undef X
+#endif
 };
 enum { NV = sizeof fns / sizeof fns[0], MAXIT = 10000 };
 
