@@ -151,6 +151,11 @@ static int before(float da, uint32_t ia, float db, uint32_t ib) { return da < db
 
 uint32_t glow__kdtree_knn(const glow__kdtree *tree, const float q[3], uint32_t k, uint32_t exclude,
                           uint32_t *out_index, float *out_dist2) {
+    return glow__kdtree_knn_within(tree, q, k, exclude, INFINITY, out_index, out_dist2);
+}
+
+uint32_t glow__kdtree_knn_within(const glow__kdtree *tree, const float q[3], uint32_t k, uint32_t exclude,
+                                 float max_dist2, uint32_t *out_index, float *out_dist2) {
     if (!tree || tree->count == 0 || k == 0) return 0;
     uint32_t found = 0;
     struct { uint32_t node; float d2; } stack[MAX_DEPTH + 4];
@@ -162,6 +167,7 @@ uint32_t glow__kdtree_knn(const glow__kdtree *tree, const float q[3], uint32_t k
         --sp;
         uint32_t ni = stack[sp].node;
         const kd_node *nd = &tree->nodes[ni];
+        if (stack[sp].d2 > max_dist2) continue; /* wholly beyond the radius */
         /* prune: a box that cannot hold a point ranking before the current k-th candidate (equal
          * distance still wins on a smaller index; min_index keeps masses of coincident points cheap) */
         if (found == k && !before(stack[sp].d2, nd->min_index, out_dist2[k - 1], out_index[k - 1])) continue;
@@ -172,6 +178,7 @@ uint32_t glow__kdtree_knn(const glow__kdtree *tree, const float q[3], uint32_t k
                 const float *p = tree->pts[i];
                 float dx = p[0] - q[0], dy = p[1] - q[1], dz = p[2] - q[2];
                 float d2 = dx * dx + dy * dy + dz * dz;
+                if (d2 > max_dist2) continue;
                 if (found == k && !before(d2, id, out_dist2[k - 1], out_index[k - 1])) continue;
                 uint32_t j = found < k ? found++ : k - 1;
                 while (j > 0 && before(d2, id, out_dist2[j - 1], out_index[j - 1])) {

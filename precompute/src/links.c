@@ -296,7 +296,7 @@ static uint32_t credit_hit(const link_job *job, const float origin[3], const flo
     /* the NEAR_KNN surfels nearest to the hit point; when none of them may take the credit, the next ones */
     uint32_t idx[NEAR_KNN_MORE];
     float dist2[NEAR_KNN_MORE];
-    uint32_t found = glow__kdtree_knn(job->surfel_tree, p, NEAR_KNN, UINT32_MAX, idx, dist2);
+    uint32_t found = glow__kdtree_knn_within(job->surfel_tree, p, NEAR_KNN, UINT32_MAX, max_d2, idx, dist2);
     for (uint32_t q = 0, round = 0; q < found; ++q) {
         const glow__surfel *s = &S->s[idx[q]];
         float d[3];
@@ -318,7 +318,7 @@ static uint32_t credit_hit(const link_job *job, const float origin[3], const flo
         if (ok) return unit;
         if (q + 1 == found && round == 0 && found == NEAR_KNN) {
             round = 1;
-            found = glow__kdtree_knn(job->surfel_tree, p, NEAR_KNN_MORE, UINT32_MAX, idx, dist2);
+            found = glow__kdtree_knn_within(job->surfel_tree, p, NEAR_KNN_MORE, UINT32_MAX, max_d2, idx, dist2);
         }
     }
     return CREDIT_NONE;
@@ -352,7 +352,8 @@ static uint32_t near_field(const link_job *job, const glow__cache *cache, const 
         front_hits++;
         if (hemi) *out_kappa_geom += dw * glow__irr_kernel(job->out->sh_bands, glow__dot(dir, cache->nrm));
         if (!(hit.t < R)) continue; /* beyond the near field: counted, not credited */
-        const uint32_t unit = credit_hit(job, cache->pos, hemi ? cache->nrm : NULL, R, dir, &hit, runs, INFINITY);
+        /* a surfel more than 2R from the hit (hit.t < R) is more than R from the cache: never credited */
+        const uint32_t unit = credit_hit(job, cache->pos, hemi ? cache->nrm : NULL, R, dir, &hit, runs, 4.04f * R * R);
         if (unit != CREDIT_NONE) {
             omega[unit] += dw;
             for (int k = 0; k < 3; ++k) dirsum[3 * unit + k] += dw * dir[k];
@@ -1180,8 +1181,8 @@ static bool detail_sees_relief(const detail_job *dj, const float pd[3], const fl
     const link_job *job = dj->lj;
     uint32_t idx[DETAIL_RELIEF_KNN];
     float dist2[DETAIL_RELIEF_KNN];
-    const uint32_t found = glow__kdtree_knn(job->surfel_tree, pd, DETAIL_RELIEF_KNN, UINT32_MAX, idx, dist2);
     const float rho2 = dj->rho * dj->rho, tol = job->near_radius / NEAR_RADII; /* a surfel's radius */
+    const uint32_t found = glow__kdtree_knn_within(job->surfel_tree, pd, DETAIL_RELIEF_KNN, UINT32_MAX, rho2, idx, dist2);
     for (uint32_t q = 0; q < found; ++q) {
         if (dist2[q] >= rho2) return false; /* nearest first: the rest are beyond the radius */
         const glow__surfel *s = &job->surfels->s[idx[q]];

@@ -64,6 +64,11 @@ void glow__kdtree_free(glow__kdtree *tree);
  * distance; returns how many were found. */
 uint32_t glow__kdtree_knn(const glow__kdtree *tree, const float q[3], uint32_t k, uint32_t exclude,
                           uint32_t *out_index, float *out_dist2);
+/* The same among the points within max_dist2 (squared distance, inclusive) of q only: the k nearest of
+ * them, so a caller that stops at the first point beyond the radius sees what glow__kdtree_knn gives,
+ * while boxes beyond it are never visited. */
+uint32_t glow__kdtree_knn_within(const glow__kdtree *tree, const float q[3], uint32_t k, uint32_t exclude,
+                                 float max_dist2, uint32_t *out_index, float *out_dist2);
 
 /* ---------------------------------------------------------------- hierarchy (hierarchy.c) */
 typedef struct glow__node {

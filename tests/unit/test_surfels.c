@@ -236,6 +236,19 @@ static void test_kdtree_matches_brute_force(void **state) {
                 assert_int_equal(idx[j], all[j].i);
                 assert_true(d2[j] == all[j].d2);
             }
+            /* within a radius: the brute-force list's prefix up to the radius (inclusive), at most k;
+             * the radius is one of the distances (a tie at the bound is kept) or between two */
+            const float radii[] = {all[k / 2].d2, 0.5f * (all[k].d2 + all[k + 1].d2), 0.0f, 1e30f};
+            for (uint32_t ri = 0; ri < 4; ++ri) {
+                uint32_t want = 0;
+                while (want < k && all[want].d2 <= radii[ri]) ++want;
+                got = glow__kdtree_knn_within(tree, qp, k, exclude, radii[ri], idx, d2);
+                assert_int_equal(got, want);
+                for (uint32_t j = 0; j < got; ++j) {
+                    assert_int_equal(idx[j], all[j].i);
+                    assert_true(d2[j] <= radii[ri]);
+                }
+            }
         }
     }
     glow__kdtree_free(tree);
