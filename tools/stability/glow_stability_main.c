@@ -250,7 +250,10 @@ static void session_free(session *s) {
     glow_scene_free(&s->scene);
 }
 
-static int session_open(session *s, const char *bake_path, const char *scene_path, uint32_t iterations) {
+/* moving_light: the measurement moves the scene's first light, refused (before the bake is loaded and
+ * the bounce converged) unless it is a point or spot light */
+static int session_open(session *s, const char *bake_path, const char *scene_path, uint32_t iterations,
+                        bool moving_light) {
     memset(s, 0, sizeof *s);
     static glow_cli_log log_state = {"glow-stability", 0};
     glow_logger lg = glow_cli_logger(&log_state);
@@ -258,6 +261,11 @@ static int session_open(session *s, const char *bake_path, const char *scene_pat
     if (glow_scene_load(scene_path, &lg, &s->scene, msg, sizeof msg) != GLOW_OK ||
         glow_render_scene_load(scene_path, &s->rs, msg, sizeof msg) != GLOW_OK) {
         fprintf(stderr, "glow-stability: %s\n", msg);
+        return 0;
+    }
+    if (moving_light && (s->scene.light_count == 0 || s->scene.lights[0].type == GLOW_SCENE_LIGHT_SUN)) {
+        fprintf(stderr, "glow-stability: %s: flicker moves the first light, which must be a point or spot light\n",
+                scene_path);
         return 0;
     }
     if (glow_context_create(&(glow_context_desc){.api_version = GLOW_VERSION, .logger = lg}, &s->ctx) != GLOW_OK) return 0;
@@ -324,12 +332,7 @@ static int flicker(const char *bake_path, const char *scene_path, uint32_t frame
     int rc = 1;
     float *pts = NULL, *eg = NULL, *er = NULL, *pg = NULL, *pr = NULL;
     FILE *csv = NULL;
-    if (!session_open(&s, bake_path, scene_path, iterations)) goto done;
-    if (s.scene.light_count == 0 || s.scene.lights[0].type == GLOW_SCENE_LIGHT_SUN) {
-        fprintf(stderr, "glow-stability: %s: flicker moves the first light, which must be a point or spot light\n",
-                scene_path);
-        goto done;
-    }
+    if (!session_open(&s, bake_path, scene_path, iterations, true)) goto done;
     const uint32_t lm = s.info.lightmap_cache_count, first = s.info.grid_cache_count;
     if (nprobes > lm) nprobes = lm;
     pts = malloc(sizeof(float) * 6 * nprobes);
@@ -448,7 +451,7 @@ static int jumps(const char *bake_path, const char *scene_path, uint32_t max_pai
     float *pts = NULL, *er = NULL;
     double *jg = NULL, *jr = NULL;
     FILE *csv = NULL;
-    if (!session_open(&s, bake_path, scene_path, 64)) goto done;
+    if (!session_open(&s, bake_path, scene_path, 64, false)) goto done;
     const glow_cache_outputs *o = glow_system_outputs(s.sys);
     const uint32_t W = o->lightmap_width, H = o->lightmap_height;
     if (!W || !H) {
@@ -561,7 +564,7 @@ static int audit(const char *bake_path, const char *scene_path, uint32_t nprobes
     double *ratio = NULL;
     uint32_t *pick = NULL;
     FILE *csv = NULL;
-    if (!session_open(&s, bake_path, scene_path, 64)) goto done;
+    if (!session_open(&s, bake_path, scene_path, 64, false)) goto done;
     const uint32_t lm = s.info.lightmap_cache_count, first = s.info.grid_cache_count;
     if (nprobes > lm) nprobes = lm;
     if (nprobes == 0) {
