@@ -11,6 +11,7 @@
 #endif
 layout(local_size_x = GLOW_SURFEL_GROUP) in;
 
+layout(std430, binding = GLOW_BINDING_SURFEL_GEOM) readonly buffer GlowSurfelGeom { glow_gl_surfel_geom glow_geom[]; };
 layout(std430, binding = GLOW_BINDING_SURFEL_MAT) readonly buffer GlowSurfelMat { glow_gl_surfel_mat glow_mat[]; };
 layout(std430, binding = GLOW_BINDING_DIRECT) readonly buffer GlowDirect { vec4 glow_direct[]; };
 layout(std430, binding = GLOW_BINDING_FEEDBACK_W) readonly buffer GlowFeedbackW { float glow_fbw[]; };
@@ -36,7 +37,7 @@ void main() {
     }
     vec3 e_ind = max(ind, vec3(0.0)) * bounce;
     vec3 B = m.rho.rgb * glow_direct[i].rgb + m.rho_ind.rgb * e_ind + m.emit.rgb;
-    float area = glow_p.surfel_area;
+    float area = glow_geom[i].position_area.w; /* the surfel's own (bake format 1.3: may differ per surfel) */
     vec3 f = vec3((0.25 * B.r + 0.5 * B.g + 0.25 * B.b) * area, (0.5 * B.r - 0.5 * B.b) * area,
                   (-0.25 * B.r + 0.5 * B.g - 0.25 * B.b) * area);
     glow_flux[i] = vec4(f, uintBitsToFloat(glow_nodes[i].z));

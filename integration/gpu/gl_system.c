@@ -639,6 +639,7 @@ glow_result glow_gl_system_update(glow_gl_system *s, const glow_update_desc *des
     for (uint32_t it = 0; it < iters; ++it) {
         /* 2. surfel flux */
         gl->UseProgram(s->prog[K_FLUX]);
+        bind(s, GLOW_BINDING_SURFEL_GEOM, B_GEOM); /* each surfel's area (position_area.w) */
         bind(s, GLOW_BINDING_SURFEL_MAT, B_MAT);
         bind(s, GLOW_BINDING_DIRECT, B_DIRECT);
         bind(s, GLOW_BINDING_FEEDBACK_W, B_FBW);

@@ -20,7 +20,8 @@
  *      checked against its domain, not only for finiteness (issue 15, D2: checksums are not
  *      authentication, and a resealed bake with a non-unit normal or an 8.8e-43 node area loaded
  *      and then drove the solver to 5e14 and NaN): unit surfel normals (|n|² within 2 %), albedos in
- *      [0, 1], emission in [0, GLOW_MAX_IRRADIANCE], leaf areas equal to surfel_area and every
+ *      [0, 1], emission in [0, GLOW_MAX_IRRADIANCE], leaf areas within 16x of surfel_area summing to
+ *      scene_area (0.1 %; 1.3: they may differ), every
  *      internal area the sum of its children's (0.1 %), factor_scale = 1 / (pi surfel_area) (0.1 %).
  * Unknown fourccs are CRC-checked and otherwise skipped.
  */
@@ -423,12 +424,24 @@ static glow_result check_tree(const vstate *v, const glow_bake_meta *m, const gl
             }
         }
     }
-    /* areas: a leaf's is surfel_area, an internal node's the sum of its children's (the links turn a
+    /* areas: a leaf's is its surfel's share of the surface, surfel_area (the nominal scene_area /
+     * surfel_count) unless the linker adapted the density (format 1.3), and then within
+     * [surfel_area / GLOW_BAKE_LEAF_AREA_RANGE, surfel_area x GLOW_BAKE_LEAF_AREA_RANGE], all of them
+     * summing to scene_area (0.1 %); an internal node's the sum of its children's (the links turn a
      * node's flux into radiosity with 1 / its area) */
-    for (uint32_t i = 0; i < ns; i++)
-        if (!near_rel(nd[i].area, m->surfel_area))
-            FAIL(GLOW_ERROR_CORRUPT_DATA, "node %u: area %g of a leaf is not surfel_area %g", i, (double)nd[i].area,
-                 (double)m->surfel_area);
+    {
+        double leaf_sum = 0.0;
+        for (uint32_t i = 0; i < ns; i++) {
+            const float a = nd[i].area;
+            if (!(a >= m->surfel_area / GLOW_BAKE_LEAF_AREA_RANGE && a <= m->surfel_area * GLOW_BAKE_LEAF_AREA_RANGE))
+                FAIL(GLOW_ERROR_CORRUPT_DATA, "node %u: area %g of a leaf is not within %gx of surfel_area %g", i,
+                     (double)a, (double)GLOW_BAKE_LEAF_AREA_RANGE, (double)m->surfel_area);
+            leaf_sum += a;
+        }
+        if (!near_rel(leaf_sum, m->scene_area))
+            FAIL(GLOW_ERROR_CORRUPT_DATA, "NODE: the leaves' areas sum to %g, not scene_area %g", leaf_sum,
+                 m->scene_area);
+    }
     for (uint32_t i = ns; i < nn; i++) {
         const double sum = (double)nd[nd[i].child[0]].area + nd[nd[i].child[1]].area;
         if (!near_rel(nd[i].area, sum))

@@ -79,6 +79,7 @@ struct glow_system {
     float *flux; /* 3 planes of N */
     float *rad;  /* [N][4]: Y Co Cg 0, interleaved for the gathers */
     float *inv_pi_area;
+    float *leaf_area;         /* per surfel: its leaf node's area (equal unless the bake adapted the density) */
     /* caches and outputs */
     float *cache_sh;
     float *grid_sh, *lm_sh;
@@ -179,13 +180,12 @@ static void task_flux(void *data, uint32_t k, uint32_t worker) {
     const uint32_t first = k * SURFEL_CHUNK, end = first + SURFEL_CHUNK < s->S ? first + SURFEL_CHUNK : s->S;
     const uint32_t L2 = s->luma * s->luma, C2 = s->chroma * s->chroma, nc = s->coeffs, fbk = s->fbk;
     const float bounce = s->params.bounce_intensity, es = s->params.emission_scale;
-    const float area = s->meta->surfel_area;
     const size_t N = s->N;
     const uint32_t *restrict mat = s->mat, *restrict feedback = s->feedback;
     const float *restrict mas = s->mat_albedo_scale, *restrict mes = s->mat_emis_scale;
     const float *restrict cache_sh = s->cache_sh, *restrict fb_w = s->fb_w, *restrict albedo = s->albedo;
     const float *restrict rho_max = s->rho_ind_max, *restrict direct = s->direct, *restrict emis = s->emis;
-    const float *restrict inv_pi_area = s->inv_pi_area;
+    const float *restrict inv_pi_area = s->inv_pi_area, *restrict leaf_area = s->leaf_area;
     float *restrict fy_out = s->flux, *restrict fco_out = s->flux + N, *restrict fcg_out = s->flux + 2 * N;
     float *restrict rad = s->rad;
     const bool fb = bounce > 0.0f;
@@ -214,7 +214,7 @@ static void task_flux(void *data, uint32_t k, uint32_t worker) {
             const float e_ind = ind[c] > 0.0f ? ind[c] * bounce : 0.0f;
             B[c] = rho * direct[3 * (size_t)i + c] + rho_ind * e_ind + PI_F * emis[3 * (size_t)i + c] * es * me[c];
         }
-        const float ipa = inv_pi_area[i];
+        const float ipa = inv_pi_area[i], area = leaf_area[i];
         const float fy = (0.25f * B[0] + 0.5f * B[1] + 0.25f * B[2]) * area; /* RGB -> YCoCg */
         const float fco = (0.5f * B[0] - 0.5f * B[2]) * area;
         const float fcg = (-0.25f * B[0] + 0.5f * B[1] - 0.25f * B[2]) * area;
@@ -429,7 +429,7 @@ static void *alloc_array(glow_system *s, size_t count, size_t elem, bool *ok) {
 static void free_system(glow_system *s) {
     glow_context *ctx = s->ctx;
     void *bufs[] = {s->pos4, s->nrm4, s->mat, s->tri, s->feedback, s->albedo, s->emis_base, s->emis,
-                    s->direct, s->direct_spare, s->fb_w, s->rho_ind_max, s->flux, s->rad, s->inv_pi_area,
+                    s->direct, s->direct_spare, s->fb_w, s->rho_ind_max, s->flux, s->rad, s->inv_pi_area, s->leaf_area,
                     s->cache_sh, s->grid_sh, s->lm_sh, s->grid_map, s->lm_map, s->mat_emis_scale,
                     s->mat_albedo_scale, s->batch_status, s->batch_negative, s->out_index, s->out_cache,
                     s->xblocks, s->slots, s->sub_ratio, s->grp_age, s->grp_delta, s->grp_drift_at, s->grp_centre,
@@ -551,6 +551,7 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     s->flux = alloc_array(s, N, 3 * sizeof(float), &ok);
     s->rad = alloc_array(s, N, 4 * sizeof(float), &ok); /* interleaved Y Co Cg pad */
     s->inv_pi_area = alloc_array(s, N, sizeof(float), &ok);
+    s->leaf_area = alloc_array(s, S, sizeof(float), &ok);
     s->cache_sh = alloc_array(s, s->C, (size_t)s->coeffs * sizeof(float), &ok);
     s->grid_sh = alloc_array(s, s->grid_cells, (size_t)s->coeffs * sizeof(float), &ok);
     s->lm_sh = alloc_array(s, s->lm_texels, (size_t)s->coeffs * sizeof(float), &ok);
@@ -596,7 +597,7 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     const glow_bake_surfel *sf = glow__bake_surfels(desc->bake);
     for (size_t i = 0; i < S; ++i) {
         memcpy(s->pos4 + 4 * i, sf[i].position, 3 * sizeof(float));
-        s->pos4[4 * i + 3] = m->surfel_area;
+        s->pos4[4 * i + 3] = s->leaf_area[i] = s->nodes[i].area;
         memcpy(s->nrm4 + 4 * i, sf[i].normal, 3 * sizeof(float));
         s->nrm4[4 * i + 3] = 0.0f;
         s->mat[i] = sf[i].material;

@@ -589,6 +589,7 @@ static void test_load_variants(void **state) {
         tb.meta.surfel_count = 1;
         tb.meta.node_count = 1;
         tb.meta.level_count = 1;
+        tb.meta.scene_area = 0.5; /* the one leaf's area: the leaves' areas sum to scene_area */
         tb.node[0].parent = GLOW_NODE_NONE;
         tb.levl[1] = 1;
         for (int i = 0; i < 2; i++)
@@ -969,6 +970,12 @@ static void test_non_finite(void **state) {
     EXPECT_PATCHED(0, C, "material 1: albedo", b->mat[1].albedo[0] = 2.0f);
     EXPECT_PATCHED(0, C, "node 0: area", b->node[0].area = 8.8e-43f);
     EXPECT_PATCHED(0, C, "node 2: area", b->node[2].area = 5.0f);
+    /* 1.3: leaves may differ in area (an adapted surfel density), within 16x of surfel_area either
+     * way and summing to scene_area */
+    EXPECT_PATCHED(0, GLOW_OK, NULL, b->node[0].area = 0.3f; b->node[1].area = 0.7f);
+    EXPECT_PATCHED(0, C, "leaves' areas sum to 0.8", b->node[0].area = 0.3f; b->node[1].area = 0.5f; b->node[2].area = 0.8f);
+    EXPECT_PATCHED(0, C, "node 1: area 9 of a leaf is not within 16x", b->node[1].area = 9.0f);
+    EXPECT_PATCHED(0, C, "node 0: area 0.03 of a leaf is not within 16x", b->node[0].area = 0.03f);
     EXPECT_PATCHED(0, C, "factor_scale", b->meta.factor_scale = 1.0f);
     /* the edges of the domain stay valid */
     EXPECT_PATCHED(0, GLOW_OK, NULL, b->surf[0].albedo[0] = 1.0f; b->surf[1].albedo[2] = 0.0f;

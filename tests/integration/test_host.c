@@ -341,7 +341,7 @@ static void test_environment(void **state) {
     float *vis = malloc(sizeof(float) * n);
     for (uint32_t i = 0; i < n; ++i) {
         memcpy(pos + 4 * i, sf[i].position, 12);
-        pos[4 * i + 3] = info.surfel_area;
+        pos[4 * i + 3] = glow__bake_nodes(fx->cornell)[i].area; /* the leaf's area */
         memcpy(nor + 4 * i, sf[i].normal, 12);
         nor[4 * i + 3] = 0;
         vis[i] = (float)(i % 5) * 0.25f;
@@ -391,7 +391,7 @@ static surfels get_surfels(const glow_bake *b) {
     assert_non_null(s.nor);
     for (uint32_t i = 0; i < s.n; ++i) {
         memcpy(s.pos + 4 * i, sf[i].position, 12);
-        s.pos[4 * i + 3] = info.surfel_area;
+        s.pos[4 * i + 3] = glow__bake_nodes(b)[i].area; /* the leaf's area */
         memcpy(s.nor + 4 * i, sf[i].normal, 12);
         s.nor[4 * i + 3] = 0;
     }

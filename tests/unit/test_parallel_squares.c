@@ -295,7 +295,7 @@ static void check_receiver(fixture *f, uint32_t luma, bool vs_true) {
     const uint32_t *lv = glow__bake_level_starts(f->bake);
     double *emit_area = calloc(m->node_count, sizeof *emit_area);
     assert_non_null(emit_area);
-    for (uint32_t i = 0; i < m->surfel_count; ++i) emit_area[i] = sf[i].emission[1] > 0.0f ? m->surfel_area : 0.0;
+    for (uint32_t i = 0; i < m->surfel_count; ++i) emit_area[i] = sf[i].emission[1] > 0.0f ? nodes[i].area : 0.0;
     for (uint32_t L = 1; L < m->level_count; ++L)
         for (uint32_t v = lv[L]; v < lv[L + 1]; ++v) emit_area[v] = emit_area[nodes[v].child[0]] + emit_area[nodes[v].child[1]];
     const glow_bake_link_block *lb = glow__bake_link_blocks(f->bake);

@@ -166,6 +166,7 @@ typedef struct hook_ctl {
     atomic_int bad_worker;
     atomic_int bad_batch; /* a batch outside the surfels, or surfel data not as documented */
     float area;           /* the bake's surfel area (0 = not checked) */
+    const glow_bake_node *leaf; /* the bake's leaves: positions[3] is their area */
     uint32_t surfel_count, material_count;
 } hook_ctl;
 
@@ -189,7 +190,7 @@ static glow_result test_hook(void *user, const glow_surfel_batch *b, float *out,
         atomic_store(&h->bad_batch, 1);
     for (uint32_t i = 0; h->area > 0.0f && i < b->count; ++i) {
         const float *p = b->positions + 4 * (size_t)i, *n = b->normals + 4 * (size_t)i;
-        if (p[3] != h->area || n[3] != 0.0f || fabsf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2] - 1.0f) > 1e-4f ||
+        if (p[3] != h->leaf[b->first + i].area || n[3] != 0.0f || fabsf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2] - 1.0f) > 1e-4f ||
             b->materials[i] >= h->material_count)
             atomic_store(&h->bad_batch, 1);
     }
@@ -225,6 +226,7 @@ static glow_system *make_system(env *e, hook_ctl *h, uint32_t batch) {
     glow_system *s = NULL;
     if (h) {
         h->area = e->meta->surfel_area;
+        h->leaf = glow__bake_nodes(e->bake); /* each surfel's area is its leaf's (format 1.3) */
         h->surfel_count = e->meta->surfel_count;
         h->material_count = e->meta->material_count;
     }

@@ -59,7 +59,8 @@ extern "C" {
 /* The bake format this runtime reads and glow-bake writes: a bake of another major is refused
  * (GLOW_ERROR_VERSION_MISMATCH); a newer minor loads, its unknown sections skipped. */
 #define GLOW_BAKE_FORMAT_VERSION_MAJOR 1u
-#define GLOW_BAKE_FORMAT_VERSION_MINOR 2u /* 1.1: material UVs and texture paths (TUV0, TEXP); 1.2: lightmap detail (LDET) */
+#define GLOW_BAKE_FORMAT_VERSION_MINOR 3u /* 1.1: material UVs and texture paths (TUV0, TEXP); 1.2: lightmap detail (LDET);
+                                            * 1.3: leaf surfels may differ in area (an adapted density) */
 #define GLOW_BAKE_FORMAT_MAJOR 1 /* the bake major this runtime reads */
 
 /* GLOW_API marks the public functions. A shared build (BUILD_SHARED_LIBS) compiles the libraries with
@@ -154,7 +155,7 @@ typedef struct glow_bake_info {
     uint32_t grid_dims[3];
     uint32_t lightmap_count, lightmap_width, lightmap_height;
     float bounds_min[3], bounds_max[3];
-    float surfel_area, grid_spacing, texel_density;
+    float surfel_area, grid_spacing, texel_density; /* surfel_area: nominal, scene_area / surfel_count */
     double scene_area;
     uint64_t file_size;
 } glow_bake_info;

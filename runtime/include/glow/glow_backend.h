@@ -25,7 +25,9 @@ typedef struct glow_solver_tables {
     uint32_t surfel_count, node_count, level_count, cache_count, material_count;
     uint32_t links_per_cache, link_blocks_per_cache; /* link blocks: 16 links each, see link_blocks */
     uint32_t sh_bands_luma, sh_bands_chroma, coeff_count;
-    float surfel_area;                 /* m², every leaf surfel */
+    float surfel_area;                 /* m², the nominal leaf area (META); each surfel's own is the w of
+                                          glow_system_get_surfels' positions (differs when the linker
+                                          adapted the density, bake format 1.3) */
     const float *albedo;               /* [S][3] linear RGB (texture folded in), before material scales */
     const float *emission;             /* [S][3] W/(m²·sr) before scales (the bake's, or the host's override) */
     const uint32_t *materials;         /* [S] */

@@ -112,7 +112,7 @@ typedef struct glow_bake_meta {
     /*  40 */ uint32_t material_count;
     /*  44 */ uint32_t triangle_count;    /* triangles kept (GEOM entries) */
     /*  48 */ float bounds_min[3];        /* scene AABB, m */
-    /*  60 */ float surfel_area;          /* area of every leaf surfel, m² */
+    /*  60 */ float surfel_area;          /* nominal leaf area scene_area / surfel_count, m² (1.3: leaves may differ, NODE) */
     /*  64 */ float bounds_max[3];
     /*  76 */ float factor_scale;         /* 1/(pi * surfel_area): scales SHLK coefficients (LINK needs none) */
     /*  80 */ float grid_origin[3];       /* centre of grid cell (0,0,0), m */
@@ -123,7 +123,7 @@ typedef struct glow_bake_meta {
     /* 116 */ uint32_t lightmap_height;
     /* 120 */ float texel_density;        /* texels per m */
     /* 124 */ uint32_t seed;
-    /* 128 */ double scene_area;          /* m², sum of kept triangle areas == surfel_count*surfel_area */
+    /* 128 */ double scene_area;          /* m², sum of kept triangle areas == surfel_count*surfel_area == the leaves' areas */
     /* 136 */ uint32_t source_triangles;  /* triangles read from the file */
     /* 140 */ uint32_t skipped_degenerate;/* zero-area / repeated-index triangles */
     /* 144 */ uint32_t skipped_duplicate; /* coincident duplicate faces */
@@ -142,6 +142,10 @@ typedef struct glow_bake_material {
     /* 48 */ float emission[3];  /* emitted radiance W/(m²·sr) (Ke / emissiveFactor) */
     /* 60 */ uint32_t reserved;
 } glow_bake_material; /* 64 */
+
+/* A leaf node's area lies within this factor of META surfel_area either way (format 1.3: the linker
+ * may adapt the surfel density; before, every leaf's area was surfel_area). */
+#define GLOW_BAKE_LEAF_AREA_RANGE 16.0f
 
 typedef struct glow_bake_surfel {
     /*  0 */ float position[3];  /* m */
