@@ -559,7 +559,7 @@ static float leaf_solid_angle(const link_job *job, const glow__cache *cache, con
         if (up <= -0.5f * eps && !(up > -1.5f * eps && glow__dot(s->nrm, cache->nrm) < 0.9f)) return 0.0f;
     }
     if (d2 < job->near_radius * job->near_radius) return 0.0f; /* measured by the near-field rays */
-    float w = disc_solid_angle(job->surfels->area, d2, cos_s);
+    float w = disc_solid_angle(s->area, d2, cos_s);
     if (!(w > 0.0f)) return 0.0f;
     for (int k = 0; k < 3; ++k) dir[k] = d[k] * inv;
     *dist = sqrtf(d2);
@@ -726,7 +726,6 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
     const bool hemi = cache->kind == GLOW_CACHE_KIND_LIGHTMAP;
     const uint32_t rays = set->rays_per_surfel ? set->rays_per_surfel : 1u;
     const float eps = job->ray_eps;
-    const float radius = sqrtf(S->area / (float)GLOW__PI);
 
     /* 1. leaves (exact) or runs of leaves (clustered): solid angles, then visibility in packets of 16
      * rays from the cache. "Units" below are the leaves or the runs. */
@@ -770,7 +769,7 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
                 uint32_t seen = 0;
                 for (uint32_t k = 0; k < rays; ++k) {
                     float p[3], dd[3];
-                    disc_point(s, radius, k, rays, p);
+                    disc_point(s, sqrtf(s->area / (float)GLOW__PI), k, rays, p);
                     glow__sub(p, cache->pos, dd);
                     float dl = sqrtf(glow__dot(dd, dd));
                     if (!(dl > 2.0f * eps)) { seen++; continue; }
@@ -1516,9 +1515,12 @@ glow_result glow__links_build(const glow__scene *scene, const glow__rt *rt, cons
     for (uint32_t v = 0; v < h->node_count; ++v) {
         const glow__node *nd = &h->nodes[v];
         if (v < h->leaf_count) {
-            job.radius[v] = sqrtf(surfels->area / (float)GLOW__PI);
+            job.radius[v] = sqrtf(surfels->s[v].area / (float)GLOW__PI);
             job.cone[v] = 0.0f;
-            memcpy(&job.nsum[3 * v], surfels->s[v].nrm, 3 * sizeof(float));
+            /* in units of the nominal area (1 each unless the density adapts), so that the
+             * clustered pass's S->area x nsum is the area-weighted normal sum */
+            const float rel = surfels->s[v].area / surfels->area;
+            for (int k = 0; k < 3; ++k) job.nsum[3 * v + k] = rel * surfels->s[v].nrm[k];
             const float *e = surfels->s[v].emission;
             job.emissive[v] = e[0] > 0.0f || e[1] > 0.0f || e[2] > 0.0f;
             continue;
@@ -1547,13 +1549,14 @@ glow_result glow__links_build(const glow__scene *scene, const glow__rt *rt, cons
      * its children's centres): take the farthest leaf instead, walking each leaf's ancestors
      * (leaves x depth). */
     {
-        const float rs = sqrtf(surfels->area / (float)GLOW__PI);
+        float rs = 0.0f; /* the largest leaf's radius */
+        for (uint32_t i = 0; i < h->leaf_count; ++i) rs = job.radius[i] > rs ? job.radius[i] : rs;
         for (uint32_t v = h->leaf_count; v < h->node_count; ++v) job.radius[v] = rs;
         for (uint32_t i = 0; i < h->leaf_count; ++i)
             for (uint32_t v = h->nodes[i].parent; v != GLOW_NODE_NONE; v = h->nodes[v].parent) {
                 float d[3];
                 glow__sub(surfels->s[i].pos, h->nodes[v].pos, d);
-                const float ri = sqrtf(glow__dot(d, d)) + rs;
+                const float ri = sqrtf(glow__dot(d, d)) + job.radius[i];
                 if (ri > job.radius[v]) job.radius[v] = ri;
             }
     }

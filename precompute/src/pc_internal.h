@@ -37,18 +37,24 @@ typedef struct glow__surfel {
     uint32_t tri;             /* scene triangle it lies on */
     float bary[2];            /* barycentrics (of corners 1, 2) on tri */
     uint32_t material;
+    float area;               /* m²: its share of the surface (all equal unless the density adapts) */
 } glow__surfel;
 
 typedef struct glow__surfels {
     uint32_t count;
     glow__surfel *s;
-    float area;               /* every surfel's area: scene area / count */
+    float area;               /* the nominal area, scene area / count (META surfel_area); each
+                               * surfel's own is s[i].area, equal to it unless the density adapts */
+    uint32_t adapted;         /* 1 when the density followed the surface's concavity */
 } glow__surfels;
 
 typedef struct glow__surfel_settings {
     uint32_t count;           /* target n_S (exact: placement yields exactly this many) */
     uint32_t seed;            /* scrambles the Halton sequence */
     uint32_t relax_iterations;/* 0 = none */
+    float adapt;              /* > 1: the density in concave places may be up to this many times the
+                               * density on open flat ground (needs rt); <= 1: area-uniform */
+    const glow__rt *rt;       /* for the concavity rays (adapt > 1) */
 } glow__surfel_settings;
 
 glow_result glow__surfels_place(const glow__scene *scene, const glow__surfel_settings *settings,

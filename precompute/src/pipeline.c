@@ -31,22 +31,27 @@ const char *glow_pc_stage_name(uint32_t stage) { return stage < GLOW_PC_STAGE_CO
 
 typedef struct preset {
     uint32_t surfels, links, bands, grid, lightmap, relax;
+    float adapt; /* surfel density in concave places against open ground (surfels.c "adaptive
+                  * density"); 1 = area-uniform. Sponza against the referee, surfel seeds 0-3: moderate
+                  * 0.123 -> 0.102 with 4; low 0.199 -> 0.197 (seeds 0-1); fine 0.081 / 0.088 ->
+                  * 0.099 / 0.090 (seeds 0 / 1): at 131k surfels the open ground it thins costs more
+                  * than the creases gain, so high and fine stay area-uniform (docs/results.md) */
 } preset;
 static const preset presets[5] = {
-    /* default = moderate */ {32768, 128, 3, 2000, 8000, 6},
-    /* low      */ {8192, 64, 3, 500, 2000, 4},
+    /* default = moderate */ {32768, 128, 3, 2000, 8000, 6, 4.0f},
+    /* low      */ {8192, 64, 3, 500, 2000, 4, 4.0f},
     /* moderate: PIC's. Half the links on twice the lightmap caches (about the same links per bake)
      * was 4 % better on Sponza's block error averaged over 4 surfel seeds, 7 % worse on Cornell's, at
      * +11.5 % update time: not taken (docs/results.md, "More budget"); --lightmap-caches sets it */
-    /* moderate */ {32768, 128, 3, 2000, 8000, 6},
-    /* high     */ {131072, 254, 4, 2000, 8000, 6},
+    /* moderate */ {32768, 128, 3, 2000, 8000, 6, 4.0f},
+    /* high     */ {131072, 254, 4, 2000, 8000, 6, 1.0f},
     /* fine: moderate's links, bands and lightmap on 4x its surfels (0.24 m apart on Sponza), with the
      * lightmap detail (the default) for the receivers. It resolves light from surfaces a fraction of a
      * metre away (pillar feet next to a sunlit floor, capitals): Sponza's block error 0.124 -> 0.088
      * (surfel seeds 0-3), at about 1.8x moderate's update time and 2.3x its memory. Until 2026-11-27 it
      * also had 4x moderate's lightmap caches (32000: 0.079 without the detail, 0.060 with it on seed 0,
      * at about 4x the update): --lightmap-caches 32000 (docs/results.md, "Near light") */
-    /* fine     */ {131072, 128, 3, 2000, 8000, 6},
+    /* fine     */ {131072, 128, 3, 2000, 8000, 6, 1.0f},
 };
 
 static const preset *preset_of(glow_pc_quality q) {
@@ -69,6 +74,7 @@ glow_pc_settings glow_pc_settings_resolve(const glow_pc_settings *in) {
     if (!s.lightmap_detail) s.lightmap_detail = GLOW_PC_LIGHTMAP_DETAIL;
     if (!s.detail_links) s.detail_links = GLOW_PC_DETAIL_LINKS;
     if (s.detail_radius == 0.0f) s.detail_radius = GLOW_PC_DETAIL_RADIUS;
+    if (s.surfel_adapt == 0.0f) s.surfel_adapt = p->adapt;
     return s;
 }
 
@@ -97,6 +103,8 @@ glow_result glow_pc_settings_validate(const glow_pc_settings *s, char *msg, size
     if (s->detail_links > 256) BAD("--detail-links %u is out of range (1..256)", s->detail_links);
     if (s->detail_radius != 0.0f && !(s->detail_radius > 0.0f && s->detail_radius <= 4.0f))
         BAD("--detail-radius %g is out of range (0..4 lightmap texels)", (double)s->detail_radius);
+    if (s->surfel_adapt != 0.0f && !(s->surfel_adapt >= 1.0f && s->surfel_adapt <= 4.0f))
+        BAD("--surfel-adapt %g is out of range (1..4)", (double)s->surfel_adapt);
 #undef BAD
     return GLOW_OK;
 }
@@ -593,7 +601,8 @@ static glow_result bake(const char *scene_path, const char *out_path, const glow
     if (res != GLOW_OK) goto done;
 
     STAGE_BEGIN(ST_SURFELS);
-    glow__surfel_settings ssurf = {.count = set.surfels, .seed = set.seed, .relax_iterations = set.relax_iterations};
+    glow__surfel_settings ssurf = {.count = set.surfels, .seed = set.seed, .relax_iterations = set.relax_iterations,
+                                   .adapt = set.surfel_adapt, .rt = rt};
     res = glow__surfels_place(&scene, &ssurf, pool, &log, &surfels);
     STAGE_END(ST_SURFELS);
     if (res != GLOW_OK) goto done;

@@ -71,6 +71,10 @@ static const char *usage_text =
     "  --detail-links K       at most K links per detail texel (default 16)\n"
     "  --detail-radius R      a detail texel corrects the light of surfels within R lightmap texels of\n"
     "                         it (default 1)\n"
+    "  --surfel-adapt F       surfels up to F times as dense where surfaces face each other within\n"
+    "                         the near field (concave places) as on open ground, same count:\n"
+    "                         1 = area-uniform, up to 4 (default: low and moderate 4, high and\n"
+    "                         fine 1)\n"
     "  --audit-radiance FILE  audit the cuts under a lighting: FILE holds one float32 radiance per surfel\n"
     "                         (glow-stability audit --radiance-out, for a bake with the same settings);\n"
     "                         logs each cut's gather against the exact gather through visible surfels\n"
@@ -501,6 +505,13 @@ int main(int argc, char **argv) {
             if (!end || *end || !(x > 0.0 && x <= 4.0))
                 return usage_error("--detail-radius '%s': expected lightmap texels in (0, 4]", v);
             s.detail_radius = (float)x;
+        } else if (!strcmp(a, "--surfel-adapt")) {
+            NEED_VALUE();
+            char *end = NULL;
+            double x = strtod(v, &end);
+            if (!end || *end || !(x >= 1.0 && x <= 4.0))
+                return usage_error("--surfel-adapt '%s': expected a density ratio in [1, 4] (1 = area-uniform)", v);
+            s.surfel_adapt = (float)x;
         } else if (!strcmp(a, "--detail-links")) {
             NEED_VALUE();
             if (!parse_u32(v, 1, 256, &s.detail_links)) return usage_error("--detail-links '%s': expected an integer in 1..256", v);

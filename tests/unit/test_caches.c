@@ -126,6 +126,7 @@ static void make_surfels(const glow__scene *s, uint32_t count, glow__surfels *ou
 #define NEXT() ((rng = rng * 6364136223846793005ull + 1442695040888963407ull) >> 11) * (1.0 / 9007199254740992.0)
     for (uint32_t i = 0; i < count; ++i) {
         glow__surfel *sf = &out->s[i];
+        sf->area = out->area;
         sf->tri = (uint32_t)(NEXT() * s->tri_count) % s->tri_count;
         double u = NEXT(), v = NEXT();
         if (u + v > 1.0) {

@@ -48,6 +48,7 @@ static void set_surfel(glow__surfels *s, uint32_t i, double x, double y, double 
     q->albedo[0] = q->albedo[1] = q->albedo[2] = 0.5f;
     q->tri = i;
     q->material = i % 5u;
+    q->area = s->area; /* equal areas, as an area-uniform placement gives */
 }
 
 static glow__surfels surfels_copy(const glow__surfels *s) {
@@ -120,7 +121,7 @@ static void check_hierarchy(const glow__hierarchy *h, const glow__surfels *s, co
     for (uint32_t i = 0; i < n; ++i) {
         assert_int_equal(nd[i].child[0], GLOW_NODE_NONE);
         assert_int_equal(nd[i].child[1], GLOW_NODE_NONE);
-        assert_true(nd[i].area == s->area);
+        assert_true(nd[i].area == s->s[i].area);
         assert_memory_equal(nd[i].pos, s->s[i].pos, sizeof nd[i].pos);
         assert_memory_equal(nd[i].nrm, s->s[i].nrm, sizeof nd[i].nrm);
     }
@@ -141,7 +142,9 @@ static void check_hierarchy(const glow__hierarchy *h, const glow__surfels *s, co
         float l2 = glow__dot(nd[i].nrm, nd[i].nrm);
         assert_true(l2 == 0.0f || fabsf(l2 - 1.0f) < 1e-4f);
     }
-    assert_true(fabs(nd[root].area - (double)n * s->area) <= 1e-5 * (double)n * s->area);
+    double leaf_sum = 0.0;
+    for (uint32_t i = 0; i < n; ++i) leaf_sum += s->s[i].area;
+    assert_true(fabs(nd[root].area - leaf_sum) <= 1e-5 * leaf_sum);
     /* depth-first traversal (first child first) meets the leaves exactly once each, in order */
     uint32_t *stack = malloc((size_t)h->node_count * sizeof *stack);
     assert_non_null(stack);
@@ -259,6 +262,8 @@ static void test_invalid_input(void **state) {
     for (uint32_t i = 0; i < 4; ++i) set_surfel(&s, i, i, 0, 0, 0, 0, 1);
     assert_int_equal(glow__hierarchy_build(&s, lo, hi, NULL, NULL, &h), GLOW_ERROR_INVALID_ARGUMENT);
     s.area = 1.0f;
+    assert_int_equal(glow__hierarchy_build(&s, lo, hi, NULL, NULL, &h), GLOW_ERROR_INVALID_ARGUMENT); /* leaves of area 0 */
+    for (uint32_t i = 0; i < 4; ++i) s.s[i].area = 1.0f;
     s.s[2].pos[1] = NAN;
     assert_int_equal(glow__hierarchy_build(&s, lo, hi, NULL, NULL, &h), GLOW_ERROR_INVALID_ARGUMENT);
     assert_null(h.nodes);

@@ -13,6 +13,10 @@
 
 #include "pc_internal.h"
 
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
 /* ------------------------------------------------------------------ helpers */
 static uint32_t rng_state = 12345u;
 static double rnd(void) {
@@ -542,6 +546,79 @@ static void test_deterministic_across_threads(void **state) {
     ts_free(&ts);
 }
 
+/* Adaptive density (surfels.c "adaptive density", "areas from the placement"): a 4 x 4 m floor
+ * meeting a 4 x 2 m wall. Within the near field of the crease the surfels must be denser and
+ * smaller; every surfel's area is its share of the surface, so the areas sum to each surface's area,
+ * and to a region's far from the crease; the same bytes on any thread count. */
+static void add_floor_and_wall(test_scene *ts) {
+    ts_init(ts, 64);
+    ts_rect(ts, 0.0f, 0.0f, 4.0f, 4.0f, 0.0f, 4, 0); /* floor z = 0, normal +z */
+    const float w0[3] = {0, 0, 0}, w1[3] = {0, 4, 0}, w2[3] = {0, 4, 2}, w3[3] = {0, 0, 2};
+    ts_tri(ts, w0, w1, w2, NULL, 1); /* wall x = 0, normal +x (towards the floor) */
+    ts_tri(ts, w0, w2, w3, NULL, 1);
+}
+
+static void test_adaptive_density(void **state) {
+    (void)state;
+    test_scene ts;
+    add_floor_and_wall(&ts);
+    glow__rt *rt = NULL;
+    assert_int_equal(glow__rt_create(&ts.sc, NULL, &rt), GLOW_OK);
+    glow__surfel_settings set = {.count = 4000, .seed = 3, .relax_iterations = 4, .adapt = 4.0f, .rt = rt};
+    glow__surfels s;
+    assert_int_equal(glow__surfels_place(&ts.sc, &set, NULL, NULL, &s), GLOW_OK);
+    assert_int_equal(s.count, 4000);
+    assert_int_equal(s.adapted, 1);
+    const double nominal = ts.sc.area / 4000.0, reach = 4.0 * sqrt(nominal / M_PI); /* ADAPT_RADII */
+    double sum = 0.0, floor_a = 0.0, wall_a = 0.0, far_a = 0.0, near_a = 0.0, amin = INFINITY, amax = 0.0;
+    uint32_t near_n = 0, far_n = 0;
+    for (uint32_t i = 0; i < s.count; ++i) {
+        const glow__surfel *x = &s.s[i];
+        assert_true(isfinite(x->area) && x->area > 0.0f);
+        sum += x->area;
+        amin = fmin(amin, x->area);
+        amax = fmax(amax, x->area);
+        if (x->material == 0) {
+            floor_a += x->area;
+            if (x->pos[0] < 0.5 * reach) { near_a += x->area; near_n++; }
+            if (x->pos[0] > 1.0f) { far_a += x->area; far_n++; }
+        } else {
+            wall_a += x->area;
+        }
+    }
+    printf("adaptive: areas %.4g..%.4g (nominal %.4g); floor %.4f wall %.4f; floor near the crease %u surfels "
+           "(%.1f per m2), far %u (%.1f per m2, their areas %.4f of 12 m2)\n", amin, amax, nominal, floor_a, wall_a,
+           near_n, near_n / (4.0 * 0.5 * reach), far_n, far_n / 12.0, far_a);
+    assert_true(fabs(sum - ts.sc.area) < 1e-4 * ts.sc.area);
+    assert_true(fabs(floor_a - 16.0) < 0.02 * 16.0);
+    assert_true(fabs(wall_a - 8.0) < 0.02 * 8.0);
+    assert_true(fabs(far_a - 12.0) < 0.03 * 12.0);        /* a region's areas are its area */
+    const double near_density = near_n / (4.0 * 0.5 * reach), far_density = far_n / 12.0;
+    assert_true(near_density > 1.5 * far_density);          /* denser in the crease ... */
+    assert_true(near_a / near_n < 0.75 * (far_a / far_n)); /* ... with smaller surfels */
+    assert_true(amin >= nominal / 16.0 && amax <= 16.0 * nominal); /* the bake's leaf-area range */
+
+    /* the same bytes on 1 and 2 threads */
+    glow__pool *pool = glow__pool_create(2);
+    assert_non_null(pool);
+    glow__surfels s2;
+    assert_int_equal(glow__surfels_place(&ts.sc, &set, pool, NULL, &s2), GLOW_OK);
+    assert_int_equal(s2.count, s.count);
+    assert_memory_equal(s2.s, s.s, (size_t)s.count * sizeof *s.s);
+    glow__surfels_free(&s2);
+    glow__pool_destroy(pool);
+
+    /* without rays (no rt) the density stays area-uniform: every surfel has the nominal area */
+    set.rt = NULL;
+    assert_int_equal(glow__surfels_place(&ts.sc, &set, NULL, NULL, &s2), GLOW_OK);
+    assert_int_equal(s2.adapted, 0);
+    for (uint32_t i = 0; i < s2.count; ++i) assert_true(s2.s[i].area == s2.area);
+    glow__surfels_free(&s2);
+    glow__surfels_free(&s);
+    glow__rt_destroy(rt);
+    ts_free(&ts);
+}
+
 static void test_invalid_input(void **state) {
     (void)state;
     test_scene ts;
@@ -584,6 +661,7 @@ int main(void) {
         cmocka_unit_test(test_textured_albedo),
         cmocka_unit_test(test_relaxation_spreads_surfels),
         cmocka_unit_test(test_deterministic_across_threads),
+        cmocka_unit_test(test_adaptive_density),
         cmocka_unit_test(test_invalid_input),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -105,6 +105,11 @@ typedef struct glow_pc_settings {
     uint32_t detail_links;      /* at most this many links per detail texel; 0 = default (--detail-links) */
     float detail_radius;        /* a detail texel corrects the light of surfels within this many lightmap
                                    texels of it; 0 = default (--detail-radius) */
+    float surfel_adapt;         /* surfels up to this many times as dense in concave places (surfaces
+                                   facing each other within the links' near field) as on open ground,
+                                   at the same count; each surfel carries its own area (format 1.3).
+                                   0 = preset (low and moderate 4, high and fine 1), 1 = area-uniform,
+                                   at most 4 (--surfel-adapt) */
 } glow_pc_settings;
 
 typedef struct glow_pc_stats {
