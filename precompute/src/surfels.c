@@ -410,7 +410,7 @@ static glow_result place_adaptive(const glow__scene *scene, const glow__surfel_s
     uint32_t *cand_tri = malloc((size_t)M * sizeof *cand_tri);
     float (*cand_bary)[2] = malloc((size_t)M * sizeof *cand_bary);
     float *w = malloc((size_t)M * sizeof *w);
-    double *p = malloc((size_t)M * sizeof *p);
+    double *p = malloc((size_t)n * sizeof *p); /* the picks' inclusion probabilities */
     float *areas = malloc((size_t)n * sizeof *areas);
     uint32_t *pick = malloc((size_t)n * sizeof *pick);
     if (!cand_tri || !cand_bary || !w || !p || !areas || !pick) {
@@ -457,14 +457,14 @@ static glow_result place_adaptive(const glow__scene *scene, const glow__surfel_s
         qsort(pick, n, sizeof *pick, cmp_u32);
         for (uint32_t j = 0; j < n; ++j) {
             const double q = (double)w[pick[j]] * tau;
-            p[pick[j]] = q < 1.0 ? q : 1.0;
+            p[j] = q < 1.0 ? q : 1.0;
         }
     }
     double inv_sum = 0.0;
-    for (uint32_t j = 0; j < n; ++j) inv_sum += 1.0 / p[pick[j]];
+    for (uint32_t j = 0; j < n; ++j) inv_sum += 1.0 / p[j];
     for (uint32_t j = 0; j < n; ++j) {
         const uint32_t i = pick[j];
-        areas[j] = (float)(scene->area * (1.0 / p[i]) / inv_sum);
+        areas[j] = (float)(scene->area * (1.0 / p[j]) / inv_sum);
         memset(&s[j], 0, sizeof s[j]);
         s[j].tri = cand_tri[i];
         set_bary(&s[j], cand_bary[i][0], cand_bary[i][1]);

@@ -608,6 +608,16 @@ static void test_adaptive_density(void **state) {
     glow__surfels_free(&s2);
     glow__pool_destroy(pool);
 
+    /* the smallest count a bake allows: still exactly n, areas summing to the scene's */
+    glow__surfel_settings few = set;
+    few.count = 16;
+    assert_int_equal(glow__surfels_place(&ts.sc, &few, NULL, NULL, &s2), GLOW_OK);
+    assert_int_equal(s2.count, 16);
+    double few_sum = 0.0;
+    for (uint32_t i = 0; i < s2.count; ++i) few_sum += s2.s[i].area;
+    assert_true(fabs(few_sum - ts.sc.area) < 1e-4 * ts.sc.area);
+    glow__surfels_free(&s2);
+
     /* without rays (no rt) the density stays area-uniform: every surfel has the nominal area */
     set.rt = NULL;
     assert_int_equal(glow__surfels_place(&ts.sc, &set, NULL, NULL, &s2), GLOW_OK);
