@@ -179,6 +179,17 @@ static void set_bary(glow__surfel *s, double v, double w) {
     s->bary[1] = fw;
 }
 
+/* Point i of the rotated 2-d Halton sequence on s->tri, through the square-root warp (surfels,
+ * adaptive candidates and area points alike). */
+static void halton_bary(glow__surfel *s, uint32_t i, const double rot[2]) {
+    double u1 = frac1(radical_inverse2(i) + rot[0]);
+    double u2 = frac1(radical_inverse3(i) + rot[1]);
+    double su = sqrt(u1);
+    double v = su * (1.0 - u2), w = su * u2;
+    clamp_bary(&v, &w);
+    set_bary(s, v, w);
+}
+
 /* ------------------------------------------------------------------ placement */
 typedef struct place_ctx {
     const glow__scene *scene;
@@ -195,12 +206,7 @@ static void place_range(void *vctx, uint32_t begin, uint32_t end, uint32_t worke
         glow__surfel *s = &c->s[i];
         memset(s, 0, sizeof *s);
         s->tri = c->surfel_tri[i];
-        double u1 = frac1(radical_inverse2(i) + c->rot[0]);
-        double u2 = frac1(radical_inverse3(i) + c->rot[1]);
-        double su = sqrt(u1);
-        double v = su * (1.0 - u2), w = su * u2;
-        clamp_bary(&v, &w);
-        set_bary(s, v, w);
+        halton_bary(s, i, c->rot);
         surfel_eval(c->scene, c->area, s);
     }
 }
@@ -339,12 +345,7 @@ static void adapt_range(void *vctx, uint32_t begin, uint32_t end, uint32_t worke
         glow__surfel t;
         memset(&t, 0, sizeof t);
         t.tri = c->cand_tri[i];
-        double u1 = frac1(radical_inverse2(i) + c->rot[0]);
-        double u2 = frac1(radical_inverse3(i) + c->rot[1]);
-        double su = sqrt(u1);
-        double v = su * (1.0 - u2), w = su * u2;
-        clamp_bary(&v, &w);
-        set_bary(&t, v, w);
+        halton_bary(&t, i, c->rot);
         surfel_eval(c->scene, c->area, &t);
         c->cand_bary[i][0] = t.bary[0];
         c->cand_bary[i][1] = t.bary[1];
@@ -520,12 +521,7 @@ static void area_range(void *vctx, uint32_t begin, uint32_t end, uint32_t worker
         glow__surfel q;
         memset(&q, 0, sizeof q);
         q.tri = t;
-        double u1 = frac1(radical_inverse2(j) + c->rot[0]);
-        double u2 = frac1(radical_inverse3(j) + c->rot[1]);
-        double su = sqrt(u1);
-        double v = su * (1.0 - u2), w = su * u2;
-        clamp_bary(&v, &w);
-        set_bary(&q, v, w);
+        halton_bary(&q, j, c->rot);
         /* position and normal as surfel_eval has them (without the textures) */
         const float *p0 = scene->pos[3 * t], *p1 = scene->pos[3 * t + 1], *p2 = scene->pos[3 * t + 2];
         const float *n0 = scene->nrm[3 * t], *n1 = scene->nrm[3 * t + 1], *n2 = scene->nrm[3 * t + 2];
