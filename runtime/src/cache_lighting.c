@@ -159,6 +159,10 @@ static inline glow__v8f sqrt8_generic(glow__v8f x) {
     for (uint32_t i_ = 0; i_ < (n); ++i_) (out)[i_] = reduce8((acc)[i_]) * (scale)[i_]
 #define KFN(name) name##_avx2
 #define KATTR __attribute__((target("avx2,fma,f16c")))
+#undef REDUCE_STORE
+/* eight sums at a time by a horizontal-add tree (the same fixed order for every cache and worker)
+ * and one masked store, instead of a shuffle chain and a scalar store per sum */
+#define REDUCE_STORE(acc, n, scale, out) reduce_store8((acc), (n), (scale), (out))
 #define LOAD_U32(p) ((glow__v8u)_mm256_loadu_si256((const __m256i *)(const void *)(p)))
 #define LOAD_U16(p) ((glow__v8u)_mm256_cvtepu16_epi32(_mm_loadu_si128((const __m128i *)(const void *)(p))))
 #define HALF8(p) ((glow__v8f)_mm256_cvtph_ps(_mm_loadu_si128((const __m128i *)(const void *)(p))))
@@ -170,39 +174,80 @@ static inline glow__v8f sqrt8_generic(glow__v8f x) {
  * three (docs/results.md "Link subsets"). Same values. */
 #define GATHER_PAIR(base, node, lo, hi) gather_pair_avx2((const void *)(base), (node), &(lo), &(hi))
 #define GATHER3(a, idx, y, co, cg) gather3_avx2((a), (idx), &(y), &(co), &(cg))
+#define GATHER3_IDX(a, n, y, co, cg) gather3_idx_avx2((a), (n), &(y), &(co), &(cg))
+#define GATHER_PAIR_IDX(base, n, lo, hi) gather_pair_idx_avx2((const void *)(base), (n), &(lo), &(hi))
 /* rsqrt estimate (12 bits) + one Newton step: ~1e-7 relative, a fraction of the sqrt+div cost */
 #define RSQRT(x) rsqrt_avx2(x)
 /* the inline helpers of the .inc must also carry the target to be inlined into KATTR code */
 #pragma GCC push_options
 #pragma GCC target("avx2,fma,f16c")
 /* idx in units of 8 bytes from base: lane l's two dwords at base + 8 idx[l] -> lo[l], hi[l] */
+static inline __attribute__((always_inline)) void gather_pair_idx_avx2(const void *base, const uint32_t *n, glow__v8u *lo,
+                                                                       glow__v8u *hi) {
+    const double *b = (const double *)base;
+#define GLOW__LD2(i, j) _mm_loadh_pd(_mm_load_sd(b + n[i]), b + n[j])
+    const __m256 A = _mm256_castpd_ps(_mm256_insertf128_pd(_mm256_castpd128_pd256(GLOW__LD2(0, 1)), GLOW__LD2(4, 5), 1));
+    const __m256 B = _mm256_castpd_ps(_mm256_insertf128_pd(_mm256_castpd128_pd256(GLOW__LD2(2, 3)), GLOW__LD2(6, 7), 1));
+#undef GLOW__LD2
+    *lo = (glow__v8u)_mm256_shuffle_ps(A, B, 0x88); /* lanes 0 2 of each pair: lo0 lo1 lo2 lo3 | lo4 .. lo7 */
+    *hi = (glow__v8u)_mm256_shuffle_ps(A, B, 0xDD);
+}
 static inline __attribute__((always_inline)) void gather_pair_avx2(const void *base, glow__v8u idx, glow__v8u *lo,
                                                                    glow__v8u *hi) {
-    const __m128i i0 = _mm256_castsi256_si128((__m256i)idx), i1 = _mm256_extracti128_si256((__m256i)idx, 1);
-    const glow__v8u g0 = (glow__v8u)_mm256_i32gather_epi64((const long long *)base, i0, 8);
-    const glow__v8u g1 = (glow__v8u)_mm256_i32gather_epi64((const long long *)base, i1, 8);
-    *lo = __builtin_shufflevector(g0, g1, 0, 2, 4, 6, 8, 10, 12, 14);
-    *hi = __builtin_shufflevector(g0, g1, 1, 3, 5, 7, 9, 11, 13, 15);
+    uint32_t n[8];
+    memcpy(n, &idx, sizeof n);
+    gather_pair_idx_avx2(base, n, lo, hi);
+}
+static inline __attribute__((always_inline)) void gather3_idx_avx2(const glow__cl_args *a, const uint32_t *n, glow__v8f *y,
+                                                                   glow__v8f *co, glow__v8f *cg) {
+    if (a->rad_stride == 4u && a->rad_co == a->rad_y + 1 && a->rad_cg == a->rad_y + 2) {
+        const float *b = a->rad_y;
+#define GLOW__LD2(i, j) _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(b + 4 * (size_t)n[i])), _mm_loadu_ps(b + 4 * (size_t)n[j]), 1)
+        const __m256 v0 = GLOW__LD2(0, 4), v1 = GLOW__LD2(1, 5), v2 = GLOW__LD2(2, 6), v3 = GLOW__LD2(3, 7);
+#undef GLOW__LD2
+        const __m256 t0 = _mm256_unpacklo_ps(v0, v1), t1 = _mm256_unpackhi_ps(v0, v1);
+        const __m256 t2 = _mm256_unpacklo_ps(v2, v3), t3 = _mm256_unpackhi_ps(v2, v3);
+        *y = (glow__v8f)_mm256_castpd_ps(_mm256_unpacklo_pd(_mm256_castps_pd(t0), _mm256_castps_pd(t2)));
+        *co = (glow__v8f)_mm256_castpd_ps(_mm256_unpackhi_pd(_mm256_castps_pd(t0), _mm256_castps_pd(t2)));
+        *cg = (glow__v8f)_mm256_castpd_ps(_mm256_unpacklo_pd(_mm256_castps_pd(t1), _mm256_castps_pd(t3)));
+    } else {
+        glow__v8u node;
+        memcpy(&node, n, sizeof node);
+        GATHER3_PLAIN(a, node, *y, *co, *cg);
+    }
 }
 static inline __attribute__((always_inline)) void gather3_avx2(const glow__cl_args *a, glow__v8u node, glow__v8f *y,
                                                                glow__v8f *co, glow__v8f *cg) {
-    if (a->rad_stride == 4u && a->rad_co == a->rad_y + 1 && a->rad_cg == a->rad_y + 2) {
-        glow__v8u yc, cp, cgp, pad;
-        gather_pair_avx2(a->rad_y, node << 1, &yc, &cp);
-        gather_pair_avx2(a->rad_y + 2, node << 1, &cgp, &pad);
-        (void)pad;
-        *y = (glow__v8f)yc;
-        *co = (glow__v8f)cp;
-        *cg = (glow__v8f)cgp;
-    } else {
-        GATHER3_PLAIN(a, node, *y, *co, *cg);
+    uint32_t n[8];
+    memcpy(n, &node, sizeof n);
+    gather3_idx_avx2(a, n, y, co, cg);
+}
+static inline __attribute__((always_inline)) void reduce_store8(const glow__v8f *acc, uint32_t n, const float *scale,
+                                                                float *out) {
+#pragma GCC unroll 8
+    for (uint32_t g = 0; g < n; g += 8u) {
+        __m256 v[8];
+#pragma GCC unroll 8
+        for (uint32_t j = 0; j < 8u; ++j) v[j] = g + j < n ? (__m256)acc[g + j] : _mm256_setzero_ps();
+        const __m256 s01 = _mm256_hadd_ps(v[0], v[1]), s23 = _mm256_hadd_ps(v[2], v[3]);
+        const __m256 s45 = _mm256_hadd_ps(v[4], v[5]), s67 = _mm256_hadd_ps(v[6], v[7]);
+        const __m256 q0 = _mm256_hadd_ps(s01, s23), q1 = _mm256_hadd_ps(s45, s67); /* per 128-bit half */
+        const __m256 f = _mm256_add_ps(_mm256_permute2f128_ps(q0, q1, 0x20), _mm256_permute2f128_ps(q0, q1, 0x31));
+        const uint32_t m = n - g < 8u ? n - g : 8u;
+        const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+        const __m256i mask = _mm256_cmpgt_epi32(_mm256_set1_epi32((int)m), lane);
+        _mm256_maskstore_ps(out + g, mask, _mm256_mul_ps(f, _mm256_maskload_ps(scale + g, mask)));
     }
 }
 static inline glow__v8f rsqrt_avx2(glow__v8f x) {
     glow__v8f y = (glow__v8f)_mm256_rsqrt_ps((__m256)x);
     return y * (1.5f - 0.5f * x * y * y);
 }
+#define KSPLIT 1 /* the two-phase kernel (cache_kernel.inc): 16 registers cannot hold the accumulators */
 #include "cache_kernel.inc"
+#undef KSPLIT
+#undef GATHER3_IDX
+#undef GATHER_PAIR_IDX
 #pragma GCC pop_options
 #undef KFN
 #undef KATTR
