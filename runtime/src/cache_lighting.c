@@ -14,7 +14,7 @@
  * half conversion) and a portable one; chosen once at run time with __builtin_cpu_supports. The band
  * counts are compile-time constants in the common instantiations so the band loops unroll (by
  * pragma: GCC -O2 does not). This file is compiled with -ffp-contract=fast (CMake) so a*b+c becomes
- * FMA where the target has it. Also here: the output-plane writer (glow__cl_write_plane). */
+ * FMA where the target has it. Also here: the output-plane writer (glow__cl_write_planes). */
 #include <math.h>
 #include <string.h>
 
@@ -359,60 +359,80 @@ static inline __attribute__((always_inline)) void gather3_avx512(const glow__cl_
 #endif
 
 /* ------------------------------------------------------------------------------ output planes */
-/* dst[t] = map[t] == empty ? 0 : sh[map[t] * nc + k] for t < n: a whole plane in order, the empty
- * texels included (they are a few percent of a lightmap), so the stores stream and the loads are
- * masked gathers with many in flight. Same values as writing only the non-empty entries. */
-static void write_plane_generic(float *dst, const uint32_t *map, size_t n, const float *sh, uint32_t nc, uint32_t k) {
-    for (size_t t = 0; t < n; ++t) dst[t] = map[t] == GLOW__CL_EMPTY ? 0.0f : sh[(size_t)map[t] * nc + k];
-}
-#ifdef GLOW__HAVE_AVX512_KERNEL
-__attribute__((target("avx512f"))) static void write_plane_avx512(float *dst, const uint32_t *map, size_t n, const float *sh,
-                                                                  uint32_t nc, uint32_t k) {
-    const __m512i vnc = _mm512_set1_epi32((int)nc), vk = _mm512_set1_epi32((int)k), empty = _mm512_set1_epi32(-1);
-    size_t t = 0;
-    for (; t + 16u <= n; t += 16u) {
-        const __m512i m = _mm512_loadu_si512((const void *)(map + t));
-        const __mmask16 used = _mm512_cmpneq_epi32_mask(m, empty);
-        const __m512i idx = _mm512_add_epi32(_mm512_mullo_epi32(m, vnc), vk);
-        _mm512_storeu_ps(dst + t, _mm512_mask_i32gather_ps(_mm512_setzero_ps(), used, idx, sh, 4));
+/* All planes of a range of texels at once: each texel's cache row (nc floats, contiguous) is read
+ * once and its values go to nc planes, each written in order. The former plane-at-a-time writer
+ * gathered one float per texel and plane (nc passes over the map, a cache line touched per value). */
+static const float glow__cl_zero_row[GLOW__CL_SCALE_FLOATS] = {0};
+static void write_planes_generic(float *dst, size_t stride, const uint32_t *map, size_t first, size_t end, const float *sh,
+                                 uint32_t nc) {
+    for (size_t t = first; t < end; ++t) {
+        const float *r = map[t] == GLOW__CL_EMPTY ? glow__cl_zero_row : sh + (size_t)map[t] * nc;
+        for (uint32_t k = 0; k < nc; ++k) dst[(size_t)k * stride + t] = r[k];
     }
-    write_plane_generic(dst + t, map + t, n - t, sh, nc, k);
 }
-#endif
 #ifdef GLOW__HAVE_AVX2_KERNEL
-__attribute__((target("avx2"))) static void write_plane_avx2(float *dst, const uint32_t *map, size_t n, const float *sh,
-                                                             uint32_t nc, uint32_t k) {
-    const __m256i vnc = _mm256_set1_epi32((int)nc), vk = _mm256_set1_epi32((int)k), empty = _mm256_set1_epi32(-1);
-    size_t t = 0;
-    for (; t + 8u <= n; t += 8u) {
-        const __m256i m = _mm256_loadu_si256((const __m256i *)(const void *)(map + t));
-        const __m256 used = _mm256_castsi256_ps(_mm256_xor_si256(_mm256_cmpeq_epi32(m, empty), empty));
-        const __m256i idx = _mm256_add_epi32(_mm256_mullo_epi32(m, vnc), vk);
-        _mm256_storeu_ps(dst + t, _mm256_mask_i32gather_ps(_mm256_setzero_ps(), sh, idx, used, 4));
+/* Eight texels at a time: four coefficients of each of the eight rows (two rows to a 256-bit
+ * register), a 4 x 8 transpose, four plane stores of eight texels. The last nc % 4 coefficients
+ * are loaded masked (a row's end may be the array's). Same values as the generic writer. */
+#define GLOW__TRANSPOSE_4x8(x0, x1, x2, x3, x4, x5, x6, x7, o0, o1, o2, o3)                                              \
+    do {                                                                                                                  \
+        const __m256 v0_ = _mm256_insertf128_ps(_mm256_castps128_ps256(x0), (x4), 1);                                     \
+        const __m256 v1_ = _mm256_insertf128_ps(_mm256_castps128_ps256(x1), (x5), 1);                                     \
+        const __m256 v2_ = _mm256_insertf128_ps(_mm256_castps128_ps256(x2), (x6), 1);                                     \
+        const __m256 v3_ = _mm256_insertf128_ps(_mm256_castps128_ps256(x3), (x7), 1);                                     \
+        const __m256d t0_ = _mm256_castps_pd(_mm256_unpacklo_ps(v0_, v1_)), t1_ = _mm256_castps_pd(_mm256_unpackhi_ps(v0_, v1_)); \
+        const __m256d t2_ = _mm256_castps_pd(_mm256_unpacklo_ps(v2_, v3_)), t3_ = _mm256_castps_pd(_mm256_unpackhi_ps(v2_, v3_)); \
+        (o0) = _mm256_castpd_ps(_mm256_unpacklo_pd(t0_, t2_));                                                          \
+        (o1) = _mm256_castpd_ps(_mm256_unpackhi_pd(t0_, t2_));                                                          \
+        (o2) = _mm256_castpd_ps(_mm256_unpacklo_pd(t1_, t3_));                                                          \
+        (o3) = _mm256_castpd_ps(_mm256_unpackhi_pd(t1_, t3_));                                                          \
+    } while (0)
+__attribute__((target("avx2"))) static void write_planes_avx2(float *dst, size_t stride, const uint32_t *map, size_t first,
+                                                              size_t end, const float *sh, uint32_t nc) {
+    size_t t = first;
+    const uint32_t nc4 = nc & ~3u, m = nc - nc4;
+    const __m128i tail = _mm_cmpgt_epi32(_mm_set1_epi32((int)m), _mm_setr_epi32(0, 1, 2, 3));
+    for (; t + 8u <= end; t += 8u) {
+        const float *r0, *r1, *r2, *r3, *r4, *r5, *r6, *r7;
+#define GLOW__ROW(i) (map[t + (i)] == GLOW__CL_EMPTY ? glow__cl_zero_row : sh + (size_t)map[t + (i)] * nc)
+        r0 = GLOW__ROW(0), r1 = GLOW__ROW(1), r2 = GLOW__ROW(2), r3 = GLOW__ROW(3);
+        r4 = GLOW__ROW(4), r5 = GLOW__ROW(5), r6 = GLOW__ROW(6), r7 = GLOW__ROW(7);
+#undef GLOW__ROW
+        float *d = dst + t;
+        __m256 o0, o1, o2, o3;
+        for (uint32_t k = 0; k < nc4; k += 4u, d += 4u * stride) {
+            GLOW__TRANSPOSE_4x8(_mm_loadu_ps(r0 + k), _mm_loadu_ps(r1 + k), _mm_loadu_ps(r2 + k), _mm_loadu_ps(r3 + k),
+                                _mm_loadu_ps(r4 + k), _mm_loadu_ps(r5 + k), _mm_loadu_ps(r6 + k), _mm_loadu_ps(r7 + k), o0,
+                                o1, o2, o3);
+            _mm256_storeu_ps(d, o0);
+            _mm256_storeu_ps(d + stride, o1);
+            _mm256_storeu_ps(d + 2 * stride, o2);
+            _mm256_storeu_ps(d + 3 * stride, o3);
+        }
+        if (m) { /* masked: a row's end may be the array's */
+            GLOW__TRANSPOSE_4x8(_mm_maskload_ps(r0 + nc4, tail), _mm_maskload_ps(r1 + nc4, tail), _mm_maskload_ps(r2 + nc4, tail),
+                                _mm_maskload_ps(r3 + nc4, tail), _mm_maskload_ps(r4 + nc4, tail), _mm_maskload_ps(r5 + nc4, tail),
+                                _mm_maskload_ps(r6 + nc4, tail), _mm_maskload_ps(r7 + nc4, tail), o0, o1, o2, o3);
+            _mm256_storeu_ps(d, o0);
+            if (m > 1u) _mm256_storeu_ps(d + stride, o1);
+            if (m > 2u) _mm256_storeu_ps(d + 2 * stride, o2);
+        }
     }
-    write_plane_generic(dst + t, map + t, n - t, sh, nc, k);
+    write_planes_generic(dst, stride, map, t, end, sh, nc);
 }
+#undef GLOW__TRANSPOSE_4x8
 #endif
 
-void glow__cl_write_plane(glow__cl_isa isa, float *dst, const uint32_t *map, size_t n, const float *sh, uint32_t cache_count,
-                          uint32_t nc, uint32_t k) {
-    const bool fits = (uint64_t)cache_count * nc < 0x7FFFFFFFu; /* gather indices are int32 */
-#ifdef GLOW__HAVE_AVX512_KERNEL
-    if (isa == GLOW__CL_AVX512 && fits) {
-        write_plane_avx512(dst, map, n, sh, nc, k);
-        return;
-    }
-#endif
+void glow__cl_write_planes(glow__cl_isa isa, float *dst, size_t stride, const uint32_t *map, size_t first, size_t end,
+                           const float *sh, uint32_t nc) {
 #ifdef GLOW__HAVE_AVX2_KERNEL
-    if ((isa == GLOW__CL_AVX2 || isa == GLOW__CL_AVX512) && fits) {
-        write_plane_avx2(dst, map, n, sh, nc, k);
+    if (isa == GLOW__CL_AVX2 || isa == GLOW__CL_AVX512) {
+        write_planes_avx2(dst, stride, map, first, end, sh, nc);
         return;
     }
 #endif
     (void)isa;
-    (void)fits;
-    (void)cache_count;
-    write_plane_generic(dst, map, n, sh, nc, k);
+    write_planes_generic(dst, stride, map, first, end, sh, nc);
 }
 
 static int has_avx2(void) {

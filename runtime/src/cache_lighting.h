@@ -49,11 +49,12 @@ void glow__cl_expand(const glow_bake_link_block *blocks, uint32_t blocks_per_cac
 
 /* Lights caches [first, first + count). Reads only `a`'s inputs, writes only those caches' rows. */
 void glow__cl_light_caches(const glow__cl_args *a, uint32_t first, uint32_t count);
-/* Output plane k (glow.h's planar layout): dst[t] = sh[map[t] * nc + k], 0 where map[t] is
- * GLOW__CL_EMPTY, for t < n; sh is cache_count rows of nc floats. */
+/* Output planes (glow.h's planar layout), texels [first, end) of all nc planes:
+ * dst[k * stride + t] = sh[map[t] * nc + k], 0 where map[t] is GLOW__CL_EMPTY; sh holds rows of nc
+ * floats, nc <= GLOW__CL_SCALE_FLOATS - 16. */
 #define GLOW__CL_EMPTY 0xFFFFFFFFu
-void glow__cl_write_plane(glow__cl_isa isa, float *dst, const uint32_t *map, size_t n, const float *sh, uint32_t cache_count,
-                          uint32_t nc, uint32_t k);
+void glow__cl_write_planes(glow__cl_isa isa, float *dst, size_t stride, const uint32_t *map, size_t first, size_t end,
+                           const float *sh, uint32_t nc);
 glow__cl_isa glow__cl_best_isa(void);
 int glow__cl_isa_supported(glow__cl_isa isa); /* this CPU runs it */
 const char *glow__cl_isa_name(glow__cl_isa isa);

@@ -318,23 +318,24 @@ static void task_caches_sel(void *data, uint32_t k, uint32_t worker) {
     s->grp_delta[g] = v > 0.0 ? (float)(d / v) : (d > 0.0 ? INFINITY : 0.0f);
 }
 
-/* outputs: tasks [0, g) fill the grid planes (g = coeffs with a grid, else 0), the rest the
- * lightmap's. Each writes its whole plane in order, empty cells/texels as 0 (glow__cl_write_plane:
- * masked gathers, plain stores: streaming ones measured slower, the planes stay in L3): 0.62-0.70x the time of writing only the non-empty entries
- * (Sponza moderate, where 97 % of the lightmap is in use; paired runs, one thread). */
+/* outputs: tasks of PLANE_CHUNK cells (the grid's, then the lightmap's texels), each writing all the
+ * planes of its cells, empty cells/texels as 0 (glow__cl_write_planes: every cache row read once),
+ * then the lightmap detail, DETAIL_CHUNK texels a task. */
+#define PLANE_CHUNK 2048u
 _Static_assert(GLOW__CL_EMPTY == GLOW_MAP_EMPTY, "one empty marker");
 static void detail_range(glow_system *s, uint32_t first, uint32_t end) {
     const float *restrict rad = s->rad, *restrict w = s->det_weight;
     const uint32_t *restrict fi = s->det_first, *restrict sf = s->det_surfel, *restrict tx = s->det_texel;
     float *restrict out = s->det_out;
+    typedef float v4f __attribute__((vector_size(16))); /* Y Co Cg pad: one vector multiply-add a link */
     for (uint32_t i = first; i < end; ++i) {
-        float y = 0.0f, co = 0.0f, cg = 0.0f;
+        v4f acc = {0.0f, 0.0f, 0.0f, 0.0f};
         for (uint32_t k = fi[i]; k < fi[i + 1]; ++k) {
-            const float *r = rad + 4 * (size_t)sf[k];
-            y += w[k] * r[0];
-            co += w[k] * r[1];
-            cg += w[k] * r[2];
+            v4f r;
+            memcpy(&r, rad + 4 * (size_t)sf[k], sizeof r);
+            acc += w[k] * r;
         }
+        const float y = acc[0], co = acc[1], cg = acc[2];
         float *o = out + 4 * (size_t)tx[i];
         o[0] = y + co - cg; /* glow_ycocg_to_rgb */
         o[1] = y + cg;
@@ -342,21 +343,27 @@ static void detail_range(glow_system *s, uint32_t first, uint32_t end) {
     }
 }
 
+static uint32_t output_tasks(const glow_system *s, uint32_t *grid_tasks, uint32_t *plane_tasks) {
+    const uint32_t g = div_up(s->grid_cells, PLANE_CHUNK), p = g + div_up(s->lm_texels, PLANE_CHUNK);
+    if (grid_tasks) *grid_tasks = g;
+    if (plane_tasks) *plane_tasks = p;
+    return p + (s->det ? div_up(s->det->texel_count, DETAIL_CHUNK) : 0u);
+}
+
 static void task_output(void *data, uint32_t q, uint32_t worker) {
     (void)worker;
     glow_system *s = data;
-    const uint32_t planes = (s->grid_cells ? s->coeffs : 0u) + (s->lm_texels ? s->coeffs : 0u);
-    if (q >= planes) { /* the lightmap detail, DETAIL_CHUNK texels a task */
+    uint32_t g, planes;
+    output_tasks(s, &g, &planes);
+    if (q >= planes) { /* the lightmap detail */
         const uint32_t first = (q - planes) * DETAIL_CHUNK, T = s->det->texel_count;
         detail_range(s, first, T - first < DETAIL_CHUNK ? T : first + DETAIL_CHUNK);
         return;
     }
-    const uint32_t nc = s->coeffs, g = s->grid_cells ? nc : 0u;
     const bool grid = q < g;
-    const uint32_t k = grid ? q : q - g;
-    const size_t n = grid ? s->grid_cells : s->lm_texels;
-    glow__cl_write_plane(s->isa, (grid ? s->grid_sh : s->lm_sh) + (size_t)k * n, grid ? s->grid_map : s->lm_map, n,
-                         s->cache_sh, s->C, nc, k);
+    const size_t n = grid ? s->grid_cells : s->lm_texels, first = (size_t)(grid ? q : q - g) * PLANE_CHUNK;
+    glow__cl_write_planes(s->isa, grid ? s->grid_sh : s->lm_sh, n, grid ? s->grid_map : s->lm_map, first,
+                          n - first < PLANE_CHUNK ? n : first + PLANE_CHUNK, s->cache_sh, s->coeffs);
 }
 
 /* create-time: expanded links for caches [k*EXPAND_CHUNK, ...) */
@@ -1141,8 +1148,7 @@ static glow_result system_update(glow_system *s, const glow_update_desc *desc) {
     st.outputs_skipped = budgeted && s->sel_count == 0 && s->out_written && !(flags & GLOW_UPDATE_FLAG_RESET_BOUNCE) &&
                          memcmp(s->rad, s->rad_out, rad_bytes) == 0;
     if (!st.outputs_skipped) {
-        glow__ctx_run(s->ctx, task_output, s, (s->grid_cells ? s->coeffs : 0u) + (s->lm_texels ? s->coeffs : 0u) +
-                                                  (s->det ? div_up(s->det->texel_count, DETAIL_CHUNK) : 0u));
+        glow__ctx_run(s->ctx, task_output, s, output_tasks(s, NULL, NULL));
         memcpy(s->rad_out, s->rad, rad_bytes);
         s->out_written = true;
     }

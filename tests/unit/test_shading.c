@@ -777,34 +777,40 @@ static void test_sample_lightmap(void **state) {
 /* Both builds of the cache-lighting kernel on a real (small) bake's links with random node
  * radiances, against each other and against the links re-summed in double here:
  *     L_lm = Σ_j R[node_j] k_l(1 - omc_j) y_lm(dir_j). */
-/* Output planes (glow__cl_write_plane): every ISA build this CPU runs gives exactly cache_sh's value
- * for mapped texels and 0 for empty ones, with plane lengths that leave vector tails and a
- * destination that is not 64-byte aligned. */
+/* Output planes (glow__cl_write_planes): every ISA build this CPU runs gives exactly cache_sh's value
+ * for mapped texels and 0 for empty ones, in ranges that start anywhere and leave vector tails,
+ * with a coefficient count that leaves a partial block of four, into planes that are not 32-byte
+ * aligned, and writes nothing outside its range. */
 static void test_write_plane(void **state) {
     (void)state;
-    enum { WC = 301, WNC = 27, WN = 1000 + 13 };
-    float *sh = malloc((size_t)WC * WNC * sizeof *sh), *dst = malloc((WN + 1) * sizeof *dst);
+    enum { WC = 301, WNC = 27, WN = 1000 + 13, WS = WN + 5 };
+    float *sh = malloc((size_t)WC * WNC * sizeof *sh), *dst = malloc(((size_t)WNC * WS + 1) * sizeof *dst);
     uint32_t *map = malloc(WN * sizeof *map);
     assert_true(sh && dst && map);
     for (size_t i = 0; i < (size_t)WC * WNC; ++i) sh[i] = (float)(rnd() * 10.0 - 3.0);
     for (uint32_t t = 0; t < WN; ++t) map[t] = rnd() < 0.1 ? 0xFFFFFFFFu : (uint32_t)(rnd() * WC) % WC;
     map[WN - 1] = 0xFFFFFFFFu;
-    map[WN - 2] = WC - 1; /* the last row, in the scalar tail */
+    map[WN - 2] = WC - 1; /* the array's last row, in the scalar tail */
+    map[8] = WC - 1;      /* and in a vector step: its masked last block must not read past the array */
     const glow__cl_isa isas[] = {GLOW__CL_GENERIC, GLOW__CL_AVX2, GLOW__CL_AVX512};
+    const size_t ranges[][2] = {{0, WN}, {3, WN - 17}, {8, 16}, {WN - 5, WN}, {7, 7}};
     for (size_t ii = 0; ii < 3; ++ii) {
         if (!glow__cl_isa_supported(isas[ii])) continue;
-        for (uint32_t k = 0; k < WNC; k += 13)
-            for (size_t n = WN - 17; n <= WN; n += 8) {
-                for (size_t t = 0; t <= WN; ++t) dst[t] = -777.0f;
-                glow__cl_write_plane(isas[ii], dst + 1, map, n, sh, WC, WNC, k); /* dst + 1: unaligned */
+        for (uint32_t nc = WNC - 2; nc <= WNC; ++nc) /* 25, 26, 27: partial blocks of 1, 2 and 3 */
+            for (size_t ri = 0; ri < sizeof ranges / sizeof ranges[0]; ++ri) {
+                const size_t first = ranges[ri][0], end = ranges[ri][1];
+                for (size_t q = 0; q < (size_t)WNC * WS + 1; ++q) dst[q] = -777.0f;
+                glow__cl_write_planes(isas[ii], dst + 1, WS, map, first, end, sh, nc); /* dst + 1: unaligned */
                 assert_true(dst[0] == -777.0f);
-                for (size_t t = 0; t < n; ++t) {
-                    const float want = map[t] == 0xFFFFFFFFu ? 0.0f : sh[(size_t)map[t] * WNC + k];
-                    if (dst[1 + t] != want)
-                        fail_msg("write_plane %s k %u n %zu texel %zu: %g, want %g", glow__cl_isa_name(isas[ii]), k, n, t,
-                                 (double)dst[1 + t], (double)want);
-                }
-                for (size_t t = n + 1; t <= WN; ++t) assert_true(dst[t] == -777.0f); /* nothing past n */
+                for (uint32_t k = 0; k < WNC; ++k)
+                    for (size_t t = 0; t < WS; ++t) {
+                        const bool in = k < nc && t >= first && t < end;
+                        const float want = !in ? -777.0f : map[t] == 0xFFFFFFFFu ? 0.0f : sh[(size_t)map[t] * nc + k];
+                        if (dst[1 + (size_t)k * WS + t] != want)
+                            fail_msg("write_planes %s nc %u [%zu, %zu) plane %u texel %zu: %g, want %g",
+                                     glow__cl_isa_name(isas[ii]), nc, first, end, k, t, (double)dst[1 + (size_t)k * WS + t],
+                                     (double)want);
+                    }
             }
     }
     free(sh), free(dst), free(map);
