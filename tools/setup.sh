@@ -15,6 +15,7 @@ PKGS=(
   libopenexr-dev glslang-tools gnuplot-nox                       # evaluation, shaders, charts
   python3              # tools/glow-eval (the sweep driver) and its CLI test
   xvfb xauth           # the GL samples' window path in ctest (xvfb-run: GLFW + GLX on llvmpipe)
+  libopenmpi-dev openmpi-bin   # glow-bake --mpi (optional at build time; its test runs 2-3 ranks)
 )
 missing=()
 for p in "${PKGS[@]}"; do

@@ -79,6 +79,7 @@ typedef struct trav_node {
 #define TRAV_EMISSIVE 0x80000000u
 
 typedef struct link_job {
+    uint32_t cache_base, cache_total; /* this rank's caches are [base, base + total) (links.c "Ranks") */
     const glow__scene *scene;
     const glow__rt *rt;
     const glow__surfels *surfels;
@@ -1043,11 +1044,40 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
 static void link_range(void *ctx, uint32_t begin, uint32_t end, uint32_t worker) {
     link_job *job = ctx;
     for (uint32_t c = begin; c < end; ++c) {
-        link_cache(job, c, worker);
+        link_cache(job, job->cache_base + c, worker);
         unsigned done = atomic_fetch_add(&job->done, 1u) + 1u;
         if (worker == 0 && job->progress) /* < 1: the pipeline reports the stage end itself */
-            job->progress(job->progress_user, 0.999 * (double)done / job->caches->count);
+            job->progress(job->progress_user, 0.999 * (double)done / job->cache_total);
     }
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* Ranks (glow_pc_distribution): a bake split over processes. Rank r computes the items (caches, or
+ * lightmap detail texels) [n r / R, n (r + 1) / R) and share() hands every rank every part, array by
+ * array; since each item's result depends on that item alone (as for any thread count), the table
+ * is the one-process table byte for byte. */
+static void rank_range(const glow_pc_distribution *d, uint32_t n, uint32_t *first, uint32_t *end) {
+    const uint32_t R = d ? d->ranks : 1u, r = d ? d->rank : 0u;
+    *first = (uint32_t)((uint64_t)n * r / R);
+    *end = (uint32_t)((uint64_t)n * (r + 1u) / R);
+}
+
+/* Every rank's part of base[n * elem bytes], parts by rank_range; a no-op for one process. */
+static glow_result rank_share(const glow_pc_distribution *d, void *base, uint32_t n, size_t elem, glow__log *log,
+                              const char *what) {
+    if (!d || d->ranks < 2) return GLOW_OK;
+    size_t *off = malloc(((size_t)d->ranks + 1) * sizeof *off);
+    if (!off) {
+        glow__errorf(log, "links: out of memory sharing %s between ranks", what);
+        return GLOW_ERROR_OUT_OF_MEMORY;
+    }
+    for (uint32_t r = 0; r <= d->ranks; ++r) off[r] = (size_t)((uint64_t)n * r / d->ranks) * elem;
+    const glow_result res = d->share(d->user, base, off);
+    free(off);
+    if (res != GLOW_OK)
+        glow__errorf(log, "links: rank %u of %u: exchanging %s with the other ranks failed: %s", d->rank, d->ranks, what,
+                     glow_result_string(res));
+    return res;
 }
 
 /* ------------------------------------------------------------------------------------------ */
@@ -1089,6 +1119,7 @@ typedef struct detail_hit {
 
 typedef struct detail_job {
     const link_job *lj;
+    uint32_t texel_base;           /* this rank's detail texels start here (links.c "Ranks") */
     float rho, reach;              /* detail radius (m); a cache's credit radius: rho + its texels' reach */
     float credit_d2;               /* a hit is credited only to a surfel within this squared distance */
     float dirs[DETAIL_RAYS][3];    /* uniform hemisphere, z up */
@@ -1237,7 +1268,7 @@ static void detail_texel_range(void *p, uint32_t begin, uint32_t end, uint32_t w
     uint32_t *touched = dj->touched[worker];
     uint8_t *mark = dj->mark[worker];
     const float rho2 = dj->rho * dj->rho, wr = 2.0f / (float)DETAIL_RAYS;
-    for (uint32_t d = begin; d < end; ++d) {
+    for (uint32_t d = dj->texel_base + begin; d < dj->texel_base + end; ++d) {
         const float *pd = ca->detail_pos[d], *nd = ca->detail_nrm[d];
         uint32_t n = 0;
         dj->out_n[d] = 0;
@@ -1381,7 +1412,19 @@ static glow_result detail_build(const link_job *job, glow__pool *pool, glow__log
         glow__parallel_for(pool, L, 16, detail_cache_range, &dj);
         ok = !dj.oom;
     }
-    if (ok) glow__parallel_for(pool, Dn, 16, detail_texel_range, &dj);
+    if (ok) { /* this rank's texels, then every rank's (links.c "Ranks") */
+        const glow_pc_distribution *dist = set->dist;
+        uint32_t d0, d1;
+        rank_range(dist, Dn, &d0, &d1);
+        dj.texel_base = d0;
+        glow__parallel_for(pool, d1 - d0, 16, detail_texel_range, &dj);
+        if ((res = rank_share(dist, dj.out_s, Dn, dj.K * sizeof *dj.out_s, log, "the detail links")) != GLOW_OK ||
+            (res = rank_share(dist, dj.out_w, Dn, dj.K * sizeof *dj.out_w, log, "the detail weights")) != GLOW_OK ||
+            (res = rank_share(dist, dj.out_n, Dn, sizeof *dj.out_n, log, "the detail link counts")) != GLOW_OK ||
+            (res = rank_share(dist, dj.dropped, Dn, sizeof *dj.dropped, log, "the detail weight sums")) != GLOW_OK ||
+            (res = rank_share(dist, dj.kept, Dn, sizeof *dj.kept, log, "the detail weight sums")) != GLOW_OK)
+            ok = false;
+    }
     if (ok) {
         size_t total = 0;
         for (uint32_t d = 0; d < Dn; ++d) total += dj.out_n[d];
@@ -1409,7 +1452,7 @@ static glow_result detail_build(const link_job *job, glow__pool *pool, glow__log
                             ? 100.0 * out->detail_dropped / (out->detail_kept + out->detail_dropped) : 0.0);
         }
     }
-    if (!ok) {
+    if (!ok && res == GLOW_OK) {
         glow__errorf(log, "links: out of memory for the lightmap detail");
         res = GLOW_ERROR_OUT_OF_MEMORY;
     }
@@ -1627,7 +1670,49 @@ glow_result glow__links_build(const glow__scene *scene, const glow__rt *rt, cons
             goto done;
         }
     }
-    glow__parallel_for(pool, caches->count, 4, link_range, &job);
+    { /* this rank's caches, then every rank's (links.c "Ranks") */
+        const glow_pc_distribution *dist = settings->dist;
+        uint32_t c0, c1;
+        rank_range(dist, caches->count, &c0, &c1);
+        job.cache_base = c0;
+        job.cache_total = c1 - c0;
+        glow__parallel_for(pool, c1 - c0, 4, link_range, &job);
+        if (dist) {
+            const uint32_t R = dist->ranks;
+            uint64_t *counts = calloc((size_t)R * 3u, sizeof *counts);
+            if (!counts) {
+                glow__errorf(log, "links: out of memory sharing the ray counts between ranks");
+                res = GLOW_ERROR_OUT_OF_MEMORY;
+                goto done;
+            }
+            counts[3 * dist->rank] = atomic_load(&job.vis_rays);
+            counts[3 * dist->rank + 1] = atomic_load(&job.vis_cluster_rays);
+            counts[3 * dist->rank + 2] = atomic_load(&job.vis_units);
+            if ((res = rank_share(dist, out->links, caches->count, (size_t)nl * sizeof *out->links, log, "the links")) != GLOW_OK ||
+                (out->sh && (res = rank_share(dist, out->sh, caches->count,
+                                              (size_t)nl * settings->sh_bands * settings->sh_bands * sizeof *out->sh, log,
+                                              "the full-SH links")) != GLOW_OK) ||
+                (out->audit && (res = rank_share(dist, out->audit, caches->count, GLOW__AUDIT_FIELDS * sizeof *out->audit,
+                                                 log, "the audit")) != GLOW_OK) ||
+                (res = rank_share(dist, job.visible_total, caches->count, sizeof *job.visible_total, log,
+                                  "the visible solid angles")) != GLOW_OK ||
+                (res = rank_share(dist, job.norm_scale, caches->count, sizeof *job.norm_scale, log,
+                                  "the normalisation")) != GLOW_OK ||
+                (res = rank_share(dist, job.norm_clamped, caches->count, sizeof *job.norm_clamped, log,
+                                  "the normalisation")) != GLOW_OK ||
+                (res = rank_share(dist, counts, R, 3 * sizeof *counts, log, "the ray counts")) != GLOW_OK) {
+                free(counts);
+                goto done;
+            }
+            uint64_t sum[3] = {0, 0, 0};
+            for (uint32_t r = 0; r < R; ++r)
+                for (int k = 0; k < 3; ++k) sum[k] += counts[3 * r + (uint32_t)k];
+            free(counts);
+            atomic_store(&job.vis_rays, (unsigned long long)sum[0]);
+            atomic_store(&job.vis_cluster_rays, (unsigned long long)sum[1]);
+            atomic_store(&job.vis_units, (unsigned long long)sum[2]);
+        }
+    }
     if (settings->detail_radius > 0.0f && caches->detail_count && caches->texel_density > 0.0f &&
         (res = detail_build(&job, pool, log, out)) != GLOW_OK)
         goto done;

@@ -186,6 +186,7 @@ typedef struct glow__link_settings {
     float detail_radius;       /* > 0 with the caches' detail texels: their near light from surfels
                                   within this many lightmap texels (links.c "Lightmap detail") */
     uint32_t detail_links;     /* at most this many per detail texel */
+    const glow_pc_distribution *dist; /* several ranks: this one computes its share (links.c "Ranks") */
 } glow__link_settings;
 
 typedef struct glow__link {

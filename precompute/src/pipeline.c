@@ -105,6 +105,11 @@ glow_result glow_pc_settings_validate(const glow_pc_settings *s, char *msg, size
         BAD("--detail-radius %g is out of range (0..4 lightmap texels)", (double)s->detail_radius);
     if (s->surfel_adapt != 0.0f && !(s->surfel_adapt >= 1.0f && s->surfel_adapt <= 4.0f))
         BAD("--surfel-adapt %g is out of range (1..4)", (double)s->surfel_adapt);
+    if (s->distribution) {
+        const glow_pc_distribution *d = s->distribution;
+        if (d->ranks == 0 || d->rank >= d->ranks) BAD("distribution: rank %u of %u ranks", d->rank, d->ranks);
+        if (d->ranks > 1 && !d->share) BAD("distribution: %u ranks and no share function", d->ranks);
+    }
 #undef BAD
     return GLOW_OK;
 }
@@ -558,7 +563,11 @@ static glow_result bake(const char *scene_path, const char *out_path, const glow
     float *audit_radiance = NULL;
     FILE *audit_csv = NULL; /* opened first: a bad path fails before the work */
     /* the output must be writable and must not be the input, checked before the work (D7, D8) */
-    if ((res = glow__bake_write_check(out_path, strncmp(scene_path, "builtin:", 8) ? scene_path : NULL, &log)) != GLOW_OK) {
+    /* a distributed bake (glow_pc_distribution): rank 0 alone writes, so it alone checks the output */
+    const bool writer = !set.distribution || set.distribution->rank == 0;
+    if (!writer) set.audit_csv = NULL;
+    if (writer &&
+        (res = glow__bake_write_check(out_path, strncmp(scene_path, "builtin:", 8) ? scene_path : NULL, &log)) != GLOW_OK) {
         snprintf(stats->error, sizeof stats->error, "%s", log.last_error);
         return res;
     }
@@ -675,7 +684,8 @@ static glow_result bake(const char *scene_path, const char *out_path, const glow
                                  .audit_radiance = audit_radiance, .link_subsets = !set.no_link_subsets,
                                  .cluster_tau = set.link_visibility == GLOW_PC_LINK_VISIBILITY_CLUSTERED ? set.link_cluster_angle : 0.0f,
                                  .cluster_samples = set.link_cluster_rays,
-                                 .detail_radius = set.detail_radius, .detail_links = set.detail_links};
+                                 .detail_radius = set.detail_radius, .detail_links = set.detail_links,
+                                 .dist = set.distribution && set.distribution->ranks > 1 ? set.distribution : NULL};
     res = glow__links_build(&scene, rt, &surfels, &hier, &caches, &slink, pool, &log, stage_progress, &pc, &links);
     STAGE_END(ST_LINKS);
     if (res != GLOW_OK) goto done;
@@ -691,6 +701,10 @@ static glow_result bake(const char *scene_path, const char *out_path, const glow
     stats->links_per_cache = set.links;
     stats->bands = set.bands;
     stats->seed = set.seed;
+    if (!writer) { /* every rank holds the whole link table now; rank 0 writes it */
+        stats->total_seconds = now_seconds() - t_all;
+        goto done;
+    }
 
     STAGE_BEGIN(ST_WRITE);
     res = serialise(&set, &scene, &surfels, &hier, &caches, &links, gvis, &ss, &log);

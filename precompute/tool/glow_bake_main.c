@@ -17,6 +17,9 @@
 
 #include "glow/glow.h"
 #include "glow/glow_precompute.h"
+#ifdef GLOW_HAVE_MPI
+#include "bake_mpi.h"
+#endif
 
 static const char *usage_text =
     "usage: glow-bake SCENE -o OUT.glow [options]\n"
@@ -81,6 +84,9 @@ static const char *usage_text =
     "  --audit-csv FILE       with --audit-radiance: the per-cache figures as CSV\n"
     "  --no-link-normalize    keep each cache's link solid angles as estimated (default: scaled to\n"
     "                         the ray-measured visible geometry, so no energy is lost per bounce)\n"
+    "  --mpi                  one bake over the ranks of an MPI job: mpirun -np N glow-bake --mpi\n"
+    "                         SCENE -o OUT; the links are split between the ranks, rank 0 writes the\n"
+    "                         same bytes as a one-process bake (needs a glow-bake built with MPI)\n"
     "  --json                 print the summary (or --info) as JSON on stdout\n"
     "  -q, --quiet            no progress output\n"
     "  --info FILE            validate and describe an existing bake\n"
@@ -410,7 +416,7 @@ static int run_info(const char *path, bool json) {
 int main(int argc, char **argv) {
     glow_pc_settings s = {0};
     const char *scene = NULL, *out = NULL, *info = NULL;
-    bool json = false, quiet = false;
+    bool json = false, quiet = false, mpi = false;
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i];
         const char *v = i + 1 < argc ? argv[i + 1] : NULL;
@@ -419,8 +425,13 @@ int main(int argc, char **argv) {
             fputs(usage_text, stdout);
             return 0;
         } else if (!strcmp(a, "--version")) {
-            printf("glow-bake %d.%d.%d (bake format %u.%u)\n", GLOW_VERSION_MAJOR, GLOW_VERSION_MINOR,
-                   GLOW_VERSION_PATCH, GLOW_BAKE_FORMAT_VERSION_MAJOR, GLOW_BAKE_FORMAT_VERSION_MINOR);
+#ifdef GLOW_HAVE_MPI
+            const char *mpi_state = "on";
+#else
+            const char *mpi_state = "off";
+#endif
+            printf("glow-bake %d.%d.%d (bake format %u.%u, --mpi %s)\n", GLOW_VERSION_MAJOR, GLOW_VERSION_MINOR,
+                   GLOW_VERSION_PATCH, GLOW_BAKE_FORMAT_VERSION_MAJOR, GLOW_BAKE_FORMAT_VERSION_MINOR, mpi_state);
             return 0;
         } else if (!strcmp(a, "-o") || !strcmp(a, "--output")) {
             NEED_VALUE();
@@ -519,6 +530,8 @@ int main(int argc, char **argv) {
             s.no_link_normalize = true;
         } else if (!strcmp(a, "--sh-links")) {
             s.sh_links = true;
+        } else if (!strcmp(a, "--mpi")) {
+            mpi = true;
         } else if (!strcmp(a, "--json")) {
             json = true;
         } else if (!strcmp(a, "-q") || !strcmp(a, "--quiet")) {
@@ -541,6 +554,24 @@ int main(int argc, char **argv) {
     char msg[512];
     if (glow_pc_settings_validate(&s, msg, sizeof msg) != GLOW_OK) return usage_error("%s", msg);
 
+    if (mpi && info) return usage_error("--mpi bakes; --info reads one bake file");
+#ifndef GLOW_HAVE_MPI
+    if (mpi)
+        return usage_error("--mpi: this glow-bake was built without MPI (install libopenmpi-dev and rebuild; "
+                           "tools/setup.sh does)");
+#endif
+    glow_pc_distribution dist = {.rank = 0, .ranks = 1};
+#ifdef GLOW_HAVE_MPI
+    if (mpi) {
+        char err[256];
+        if (!glow_bake_mpi_begin(&argc, &argv, &dist, err, sizeof err)) {
+            fprintf(stderr, "glow-bake: error: --mpi: %s\n", err);
+            return 1;
+        }
+        s.distribution = &dist;
+        if (dist.rank != 0) quiet = true; /* rank 0 reports progress and the summary */
+    }
+#endif
     progress_state ps = {.tty = isatty(2) != 0, .quiet = quiet};
     s.progress = on_progress;
     s.progress_user = &ps;
@@ -549,9 +580,19 @@ int main(int argc, char **argv) {
     glow_result r = glow_pc_bake(scene, out, &s, &stats);
     if (r != GLOW_OK) {
         if (ps.tty) fputs("\r\033[K", stderr);
-        fprintf(stderr, "glow-bake: error: %s\n", stats.error[0] ? stats.error : glow_result_string(r));
+        if (mpi)
+            fprintf(stderr, "glow-bake: rank %u of %u: error: %s\n", dist.rank, dist.ranks,
+                    stats.error[0] ? stats.error : glow_result_string(r));
+        else
+            fprintf(stderr, "glow-bake: error: %s\n", stats.error[0] ? stats.error : glow_result_string(r));
+#ifdef GLOW_HAVE_MPI
+        if (mpi) glow_bake_mpi_end(1);
+#endif
         return 1;
     }
-    print_summary(scene, out, &stats, json);
+    if (dist.rank == 0) print_summary(scene, out, &stats, json);
+#ifdef GLOW_HAVE_MPI
+    if (mpi) glow_bake_mpi_end(0);
+#endif
     return 0;
 }

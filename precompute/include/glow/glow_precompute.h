@@ -50,6 +50,24 @@ typedef enum glow_pc_link_visibility {
     GLOW_PC_LINK_VISIBILITY_FORCE_U32 = 0x7FFFFFFF
 } glow_pc_link_visibility;
 
+/* A bake split over several processes (glow-bake --mpi, precompute/tool/bake_mpi.c; docs/linker.md
+ * "A bake over MPI"). Every process calls glow_pc_bake with the same scene and settings and its own
+ * rank. The stages before the links are computed by each (they are a few percent of a bake); the
+ * links stage, which grows as caches x links, is split in contiguous index ranges: each rank computes
+ * its share of the caches' links and of the lightmap detail texels, and share() exchanges the shares.
+ * Only rank 0 writes the bake (the others' out_path is not touched), and its bytes are the
+ * one-process bake's for any number of ranks (each cache's links depend on nothing but the cache).
+ * No MPI in the library: the host supplies the exchange. */
+typedef struct glow_pc_distribution {
+    uint32_t rank, ranks; /* this process's rank, 0 <= rank < ranks */
+    /* buf holds one part per rank, part r in bytes [offsets[r], offsets[r + 1]); on entry this rank's
+       part is filled, on return every part is. Every rank calls it with the same offsets, in the same
+       order. Return GLOW_OK, or an error when the exchange failed (a rank died): the bake then fails
+       with that code and writes nothing. */
+    glow_result (*share)(void *user, void *buf, const size_t *offsets);
+    void *user;
+} glow_pc_distribution;
+
 typedef struct glow_pc_settings {
     glow_pc_quality quality;  /* presets below; 0 = moderate */
     uint32_t surfels;         /* n_S, 0 = preset */
@@ -110,6 +128,7 @@ typedef struct glow_pc_settings {
                                    at the same count; each surfel carries its own area (format 1.3).
                                    0 = preset (low and moderate 4, high and fine 1), 1 = area-uniform,
                                    at most 4 (--surfel-adapt) */
+    const glow_pc_distribution *distribution; /* NULL = this process bakes alone */
 } glow_pc_settings;
 
 typedef struct glow_pc_stats {
