@@ -65,7 +65,9 @@ struct glow_system {
     float xscale;                /* SH mode: the bake's factor_scale (SHLK is against node flux) */
     const uint16_t *subsets;     /* the bake's LSUB (every link mode), else NULL */
     uint32_t *slots;             /* with subsets: [N][4] glow_bake_link_slots of every node */
-    uint16_t *sub_ratio;         /* with subsets: [N][4] Y[slot] / Y[node] as IEEE halves, each update */
+    uint16_t *sub_ratio;         /* with subsets: [N][4] Y[slot] / Y[node] as IEEE halves, each update,
+                                    for the sub_nodes only (the others stay 1: no weighted link reads them) */
+    uint32_t *sub_nodes, sub_count; /* the internal nodes some link reads with LSUB weights, ascending */
     uint64_t memory_bytes;
     /* surfels */
     float *pos4, *nrm4;
@@ -257,13 +259,27 @@ static void pull_range(glow_system *s, uint32_t first, uint32_t end) {
         rn[1] = co * ipa;
         rn[2] = cg * ipa;
         rn[3] = 0.0f;
-        if (s->sub_ratio) { /* LSUB: the four slots (grandchildren) are on lower levels, final */
-            const uint32_t *sl = s->slots + 4 * (size_t)n;
-            const float inv = y * ipa > 0.0f ? 1.0f / (y * ipa) : 0.0f;
-            for (int i = 0; i < 4; ++i)
-                s->sub_ratio[4 * (size_t)n + (size_t)i] = inv > 0.0f ? ratio_half(r[4 * (size_t)sl[i]] * inv) : 0x3C00u;
-        }
     }
+}
+
+/* LSUB ratios of sub_nodes [first, end), after the pull (their slots, grandchildren, are final) */
+static void sub_ratio_range(glow_system *s, uint32_t first, uint32_t end) {
+    const float *restrict r = s->rad;
+    for (uint32_t k = first; k < end; ++k) {
+        const uint32_t n = s->sub_nodes[k];
+        const uint32_t *sl = s->slots + 4 * (size_t)n;
+        const float yn = r[4 * (size_t)n];
+        const float inv = yn > 0.0f ? 1.0f / yn : 0.0f;
+        for (int i = 0; i < 4; ++i)
+            s->sub_ratio[4 * (size_t)n + (size_t)i] = inv > 0.0f ? ratio_half(r[4 * (size_t)sl[i]] * inv) : 0x3C00u;
+    }
+}
+
+static void task_sub_ratio(void *data, uint32_t k, uint32_t worker) {
+    (void)worker;
+    glow_system *s = data;
+    const uint32_t first = k * NODE_CHUNK, end = first + NODE_CHUNK < s->sub_count ? first + NODE_CHUNK : s->sub_count;
+    sub_ratio_range(s, first, end);
 }
 
 static void task_pull(void *data, uint32_t k, uint32_t worker) {
@@ -439,7 +455,7 @@ static void free_system(glow_system *s) {
                     s->direct, s->direct_spare, s->fb_w, s->rho_ind_max, s->flux, s->rad, s->inv_pi_area, s->leaf_area,
                     s->cache_sh, s->grid_sh, s->lm_sh, s->grid_map, s->lm_map, s->mat_emis_scale,
                     s->mat_albedo_scale, s->batch_status, s->batch_negative, s->out_index, s->out_cache,
-                    s->xblocks, s->slots, s->sub_ratio, s->grp_age, s->grp_delta, s->grp_drift_at, s->grp_centre,
+                    s->xblocks, s->slots, s->sub_ratio, s->sub_nodes, s->grp_age, s->grp_delta, s->grp_drift_at, s->grp_centre,
                     s->grp_pack, s->grp_sel, s->rad_prev, s->uv0, s->det_out, s->rad_out};
     for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; ++i) glow__ctx_free(ctx, bufs[i]);
     glow__ctx_free(ctx, s);
@@ -578,6 +594,31 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     if (glow__bake_link_subsets(desc->bake))
         s->slots = alloc_array(s, N, 4 * sizeof(uint32_t), &ok);
     if (s->slots) s->sub_ratio = alloc_array(s, N, 4 * sizeof(uint16_t), &ok);
+    if (s->slots && ok) { /* which internal nodes a weighted link reads (their ratios are computed each update) */
+        const uint16_t *sub = glow__bake_link_subsets(desc->bake);
+        const glow_bake_link_block *lb = glow__bake_link_blocks(desc->bake);
+        uint8_t *mark = glow__ctx_alloc(ctx, N + 1, 64);
+        if (!mark) ok = false;
+        else {
+            memset(mark, 0, N + 1);
+            const size_t links = (size_t)s->C * s->bpc * GLOW_LINK_BLOCK;
+            for (size_t j = 0; j < links; ++j)
+                if (sub[j]) {
+                    const uint32_t n = glow_bake_link_node(lb + j / GLOW_LINK_BLOCK, (uint32_t)(j % GLOW_LINK_BLOCK));
+                    if (n < N) mark[n] = 1;
+                }
+            uint32_t marked = 0;
+            for (size_t n = S; n < N; ++n) marked += mark[n]; /* leaves (n < S) keep ratio 1 */
+            s->sub_count = marked;
+            s->sub_nodes = alloc_array(s, marked ? marked : 1u, sizeof(uint32_t), &ok);
+            if (ok) {
+                marked = 0;
+                for (size_t n = S; n < N; ++n)
+                    if (mark[n]) s->sub_nodes[marked++] = (uint32_t)n;
+            }
+            glow__ctx_free(ctx, mark);
+        }
+    }
     s->groups = div_up(s->C, GLOW_BUDGET_GROUP);
     const size_t G = s->groups ? s->groups : 1u;
     s->grp_age = alloc_array(s, G, sizeof(uint32_t), &ok);
@@ -942,6 +983,7 @@ static void pull(glow_system *s) {
             pull_range(s, first, end);
         }
     }
+    if (s->sub_count) glow__ctx_run(s->ctx, task_sub_ratio, s, div_up(s->sub_count, NODE_CHUNK));
 }
 
 static glow_result system_update(glow_system *s, const glow_update_desc *desc);
