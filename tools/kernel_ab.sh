@@ -50,17 +50,27 @@ for i in "${!revs[@]}"; do
 #define glow__cl_expand V${i}_expand
 #define glow__cl_coeff_scale V${i}_coeff_scale
 #define glow__cl_write_plane V${i}_write_plane
+#define glow__cl_write_planes V${i}_write_planes
 #include "cache_lighting.c"
+/* the harness's link subsets (KAB_SUBSETS=1 in its environment; NULL otherwise), for versions whose
+ * args have them (the script defines KAB_HAS_SUBSETS then) */
+extern const uint16_t *kab_subsets;
+extern const uint32_t *kab_ratio;
 /* args built here, with this version's header (the struct changed between versions) */
 void V${i}_run(const glow_bake_link_block *blocks, uint32_t bpc, const float *rad, uint32_t L, uint32_t C, float *out,
                uint32_t first, uint32_t count) {
     glow__cl_args a = {.blocks = blocks, .blocks_per_cache = bpc, .rad_y = rad, .rad_co = rad + 1, .rad_cg = rad + 2,
                        .rad_stride = 4, .luma = L, .chroma = C, .coeffs = L * L + 2 * C * C, .cache_sh = out,
+#ifdef KAB_HAS_SUBSETS
+                       .subsets = kab_subsets, .sub_ratio = kab_ratio,
+#endif
                        .isa = V${i}_best()};
     V${i}_light(&a, first, count);
 }
 EOT
-  "$cc" "${flags[@]}" -ffp-contract=fast -Wno-psabi -c "$d/variant.c" -o "$d/variant.o"
+  vflags=()
+  grep -q "sub_ratio" "$d/cache_lighting.h" && vflags+=(-DKAB_HAS_SUBSETS=1)
+  "$cc" "${flags[@]}" "${vflags[@]}" -ffp-contract=fast -Wno-psabi -c "$d/variant.c" -o "$d/variant.o"
   objs+=("$d/variant.o"); vlist="$vlist X($i)"
   echo "version $i: ${revs[$i]}"
 done

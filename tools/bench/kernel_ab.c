@@ -7,7 +7,9 @@
  * turn, alternating the order every iteration, and reports per version the min / p10 / median time
  * and the median of the per-iteration ratio to version 0 (both ran within a few ms of each other).
  * Node radiance is random (interleaved Y Co Cg pad, as the system lays it out); the outputs are
- * compared with version 0 (largest difference relative to |value| + 1e-3).
+ * compared with version 0 (largest difference relative to |value| + 1e-3). With KAB_SUBSETS=1 in the
+ * environment the links carry the bake's LSUB weights and random per-node ratios (the system's
+ * case; versions older than link subsets ignore them, so compare such versions without it).
  *
  *   kernel_ab BAKE [ITERS=200] [THREADS=1] [LUMA=3] [CHROMA=LUMA]
  */
@@ -39,6 +41,8 @@ static const run_fn fns[] = {
 #endif
 };
 enum { NV = sizeof fns / sizeof fns[0], MAXIT = 10000 };
+const uint16_t *kab_subsets; /* read by the versions (tools/kernel_ab.sh's variant text) */
+const uint32_t *kab_ratio;
 
 typedef struct job {
     run_fn f;
@@ -95,6 +99,19 @@ int main(int argc, char **argv) {
         rad[4 * i + 2] = rad[4 * i] * ((float)rand() / (float)RAND_MAX - 0.5f) * 0.4f;
         rad[4 * i + 3] = 0.0f;
     }
+    uint16_t *ratio_h = NULL;
+    const char *ks = getenv("KAB_SUBSETS");
+    if (ks && atoi(ks) == 1) {
+        kab_subsets = glow__bake_link_subsets(bake);
+        if (!kab_subsets) {
+            fprintf(stderr, "kernel_ab: KAB_SUBSETS=1 but %s has no link subsets (LSUB)\n", argv[1]);
+            return 1;
+        }
+        if (!(ratio_h = malloc((size_t)N * 4 * sizeof *ratio_h))) return 1;
+        for (size_t i = 0; i < (size_t)N * 4; ++i) /* halves in [0.25, 2): normal, as the pull leaves them */
+            ratio_h[i] = (uint16_t)(0x3400u + (uint32_t)(rand() % 0x0C00));
+        kab_ratio = (const uint32_t *)(const void *)ratio_h;
+    }
     for (int v = 0; v < NV; ++v)
         if (!(out[v] = calloc((size_t)caches * nc, sizeof(float)))) return 1;
     for (int it = 0; it < iters; ++it)
@@ -112,7 +129,8 @@ int main(int argc, char **argv) {
             for (int q = 1; q < threads; ++q) pthread_join(th[q], NULL);
             t[(size_t)it * NV + v] = now_ms() - t0;
         }
-    printf("%u caches x %u links, l = %u/%u, %d thread(s), %d iterations\n", caches, m->links_per_cache, L, C, threads, iters);
+    printf("%u caches x %u links, l = %u/%u, %d thread(s), %d iterations%s\n", caches, m->links_per_cache, L, C, threads, iters,
+           kab_subsets ? ", link subsets" : "");
     for (int v = 0; v < NV; ++v) {
         double worst = 0.0;
         for (size_t i = 0; i < (size_t)caches * nc; ++i) {
@@ -131,6 +149,7 @@ int main(int argc, char **argv) {
                v, col[0], col[iters / 10], col[iters / 2], ratio[iters / 2], ratio[iters / 4], ratio[3 * iters / 4], worst);
     }
     for (int v = 0; v < NV; ++v) free(out[v]);
+    free(ratio_h);
     free(rad);
     free(t);
     free(col);
