@@ -187,6 +187,7 @@ static bool blocked_elsewhere(const link_job *job, const float from[3], const fl
     const float f = job->ray_eps / len;
     glow__hit hit = glow__rt_intersect(job->rt, from, d, f, 1.0f - f);
     if (hit.t == INFINITY) return false;
+    if (hit.foreign) return true; /* another system's surface */
     const float(*P)[3] = job->scene->pos + 3 * (size_t)hit.tri;
     float e1[3], e2[3], n[3], h[3], off[3];
     glow__sub(P[1], P[0], e1);
@@ -283,6 +284,7 @@ static uint32_t credit_hit(const link_job *job, const float origin[3], const flo
                            const glow__hit *hit, const cl_runs *runs, float max_d2) {
     const glow__surfels *S = job->surfels;
     const float eps = job->ray_eps, plane_tol = job->near_radius / NEAR_RADII; /* one surfel radius */
+    if (hit->foreign) return CREDIT_NONE; /* another system's surface: its surfels are not this system's */
     float p[3], hn[3];
     for (int k = 0; k < 3; ++k) p[k] = origin[k] + hit->t * dir[k];
     {
@@ -350,7 +352,9 @@ static uint32_t near_field(const link_job *job, const glow__cache *cache, const 
             memcpy(dir, job->sphere_dirs[r], sizeof dir);
         }
         glow__hit hit = glow__rt_intersect(job->rt, cache->pos, dir, eps, INFINITY);
-        if (hit.t == INFINITY || hit.back_face) continue;
+        /* another system's surface (a bake split into systems) counts as the sky does: this system
+         * links none of its light */
+        if (hit.t == INFINITY || hit.back_face || hit.foreign) continue;
         front_hits++;
         if (hemi) *out_kappa_geom += dw * glow__irr_kernel(job->out->sh_bands, glow__dot(dir, cache->nrm));
         if (!(hit.t < R)) continue; /* beyond the near field: counted, not credited */

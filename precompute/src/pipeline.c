@@ -7,6 +7,8 @@
 #include <string.h>
 #include <time.h>
 
+#include <cjson/cJSON.h>
+
 #include "bake_format.h"
 #include "bake_write.h"
 #include "hierarchy.h"
@@ -533,27 +535,18 @@ static void report_audit(const glow__caches *c, const glow__links *l, FILE *csv,
     if (ferror(csv)) glow__warnf(log, "%s: writing the audit CSV failed", csv_path);
 }
 
-static glow_result bake(const char *scene_path, const char *out_path, const glow_pc_settings *settings_in,
-                        glow_pc_stats *stats) {
-    memset(stats, 0, sizeof *stats);
-    glow_pc_settings zero = {0};
-    glow_pc_settings set = glow_pc_settings_resolve(settings_in ? settings_in : &zero);
-    glow__log log = {.fn = log_adapter, .user = &set};
-    if (!scene_path || !out_path) {
-        glow__errorf(&log, "glow_pc_bake: scene and output paths are required");
-        snprintf(stats->error, sizeof stats->error, "%s", log.last_error);
-        return GLOW_ERROR_INVALID_ARGUMENT;
-    }
-    char msg[512];
-    glow_result res = glow_pc_settings_validate(&set, msg, sizeof msg);
-    if (res != GLOW_OK) {
-        glow__errorf(&log, "%s", msg);
-        snprintf(stats->error, sizeof stats->error, "%s", log.last_error);
-        return res;
-    }
-    const preset *p = preset_of(set.quality);
-    glow__scene scene = {0};
-    glow__rt *rt = NULL;
+#define STAGE_BEGIN(k) do { pc.stage = (k); peak_reset(); t0 = now_seconds(); stage_progress(&pc, 0.0); } while (0)
+#define STAGE_END(k) do { stats->stage_seconds[k] = now_seconds() - t0; stats->stage_peak_rss[k] = peak_read(); \
+                          stage_progress(&pc, 1.0); } while (0)
+
+/* One system (the whole scene when the bake is not split): surfels -> hierarchy -> caches -> links ->
+ * file, from its triangles and its rays. grid_target: the grid's cache budget. Fills the stats of these
+ * stages; a rank other than the writer (`writer` false) stops before the file. */
+static glow_result bake_system(const glow_pc_settings *setp, uint32_t grid_target, const glow__scene *sc,
+                               const glow__rt *rt, const char *out_path, bool writer, glow__pool *pool,
+                               glow__log *log, FILE *audit_csv, glow_pc_stats *stats) {
+    glow_pc_settings set = *setp;
+    const char *scene_path = sc->source;
     glow__surfels surfels = {0};
     glow__hierarchy hier = {0};
     glow__caches caches = {0};
@@ -561,64 +554,19 @@ static glow_result bake(const char *scene_path, const char *out_path, const glow
     glow__links links = {0};
     sections ss = {0};
     float *audit_radiance = NULL;
-    FILE *audit_csv = NULL; /* opened first: a bad path fails before the work */
-    /* the output must be writable and must not be the input, checked before the work (D7, D8) */
-    /* a distributed bake (glow_pc_distribution): rank 0 alone writes, so it alone checks the output */
-    const bool writer = !set.distribution || set.distribution->rank == 0;
-    if (!writer) set.audit_csv = NULL;
-    if (writer &&
-        (res = glow__bake_write_check(out_path, strncmp(scene_path, "builtin:", 8) ? scene_path : NULL, &log)) != GLOW_OK) {
-        snprintf(stats->error, sizeof stats->error, "%s", log.last_error);
-        return res;
-    }
-    if (set.audit_csv && !(audit_csv = fopen(set.audit_csv, "w"))) {
-        glow__errorf(&log, "%s: cannot write the audit CSV", set.audit_csv);
-        return GLOW_ERROR_IO;
-    }
-    glow__pool *pool = glow__pool_create(set.threads);
-    if (!pool) {
-        glow__errorf(&log, "cannot start %u threads", set.threads);
-        res = GLOW_ERROR_OUT_OF_MEMORY;
-        goto done;
-    }
-    stats->threads = glow__pool_threads(pool);
-    double t_all = now_seconds(), t0;
-    progress_ctx pc = {.s = &set};
-#define STAGE_BEGIN(k) do { pc.stage = (k); peak_reset(); t0 = now_seconds(); stage_progress(&pc, 0.0); } while (0)
-#define STAGE_END(k) do { stats->stage_seconds[k] = now_seconds() - t0; stats->stage_peak_rss[k] = peak_read(); \
-                          stage_progress(&pc, 1.0); } while (0)
-
-    STAGE_BEGIN(ST_IMPORT);
-    res = glow__scene_load(scene_path, &log, &scene);
-    STAGE_END(ST_IMPORT);
-    if (res != GLOW_OK) goto done;
-    stats->source_triangles = scene.source_tri_count;
-    stats->triangles = scene.tri_count;
-    stats->materials = scene.material_count;
-    stats->textures = scene.texture_count;
-    stats->textures_missing = scene.textures_missing;
-    stats->skipped_degenerate = scene.skipped_degenerate;
-    stats->skipped_repeated = scene.skipped_repeated;
-    stats->skipped_collinear = scene.skipped_collinear;
-    stats->skipped_duplicate = scene.skipped_duplicate;
-    stats->skipped_nonfinite = scene.skipped_nonfinite;
-    stats->scene_area = scene.area;
-
-    STAGE_BEGIN(ST_BVH);
-    res = glow__rt_create(&scene, &log, &rt);
-    STAGE_END(ST_BVH);
-    if (res != GLOW_OK) goto done;
-
+    glow_result res = GLOW_OK;
+    double t0;
+    progress_ctx pc = {.s = setp};
     STAGE_BEGIN(ST_SURFELS);
     glow__surfel_settings ssurf = {.count = set.surfels, .seed = set.seed, .relax_iterations = set.relax_iterations,
                                    .adapt = set.surfel_adapt, .rt = rt};
-    res = glow__surfels_place(&scene, &ssurf, pool, &log, &surfels);
+    res = glow__surfels_place(sc, &ssurf, pool, log, &surfels);
     STAGE_END(ST_SURFELS);
     if (res != GLOW_OK) goto done;
     stats->surfels = surfels.count;
 
     STAGE_BEGIN(ST_HIER);
-    res = glow__hierarchy_build_rt(&surfels, scene.bounds_min, scene.bounds_max, rt, pool, &log, &hier);
+    res = glow__hierarchy_build_rt(&surfels, sc->bounds_min, sc->bounds_max, rt, pool, log, &hier);
     STAGE_END(ST_HIER);
     if (res != GLOW_OK) goto done;
     stats->nodes = hier.node_count;
@@ -626,17 +574,17 @@ static glow_result bake(const char *scene_path, const char *out_path, const glow
 
     STAGE_BEGIN(ST_CACHES);
     glow__cache_settings scache = {.grid_spacing = set.grid_spacing, .texel_density = set.texel_density,
-                                   .target_grid = p->grid, .target_lightmap = set.lightmap_caches, .seed = set.seed,
+                                   .target_grid = grid_target, .target_lightmap = set.lightmap_caches, .seed = set.seed,
                                    .detail_factor = set.lightmap_detail >= 2 ? set.lightmap_detail : 0u};
-    res = glow__caches_build(&scene, rt, &surfels, &scache, pool, &log, &caches);
+    res = glow__caches_build(sc, rt, &surfels, &scache, pool, log, &caches);
     if (res == GLOW_OK && caches.grid_dims[0] && caches.grid_dims[1] && caches.grid_dims[2]) {
         /* which corners of each grid cell a lookup may blend (grid_vis.c) */
         const size_t cells = (size_t)caches.grid_dims[0] * caches.grid_dims[1] * caches.grid_dims[2];
         float ext[3];
-        glow__sub(scene.bounds_max, scene.bounds_min, ext);
+        glow__sub(sc->bounds_max, sc->bounds_min, ext);
         gvis = malloc(cells * 8);
         if (!gvis) {
-            glow__errorf(&log, "%s: out of memory for the grid visibility", scene_path);
+            glow__errorf(log, "%s: out of memory for the grid visibility", scene_path);
             res = GLOW_ERROR_OUT_OF_MEMORY;
         } else {
             res = glow__grid_visibility(rt, &caches, sqrtf(glow__dot(ext, ext)), pool, gvis);
@@ -667,14 +615,14 @@ static glow_result bake(const char *scene_path, const char *out_path, const glow
     {   /* refuse link tables that cannot fit before trying (each link costs ~28 B while baking) */
         double bytes = (double)caches.count * set.links * (sizeof(glow__link) + (set.sh_links ? 4.0 * set.bands * set.bands : 0.0));
         if (bytes > 64.0 * 1024 * 1024 * 1024) {
-            glow__errorf(&log, "%s: %u caches x %u links would need %.1f GiB; lower --links or the cache density",
+            glow__errorf(log, "%s: %u caches x %u links would need %.1f GiB; lower --links or the cache density",
                          scene_path, caches.count, set.links, bytes / (1024.0 * 1024 * 1024));
             res = GLOW_ERROR_INVALID_ARGUMENT;
             goto done;
         }
     }
     if (set.audit_radiance) {
-        res = read_audit_radiance(set.audit_radiance, surfels.count, &log, &audit_radiance);
+        res = read_audit_radiance(set.audit_radiance, surfels.count, log, &audit_radiance);
         if (res != GLOW_OK) goto done;
     }
     STAGE_BEGIN(ST_LINKS);
@@ -686,10 +634,10 @@ static glow_result bake(const char *scene_path, const char *out_path, const glow
                                  .cluster_samples = set.link_cluster_rays,
                                  .detail_radius = set.detail_radius, .detail_links = set.detail_links,
                                  .dist = set.distribution && set.distribution->ranks > 1 ? set.distribution : NULL};
-    res = glow__links_build(&scene, rt, &surfels, &hier, &caches, &slink, pool, &log, stage_progress, &pc, &links);
+    res = glow__links_build(sc, rt, &surfels, &hier, &caches, &slink, pool, log, stage_progress, &pc, &links);
     STAGE_END(ST_LINKS);
     if (res != GLOW_OK) goto done;
-    if (links.audit) report_audit(&caches, &links, audit_csv, set.audit_csv, &log);
+    if (links.audit) report_audit(&caches, &links, audit_csv, set.audit_csv, log);
     stats->links = (uint64_t)caches.count * set.links;
     if (links.detail_count) {
         stats->detail_factor = caches.detail_factor;
@@ -701,15 +649,12 @@ static glow_result bake(const char *scene_path, const char *out_path, const glow
     stats->links_per_cache = set.links;
     stats->bands = set.bands;
     stats->seed = set.seed;
-    if (!writer) { /* every rank holds the whole link table now; rank 0 writes it */
-        stats->total_seconds = now_seconds() - t_all;
-        goto done;
-    }
+    if (!writer) goto done; /* every rank holds the whole link table now; rank 0 writes it */
 
     STAGE_BEGIN(ST_WRITE);
-    res = serialise(&set, &scene, &surfels, &hier, &caches, &links, gvis, &ss, &log);
+    res = serialise(&set, sc, &surfels, &hier, &caches, &links, gvis, &ss, log);
     gvis = NULL; /* the sections own it now */
-    if (res == GLOW_OK) res = glow__bake_write_file(out_path, ss.s, ss.n, &log, &stats->file_size);
+    if (res == GLOW_OK) res = glow__bake_write_file(out_path, ss.s, ss.n, log, &stats->file_size);
     STAGE_END(ST_WRITE);
     if (res != GLOW_OK) goto done;
     stats->section_count = ss.n;
@@ -719,27 +664,452 @@ static glow_result bake(const char *scene_path, const char *out_path, const glow
         if (ss.s[i].fourcc == GLOW_SECTION_LINK && stats->links)
             stats->bytes_per_link = (double)ss.s[i].size / (double)stats->links;
     }
-    stats->total_seconds = now_seconds() - t_all;
-#undef STAGE_BEGIN
-#undef STAGE_END
 done:
     free(audit_radiance);
-    if (audit_csv) {
-        fclose(audit_csv);
-        if (res != GLOW_OK) remove(set.audit_csv);
-    }
     free(gvis);
     for (uint32_t i = 0; i < ss.n; ++i) free(ss.owned[i]);
     glow__links_free(&links);
     glow__caches_free(&caches);
     glow__hierarchy_free(&hier);
     glow__surfels_free(&surfels);
+    return res;
+}
+
+/* ------------------------------------------------------------------ systems (issue 16) */
+/* A scene split into systems (glow_pc_settings.system_area): triangles go by their centroid; a range of
+ * them is halved along the longest side of its centroids' bounds at the area median until each part
+ * holds at most the target area (a single triangle larger than that stays whole). Sorting by
+ * (coordinate, triangle index) makes the partition deterministic. */
+typedef struct sys_key {
+    float key;
+    uint32_t tri;
+} sys_key;
+
+static int cmp_sys_key(const void *a, const void *b) {
+    const sys_key *x = a, *y = b;
+    if (x->key != y->key) return x->key < y->key ? -1 : 1;
+    return (x->tri > y->tri) - (x->tri < y->tri);
+}
+
+typedef struct sys_part {
+    uint32_t first, count; /* range of the partition's triangle order */
+    double area;
+} sys_part;
+
+typedef struct sys_split {
+    const glow__scene *sc;
+    const double *tri_area;
+    uint32_t *order;
+    sys_key *keys;
+    double target;
+    sys_part *parts;
+    uint32_t n, cap;
+} sys_split;
+
+static double tri_area(const glow__scene *sc, uint32_t t) {
+    const float *p0 = sc->pos[3 * (size_t)t], *p1 = sc->pos[3 * (size_t)t + 1], *p2 = sc->pos[3 * (size_t)t + 2];
+    double e1[3], e2[3];
+    for (int k = 0; k < 3; ++k) {
+        e1[k] = (double)p1[k] - p0[k];
+        e2[k] = (double)p2[k] - p0[k];
+    }
+    const double c0 = e1[1] * e2[2] - e1[2] * e2[1], c1 = e1[2] * e2[0] - e1[0] * e2[2], c2 = e1[0] * e2[1] - e1[1] * e2[0];
+    return 0.5 * sqrt(c0 * c0 + c1 * c1 + c2 * c2);
+}
+
+static float tri_centroid(const glow__scene *sc, uint32_t t, int axis) {
+    return (sc->pos[3 * (size_t)t][axis] + sc->pos[3 * (size_t)t + 1][axis] + sc->pos[3 * (size_t)t + 2][axis]) *
+           (1.0f / 3.0f);
+}
+
+static bool split_systems(sys_split *sp, uint32_t first, uint32_t count, uint32_t depth) {
+    double area = 0.0;
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (uint32_t i = first; i < first + count; ++i) {
+        const uint32_t t = sp->order[i];
+        area += sp->tri_area[t];
+        for (int k = 0; k < 3; ++k) {
+            const float c = tri_centroid(sp->sc, t, k);
+            lo[k] = c < lo[k] ? c : lo[k];
+            hi[k] = c > hi[k] ? c : hi[k];
+        }
+    }
+    int axis = 0;
+    for (int k = 1; k < 3; ++k)
+        if (hi[k] - lo[k] > hi[axis] - lo[axis]) axis = k;
+    if (area <= sp->target || count < 2 || !(hi[axis] > lo[axis]) || depth >= 40) {
+        if (sp->n == sp->cap) {
+            const uint32_t cap = sp->cap ? 2 * sp->cap : 16;
+            sys_part *np = realloc(sp->parts, cap * sizeof *np);
+            if (!np) return false;
+            sp->parts = np;
+            sp->cap = cap;
+        }
+        sp->parts[sp->n++] = (sys_part){first, count, area};
+        return true;
+    }
+    for (uint32_t i = 0; i < count; ++i) {
+        const uint32_t t = sp->order[first + i];
+        sp->keys[i] = (sys_key){tri_centroid(sp->sc, t, axis), t};
+    }
+    qsort(sp->keys, count, sizeof *sp->keys, cmp_sys_key);
+    uint32_t k = 0;
+    double acc = 0.0;
+    while (k < count - 1 && acc + sp->tri_area[sp->keys[k].tri] <= 0.5 * area) acc += sp->tri_area[sp->keys[k++].tri];
+    if (k == 0) k = 1;
+    for (uint32_t i = 0; i < count; ++i) sp->order[first + i] = sp->keys[i].tri;
+    return split_systems(sp, first, k, depth + 1) && split_systems(sp, first + k, count - k, depth + 1);
+}
+
+/* The triangles order[first, first + count) of `world` as a scene of their own: copies of the per-corner
+ * arrays, the world's materials and textures shared (sys_scene_free frees only the copies). */
+static bool sys_scene(const glow__scene *w, const uint32_t *order, uint32_t count, uint32_t index, glow__scene *out) {
+    memset(out, 0, sizeof *out);
+    out->tri_count = count;
+    out->pos = malloc((size_t)count * 3 * sizeof *out->pos);
+    out->nrm = malloc((size_t)count * 3 * sizeof *out->nrm);
+    out->uv0 = w->uv0 ? malloc((size_t)count * 3 * sizeof *out->uv0) : NULL;
+    out->uv1 = w->uv1 ? malloc((size_t)count * 3 * sizeof *out->uv1) : NULL;
+    out->tri_material = malloc((size_t)count * sizeof *out->tri_material);
+    out->tri_source = malloc((size_t)count * sizeof *out->tri_source);
+    if (!out->pos || !out->nrm || (w->uv0 && !out->uv0) || (w->uv1 && !out->uv1) || !out->tri_material ||
+        !out->tri_source)
+        return false;
+    for (int k = 0; k < 3; ++k) {
+        out->bounds_min[k] = INFINITY;
+        out->bounds_max[k] = -INFINITY;
+    }
+    for (uint32_t i = 0; i < count; ++i) {
+        const uint32_t t = order[i];
+        memcpy(out->pos[3 * (size_t)i], w->pos[3 * (size_t)t], sizeof(float[3][3]));
+        memcpy(out->nrm[3 * (size_t)i], w->nrm[3 * (size_t)t], sizeof(float[3][3]));
+        if (out->uv0) memcpy(out->uv0[3 * (size_t)i], w->uv0[3 * (size_t)t], sizeof(float[3][2]));
+        if (out->uv1) memcpy(out->uv1[3 * (size_t)i], w->uv1[3 * (size_t)t], sizeof(float[3][2]));
+        out->tri_material[i] = w->tri_material[t];
+        out->tri_source[i] = w->tri_source ? w->tri_source[t] : t;
+        for (int c = 0; c < 3; ++c)
+            for (int k = 0; k < 3; ++k) {
+                const float v = out->pos[3 * (size_t)i + c][k];
+                out->bounds_min[k] = v < out->bounds_min[k] ? v : out->bounds_min[k];
+                out->bounds_max[k] = v > out->bounds_max[k] ? v : out->bounds_max[k];
+            }
+        out->area += tri_area(out, i);
+    }
+    out->material_count = w->material_count;
+    out->materials = w->materials;
+    out->texture_count = w->texture_count;
+    out->textures = w->textures;
+    out->source_tri_count = count;
+    out->normals_generated = w->normals_generated;
+    snprintf(out->source, sizeof out->source, "%.480s (system %u)", w->source, index);
+    return true;
+}
+
+static void sys_scene_free(glow__scene *s) {
+    free(s->pos);
+    free(s->nrm);
+    free(s->uv0);
+    free(s->uv1);
+    free(s->tri_material);
+    free(s->tri_source);
+    memset(s, 0, sizeof *s);
+}
+
+/* STEM.sNNN.glow beside the manifest: STEM is out_path less a ".json" or ".glow" ending. */
+static void sys_path(const char *out_path, uint32_t index, char *buf, size_t n) {
+    size_t len = strlen(out_path);
+    if (len > 5 && (strcmp(out_path + len - 5, ".json") == 0 || strcmp(out_path + len - 5, ".glow") == 0)) len -= 5;
+    snprintf(buf, n, "%.*s.s%03u.glow", (int)(len < 4000 ? len : 4000), out_path, index);
+}
+
+static void add_vec3(cJSON *o, const char *name, const float v[3]) {
+    const double d[3] = {v[0], v[1], v[2]};
+    cJSON_AddItemToObject(o, name, cJSON_CreateDoubleArray(d, 3));
+}
+
+/* Sums one system's stats into the world's (see glow_pc_stats.systems). */
+static void sys_stats_add(glow_pc_stats *w, const glow_pc_stats *s, bool largest) {
+    for (int k = ST_SURFELS; k < GLOW_PC_STAGE_COUNT; ++k) {
+        w->stage_seconds[k] += s->stage_seconds[k];
+        if (s->stage_peak_rss[k] > w->stage_peak_rss[k]) w->stage_peak_rss[k] = s->stage_peak_rss[k];
+    }
+    if (largest) { /* the resolved settings of the largest system */
+        w->links_per_cache = s->links_per_cache;
+        w->bands = s->bands;
+        w->seed = s->seed;
+        w->grid_spacing = s->grid_spacing;
+        w->texel_density = s->texel_density;
+        memcpy(w->grid_dims, s->grid_dims, sizeof w->grid_dims);
+        w->lightmap_width = s->lightmap_width;
+        w->lightmap_height = s->lightmap_height;
+        w->detail_factor = s->detail_factor;
+        w->levels = s->levels;
+    }
+    const double cov = (double)w->lightmap_coverage * ((double)w->lightmap_caches + w->lightmap_invalid) +
+                       (double)s->lightmap_coverage * ((double)s->lightmap_caches + s->lightmap_invalid);
+    w->surfels += s->surfels;
+    w->nodes += s->nodes;
+    w->grid_caches += s->grid_caches;
+    w->grid_inside += s->grid_inside;
+    w->lightmap_caches += s->lightmap_caches;
+    w->lightmap_invalid += s->lightmap_invalid;
+    w->lightmap_gutter += s->lightmap_gutter;
+    w->lightmap_unused += s->lightmap_unused;
+    const double covered = (double)w->lightmap_caches + w->lightmap_invalid;
+    w->lightmap_coverage = covered > 0.0 ? (float)(cov / covered) : 0.0f;
+    w->charts += s->charts;
+    w->small_charts += s->small_charts;
+    w->shared_texels += s->shared_texels;
+    w->caches += s->caches;
+    w->links += s->links;
+    w->file_size += s->file_size;
+    w->detail_texels += s->detail_texels;
+    w->detail_corrected += s->detail_corrected;
+    w->detail_links += s->detail_links;
+    w->section_count = s->section_count;
+    memcpy(w->section_fourcc, s->section_fourcc, sizeof w->section_fourcc);
+    for (uint32_t i = 0; i < 16; ++i) w->section_size[i] += s->section_size[i];
+}
+
+/* Writes the world manifest (JSON) atomically: temp file + rename. */
+static glow_result write_manifest(const char *path, const char *text, glow__log *log) {
+    char tmp[4200];
+    snprintf(tmp, sizeof tmp, "%.4000s.tmp", path);
+    FILE *f = fopen(tmp, "wb");
+    if (!f) {
+        glow__errorf(log, "%s: cannot write the world manifest", path);
+        return GLOW_ERROR_IO;
+    }
+    const size_t len = strlen(text);
+    bool ok = fwrite(text, 1, len, f) == len && fputc('\n', f) != EOF;
+    ok = (fclose(f) == 0) && ok;
+    if (!ok || rename(tmp, path) != 0) {
+        remove(tmp);
+        glow__errorf(log, "%s: writing the world manifest failed (disk full?)", path);
+        return GLOW_ERROR_IO;
+    }
+    return GLOW_OK;
+}
+
+/* The systems of a split bake, one after the other (each with every thread, and over the ranks of a
+ * distributed bake), then the manifest. On failure the systems written so far are removed. */
+static glow_result bake_systems(const glow_pc_settings *set, const preset *p, const glow__scene *world,
+                                const char *out_path, bool writer, glow__pool *pool, glow__log *log,
+                                glow_pc_stats *stats) {
+    const uint32_t n = world->tri_count;
+    double *tri_area_v = malloc(((size_t)n + 1) * sizeof *tri_area_v);
+    sys_split sp = {.sc = world, .tri_area = tri_area_v, .target = set->system_area};
+    sp.order = malloc(((size_t)n + 1) * sizeof *sp.order);
+    sp.keys = malloc(((size_t)n + 1) * sizeof *sp.keys);
+    float *foreign = malloc(((size_t)n + 1) * 9 * sizeof *foreign);
+    cJSON *root = cJSON_CreateObject(), *list = NULL;
+    glow_result res = GLOW_OK;
+    uint32_t written = 0, largest = 0;
+    if (!tri_area_v || !sp.order || !sp.keys || !foreign || !root) {
+        glow__errorf(log, "%s: out of memory for the systems", world->source);
+        res = GLOW_ERROR_OUT_OF_MEMORY;
+        goto done;
+    }
+    for (uint32_t t = 0; t < n; ++t) {
+        tri_area_v[t] = tri_area(world, t);
+        sp.order[t] = t;
+    }
+    if (!split_systems(&sp, 0, n, 0)) {
+        glow__errorf(log, "%s: out of memory for the systems", world->source);
+        res = GLOW_ERROR_OUT_OF_MEMORY;
+        goto done;
+    }
+    if (sp.n > 1000) {
+        glow__errorf(log, "%s: --system-area %g splits the scene (area %.6g) into %u systems; at most 1000", world->source,
+                     (double)set->system_area, world->area, sp.n);
+        res = GLOW_ERROR_INVALID_ARGUMENT;
+        goto done;
+    }
+    glow__infof(log, "systems: %u of at most %g units² each (scene area %.6g)", sp.n, (double)set->system_area,
+                world->area);
+    cJSON_AddNumberToObject(root, "glow_world", 1);
+    cJSON_AddStringToObject(root, "source", world->source);
+    cJSON_AddNumberToObject(root, "system_area", set->system_area);
+    cJSON_AddNumberToObject(root, "seed", set->seed);
+    cJSON_AddStringToObject(root, "cross_system_light", "none");
+    if (!(list = cJSON_AddArrayToObject(root, "systems"))) {
+        glow__errorf(log, "%s: out of memory for the world manifest", out_path);
+        res = GLOW_ERROR_OUT_OF_MEMORY;
+        goto done;
+    }
+    for (uint32_t s = 0; s < sp.n && res == GLOW_OK; ++s) {
+        const sys_part *part = &sp.parts[s];
+        glow__scene sub;
+        glow__rt *rt = NULL;
+        if (!sys_scene(world, sp.order + part->first, part->count, s, &sub)) {
+            sys_scene_free(&sub);
+            glow__errorf(log, "%s: out of memory for system %u", world->source, s);
+            res = GLOW_ERROR_OUT_OF_MEMORY;
+            break;
+        }
+        /* the rest of the world occludes */
+        uint32_t nf = 0;
+        for (uint32_t i = 0; i < n; ++i) {
+            if (i == part->first) i += part->count;
+            if (i >= n) break;
+            memcpy(foreign + 9 * (size_t)nf++, world->pos[3 * (size_t)sp.order[i]], 9 * sizeof(float));
+        }
+        res = glow__rt_create_system(&sub, foreign, nf, log, &rt);
+        /* budgets per system_area of surface */
+        const double f = part->area / set->system_area;
+        glow_pc_settings sset = *set;
+        double sv = (double)set->surfels * f;
+        sset.surfels = sv < 16.0 ? 16u : (sv > (double)(1u << 22) ? (1u << 22) : (uint32_t)lround(sv));
+        const double lv = (double)set->lightmap_caches * f;
+        sset.lightmap_caches = lv < 1.0 ? 1u : (uint32_t)lround(lv);
+        const double gv = (double)p->grid * f;
+        const uint32_t grid_target = gv < 8.0 ? 8u : (uint32_t)lround(gv);
+        char path[4200];
+        sys_path(out_path, s, path, sizeof path);
+        glow_pc_stats ss = {0};
+        if (res == GLOW_OK) res = bake_system(&sset, grid_target, &sub, rt, path, writer, pool, log, NULL, &ss);
+        if (res == GLOW_OK) {
+            written += writer;
+            const bool big = ss.surfels > largest;
+            if (big) largest = ss.surfels;
+            sys_stats_add(stats, &ss, big);
+            glow__infof(log, "system %u: %u triangles, area %.6g, %u surfels, %u caches (%u grid, %u lightmap), %.3g texels/unit -> %s",
+                        s, sub.tri_count, sub.area, ss.surfels, ss.caches, ss.grid_caches, ss.lightmap_caches,
+                        (double)ss.texel_density, path);
+            cJSON *o = cJSON_CreateObject();
+            const char *base = strrchr(path, '/');
+            cJSON_AddNumberToObject(o, "index", s);
+            cJSON_AddStringToObject(o, "file", base ? base + 1 : path);
+            add_vec3(o, "bounds_min", sub.bounds_min);
+            add_vec3(o, "bounds_max", sub.bounds_max);
+            cJSON_AddNumberToObject(o, "area", sub.area);
+            cJSON_AddNumberToObject(o, "triangles", sub.tri_count);
+            cJSON_AddNumberToObject(o, "surfels", ss.surfels);
+            cJSON_AddNumberToObject(o, "caches", ss.caches);
+            cJSON_AddNumberToObject(o, "grid_caches", ss.grid_caches);
+            cJSON_AddNumberToObject(o, "lightmap_caches", ss.lightmap_caches);
+            cJSON_AddNumberToObject(o, "texel_density", ss.texel_density);
+            cJSON_AddNumberToObject(o, "bytes", (double)ss.file_size);
+            cJSON_AddItemToArray(list, o);
+        }
+        glow__rt_destroy(rt);
+        sys_scene_free(&sub);
+    }
+    stats->systems = sp.n;
+    for (uint32_t i = 0; i < stats->section_count && i < 16; ++i)
+        if (stats->section_fourcc[i] == GLOW_SECTION_LINK && stats->links)
+            stats->bytes_per_link = (double)stats->section_size[i] / (double)stats->links;
+    if (res == GLOW_OK && writer) {
+        char *text = cJSON_Print(root);
+        if (!text) {
+            glow__errorf(log, "%s: out of memory for the world manifest", out_path);
+            res = GLOW_ERROR_OUT_OF_MEMORY;
+        } else {
+            res = write_manifest(out_path, text, log);
+            cJSON_free(text);
+        }
+    }
+done:
+    if (res != GLOW_OK)
+        for (uint32_t s = 0; s < written; ++s) { /* no partial output */
+            char path[4200];
+            sys_path(out_path, s, path, sizeof path);
+            remove(path);
+        }
+    cJSON_Delete(root);
+    free(foreign);
+    free(sp.parts);
+    free(sp.keys);
+    free(sp.order);
+    free(tri_area_v);
+    return res;
+}
+
+static glow_result bake(const char *scene_path, const char *out_path, const glow_pc_settings *settings_in,
+                        glow_pc_stats *stats) {
+    memset(stats, 0, sizeof *stats);
+    glow_pc_settings zero = {0};
+    glow_pc_settings set = glow_pc_settings_resolve(settings_in ? settings_in : &zero);
+    glow__log log = {.fn = log_adapter, .user = &set};
+    if (!scene_path || !out_path) {
+        glow__errorf(&log, "glow_pc_bake: scene and output paths are required");
+        snprintf(stats->error, sizeof stats->error, "%s", log.last_error);
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    char msg[512];
+    glow_result res = glow_pc_settings_validate(&set, msg, sizeof msg);
+    if (res != GLOW_OK) {
+        glow__errorf(&log, "%s", msg);
+        snprintf(stats->error, sizeof stats->error, "%s", log.last_error);
+        return res;
+    }
+    const preset *p = preset_of(set.quality);
+    glow__scene scene = {0};
+    glow__rt *rt = NULL;
+    FILE *audit_csv = NULL; /* opened first: a bad path fails before the work */
+    /* the output must be writable and must not be the input, checked before the work (D7, D8) */
+    /* a distributed bake (glow_pc_distribution): rank 0 alone writes, so it alone checks the output */
+    const bool writer = !set.distribution || set.distribution->rank == 0;
+    if (!writer) set.audit_csv = NULL;
+    if (writer &&
+        (res = glow__bake_write_check(out_path, strncmp(scene_path, "builtin:", 8) ? scene_path : NULL, &log)) != GLOW_OK) {
+        snprintf(stats->error, sizeof stats->error, "%s", log.last_error);
+        return res;
+    }
+    if (set.audit_csv && !(audit_csv = fopen(set.audit_csv, "w"))) {
+        glow__errorf(&log, "%s: cannot write the audit CSV", set.audit_csv);
+        return GLOW_ERROR_IO;
+    }
+    glow__pool *pool = glow__pool_create(set.threads);
+    if (!pool) {
+        glow__errorf(&log, "cannot start %u threads", set.threads);
+        res = GLOW_ERROR_OUT_OF_MEMORY;
+        goto done;
+    }
+    stats->threads = glow__pool_threads(pool);
+    double t_all = now_seconds(), t0;
+    progress_ctx pc = {.s = &set};
+
+    STAGE_BEGIN(ST_IMPORT);
+    res = glow__scene_load(scene_path, &log, &scene);
+    STAGE_END(ST_IMPORT);
+    if (res != GLOW_OK) goto done;
+    stats->source_triangles = scene.source_tri_count;
+    stats->triangles = scene.tri_count;
+    stats->materials = scene.material_count;
+    stats->textures = scene.texture_count;
+    stats->textures_missing = scene.textures_missing;
+    stats->skipped_degenerate = scene.skipped_degenerate;
+    stats->skipped_repeated = scene.skipped_repeated;
+    stats->skipped_collinear = scene.skipped_collinear;
+    stats->skipped_duplicate = scene.skipped_duplicate;
+    stats->skipped_nonfinite = scene.skipped_nonfinite;
+    stats->scene_area = scene.area;
+
+    if (set.system_area > 0.0f) { /* each system builds its own rays */
+        res = bake_systems(&set, p, &scene, out_path, writer, pool, &log, stats);
+    } else {
+        stats->systems = 1;
+        STAGE_BEGIN(ST_BVH);
+        res = glow__rt_create(&scene, &log, &rt);
+        STAGE_END(ST_BVH);
+        if (res == GLOW_OK) res = bake_system(&set, p->grid, &scene, rt, out_path, writer, pool, &log, audit_csv, stats);
+    }
+    stats->total_seconds = now_seconds() - t_all;
+done:
+    if (audit_csv) {
+        fclose(audit_csv);
+        if (res != GLOW_OK) remove(set.audit_csv);
+    }
     glow__rt_destroy(rt);
     glow__scene_free(&scene);
     glow__pool_destroy(pool);
     if (res != GLOW_OK) snprintf(stats->error, sizeof stats->error, "%s", log.last_error);
     return res;
 }
+#undef STAGE_BEGIN
+#undef STAGE_END
+
 
 glow_result glow_pc_bake(const char *scene_path, const char *out_path, const glow_pc_settings *settings_in,
                          glow_pc_stats *stats) {

@@ -13,19 +13,40 @@ struct glow__rt {
     RTCDevice device;
     RTCScene scene;
     const glow__scene *src;
+    const float *foreign; /* glow__rt_create_system: geometry 1's corners (9 floats a triangle), not owned */
     bool ray16;
 };
+
+/* Attaches one triangle geometry of n unwelded triangles (9 floats each) as geometry id `id`. */
+static bool attach_tris(glow__rt *rt, const float *pos, uint32_t n, unsigned id) {
+    RTCGeometry geom = rtcNewGeometry(rt->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    float *v = rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+                                       (size_t)3 * n);
+    uint32_t *idx = rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), n);
+    if (!v || !idx) {
+        rtcReleaseGeometry(geom);
+        return false;
+    }
+    if (n) memcpy(v, pos, (size_t)n * 9 * sizeof(float));
+    for (uint32_t i = 0; i < 3 * n; ++i) idx[i] = i;
+    rtcCommitGeometry(geom);
+    rtcAttachGeometryByID(rt->scene, geom, id);
+    rtcReleaseGeometry(geom);
+    return true;
+}
 
 static void embree_error(void *user, enum RTCError code, const char *str) {
     glow__log *log = user;
     glow__errorf(log, "embree: error %d: %s", (int)code, str ? str : "");
 }
 
-glow_result glow__rt_create(const glow__scene *scene, glow__log *log, glow__rt **out) {
+glow_result glow__rt_create_system(const glow__scene *scene, const float *foreign, uint32_t foreign_count,
+                                   glow__log *log, glow__rt **out) {
     *out = NULL;
     glow__rt *rt = calloc(1, sizeof *rt);
     if (!rt) return GLOW_ERROR_OUT_OF_MEMORY;
     rt->src = scene;
+    rt->foreign = foreign_count ? foreign : NULL;
     rt->device = rtcNewDevice(NULL);
     if (!rt->device) {
         glow__errorf(log, "embree: cannot create device (error %d)", (int)rtcGetDeviceError(NULL));
@@ -37,22 +58,13 @@ glow_result glow__rt_create(const glow__scene *scene, glow__log *log, glow__rt *
     rt->scene = rtcNewScene(rt->device);
     rtcSetSceneBuildQuality(rt->scene, RTC_BUILD_QUALITY_HIGH);
     rtcSetSceneFlags(rt->scene, RTC_SCENE_FLAG_ROBUST);
-    RTCGeometry geom = rtcNewGeometry(rt->device, RTC_GEOMETRY_TYPE_TRIANGLE);
-    uint32_t n = scene->tri_count;
-    float *v = rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
-                                       (size_t)3 * n);
-    uint32_t *idx = rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), n);
-    if (!v || !idx) {
-        rtcReleaseGeometry(geom);
+    const uint32_t n = scene->tri_count;
+    if (!attach_tris(rt, (const float *)scene->pos, n, 0) ||
+        (rt->foreign && !attach_tris(rt, foreign, foreign_count, 1))) {
         glow__rt_destroy(rt);
-        glow__errorf(log, "embree: out of memory for %u triangles", n);
+        glow__errorf(log, "embree: out of memory for %u triangles", n + foreign_count);
         return GLOW_ERROR_OUT_OF_MEMORY;
     }
-    memcpy(v, scene->pos, (size_t)n * 9 * sizeof(float));
-    for (uint32_t i = 0; i < 3 * n; ++i) idx[i] = i;
-    rtcCommitGeometry(geom);
-    rtcAttachGeometry(rt->scene, geom);
-    rtcReleaseGeometry(geom);
     rtcCommitScene(rt->scene);
     if (rtcGetDeviceError(rt->device) != RTC_ERROR_NONE) {
         glow__rt_destroy(rt);
@@ -60,6 +72,10 @@ glow_result glow__rt_create(const glow__scene *scene, glow__log *log, glow__rt *
     }
     *out = rt;
     return GLOW_OK;
+}
+
+glow_result glow__rt_create(const glow__scene *scene, glow__log *log, glow__rt **out) {
+    return glow__rt_create_system(scene, NULL, 0, log, out);
 }
 
 void glow__rt_destroy(glow__rt *rt) {
@@ -129,6 +145,11 @@ glow__hit glow__rt_intersect(const glow__rt *rt, const float org[3], const float
     hit.v = rh.hit.v;
     /* Our own front-face convention, independent of Embree's Ng sign: (p1-p0) x (p2-p0). */
     const float(*p)[3] = rt->src->pos + 3 * (size_t)hit.tri;
+    if (rh.hit.geomID == 1) { /* another system's triangle */
+        p = (const float(*)[3])(rt->foreign + 9 * (size_t)hit.tri);
+        hit.tri = UINT32_MAX;
+        hit.foreign = true;
+    }
     float e1[3], e2[3], ng[3];
     glow__sub(p[1], p[0], e1);
     glow__sub(p[2], p[0], e2);

@@ -74,6 +74,11 @@ static const char *usage_text =
     "  --detail-links K       at most K links per detail texel (default 16)\n"
     "  --detail-radius R      a detail texel corrects the light of surfels within R lightmap texels of\n"
     "                         it (default 1)\n"
+    "  --system-area A        split the scene into systems of at most about A units² of surface each\n"
+    "                         (halving its bounds at the area median), each baked with its own\n"
+    "                         surfels, hierarchy, caches and links and the preset's budgets per A\n"
+    "                         units²; -o then names the world manifest (JSON) and the systems are\n"
+    "                         written beside it as STEM.sNNN.glow. Light does not cross systems yet\n"
     "  --surfel-adapt F       surfels up to F times as dense where surfaces face each other within\n"
     "                         the near field (concave places) as on open ground, same count:\n"
     "                         1 = area-uniform, up to 4 (default: low and moderate 4, high and\n"
@@ -237,6 +242,7 @@ static void print_summary(const char *scene, const char *out, const glow_pc_stat
         cJSON_AddNumberToObject(x, "textures", s->textures);
         cJSON_AddNumberToObject(x, "textures_missing", s->textures_missing);
         cJSON_AddNumberToObject(x, "area", s->scene_area);
+        cJSON_AddNumberToObject(o, "systems", s->systems);
         cJSON_AddNumberToObject(o, "surfels", s->surfels);
         cJSON_AddNumberToObject(o, "nodes", s->nodes);
         cJSON_AddNumberToObject(o, "levels", s->levels);
@@ -279,6 +285,9 @@ static void print_summary(const char *scene, const char *out, const glow_pc_stat
         return;
     }
     printf("glow-bake: %s -> %s\n", scene, out);
+    if (s->systems > 1)
+        printf("  systems   %u (the world manifest %s names their bakes; the figures below are sums over them, the "
+               "settings the largest's)\n", s->systems, out);
     printf("  scene     %u triangles kept of %u (skipped: %u degenerate [%u repeated corners, %u collinear], "
            "%u duplicate, %u non-finite), "
            "%u materials, %u textures (%u missing), area %.6g\n",
@@ -295,7 +304,10 @@ static void print_summary(const char *scene, const char *out, const glow_pc_stat
                "copies and %u unused texels (%.0f %%); %u charts narrower than a texel share %u texels\n",
                s->texel_density > 0.0f ? 1.0 / (double)s->texel_density : 0.0, s->lightmap_caches,
                100.0 * (double)s->lightmap_coverage, s->lightmap_gutter, s->lightmap_unused,
-               100.0 * s->lightmap_unused / ((double)s->lightmap_width * s->lightmap_height), s->small_charts,
+               100.0 * s->lightmap_unused /
+                   (s->systems > 1 ? (double)s->lightmap_caches + s->lightmap_invalid + s->lightmap_gutter + s->lightmap_unused
+                                   : (double)s->lightmap_width * s->lightmap_height),
+               s->small_charts,
                s->shared_texels);
     printf("  links     %llu (%u per cache, l=%u), %.2f bytes per link\n", (unsigned long long)s->links,
            s->links_per_cache, s->bands, s->bytes_per_link);
@@ -516,6 +528,13 @@ int main(int argc, char **argv) {
             if (!end || *end || !(x > 0.0 && x <= 4.0))
                 return usage_error("--detail-radius '%s': expected lightmap texels in (0, 4]", v);
             s.detail_radius = (float)x;
+        } else if (!strcmp(a, "--system-area")) {
+            NEED_VALUE();
+            char *end = NULL;
+            double x = strtod(v, &end);
+            if (!end || *end || !(x > 0.0 && x < 1e30))
+                return usage_error("--system-area '%s': expected a positive area in scene units squared", v);
+            s.system_area = (float)x;
         } else if (!strcmp(a, "--surfel-adapt")) {
             NEED_VALUE();
             char *end = NULL;
@@ -550,6 +569,7 @@ int main(int argc, char **argv) {
     }
     if (!scene) return usage_error("no scene given");
     if (s.audit_csv && !s.audit_radiance) return usage_error("--audit-csv needs --audit-radiance");
+    if (s.audit_radiance && s.system_area > 0.0f) return usage_error("--audit-radiance audits a bake of one system (no --system-area)");
     if (!out) return usage_error("no output file given (-o OUT.glow)");
     char msg[512];
     if (glow_pc_settings_validate(&s, msg, sizeof msg) != GLOW_OK) return usage_error("%s", msg);

@@ -36,6 +36,15 @@ expect 0 "2 ranks, 2 threads each (the default threads)" "${MPI[@]}" -np 2 "$B" 
   --surfels 2048 --links 32 -q -o "$T/mpi2t.glow"
 cmp -s "$T/one.glow" "$T/mpi2t.glow" && pass "  the same bytes" || fail "  bytes differ"
 
+# a bake split into systems (--system-area): each system's links over the ranks, the same files
+SYS=(builtin:pillar-hall --system-area 100 --surfels 1024 --links 16 --lightmap-caches 300 --lightmap-detail 1 --threads 1 -q)
+mkdir -p "$T/s1" "$T/s2"
+expect 0 "systems, one process" "$B" "${SYS[@]}" -o "$T/s1/w.json"
+expect 0 "systems, 2 ranks" "${MPI[@]}" -np 2 "$B" --mpi "${SYS[@]}" -o "$T/s2/w.json"
+same=1
+for f in w.json w.s000.glow w.s001.glow w.s002.glow w.s003.glow; do cmp -s "$T/s1/$f" "$T/s2/$f" || { same=0; fail "  $f differs"; }; done
+[ $same = 1 ] && pass "  the manifest and the 4 systems' bakes: the same bytes"
+
 # rank 1 dies (SIGKILL) at its first exchange: mpirun stops the job
 out="$T/dead.glow"
 GLOW_BAKE_MPI_FAIL_RANK=1 "${MPI[@]}" -np 2 "$B" --mpi "${ARGS[@]}" -o "$out" >"$T/out" 2>"$T/err"

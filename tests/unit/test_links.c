@@ -360,12 +360,11 @@ static double rect_solid_angle(double x0, double x1, double z0, double z1, doubl
  * must not pull the visible solid angle towards 4π: rays into the sky and onto back faces count
  * nothing, so the links add up to the floor's solid angle (analytic) seen from above, and to nothing
  * from below. */
-static void test_normalise_open_floor(void **state) {
-    (void)state;
+/* An open floor, [-1, 1]² in y = 0 facing +y, as Q x Q quads; the scene is finalised, not traced. */
+static void make_open_floor(world *w) {
     enum { Q = 8 };
-    world w;
-    memset(&w, 0, sizeof w);
-    glow__scene *sc = &w.scene;
+    memset(w, 0, sizeof *w);
+    glow__scene *sc = &w->scene;
     sc->tri_count = 2 * Q * Q;
     sc->pos = malloc((size_t)sc->tri_count * 3 * sizeof *sc->pos);
     sc->tri_material = calloc(sc->tri_count, sizeof *sc->tri_material);
@@ -384,7 +383,14 @@ static void test_normalise_open_floor(void **state) {
             for (int a = 0; a < 2; ++a, ++t)
                 for (int c = 0; c < 3; ++c) memcpy(sc->pos[3 * t + c], quad[idx[a][c]], sizeof quad[0]);
         }
-    assert_int_equal(glow__scene_finalize(sc, &w.log), GLOW_OK);
+    assert_int_equal(glow__scene_finalize(sc, &w->log), GLOW_OK);
+}
+
+static void test_normalise_open_floor(void **state) {
+    (void)state;
+    world w;
+    make_open_floor(&w);
+    glow__scene *sc = &w.scene;
     assert_int_equal(glow__rt_create(sc, &w.log, &w.rt), GLOW_OK);
     w.pool = glow__pool_create(2);
     glow__surfel_settings ss = {.count = 4096, .seed = 1, .relax_iterations = 4};
@@ -412,6 +418,55 @@ static void test_normalise_open_floor(void **state) {
         if (fabs(total - expect) > 0.015 * expect + 1e-6)
             fail_msg("cache %u: solid angle %g, expected %g", ci, total, expect);
     }
+    glow__links_free(&L);
+    free(c.caches);
+    world_free(&w);
+}
+
+/* A system of a bake split into systems (glow__rt_create_system): another system's surface occludes,
+ * reports foreign hits, and counts for the normalisation as the sky does. The open floor is the
+ * system; a 1 x 1 ceiling tile of another system hangs at y = 0.8 over its middle, facing down. Below
+ * it, a cache sees the whole floor and its links must sum to the floor's analytic solid angle (had the
+ * tile's underside counted as visible geometry, the normalisation would have scaled them up by the
+ * tile's share); above it, the tile hides the whole floor (its shadow from y = 1.2 is 3 x 3). */
+static void test_foreign_occluders(void **state) {
+    (void)state;
+    world w;
+    make_open_floor(&w);
+    glow__scene *sc = &w.scene;
+    /* counter-clockwise seen from -y */
+    const float tile[2][9] = {{-0.5f, 0.8f, -0.5f, 0.5f, 0.8f, -0.5f, 0.5f, 0.8f, 0.5f},
+                              {-0.5f, 0.8f, -0.5f, 0.5f, 0.8f, 0.5f, -0.5f, 0.8f, 0.5f}};
+    assert_int_equal(glow__rt_create_system(sc, &tile[0][0], 2, &w.log, &w.rt), GLOW_OK);
+    const float below[3] = {0.0f, 0.5f, 0.0f}, above[3] = {0.0f, 1.2f, 0.0f}, up[3] = {0, 1, 0}, down[3] = {0, -1, 0};
+    glow__hit h = glow__rt_intersect(w.rt, below, up, 0.0f, INFINITY);
+    assert_true(h.foreign && h.tri == UINT32_MAX && !h.back_face && fabsf(h.t - 0.3f) < 1e-4f);
+    h = glow__rt_intersect(w.rt, above, down, 0.0f, INFINITY);
+    assert_true(h.foreign && h.back_face && fabsf(h.t - 0.4f) < 1e-4f);
+    h = glow__rt_intersect(w.rt, below, down, 0.0f, INFINITY); /* the system's own floor */
+    assert_true(!h.foreign && h.tri < sc->tri_count && fabsf(h.t - 0.5f) < 1e-4f);
+    assert_true(glow__rt_occluded(w.rt, above, down, 0.0f, 1.0f));
+
+    w.pool = glow__pool_create(2);
+    glow__surfel_settings ss = {.count = 4096, .seed = 1, .relax_iterations = 4};
+    assert_int_equal(glow__surfels_place(sc, &ss, w.pool, &w.log, &w.surfels), GLOW_OK);
+    assert_int_equal(glow__hierarchy_build(&w.surfels, sc->bounds_min, sc->bounds_max, w.pool, &w.log, &w.h), GLOW_OK);
+    glow__caches c = caches_alloc(2);
+    c.caches[0] = (glow__cache){.pos = {0.0f, 0.5f, 0.0f}, .kind = GLOW_CACHE_KIND_GRID};
+    c.caches[1] = (glow__cache){.pos = {0.0f, 1.2f, 0.0f}, .kind = GLOW_CACHE_KIND_GRID};
+    const uint32_t nl = 256;
+    glow__link_settings ls = {.links_per_cache = nl, .sh_bands = 3, .rays_per_surfel = 1};
+    glow__links L;
+    assert_int_equal(glow__links_build(sc, w.rt, &w.surfels, &w.h, &c, &ls, w.pool, &w.log, NULL, NULL, &L), GLOW_OK);
+    double total[2] = {0.0, 0.0};
+    for (uint32_t ci = 0; ci < 2; ++ci)
+        for (uint32_t j = 0; j < nl; ++j)
+            if (L.links[ci * nl + j].factor != 0.0f) total[ci] += link_omega(&L.links[ci * nl + j]);
+    const double floor_below = rect_solid_angle(-1.0, 1.0, -1.0, 1.0, 0.5);
+    print_message("foreign tile: below %.4f (floor %.4f), above %.4f\n", total[0], floor_below, total[1]);
+    if (fabs(total[0] - floor_below) > 0.015 * floor_below)
+        fail_msg("below the tile: links %g sr, the floor %g sr", total[0], floor_below);
+    if (!(total[1] < 0.01 * floor_below)) fail_msg("above the tile: links %g sr, the floor is hidden", total[1]);
     glow__links_free(&L);
     free(c.caches);
     world_free(&w);
@@ -615,6 +670,7 @@ int main(void) {
         cmocka_unit_test(test_full_sh_matches_runtime_dc),
         cmocka_unit_test(test_near_field_closes),
         cmocka_unit_test(test_normalise_open_floor),
+        cmocka_unit_test(test_foreign_occluders),
         cmocka_unit_test(test_normalise_keeps_cosine_moment),
         cmocka_unit_test(test_cone_fit_response),
         cmocka_unit_test(test_links_deterministic_across_threads),

@@ -103,6 +103,11 @@ void glow__texture_sample(const glow__texture *tex, float u, float v, float foot
 /* ---------------------------------------------------------------- ray tracing (rt.c) */
 typedef struct glow__rt glow__rt;
 glow_result glow__rt_create(const glow__scene *scene, glow__log *log, glow__rt **out);
+/* The rays of one system of a bake split into systems: `scene` is the system's own triangles (hits on
+ * them report their index in it), `foreign` (foreign_count x 9 floats, corners packed) the rest of the
+ * world's, which occlude every query and report foreign hits (glow__hit.foreign). */
+glow_result glow__rt_create_system(const glow__scene *scene, const float *foreign, uint32_t foreign_count,
+                                   glow__log *log, glow__rt **out);
 void glow__rt_destroy(glow__rt *rt);
 /* true when anything blocks the segment org + t*dir, t in (tnear, tfar). dir need not be unit. */
 bool glow__rt_occluded(const glow__rt *rt, const float org[3], const float dir[3], float tnear, float tfar);
@@ -115,6 +120,8 @@ typedef struct glow__hit {
     float u, v;               /* barycentrics of corners 1 and 2 */
     bool back_face;           /* ray hit the side opposite the triangle's geometric normal
                                  (geometric normal = (p1-p0)x(p2-p0), CCW front) */
+    bool foreign;             /* the hit is on another system's triangle (glow__rt_create_system):
+                                 tri is UINT32_MAX, t and back_face are set; it occludes, nothing more */
 } glow__hit;
 glow__hit glow__rt_intersect(const glow__rt *rt, const float org[3], const float dir[3], float tnear, float tfar);
 

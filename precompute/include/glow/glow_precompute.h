@@ -129,6 +129,14 @@ typedef struct glow_pc_settings {
                                    0 = preset (low and moderate 4, high and fine 1), 1 = area-uniform,
                                    at most 4 (--surfel-adapt) */
     const glow_pc_distribution *distribution; /* NULL = this process bakes alone */
+    float system_area;          /* > 0: split the scene into systems (issue 16) of at most about this much
+                                   surface (scene units²) each, by halving its bounds at the area median,
+                                   and bake each with its own surfels, hierarchy, caches and links, with
+                                   the budgets above per system_area of surface (a system of half that
+                                   area gets half the surfels and caches). out_path then names the world
+                                   manifest (JSON), beside which the systems' bakes are written. The
+                                   other systems' geometry occludes; their light does not reach this
+                                   system yet (docs/linker.md "Systems"). 0 = one system (--system-area) */
 } glow_pc_settings;
 
 typedef struct glow_pc_stats {
@@ -167,6 +175,10 @@ typedef struct glow_pc_stats {
     uint32_t detail_texels;   /* detail texels that cover a surface */
     uint32_t detail_corrected;/* ... of which correct their caches' near light (have links) */
     uint64_t detail_links;
+    /* systems (glow_pc_settings.system_area): how many; 1 for a bake of one. With several, the counts
+     * and sizes above are sums over the systems, the resolved settings those of the largest, and
+     * stage_peak_rss the largest over the systems */
+    uint32_t systems;
 } glow_pc_stats;
 
 /** Resolves presets: fills every zero field of `settings` from its quality. \since 0.1 */
@@ -176,7 +188,9 @@ GLOW_API glow_pc_settings glow_pc_settings_resolve(const glow_pc_settings *setti
  * (e.g. bands outside 2..8, surfels < 16 or > 4M, links outside 1..4096). \since 0.1 */
 GLOW_API glow_result glow_pc_settings_validate(const glow_pc_settings *settings, char *message, size_t message_size);
 
-/** Bakes `scene_path` into `out_path` (atomic: temp file + rename). `stats` may be NULL.
+/** Bakes `scene_path` into `out_path` (atomic: temp file + rename). `stats` may be NULL. With
+ * settings->system_area, out_path names the world manifest and the systems' bakes are written beside
+ * it as STEM.sNNN.glow (STEM: out_path less a ".json" or ".glow" ending); on failure none is left.
  * \returns GLOW_OK; GLOW_ERROR_IO (missing/unreadable input, unwritable output, disk full),
  * GLOW_ERROR_UNSUPPORTED (unknown format), GLOW_ERROR_EMPTY_SCENE, GLOW_ERROR_CORRUPT_DATA,
  * GLOW_ERROR_INVALID_ARGUMENT, GLOW_ERROR_OUT_OF_MEMORY. \since 0.1 */
