@@ -676,31 +676,28 @@ done:
 }
 
 /* ------------------------------------------------------------------ systems (issue 16) */
-/* A scene split into systems (glow_pc_settings.system_area): triangles go by their centroid; a range of
- * them is halved along the longest side of its centroids' bounds at the area median until each part
- * holds at most the target area (a single triangle larger than that stays whole). Sorting by
- * (coordinate, triangle index) makes the partition deterministic. */
-typedef struct sys_key {
-    float key;
-    uint32_t tri;
-} sys_key;
-
-static int cmp_sys_key(const void *a, const void *b) {
-    const sys_key *x = a, *y = b;
-    if (x->key != y->key) return x->key < y->key ? -1 : 1;
-    return (x->tri > y->tri) - (x->tri < y->tri);
-}
+/* A scene split into systems (glow_pc_settings.system_area). Triangles go by their centroid. The cells
+ * are fixed in space, so that an edit changes only the systems it touches (incremental re-bakes): the
+ * root is the cube [-2^k, 2^k]^3 around the origin, k the smallest that holds every centroid; a cell
+ * holding more than the target area is halved at its middle, along x, y, z in turn with its depth,
+ * and each half again, down to cells of at most the target area (a single triangle larger than that
+ * stays whole, in a cell of its own). Empty cells are no systems. A system is named by its cell:
+ * depth and the path of halves (bit i: upper half at depth i). Centroids on a halving plane go up. */
+/* Other systems' triangles within this fraction of a system's bounds diagonal occlude its rays. */
+#define SYS_OCCLUDER_MARGIN 0.1f
 
 typedef struct sys_part {
     uint32_t first, count; /* range of the partition's triangle order */
     double area;
+    uint32_t depth;
+    uint64_t path;
 } sys_part;
 
 typedef struct sys_split {
     const glow__scene *sc;
     const double *tri_area;
-    uint32_t *order;
-    sys_key *keys;
+    const float (*cent)[3];
+    uint32_t *order, *tmp;
     double target;
     sys_part *parts;
     uint32_t n, cap;
@@ -717,27 +714,14 @@ static double tri_area(const glow__scene *sc, uint32_t t) {
     return 0.5 * sqrt(c0 * c0 + c1 * c1 + c2 * c2);
 }
 
-static float tri_centroid(const glow__scene *sc, uint32_t t, int axis) {
-    return (sc->pos[3 * (size_t)t][axis] + sc->pos[3 * (size_t)t + 1][axis] + sc->pos[3 * (size_t)t + 2][axis]) *
-           (1.0f / 3.0f);
-}
+#define SYS_MAX_DEPTH 60u
 
-static bool split_systems(sys_split *sp, uint32_t first, uint32_t count, uint32_t depth) {
+static bool split_systems(sys_split *sp, uint32_t first, uint32_t count, const double lo[3], const double hi[3],
+                          uint32_t depth, uint64_t path) {
+    if (count == 0) return true;
     double area = 0.0;
-    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (uint32_t i = first; i < first + count; ++i) {
-        const uint32_t t = sp->order[i];
-        area += sp->tri_area[t];
-        for (int k = 0; k < 3; ++k) {
-            const float c = tri_centroid(sp->sc, t, k);
-            lo[k] = c < lo[k] ? c : lo[k];
-            hi[k] = c > hi[k] ? c : hi[k];
-        }
-    }
-    int axis = 0;
-    for (int k = 1; k < 3; ++k)
-        if (hi[k] - lo[k] > hi[axis] - lo[axis]) axis = k;
-    if (area <= sp->target || count < 2 || !(hi[axis] > lo[axis]) || depth >= 40) {
+    for (uint32_t i = first; i < first + count; ++i) area += sp->tri_area[sp->order[i]];
+    if (area <= sp->target || count < 2 || depth >= SYS_MAX_DEPTH) {
         if (sp->n == sp->cap) {
             const uint32_t cap = sp->cap ? 2 * sp->cap : 16;
             sys_part *np = realloc(sp->parts, cap * sizeof *np);
@@ -745,20 +729,25 @@ static bool split_systems(sys_split *sp, uint32_t first, uint32_t count, uint32_
             sp->parts = np;
             sp->cap = cap;
         }
-        sp->parts[sp->n++] = (sys_part){first, count, area};
+        sp->parts[sp->n++] = (sys_part){first, count, area, depth, path};
         return true;
     }
-    for (uint32_t i = 0; i < count; ++i) {
-        const uint32_t t = sp->order[first + i];
-        sp->keys[i] = (sys_key){tri_centroid(sp->sc, t, axis), t};
+    const int axis = (int)(depth % 3u);
+    const double mid = 0.5 * (lo[axis] + hi[axis]);
+    /* stable: the lower half keeps its order, then the upper half */
+    uint32_t nl = 0, nu = 0;
+    for (uint32_t i = first; i < first + count; ++i) {
+        const uint32_t t = sp->order[i];
+        if ((double)sp->cent[t][axis] < mid) sp->order[first + nl++] = t;
+        else sp->tmp[nu++] = t;
     }
-    qsort(sp->keys, count, sizeof *sp->keys, cmp_sys_key);
-    uint32_t k = 0;
-    double acc = 0.0;
-    while (k < count - 1 && acc + sp->tri_area[sp->keys[k].tri] <= 0.5 * area) acc += sp->tri_area[sp->keys[k++].tri];
-    if (k == 0) k = 1;
-    for (uint32_t i = 0; i < count; ++i) sp->order[first + i] = sp->keys[i].tri;
-    return split_systems(sp, first, k, depth + 1) && split_systems(sp, first + k, count - k, depth + 1);
+    memcpy(sp->order + first + nl, sp->tmp, nu * sizeof *sp->tmp);
+    double lo_u[3], hi_l[3];
+    memcpy(lo_u, lo, sizeof lo_u);
+    memcpy(hi_l, hi, sizeof hi_l);
+    lo_u[axis] = hi_l[axis] = mid;
+    return split_systems(sp, first, nl, lo, hi_l, depth + 1, path) &&
+           split_systems(sp, first + nl, nu, lo_u, hi, depth + 1, path | (1ull << depth));
 }
 
 /* The triangles order[first, first + count) of `world` as a scene of their own: copies of the per-corner
@@ -813,13 +802,6 @@ static void sys_scene_free(glow__scene *s) {
     free(s->tri_material);
     free(s->tri_source);
     memset(s, 0, sizeof *s);
-}
-
-/* STEM.sNNN.glow beside the manifest: STEM is out_path less a ".json" or ".glow" ending. */
-static void sys_path(const char *out_path, uint32_t index, char *buf, size_t n) {
-    size_t len = strlen(out_path);
-    if (len > 5 && (strcmp(out_path + len - 5, ".json") == 0 || strcmp(out_path + len - 5, ".glow") == 0)) len -= 5;
-    snprintf(buf, n, "%.*s.s%03u.glow", (int)(len < 4000 ? len : 4000), out_path, index);
 }
 
 static void add_vec3(cJSON *o, const char *name, const float v[3]) {
@@ -891,30 +873,160 @@ static glow_result write_manifest(const char *path, const char *text, glow__log 
     return GLOW_OK;
 }
 
+/* Incremental re-bakes key each system by a hash of everything its bytes follow from. FNV-1a (64 bit):
+ * a change detector, not a defence against forged inputs; zlib's CRC-32 is too short for a key. */
+static uint64_t fnv64(uint64_t h, const void *data, size_t n) {
+    const unsigned char *p = data;
+    while (n--) {
+        h ^= *p++;
+        h *= 0x100000001b3ull;
+    }
+    return h;
+}
+#define FNV_INIT 0xcbf29ce484222325ull
+#define HASH_VAL(h, v) ((h) = fnv64((h), &(v), sizeof(v)))
+
+/* The settings a system's bytes follow from, the bake format and the world's materials and textures
+ * (contents and names): the part of every system's key that is not its own geometry. */
+static uint64_t world_key(const glow_pc_settings *s, const glow__scene *w) {
+    uint64_t h = FNV_INIT;
+    const uint32_t v[] = {GLOW_BAKE_FORMAT_VERSION_MAJOR, GLOW_BAKE_FORMAT_VERSION_MINOR, GLOW_VERSION,
+                          (uint32_t)s->quality, s->surfels, s->links, s->bands, s->seed, s->sh_links,
+                          s->relax_iterations, s->rays_per_surfel, s->no_link_normalize, s->cut_solid_angle,
+                          s->lightmap_caches, s->no_link_subsets, (uint32_t)s->link_visibility, s->link_cluster_rays,
+                          s->lightmap_detail, s->detail_links, w->material_count, w->texture_count};
+    const float f[] = {s->grid_spacing, s->texel_density, s->link_cluster_angle, s->detail_radius, s->surfel_adapt,
+                       s->system_area};
+    h = fnv64(h, v, sizeof v);
+    h = fnv64(h, f, sizeof f);
+    for (uint32_t m = 0; m < w->material_count; ++m) {
+        const glow__material *mt = &w->materials[m];
+        h = fnv64(h, mt->name, strnlen(mt->name, sizeof mt->name));
+        h = fnv64(h, mt->albedo, sizeof mt->albedo);
+        h = fnv64(h, mt->emission, sizeof mt->emission);
+        HASH_VAL(h, mt->texture);
+        HASH_VAL(h, mt->emission_texture);
+    }
+    for (uint32_t t = 0; t < w->texture_count; ++t) {
+        const glow__texture *tx = &w->textures[t];
+        h = fnv64(h, tx->path, strnlen(tx->path, sizeof tx->path));
+        HASH_VAL(h, tx->width);
+        HASH_VAL(h, tx->height);
+        if (tx->levels[0]) h = fnv64(h, tx->levels[0], (size_t)tx->width * tx->height * 3 * sizeof(float));
+    }
+    return h;
+}
+
+/* A system's key: the world's part, its cell, its triangles and the occluders it traces. */
+static uint64_t system_key(uint64_t world, const sys_part *part, const glow__scene *sub, const float *occ, uint32_t nocc) {
+    uint64_t h = world;
+    HASH_VAL(h, part->depth);
+    HASH_VAL(h, part->path);
+    const size_t n = sub->tri_count;
+    h = fnv64(h, sub->pos, n * 3 * sizeof *sub->pos);
+    h = fnv64(h, sub->nrm, n * 3 * sizeof *sub->nrm);
+    if (sub->uv0) h = fnv64(h, sub->uv0, n * 3 * sizeof *sub->uv0);
+    if (sub->uv1) h = fnv64(h, sub->uv1, n * 3 * sizeof *sub->uv1);
+    h = fnv64(h, sub->tri_material, n * sizeof *sub->tri_material);
+    h = fnv64(h, sub->tri_source, n * sizeof *sub->tri_source);
+    HASH_VAL(h, nocc);
+    return fnv64(h, occ, (size_t)nocc * 9 * sizeof *occ);
+}
+
+/* The previous manifest at out_path, when it is one of ours (else NULL: everything is baked). */
+static cJSON *read_previous(const char *out_path) {
+    FILE *f = fopen(out_path, "rb");
+    if (!f) return NULL;
+    char *buf = NULL;
+    long len = -1;
+    if (fseek(f, 0, SEEK_END) == 0 && (len = ftell(f)) > 0 && len < (64l << 20) && fseek(f, 0, SEEK_SET) == 0 &&
+        (buf = malloc((size_t)len + 1)) && fread(buf, 1, (size_t)len, f) == (size_t)len)
+        buf[len] = 0;
+    else {
+        free(buf);
+        buf = NULL;
+    }
+    fclose(f);
+    cJSON *j = buf ? cJSON_Parse(buf) : NULL;
+    free(buf);
+    if (j && !(cJSON_IsNumber(cJSON_GetObjectItem(j, "glow_world")) && cJSON_IsArray(cJSON_GetObjectItem(j, "systems")))) {
+        cJSON_Delete(j);
+        j = NULL;
+    }
+    return j;
+}
+
+/* The previous manifest's entry for a system file of this name whose file is still there at the size
+ * it recorded, or NULL. */
+static const cJSON *previous_entry(const cJSON *prev, const char *file, const char *path) {
+    const cJSON *e;
+    cJSON_ArrayForEach(e, cJSON_GetObjectItem(prev, "systems")) {
+        const cJSON *fe = cJSON_GetObjectItem(e, "file"), *be = cJSON_GetObjectItem(e, "bytes");
+        if (!cJSON_IsString(fe) || strcmp(fe->valuestring, file) != 0 || !cJSON_IsNumber(be)) continue;
+        FILE *f = fopen(path, "rb");
+        if (!f) return NULL;
+        long len = -1;
+        if (fseek(f, 0, SEEK_END) == 0) len = ftell(f);
+        fclose(f);
+        return len >= 0 && (double)len == be->valuedouble ? e : NULL;
+    }
+    return NULL;
+}
+
+static double json_num(const cJSON *o, const char *name) {
+    const cJSON *x = cJSON_GetObjectItem(o, name);
+    return cJSON_IsNumber(x) ? x->valuedouble : 0.0;
+}
+
+/* The path of a file named in the manifest: beside it. */
+static void beside(const char *out_path, const char *file, char *buf, size_t n) {
+    const char *slash = strrchr(out_path, '/');
+    const int dir = slash ? (int)(slash - out_path + 1) : 0;
+    if ((size_t)snprintf(buf, n, "%.*s%s", dir < 4000 ? dir : 4000, out_path, file) >= n) buf[0] = 0; /* never: names are short */
+}
+
 /* The systems of a split bake, one after the other (each with every thread, and over the ranks of a
- * distributed bake), then the manifest. On failure the systems written so far are removed. */
+ * distributed bake), then the manifest. A system whose key (system_key) and file the previous manifest
+ * at out_path already has is kept as it is (an incremental re-bake): its bytes are what a bake would
+ * write again. Each file's name holds its key, so the previous world stays whole until the new manifest
+ * replaces it; then the files only the previous manifest named are removed. On failure the files
+ * written by this bake are removed and the previous world is left as it was. */
 static glow_result bake_systems(const glow_pc_settings *set, const preset *p, const glow__scene *world,
                                 const char *out_path, bool writer, glow__pool *pool, glow__log *log,
                                 glow_pc_stats *stats) {
     const uint32_t n = world->tri_count;
     double *tri_area_v = malloc(((size_t)n + 1) * sizeof *tri_area_v);
-    sys_split sp = {.sc = world, .tri_area = tri_area_v, .target = set->system_area};
+    float(*cent)[3] = malloc(((size_t)n + 1) * sizeof *cent);
+    sys_split sp = {.sc = world, .tri_area = tri_area_v, .cent = (const float(*)[3])cent, .target = set->system_area};
     sp.order = malloc(((size_t)n + 1) * sizeof *sp.order);
-    sp.keys = malloc(((size_t)n + 1) * sizeof *sp.keys);
+    sp.tmp = malloc(((size_t)n + 1) * sizeof *sp.tmp);
     float *foreign = malloc(((size_t)n + 1) * 9 * sizeof *foreign);
-    cJSON *root = cJSON_CreateObject(), *list = NULL;
+    char **made = NULL; /* files this bake wrote */
+    cJSON *root = cJSON_CreateObject(), *list = NULL, *prev = read_previous(out_path);
     glow_result res = GLOW_OK;
-    uint32_t written = 0, largest = 0;
-    if (!tri_area_v || !sp.order || !sp.keys || !foreign || !root) {
+    uint32_t nmade = 0, largest = 0, reused = 0;
+    uint64_t nf_total = 0;
+    if (!tri_area_v || !cent || !sp.order || !sp.tmp || !foreign || !root) {
         glow__errorf(log, "%s: out of memory for the systems", world->source);
         res = GLOW_ERROR_OUT_OF_MEMORY;
         goto done;
     }
+    double ext = 0.0;
     for (uint32_t t = 0; t < n; ++t) {
         tri_area_v[t] = tri_area(world, t);
         sp.order[t] = t;
+        for (int k = 0; k < 3; ++k) {
+            cent[t][k] = (world->pos[3 * (size_t)t][k] + world->pos[3 * (size_t)t + 1][k] + world->pos[3 * (size_t)t + 2][k]) *
+                         (1.0f / 3.0f);
+            ext = fmax(ext, fabs((double)cent[t][k]));
+        }
     }
-    if (!split_systems(&sp, 0, n, 0)) {
+    double half = 1.0; /* the root cell: [-half, half]^3, half a power of two */
+    while (half <= ext && half < 1e30) half *= 2.0;
+    while (half > 2.0 * ext && half > 0x1p-30) half *= 0.5;
+    if (!(half > ext)) half *= 2.0;
+    const double lo[3] = {-half, -half, -half}, hi[3] = {half, half, half};
+    if (!split_systems(&sp, 0, n, lo, hi, 0, 0)) {
         glow__errorf(log, "%s: out of memory for the systems", world->source);
         res = GLOW_ERROR_OUT_OF_MEMORY;
         goto done;
@@ -925,8 +1037,13 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
         res = GLOW_ERROR_INVALID_ARGUMENT;
         goto done;
     }
-    glow__infof(log, "systems: %u of at most %g units² each (scene area %.6g)", sp.n, (double)set->system_area,
-                world->area);
+    if (!(made = calloc(sp.n + 1, sizeof *made))) {
+        res = GLOW_ERROR_OUT_OF_MEMORY;
+        goto done;
+    }
+    glow__infof(log, "systems: %u of at most %g units² each (scene area %.6g)%s", sp.n, (double)set->system_area,
+                world->area, prev ? "; a previous world is there: unchanged systems are kept" : "");
+    const uint64_t wkey = world_key(set, world);
     cJSON_AddNumberToObject(root, "glow_world", 1);
     cJSON_AddStringToObject(root, "source", world->source);
     cJSON_AddNumberToObject(root, "system_area", set->system_area);
@@ -947,55 +1064,110 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
             res = GLOW_ERROR_OUT_OF_MEMORY;
             break;
         }
-        /* the rest of the world occludes */
+        /* The rest of the world occludes, as far as it can matter: every ray whose hits this system
+         * uses runs between its own caches and surfels, or within its near field of them, so inside its
+         * bounds grown by a tenth of their diagonal (SYS_OCCLUDER_MARGIN); a ray that would have hit
+         * another system beyond counts as sky either way. Only those triangles are traced. */
+        float olo[3], ohi[3];
+        {
+            float e[3];
+            glow__sub(sub.bounds_max, sub.bounds_min, e);
+            const float m = SYS_OCCLUDER_MARGIN * sqrtf(glow__dot(e, e));
+            for (int k = 0; k < 3; ++k) {
+                olo[k] = sub.bounds_min[k] - m;
+                ohi[k] = sub.bounds_max[k] + m;
+            }
+        }
         uint32_t nf = 0;
         for (uint32_t i = 0; i < n; ++i) {
             if (i == part->first) i += part->count;
             if (i >= n) break;
-            memcpy(foreign + 9 * (size_t)nf++, world->pos[3 * (size_t)sp.order[i]], 9 * sizeof(float));
+            const float(*P)[3] = world->pos + 3 * (size_t)sp.order[i];
+            bool near = true;
+            for (int k = 0; k < 3 && near; ++k) {
+                const float a = fminf(P[0][k], fminf(P[1][k], P[2][k])), b = fmaxf(P[0][k], fmaxf(P[1][k], P[2][k]));
+                near = b >= olo[k] && a <= ohi[k];
+            }
+            if (near) memcpy(foreign + 9 * (size_t)nf++, P, 9 * sizeof(float));
         }
-        res = glow__rt_create_system(&sub, foreign, nf, log, &rt);
-        /* budgets per system_area of surface */
-        const double f = part->area / set->system_area;
-        glow_pc_settings sset = *set;
-        double sv = (double)set->surfels * f;
-        sset.surfels = sv < 16.0 ? 16u : (sv > (double)(1u << 22) ? (1u << 22) : (uint32_t)lround(sv));
-        const double lv = (double)set->lightmap_caches * f;
-        sset.lightmap_caches = lv < 1.0 ? 1u : (uint32_t)lround(lv);
-        const double gv = (double)p->grid * f;
-        const uint32_t grid_target = gv < 8.0 ? 8u : (uint32_t)lround(gv);
-        char path[4200];
-        sys_path(out_path, s, path, sizeof path);
-        glow_pc_stats ss = {0};
-        if (res == GLOW_OK) res = bake_system(&sset, grid_target, &sub, rt, path, writer, pool, log, NULL, &ss);
-        if (res == GLOW_OK) {
-            written += writer;
-            const bool big = ss.surfels > largest;
-            if (big) largest = ss.surfels;
-            sys_stats_add(stats, &ss, big);
-            glow__infof(log, "system %u: %u triangles, area %.6g, %u surfels, %u caches (%u grid, %u lightmap), %.3g texels/unit -> %s",
-                        s, sub.tri_count, sub.area, ss.surfels, ss.caches, ss.grid_caches, ss.lightmap_caches,
-                        (double)ss.texel_density, path);
-            cJSON *o = cJSON_CreateObject();
-            const char *base = strrchr(path, '/');
-            cJSON_AddNumberToObject(o, "index", s);
-            cJSON_AddStringToObject(o, "file", base ? base + 1 : path);
-            add_vec3(o, "bounds_min", sub.bounds_min);
-            add_vec3(o, "bounds_max", sub.bounds_max);
-            cJSON_AddNumberToObject(o, "area", sub.area);
-            cJSON_AddNumberToObject(o, "triangles", sub.tri_count);
-            cJSON_AddNumberToObject(o, "surfels", ss.surfels);
-            cJSON_AddNumberToObject(o, "caches", ss.caches);
-            cJSON_AddNumberToObject(o, "grid_caches", ss.grid_caches);
-            cJSON_AddNumberToObject(o, "lightmap_caches", ss.lightmap_caches);
-            cJSON_AddNumberToObject(o, "texel_density", ss.texel_density);
-            cJSON_AddNumberToObject(o, "bytes", (double)ss.file_size);
-            cJSON_AddItemToArray(list, o);
+        nf_total += nf;
+        const uint64_t key = system_key(wkey, part, &sub, foreign, nf);
+        /* STEM.sDEPTH-PATH-KEY.glow beside the manifest, STEM: out_path less a ".json" or ".glow" ending */
+        char path[4200], keyhex[20];
+        snprintf(keyhex, sizeof keyhex, "%016llx", (unsigned long long)key);
+        {
+            size_t len = strlen(out_path), st = 0;
+            if (len > 5 && (strcmp(out_path + len - 5, ".json") == 0 || strcmp(out_path + len - 5, ".glow") == 0)) len -= 5;
+            for (size_t i = 0; i < len; ++i)
+                if (out_path[i] == '/') st = i + 1;
+            const int sl = (int)(len - st);
+            char name[4200];
+            snprintf(name, sizeof name, "%.*s.s%u-%llx-%s.glow", sl < 4000 ? sl : 4000, out_path + st, part->depth,
+                     (unsigned long long)part->path, keyhex);
+            beside(out_path, name, path, sizeof path);
         }
+        const char *base = strrchr(path, '/');
+        base = base ? base + 1 : path;
+        const cJSON *old = prev ? previous_entry(prev, base, path) : NULL;
+        cJSON *o = NULL;
+        if (old) { /* unchanged: keep the file and what the manifest said of it */
+            o = cJSON_Duplicate(old, 1);
+            cJSON_ReplaceItemInObject(o, "index", cJSON_CreateNumber(s));
+            reused++;
+            stats->surfels += (uint32_t)json_num(old, "surfels");
+            stats->caches += (uint32_t)json_num(old, "caches");
+            stats->grid_caches += (uint32_t)json_num(old, "grid_caches");
+            stats->lightmap_caches += (uint32_t)json_num(old, "lightmap_caches");
+            stats->file_size += (uint64_t)json_num(old, "bytes");
+            glow__infof(log, "system %u: unchanged (key %s) -> %s", s, keyhex, path);
+        } else {
+            res = glow__rt_create_system(&sub, foreign, nf, log, &rt);
+            /* budgets per system_area of surface */
+            const double f = part->area / set->system_area;
+            glow_pc_settings sset = *set;
+            double sv = (double)set->surfels * f;
+            sset.surfels = sv < 16.0 ? 16u : (sv > (double)(1u << 22) ? (1u << 22) : (uint32_t)lround(sv));
+            const double lv = (double)set->lightmap_caches * f;
+            sset.lightmap_caches = lv < 1.0 ? 1u : (uint32_t)lround(lv);
+            const double gv = (double)p->grid * f;
+            const uint32_t grid_target = gv < 8.0 ? 8u : (uint32_t)lround(gv);
+            glow_pc_stats ss = {0};
+            if (res == GLOW_OK) res = bake_system(&sset, grid_target, &sub, rt, path, writer, pool, log, NULL, &ss);
+            if (res == GLOW_OK) {
+                if (writer && !(made[nmade++] = strdup(path))) res = GLOW_ERROR_OUT_OF_MEMORY;
+                const bool big = ss.surfels > largest;
+                if (big) largest = ss.surfels;
+                sys_stats_add(stats, &ss, big);
+                glow__infof(log, "system %u: %u triangles, area %.6g, %u surfels, %u caches (%u grid, %u lightmap), "
+                            "%.3g texels/unit -> %s", s, sub.tri_count, sub.area, ss.surfels, ss.caches, ss.grid_caches,
+                            ss.lightmap_caches, (double)ss.texel_density, path);
+                o = cJSON_CreateObject();
+                cJSON_AddNumberToObject(o, "index", s);
+                cJSON_AddStringToObject(o, "file", base);
+                cJSON_AddStringToObject(o, "key", keyhex);
+                add_vec3(o, "bounds_min", sub.bounds_min);
+                add_vec3(o, "bounds_max", sub.bounds_max);
+                cJSON_AddNumberToObject(o, "area", sub.area);
+                cJSON_AddNumberToObject(o, "triangles", sub.tri_count);
+                cJSON_AddNumberToObject(o, "occluders", nf);
+                cJSON_AddNumberToObject(o, "surfels", ss.surfels);
+                cJSON_AddNumberToObject(o, "caches", ss.caches);
+                cJSON_AddNumberToObject(o, "grid_caches", ss.grid_caches);
+                cJSON_AddNumberToObject(o, "lightmap_caches", ss.lightmap_caches);
+                cJSON_AddNumberToObject(o, "texel_density", ss.texel_density);
+                cJSON_AddNumberToObject(o, "bytes", (double)ss.file_size);
+            }
+        }
+        if (o) cJSON_AddItemToArray(list, o);
         glow__rt_destroy(rt);
         sys_scene_free(&sub);
     }
     stats->systems = sp.n;
+    stats->systems_reused = reused;
+    if (res == GLOW_OK)
+        glow__infof(log, "systems: %u baked, %u unchanged; %.1f other systems' triangles per system traced as occluders "
+                    "(within %.0f %% of its diagonal)", sp.n - reused, reused, sp.n ? (double)nf_total / sp.n : 0.0,
+                    100.0 * SYS_OCCLUDER_MARGIN);
     for (uint32_t i = 0; i < stats->section_count && i < 16; ++i)
         if (stats->section_fourcc[i] == GLOW_SECTION_LINK && stats->links)
             stats->bytes_per_link = (double)stats->section_size[i] / (double)stats->links;
@@ -1008,19 +1180,37 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
             res = write_manifest(out_path, text, log);
             cJSON_free(text);
         }
+        if (res == GLOW_OK && prev) { /* the files only the previous world named */
+            const cJSON *e;
+            cJSON_ArrayForEach(e, cJSON_GetObjectItem(prev, "systems")) {
+                const cJSON *fe = cJSON_GetObjectItem(e, "file");
+                if (!cJSON_IsString(fe) || strchr(fe->valuestring, '/')) continue;
+                bool kept = false;
+                const cJSON *x;
+                cJSON_ArrayForEach(x, list) {
+                    const cJSON *fx = cJSON_GetObjectItem(x, "file");
+                    kept = kept || (cJSON_IsString(fx) && strcmp(fx->valuestring, fe->valuestring) == 0);
+                }
+                if (kept) continue;
+                char path[4200];
+                beside(out_path, fe->valuestring, path, sizeof path);
+                remove(path);
+            }
+        }
     }
 done:
-    if (res != GLOW_OK)
-        for (uint32_t s = 0; s < written; ++s) { /* no partial output */
-            char path[4200];
-            sys_path(out_path, s, path, sizeof path);
-            remove(path);
-        }
+    for (uint32_t i = 0; i < nmade; ++i) {
+        if (res != GLOW_OK && made[i]) remove(made[i]); /* no partial output */
+        free(made[i]);
+    }
+    free(made);
+    cJSON_Delete(prev);
     cJSON_Delete(root);
     free(foreign);
     free(sp.parts);
-    free(sp.keys);
+    free(sp.tmp);
     free(sp.order);
+    free(cent);
     free(tri_area_v);
     return res;
 }

@@ -74,11 +74,12 @@ static const char *usage_text =
     "  --detail-links K       at most K links per detail texel (default 16)\n"
     "  --detail-radius R      a detail texel corrects the light of surfels within R lightmap texels of\n"
     "                         it (default 1)\n"
-    "  --system-area A        split the scene into systems of at most about A units² of surface each\n"
-    "                         (halving its bounds at the area median), each baked with its own\n"
-    "                         surfels, hierarchy, caches and links and the preset's budgets per A\n"
-    "                         units²; -o then names the world manifest (JSON) and the systems are\n"
-    "                         written beside it as STEM.sNNN.glow. Light does not cross systems yet\n"
+    "  --system-area A        split the scene into systems of at most A units² of surface each (cells\n"
+    "                         fixed in space), each baked with its own surfels, hierarchy, caches\n"
+    "                         and links and the preset's budgets per A units²; -o then names the\n"
+    "                         world manifest (JSON) and the systems are written beside it, named by\n"
+    "                         their content keys; a world already there keeps its unchanged systems\n"
+    "                         (incremental). Light does not cross systems yet\n"
     "  --surfel-adapt F       surfels up to F times as dense where surfaces face each other within\n"
     "                         the near field (concave places) as on open ground, same count:\n"
     "                         1 = area-uniform, up to 4 (default: low and moderate 4, high and\n"
@@ -243,6 +244,7 @@ static void print_summary(const char *scene, const char *out, const glow_pc_stat
         cJSON_AddNumberToObject(x, "textures_missing", s->textures_missing);
         cJSON_AddNumberToObject(x, "area", s->scene_area);
         cJSON_AddNumberToObject(o, "systems", s->systems);
+        cJSON_AddNumberToObject(o, "systems_reused", s->systems_reused);
         cJSON_AddNumberToObject(o, "surfels", s->surfels);
         cJSON_AddNumberToObject(o, "nodes", s->nodes);
         cJSON_AddNumberToObject(o, "levels", s->levels);
@@ -286,8 +288,9 @@ static void print_summary(const char *scene, const char *out, const glow_pc_stat
     }
     printf("glow-bake: %s -> %s\n", scene, out);
     if (s->systems > 1)
-        printf("  systems   %u (the world manifest %s names their bakes; the figures below are sums over them, the "
-               "settings the largest's)\n", s->systems, out);
+        printf("  systems   %u, %u of them baked and %u unchanged from the previous bake (the world manifest %s names "
+               "their bakes; the figures below are sums over the baked ones, the settings the largest's)\n",
+               s->systems, s->systems - s->systems_reused, s->systems_reused, out);
     printf("  scene     %u triangles kept of %u (skipped: %u degenerate [%u repeated corners, %u collinear], "
            "%u duplicate, %u non-finite), "
            "%u materials, %u textures (%u missing), area %.6g\n",

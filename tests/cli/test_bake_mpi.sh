@@ -42,8 +42,9 @@ mkdir -p "$T/s1" "$T/s2"
 expect 0 "systems, one process" "$B" "${SYS[@]}" -o "$T/s1/w.json"
 expect 0 "systems, 2 ranks" "${MPI[@]}" -np 2 "$B" --mpi "${SYS[@]}" -o "$T/s2/w.json"
 same=1
-for f in w.json w.s000.glow w.s001.glow w.s002.glow w.s003.glow; do cmp -s "$T/s1/$f" "$T/s2/$f" || { same=0; fail "  $f differs"; }; done
-[ $same = 1 ] && pass "  the manifest and the 4 systems' bakes: the same bytes"
+sysfiles=$(python3 -c "import json,sys; print(' '.join(x['file'] for x in json.load(open(sys.argv[1]))['systems']))" "$T/s1/w.json")
+for f in w.json $sysfiles; do cmp -s "$T/s1/$f" "$T/s2/$f" || { same=0; fail "  $f differs"; }; done
+[ $same = 1 ] && [ "$(echo $sysfiles | wc -w)" = 4 ] && pass "  the manifest and the 4 systems' bakes: the same bytes"
 
 # rank 1 dies (SIGKILL) at its first exchange: mpirun stops the job
 out="$T/dead.glow"

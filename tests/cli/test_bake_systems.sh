@@ -24,27 +24,72 @@ s = m["systems"]
 assert len(s) == 4, len(s)
 assert abs(sum(x["area"] for x in s) - 306.33) < 0.01, sum(x["area"] for x in s)
 assert sum(x["triangles"] for x in s) == 236
+import re
 for i, x in enumerate(s):
-    assert x["index"] == i and x["file"] == "hall.s%03d.glow" % i, x
+    assert x["index"] == i and re.fullmatch(r"hall\.s[0-9]+-[0-9a-f]+-[0-9a-f]{16}\.glow", x["file"]), x
+    assert x["file"].endswith(x["key"] + ".glow"), x
     assert 0 < x["area"] <= 100.0, x
     assert abs(x["surfels"] - 1024 * x["area"] / 100.0) <= 1, x
     assert x["bytes"] == os.path.getsize(os.path.join(os.path.dirname(sys.argv[1]), x["file"])), x
     assert all(a <= b for a, b in zip(x["bounds_min"], x["bounds_max"])), x
 PY
-for i in 0 1 2 3; do
-  "$BIN/glow-bake" --info "$T/w/hall.s00$i.glow" > "$T/info" 2>&1 && grep -q "(valid)" "$T/info" || fail "  system $i: --info"
+files() { python3 -c "import json,sys; print(' '.join(x['file'] for x in json.load(open(sys.argv[1]))['systems']))" "$1"; }
+ok=1
+for f in $(files "$T/w/hall.json"); do
+  "$BIN/glow-bake" --info "$T/w/$f" > "$T/info" 2>&1 && grep -q "(valid)" "$T/info" || { ok=0; fail "  $f: --info"; }
 done
-pass "  every system's bake is valid (--info)"
-[ ! -e "$T/w/hall.glow" ] && [ -z "$(ls "$T/w" | grep -v -e '^hall.json$' -e '^hall.s00[0-3].glow$')" ] \
+[ $ok = 1 ] && pass "  every system's bake is valid (--info)"
+[ "$(ls "$T/w" | sort | tr '\n' ' ')" = "$( (echo hall.json; files "$T/w/hall.json" | tr ' ' '\n') | sort | tr '\n' ' ')" ] \
   && pass "  nothing else written (no temporaries)" || fail "  stray files: $(ls "$T/w")"
 
 expect 0 "again with 1 thread" "$BIN/glow-bake" builtin:pillar-hall --system-area 100 "${BUDGET[@]}" -o "$T/w1/hall.json" --threads 1
 same=1
-for f in hall.json hall.s000.glow hall.s001.glow hall.s002.glow hall.s003.glow; do cmp -s "$T/w/$f" "$T/w1/$f" || { same=0; fail "  $f differs"; }; done
+for f in hall.json $(files "$T/w/hall.json"); do cmp -s "$T/w/$f" "$T/w1/$f" || { same=0; fail "  $f differs"; }; done
 [ $same = 1 ] && pass "  the same bytes for 1 and 2 threads"
+expect 0 "again into the same world: every system unchanged" "$BIN/glow-bake" builtin:pillar-hall --system-area 100 \
+  "${BUDGET[@]}" -o "$T/w1/hall.json" --threads 2
+grep -q "0 of them baked and 4 unchanged" "$T/out" && pass "  0 baked, 4 kept" || { fail "  summary:"; head -3 "$T/out"; }
+same=1
+for f in hall.json $(files "$T/w/hall.json"); do cmp -s "$T/w/$f" "$T/w1/$f" || { same=0; fail "  $f differs"; }; done
+[ $same = 1 ] && pass "  the same bytes"
 
-expect 0 "a system updates in the runtime (glow-bench, exact host)" "$BIN/glow-bench" "$T/w/hall.s002.glow" \
+first=$(files "$T/w/hall.json" | cut -d' ' -f3)
+expect 0 "a system updates in the runtime (glow-bench, exact host)" "$BIN/glow-bench" "$T/w/$first" \
   "$ROOT/scenes/pillar-hall.json" --frames 2 --warmup 1 --threads 1 --no-machine -q
+
+# An incremental re-bake (issue 16, item 3): 16 boxes in a 4 x 4 grid, 3 m apart; one box moves. Only
+# the systems whose inputs changed are baked again, and the world is byte for byte a full bake of the
+# edited scene; the file of the box's old system is gone.
+boxes() { # boxes OUT.obj LIFT: unit boxes, box 0 lifted by LIFT
+  python3 - "$1" "$2" <<'PY'
+import sys
+out, lift = sys.argv[1], float(sys.argv[2])
+f = open(out, "w"); v = 0
+for i in range(4):
+    for j in range(4):
+        x0, z0, y0 = 3.0 * i, 3.0 * j, (lift if i == 0 and j == 0 else 0.0)
+        c = [(x0 + a, y0 + b, z0 + d) for a in (0, 1) for b in (0, 1) for d in (0, 1)]
+        for p in c: f.write("v %g %g %g\n" % p)
+        for q in ((0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)):
+            f.write("f %d %d %d %d\n" % tuple(v + k + 1 for k in q))
+        v += 8
+PY
+}
+boxes "$T/a.obj" 0; boxes "$T/b.obj" 0.25
+SMALL=(--system-area 12 --surfels 256 --links 16 --lightmap-caches 64 --lightmap-detail 1 -q)
+mkdir -p "$T/inc" "$T/full"
+expect 0 "boxes: a world" "$BIN/glow-bake" "$T/a.obj" "${SMALL[@]}" -o "$T/inc/w.json"
+n=$(python3 -c "import json,sys; print(len(json.load(open(sys.argv[1]))['systems']))" "$T/inc/w.json")
+cp "$T/b.obj" "$T/a.obj"
+expect 0 "boxes: box 0 moved, re-baked into the same world" "$BIN/glow-bake" "$T/a.obj" "${SMALL[@]}" -o "$T/inc/w.json"
+grep -q "systems   $n, 1 of them baked and $((n - 1)) unchanged" "$T/out" && pass "  1 of $n systems baked again" \
+  || { fail "  summary:"; head -3 "$T/out"; }
+expect 0 "boxes: a full bake of the edited scene" "$BIN/glow-bake" "$T/a.obj" "${SMALL[@]}" -o "$T/full/w.json"
+[ "$(ls "$T/inc" | tr '\n' ' ')" = "$(ls "$T/full" | tr '\n' ' ')" ] && pass "  the same files (the moved box's old one removed)" \
+  || fail "  files differ: $(ls "$T/inc") / $(ls "$T/full")"
+same=1
+for f in $(ls "$T/full"); do cmp -s "$T/inc/$f" "$T/full/$f" || { same=0; fail "  $f differs"; }; done
+[ $same = 1 ] && pass "  byte for byte the full bake"
 
 expect 0 "one system when the area is above the scene's" "$BIN/glow-bake" builtin:pillar-hall --system-area 1000 "${BUDGET[@]}" \
   -o "$T/one/hall.json"

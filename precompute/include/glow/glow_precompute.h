@@ -129,12 +129,13 @@ typedef struct glow_pc_settings {
                                    0 = preset (low and moderate 4, high and fine 1), 1 = area-uniform,
                                    at most 4 (--surfel-adapt) */
     const glow_pc_distribution *distribution; /* NULL = this process bakes alone */
-    float system_area;          /* > 0: split the scene into systems (issue 16) of at most about this much
-                                   surface (scene units²) each, by halving its bounds at the area median,
+    float system_area;          /* > 0: split the scene into systems (issue 16) of at most this much
+                                   surface (scene units²) each, cells of a k-d tree anchored at the origin,
                                    and bake each with its own surfels, hierarchy, caches and links, with
                                    the budgets above per system_area of surface (a system of half that
                                    area gets half the surfels and caches). out_path then names the world
-                                   manifest (JSON), beside which the systems' bakes are written. The
+                                   manifest (JSON), beside which the systems' bakes are written; a world
+                                   already there is re-baked incrementally (unchanged systems kept). The
                                    other systems' geometry occludes; their light does not reach this
                                    system yet (docs/linker.md "Systems"). 0 = one system (--system-area) */
 } glow_pc_settings;
@@ -179,6 +180,8 @@ typedef struct glow_pc_stats {
      * and sizes above are sums over the systems, the resolved settings those of the largest, and
      * stage_peak_rss the largest over the systems */
     uint32_t systems;
+    uint32_t systems_reused;  /* ... of which an incremental re-bake kept unchanged (their figures above
+                                 are only those the manifest records: surfels, caches, bytes) */
 } glow_pc_stats;
 
 /** Resolves presets: fills every zero field of `settings` from its quality. \since 0.1 */
@@ -190,7 +193,8 @@ GLOW_API glow_result glow_pc_settings_validate(const glow_pc_settings *settings,
 
 /** Bakes `scene_path` into `out_path` (atomic: temp file + rename). `stats` may be NULL. With
  * settings->system_area, out_path names the world manifest and the systems' bakes are written beside
- * it as STEM.sNNN.glow (STEM: out_path less a ".json" or ".glow" ending); on failure none is left.
+ * it as STEM.sDEPTH-PATH-KEY.glow (STEM: out_path less a ".json" or ".glow" ending); a world already at
+ * out_path keeps its unchanged systems; on failure the files this call wrote are removed.
  * \returns GLOW_OK; GLOW_ERROR_IO (missing/unreadable input, unwritable output, disk full),
  * GLOW_ERROR_UNSUPPORTED (unknown format), GLOW_ERROR_EMPTY_SCENE, GLOW_ERROR_CORRUPT_DATA,
  * GLOW_ERROR_INVALID_ARGUMENT, GLOW_ERROR_OUT_OF_MEMORY. \since 0.1 */
