@@ -848,9 +848,16 @@ static void sys_stats_add(glow_pc_stats *w, const glow_pc_stats *s, bool largest
     w->detail_texels += s->detail_texels;
     w->detail_corrected += s->detail_corrected;
     w->detail_links += s->detail_links;
-    w->section_count = s->section_count;
-    memcpy(w->section_fourcc, s->section_fourcc, sizeof w->section_fourcc);
-    for (uint32_t i = 0; i < 16; ++i) w->section_size[i] += s->section_size[i];
+    for (uint32_t i = 0; i < s->section_count && i < 16; ++i) { /* sums by section (some are optional) */
+        uint32_t k = 0;
+        while (k < w->section_count && w->section_fourcc[k] != s->section_fourcc[i]) ++k;
+        if (k == 16) continue;
+        if (k == w->section_count) {
+            w->section_fourcc[k] = s->section_fourcc[i];
+            w->section_count++;
+        }
+        w->section_size[k] += s->section_size[i];
+    }
 }
 
 /* Writes the world manifest (JSON) atomically: temp file + rename. */
