@@ -992,6 +992,24 @@ static void beside(const char *out_path, const char *file, char *buf, size_t n) 
     if ((size_t)snprintf(buf, n, "%.*s%s", dir < 4000 ? dir : 4000, out_path, file) >= n) buf[0] = 0; /* never: names are short */
 }
 
+/* A baked system's figures in the manifest: surfels, caches, grid caches, lightmap caches, texel
+ * density, bytes. */
+#define SYS_REC 6
+
+/* A system's manifest entry up to what its bake reports (bake_systems adds that, in SYS_REC's order). */
+static cJSON *sys_entry(uint32_t index, const char *file, const char *key, const glow__scene *sub, uint32_t occluders) {
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddNumberToObject(o, "index", index);
+    cJSON_AddStringToObject(o, "file", file);
+    cJSON_AddStringToObject(o, "key", key);
+    add_vec3(o, "bounds_min", sub->bounds_min);
+    add_vec3(o, "bounds_max", sub->bounds_max);
+    cJSON_AddNumberToObject(o, "area", sub->area);
+    cJSON_AddNumberToObject(o, "triangles", sub->tri_count);
+    cJSON_AddNumberToObject(o, "occluders", occluders);
+    return o;
+}
+
 /* The systems of a split bake, one after the other (each with every thread, and over the ranks of a
  * distributed bake), then the manifest. A system whose key (system_key) and file the previous manifest
  * at out_path already has is kept as it is (an incremental re-bake): its bytes are what a bake would
@@ -1009,6 +1027,10 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
     sp.tmp = malloc(((size_t)n + 1) * sizeof *sp.tmp);
     float *foreign = malloc(((size_t)n + 1) * 9 * sizeof *foreign);
     char **made = NULL; /* files this bake wrote */
+    cJSON **objs = NULL; /* the manifest entries of the systems baked now, completed after the bakes */
+    double *rec = NULL;  /* per system: what its bake reports (SYS_REC numbers), exchanged between ranks */
+    const glow_pc_distribution *dist = set->distribution && set->distribution->ranks > 1 ? set->distribution : NULL;
+    uint32_t to_bake = 0;
     cJSON *root = cJSON_CreateObject(), *list = NULL, *prev = read_previous(out_path);
     glow_result res = GLOW_OK;
     uint32_t nmade = 0, largest = 0, reused = 0;
@@ -1044,7 +1066,8 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
         res = GLOW_ERROR_INVALID_ARGUMENT;
         goto done;
     }
-    if (!(made = calloc(sp.n + 1, sizeof *made))) {
+    if (!(made = calloc(sp.n + 1, sizeof *made)) || !(objs = calloc(sp.n + 1, sizeof *objs)) ||
+        !(rec = calloc(((size_t)sp.n + 1) * SYS_REC, sizeof *rec))) {
         res = GLOW_ERROR_OUT_OF_MEMORY;
         goto done;
     }
@@ -1127,6 +1150,9 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
             stats->lightmap_caches += (uint32_t)json_num(old, "lightmap_caches");
             stats->file_size += (uint64_t)json_num(old, "bytes");
             glow__infof(log, "system %u: unchanged (key %s) -> %s", s, keyhex, path);
+        } else if (dist && (to_bake++ % dist->ranks) != dist->rank) {
+            /* another rank bakes this system (whole systems per rank): its entry waits for its figures */
+            o = objs[s] = sys_entry(s, base, keyhex, &sub, nf);
         } else {
             res = glow__rt_create_system(&sub, foreign, nf, log, &rt);
             /* budgets per system_area of surface */
@@ -1138,36 +1164,77 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
             sset.lightmap_caches = lv < 1.0 ? 1u : (uint32_t)lround(lv);
             const double gv = (double)p->grid * f;
             const uint32_t grid_target = gv < 8.0 ? 8u : (uint32_t)lround(gv);
+            sset.distribution = NULL; /* a system is baked by one rank, whole */
             glow_pc_stats ss = {0};
-            if (res == GLOW_OK) res = bake_system(&sset, grid_target, &sub, rt, path, writer, pool, log, NULL, &ss);
+            /* every rank writes the systems it bakes (a distributed bake needs a shared folder) */
+            const bool mine = dist || writer;
+            if (res == GLOW_OK) res = bake_system(&sset, grid_target, &sub, rt, path, mine, pool, log, NULL, &ss);
             if (res == GLOW_OK) {
-                if (writer && !(made[nmade++] = strdup(path))) res = GLOW_ERROR_OUT_OF_MEMORY;
+                if (mine && !(made[nmade++] = strdup(path))) res = GLOW_ERROR_OUT_OF_MEMORY;
                 const bool big = ss.surfels > largest;
                 if (big) largest = ss.surfels;
                 sys_stats_add(stats, &ss, big);
                 glow__infof(log, "system %u: %u triangles, area %.6g, %u surfels, %u caches (%u grid, %u lightmap), "
                             "%.3g texels/unit -> %s", s, sub.tri_count, sub.area, ss.surfels, ss.caches, ss.grid_caches,
                             ss.lightmap_caches, (double)ss.texel_density, path);
-                o = cJSON_CreateObject();
-                cJSON_AddNumberToObject(o, "index", s);
-                cJSON_AddStringToObject(o, "file", base);
-                cJSON_AddStringToObject(o, "key", keyhex);
-                add_vec3(o, "bounds_min", sub.bounds_min);
-                add_vec3(o, "bounds_max", sub.bounds_max);
-                cJSON_AddNumberToObject(o, "area", sub.area);
-                cJSON_AddNumberToObject(o, "triangles", sub.tri_count);
-                cJSON_AddNumberToObject(o, "occluders", nf);
-                cJSON_AddNumberToObject(o, "surfels", ss.surfels);
-                cJSON_AddNumberToObject(o, "caches", ss.caches);
-                cJSON_AddNumberToObject(o, "grid_caches", ss.grid_caches);
-                cJSON_AddNumberToObject(o, "lightmap_caches", ss.lightmap_caches);
-                cJSON_AddNumberToObject(o, "texel_density", ss.texel_density);
-                cJSON_AddNumberToObject(o, "bytes", (double)ss.file_size);
+                o = objs[s] = sys_entry(s, base, keyhex, &sub, nf);
+                double *r = rec + (size_t)s * SYS_REC;
+                r[0] = ss.surfels;
+                r[1] = ss.caches;
+                r[2] = ss.grid_caches;
+                r[3] = ss.lightmap_caches;
+                r[4] = ss.texel_density;
+                r[5] = (double)ss.file_size;
             }
         }
         if (o) cJSON_AddItemToArray(list, o);
         glow__rt_destroy(rt);
         sys_scene_free(&sub);
+    }
+    if (res == GLOW_OK && dist && to_bake) { /* every rank's figures for the systems it baked */
+        size_t *off = calloc((size_t)dist->ranks + 1, sizeof *off);
+        double *buf = malloc(((size_t)to_bake + 1) * SYS_REC * sizeof *buf);
+        uint32_t *order = malloc(((size_t)to_bake + 1) * sizeof *order); /* systems by rank, then index */
+        if (!off || !buf || !order) {
+            res = GLOW_ERROR_OUT_OF_MEMORY;
+        } else {
+            uint32_t k = 0;
+            for (uint32_t r = 0; r < dist->ranks; ++r) {
+                off[r] = (size_t)k * SYS_REC * sizeof *buf;
+                for (uint32_t s2 = 0, b = 0; s2 < sp.n; ++s2)
+                    if (objs[s2] && (b++ % dist->ranks) == r) order[k++] = s2;
+            }
+            off[dist->ranks] = (size_t)k * SYS_REC * sizeof *buf;
+            for (uint32_t i = 0; i < k; ++i) memcpy(buf + (size_t)i * SYS_REC, rec + (size_t)order[i] * SYS_REC, SYS_REC * sizeof *buf);
+            res = dist->share(dist->user, buf, off);
+            if (res != GLOW_OK) glow__errorf(log, "%s: the systems' figures could not be exchanged between the ranks", out_path);
+            for (uint32_t i = 0; res == GLOW_OK && i < k; ++i) {
+                const double *r = buf + (size_t)i * SYS_REC;
+                double *dst = rec + (size_t)order[i] * SYS_REC;
+                const bool was_mine = dst[0] != 0.0; /* a baked system has surfels */
+                memcpy(dst, r, SYS_REC * sizeof *dst);
+                if (!was_mine) { /* another rank's system: its figures into the totals */
+                    stats->surfels += (uint32_t)r[0];
+                    stats->caches += (uint32_t)r[1];
+                    stats->grid_caches += (uint32_t)r[2];
+                    stats->lightmap_caches += (uint32_t)r[3];
+                    stats->file_size += (uint64_t)r[5];
+                }
+            }
+        }
+        free(order);
+        free(buf);
+        free(off);
+    }
+    for (uint32_t s2 = 0; res == GLOW_OK && s2 < sp.n; ++s2) { /* the baked systems' figures, in entry order */
+        if (!objs[s2]) continue;
+        const double *r = rec + (size_t)s2 * SYS_REC;
+        cJSON_AddNumberToObject(objs[s2], "surfels", r[0]);
+        cJSON_AddNumberToObject(objs[s2], "caches", r[1]);
+        cJSON_AddNumberToObject(objs[s2], "grid_caches", r[2]);
+        cJSON_AddNumberToObject(objs[s2], "lightmap_caches", r[3]);
+        cJSON_AddNumberToObject(objs[s2], "texel_density", (float)r[4]);
+        cJSON_AddNumberToObject(objs[s2], "bytes", r[5]);
     }
     stats->systems = sp.n;
     stats->systems_reused = reused;
@@ -1211,6 +1278,8 @@ done:
         free(made[i]);
     }
     free(made);
+    free(objs);
+    free(rec);
     cJSON_Delete(prev);
     cJSON_Delete(root);
     free(foreign);

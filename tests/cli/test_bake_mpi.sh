@@ -45,6 +45,14 @@ same=1
 sysfiles=$(python3 -c "import json,sys; print(' '.join(x['file'] for x in json.load(open(sys.argv[1]))['systems']))" "$T/s1/w.json")
 for f in w.json $sysfiles; do cmp -s "$T/s1/$f" "$T/s2/$f" || { same=0; fail "  $f differs"; }; done
 [ $same = 1 ] && [ "$(echo $sysfiles | wc -w)" = 4 ] && pass "  the manifest and the 4 systems' bakes: the same bytes"
+mkdir -p "$T/s3"
+expect 0 "systems, 3 ranks (whole systems per rank)" "${MPI[@]}" -np 3 "$B" --mpi "${SYS[@]}" -o "$T/s3/w.json"
+same=1
+for f in w.json $sysfiles; do cmp -s "$T/s1/$f" "$T/s3/$f" || { same=0; fail "  $f differs"; }; done
+[ $same = 1 ] && pass "  the same bytes"
+expect 0 "systems, 3 ranks into the same world (nothing to bake)" "${MPI[@]}" -np 3 "$B" --mpi "${SYS[@]}" -o "$T/s3/w.json"
+cmp -s "$T/s1/w.json" "$T/s3/w.json" && [ "$(ls "$T/s3" | wc -l)" = 5 ] && pass "  the same manifest, the same 4 bakes" \
+  || fail "  manifest or files changed: $(ls "$T/s3")"
 
 # rank 1 dies (SIGKILL) at its first exchange: mpirun stops the job
 out="$T/dead.glow"

@@ -57,6 +57,9 @@ typedef enum glow_pc_link_visibility {
  * its share of the caches' links and of the lightmap detail texels, and share() exchanges the shares.
  * Only rank 0 writes the bake (the others' out_path is not touched), and its bytes are the
  * one-process bake's for any number of ranks (each cache's links depend on nothing but the cache).
+ * A bake split into systems (system_area) gives whole systems to the ranks instead (the k-th system to
+ * bake to rank k mod ranks), each rank writes the systems it baked (out_path's folder must be shared),
+ * share() exchanges their figures and rank 0 writes the manifest.
  * No MPI in the library: the host supplies the exchange. */
 typedef struct glow_pc_distribution {
     uint32_t rank, ranks; /* this process's rank, 0 <= rank < ranks */
