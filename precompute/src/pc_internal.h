@@ -57,6 +57,8 @@ typedef struct glow__surfel_settings {
     const glow__rt *rt;       /* for the concavity rays (adapt > 1) */
 } glow__surfel_settings;
 
+/* The area of scene triangle t, in double precision (surfels.c). */
+double glow__tri_area(const glow__scene *scene, uint32_t t);
 glow_result glow__surfels_place(const glow__scene *scene, const glow__surfel_settings *settings,
                                 glow__pool *pool, glow__log *log, glow__surfels *out);
 void glow__surfels_free(glow__surfels *s);

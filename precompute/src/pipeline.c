@@ -703,17 +703,6 @@ typedef struct sys_split {
     uint32_t n, cap;
 } sys_split;
 
-static double tri_area(const glow__scene *sc, uint32_t t) {
-    const float *p0 = sc->pos[3 * (size_t)t], *p1 = sc->pos[3 * (size_t)t + 1], *p2 = sc->pos[3 * (size_t)t + 2];
-    double e1[3], e2[3];
-    for (int k = 0; k < 3; ++k) {
-        e1[k] = (double)p1[k] - p0[k];
-        e2[k] = (double)p2[k] - p0[k];
-    }
-    const double c0 = e1[1] * e2[2] - e1[2] * e2[1], c1 = e1[2] * e2[0] - e1[0] * e2[2], c2 = e1[0] * e2[1] - e1[1] * e2[0];
-    return 0.5 * sqrt(c0 * c0 + c1 * c1 + c2 * c2);
-}
-
 #define SYS_MAX_DEPTH 60u
 
 static bool split_systems(sys_split *sp, uint32_t first, uint32_t count, const double lo[3], const double hi[3],
@@ -752,7 +741,8 @@ static bool split_systems(sys_split *sp, uint32_t first, uint32_t count, const d
 
 /* The triangles order[first, first + count) of `world` as a scene of their own: copies of the per-corner
  * arrays, the world's materials and textures shared (sys_scene_free frees only the copies). */
-static bool sys_scene(const glow__scene *w, const uint32_t *order, uint32_t count, uint32_t index, glow__scene *out) {
+static bool sys_scene(const glow__scene *w, const double *tri_area_w, const uint32_t *order, uint32_t count, uint32_t index,
+                      glow__scene *out) {
     memset(out, 0, sizeof *out);
     out->tri_count = count;
     out->pos = malloc((size_t)count * 3 * sizeof *out->pos);
@@ -782,7 +772,7 @@ static bool sys_scene(const glow__scene *w, const uint32_t *order, uint32_t coun
                 out->bounds_min[k] = v < out->bounds_min[k] ? v : out->bounds_min[k];
                 out->bounds_max[k] = v > out->bounds_max[k] ? v : out->bounds_max[k];
             }
-        out->area += tri_area(out, i);
+        out->area += tri_area_w[t];
     }
     out->material_count = w->material_count;
     out->materials = w->materials;
@@ -1042,7 +1032,7 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
     }
     double ext = 0.0;
     for (uint32_t t = 0; t < n; ++t) {
-        tri_area_v[t] = tri_area(world, t);
+        tri_area_v[t] = glow__tri_area(world, t);
         sp.order[t] = t;
         for (int k = 0; k < 3; ++k) {
             cent[t][k] = (world->pos[3 * (size_t)t][k] + world->pos[3 * (size_t)t + 1][k] + world->pos[3 * (size_t)t + 2][k]) *
@@ -1088,7 +1078,7 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
         const sys_part *part = &sp.parts[s];
         glow__scene sub;
         glow__rt *rt = NULL;
-        if (!sys_scene(world, sp.order + part->first, part->count, s, &sub)) {
+        if (!sys_scene(world, tri_area_v, sp.order + part->first, part->count, s, &sub)) {
             sys_scene_free(&sub);
             glow__errorf(log, "%s: out of memory for system %u", world->source, s);
             res = GLOW_ERROR_OUT_OF_MEMORY;
@@ -1211,9 +1201,9 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
             for (uint32_t i = 0; res == GLOW_OK && i < k; ++i) {
                 const double *r = buf + (size_t)i * SYS_REC;
                 double *dst = rec + (size_t)order[i] * SYS_REC;
-                const bool was_mine = dst[0] != 0.0; /* a baked system has surfels */
                 memcpy(dst, r, SYS_REC * sizeof *dst);
-                if (!was_mine) { /* another rank's system: its figures into the totals */
+                const size_t at = (size_t)i * SYS_REC * sizeof *buf;
+                if (at < off[dist->rank] || at >= off[dist->rank + 1]) { /* another rank's system: into the totals */
                     stats->surfels += (uint32_t)r[0];
                     stats->caches += (uint32_t)r[1];
                     stats->grid_caches += (uint32_t)r[2];

@@ -65,7 +65,7 @@ static double frac1(double x) {
     return x >= 1.0 ? 0.0 : x;
 }
 
-static double tri_area_d(const glow__scene *scene, uint32_t t) {
+double glow__tri_area(const glow__scene *scene, uint32_t t) {
     const float *p0 = scene->pos[3 * t], *p1 = scene->pos[3 * t + 1], *p2 = scene->pos[3 * t + 2];
     double e1[3], e2[3];
     for (int k = 0; k < 3; ++k) {
@@ -87,7 +87,7 @@ static void surfel_texture(const glow__scene *scene, uint32_t t, int tex, double
     const double u = b0 * u0[0] + b1 * u1[0] + b2 * u2[0], v = b0 * u0[1] + b1 * u1[1] + b2 * u2[1];
     const double uv_area = 0.5 * fabs(((double)u1[0] - u0[0]) * ((double)u2[1] - u0[1]) -
                                       ((double)u2[0] - u0[0]) * ((double)u1[1] - u0[1]));
-    const double ta = tri_area_d(scene, t);
+    const double ta = glow__tri_area(scene, t);
     const double footprint = ta > 0.0 ? sqrt(surfel_area * uv_area / ta) : 0.0;
     glow__texture_sample(&scene->textures[tex], (float)u, (float)v, (float)footprint, out);
 }
@@ -370,7 +370,7 @@ static void spawn_tris(const glow__scene *scene, double total, uint32_t count, u
     uint32_t spawned = 0;
     const uint32_t tri_count = scene->tri_count;
     for (uint32_t t = 0; t < tri_count; ++t) {
-        cum += tri_area_d(scene, t);
+        cum += glow__tri_area(scene, t);
         double e = floor(cum / total * (double)count);
         uint32_t upto = e >= (double)count ? count : (uint32_t)e;
         if (t + 1 == tri_count) upto = count;
@@ -568,7 +568,7 @@ static glow_result voronoi_areas(const glow__scene *scene, double total, const g
     }
     double cum = 0.0;
     for (uint32_t t = 0; t < scene->tri_count; ++t) { /* as spawn_tris */
-        cum += tri_area_d(scene, t);
+        cum += glow__tri_area(scene, t);
         const double e = floor(cum / total * (double)P);
         tri_end[t] = e >= (double)P ? P : (uint32_t)e;
     }
@@ -656,7 +656,7 @@ glow_result glow__surfels_place(const glow__scene *scene, const glow__surfel_set
     /* area-proportional spawning with the running cumulative area (in units of the total, so the
      * triangles' own sum is the reference and the last triangle ends exactly at n) */
     double total = 0.0;
-    for (uint32_t t = 0; t < tri_count; ++t) total += tri_area_d(scene, t);
+    for (uint32_t t = 0; t < tri_count; ++t) total += glow__tri_area(scene, t);
     if (!(total > 0.0) || !isfinite(total)) {
         free(s);
         free(surfel_tri);
