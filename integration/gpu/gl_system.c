@@ -272,6 +272,13 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
     }
     glow_system_get_solver_tables(desc->system, &s->t);
     const glow_solver_tables *t = &s->t;
+    if (t->proxy_count) { /* not yet: the node buffer would need the neighbours' radiance (issue 17) */
+        LOG_ERR(s, GLOW_ERROR_UNSUPPORTED,
+                "the bake is a system of a world whose links read %u nodes of neighbouring systems; the GL backend "
+                "does not carry light across systems yet (use the CPU solver)", t->proxy_count);
+        free_system(s);
+        return GLOW_ERROR_UNSUPPORTED;
+    }
     const glow_cache_outputs *co = glow_system_outputs(desc->system);
     s->S = t->surfel_count;
     s->N = t->node_count;

@@ -438,6 +438,7 @@ static uint32_t cut_descend(const link_job *job, cl_runs *r, float *omega, float
  * published priority (PIC 4.5). */
 static float cut_priority(const link_job *job, const cl_runs *r, const float *omega, const float *dirsum, uint32_t v) {
     const float om = omega[v];
+    if (job->settings->join && job->settings->join[v]) return INFINITY; /* joins trees: never a link */
     if (!job->settings->cut_error || !(om > 0.0f)) return om; /* the published priority (PIC 4.5) */
     const float *ds = &dirsum[3 * v];
     float spread = 1.0f - sqrtf(glow__dot(ds, ds)) / om;
@@ -533,6 +534,8 @@ static uint16_t link_subsets(const glow__hierarchy *h, const float *wt, uint32_t
 /* link_subsets with the slots' sums read first (clustered visibility fills them on demand) */
 static uint16_t link_subsets_of(const link_job *job, cl_runs *r, bool hemi, float *omega, float *dirsum, float *kappa,
                                 uint32_t v) {
+    /* a neighbour's node is a proxy at run time, which carries no grandchildren (bake_format.h XREF) */
+    if (job->settings->own_leaves && job->leaf_first[v] >= job->settings->own_leaves) return 0;
     uint32_t slot[4];
     link_slots(job->h, v, slot);
     for (int i = 0; i < 4; ++i) node_vals(job, r, slot[i], omega, dirsum, kappa);
@@ -545,6 +548,10 @@ static float leaf_solid_angle(const link_job *job, const glow__cache *cache, con
                               float *dist) {
     const bool hemi = cache->kind == GLOW_CACHE_KIND_LIGHTMAP;
     const float eps = job->ray_eps;
+    const glow__link_settings *set = job->settings;
+    if (set->own_leaves && (uint32_t)(s - job->surfels->s) >= set->own_leaves)
+        for (int k = 0; k < 3; ++k) /* a neighbour's leaf beyond the occluders this system traces */
+            if (!(s->pos[k] >= set->trace_lo[k] && s->pos[k] <= set->trace_hi[k])) return 0.0f;
     float d[3];
     glow__sub(s->pos, cache->pos, d);
     float d2 = glow__dot(d, d);
@@ -623,6 +630,16 @@ static uint32_t clustered_runs(link_job *job, const glow__cache *cache, uint32_t
             R++;
             continue;
         }
+        bool traceable = true; /* wholly where the system's rays see every occluder */
+        if (job->settings->own_leaves && tn->first >= job->settings->own_leaves) {
+            const glow__link_settings *set = job->settings;
+            bool out = false;
+            for (int k = 0; k < 3; ++k) {
+                out = out || tn->pos[k] + tn->radius < set->trace_lo[k] || tn->pos[k] - tn->radius > set->trace_hi[k];
+                traceable = traceable && tn->pos[k] - tn->radius >= set->trace_lo[k] && tn->pos[k] + tn->radius <= set->trace_hi[k];
+            }
+            if (out) continue; /* a neighbour's subtree wholly beyond them: hidden, as its leaves */
+        }
         float dv[3];
         glow__sub(tn->pos, cache->pos, dv);
         const float dist = sqrtf(glow__dot(dv, dv)), rad = tn->radius;
@@ -637,7 +654,7 @@ static uint32_t clustered_runs(link_job *job, const glow__cache *cache, uint32_t
             /* every normal faces the cache and all of it is above the horizon: the aggregate; else
              * (a node small enough to sum) each run sums its leaves' own solid angles, or open it */
             const bool whole = th + cone + rho < half_pi && up - rad > 0.5f * eps;
-            if (m >= 2u * K && rad <= tau * dist && !(tn->id & TRAV_EMISSIVE) && (whole || m <= CLUSTER_SUM_LEAVES)) {
+            if (traceable && m >= 2u * K && rad <= tau * dist && !(tn->id & TRAV_EMISSIVE) && (whole || m <= CLUSTER_SUM_LEAVES)) {
                 /* the runs: K subtrees of v (split the one with the most leaves until there are K),
                  * in leaf order */
                 /* sub[] holds preorder indices (trav_node): a node's children are the next entry and
@@ -795,8 +812,16 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
     }
     double kappa_geom = 0.0; /* lightmap caches: the rays' estimate of the diffuse response of all visible geometry */
     const uint32_t front_hits = near_field(job, cache, cr, uw, ud, &kappa_geom);
-    double leaf_total = 0.0;
-    for (uint32_t i = 0; i < un; ++i) leaf_total += uw[i];
+    /* a system of a world: its own units come first (runs in leaf order); the near field's rays count
+     * only its own surfaces, so only they are normalised (the neighbours' keep their solid angles) */
+    uint32_t un_own = un;
+    if (set->own_leaves) {
+        un_own = 0;
+        while (un_own < un && (cr->active ? cr->a[un_own] : un_own) < set->own_leaves) un_own++;
+    }
+    double leaf_total = 0.0, other_total = 0.0;
+    for (uint32_t i = 0; i < un_own; ++i) leaf_total += uw[i];
+    for (uint32_t i = un_own; i < un; ++i) other_total += uw[i];
     /* Normalisation (before the sums up the tree): scale every unit's ω, and its ω-weighted
      * direction, so that they add up to the ray-measured solid angle of visible geometry.
      * Nothing to scale towards when no ray hit a front face, nothing to scale when no leaf is
@@ -811,7 +836,7 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
         }
         const float fs = (float)sc;
         leaf_total = 0.0;
-        for (uint32_t i = 0; i < un; ++i) {
+        for (uint32_t i = 0; i < un_own; ++i) {
             if (uw[i] == 0.0f) continue;
             uw[i] *= fs;
             for (int k = 0; k < 3; ++k) ud[3 * i + k] *= fs;
@@ -819,6 +844,7 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
         }
         job->norm_scale[ci] = fs;
     }
+    leaf_total += other_total;
     job->visible_total[ci] = leaf_total;
 
     /* 2. sums up the tree: children precede parents in node order (clustered: prefix sums over the
@@ -841,11 +867,11 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
          * that loss over every direction), so their total response is normalised too, to the rays'
          * Σ dw K_L(t) over the same first hits. */
         double ksum = 0.0;
-        for (uint32_t i = 0; i < un; ++i) ksum += uk[i];
+        for (uint32_t i = 0; i < un_own; ++i) ksum += uk[i];
         if (kappa_geom > 0.0 && ksum > 0.0) {
             double r = kappa_geom / ksum;
             r = r < NORM_MIN ? NORM_MIN : (r > NORM_MAX ? NORM_MAX : r);
-            for (uint32_t i = 0; i < un; ++i) uk[i] = (float)(uk[i] * r);
+            for (uint32_t i = 0; i < un_own; ++i) uk[i] = (float)(uk[i] * r);
         }
     }
     if (cr->active) {
@@ -1396,7 +1422,8 @@ static void detail_texel_range(void *p, uint32_t begin, uint32_t end, uint32_t w
 static glow_result detail_build(const link_job *job, glow__pool *pool, glow__log *log, glow__links *out) {
     const glow__caches *ca = job->caches;
     const glow__link_settings *set = job->settings;
-    const uint32_t S = job->surfels->count, Dn = ca->detail_count, L = ca->lm_cache_count;
+    const uint32_t S = set->own_leaves ? set->own_leaves : job->surfels->count, Dn = ca->detail_count,
+                   L = ca->lm_cache_count;
     detail_job dj = {.lj = job, .K = set->detail_links ? set->detail_links : 16u};
     dj.rho = set->detail_radius / ca->texel_density;
     /* a detail texel reads caches up to about 1.5 texels away on its chart */
@@ -1626,7 +1653,8 @@ glow_result glow__links_build(const glow__scene *scene, const glow__rt *rt, cons
                                                                 : (float)GLOW__PI) + job.cone[u];
             cone = ang > cone ? ang : cone;
         }
-        job.emissive[v] = job.emissive[nd->child[0]] | job.emissive[nd->child[1]];
+        job.emissive[v] = job.emissive[nd->child[0]] | job.emissive[nd->child[1]] |
+                          (settings->join && settings->join[v]); /* a join spans systems: never one cluster */
         job.radius[v] = r; /* a bound from the children's spheres; tightened by the leaves below */
         job.cone[v] = cone < (float)GLOW__PI ? cone : (float)GLOW__PI;
         for (int k = 0; k < 3; ++k) job.nsum[3 * v + k] = job.nsum[3 * nd->child[0] + k] + job.nsum[3 * nd->child[1] + k];
@@ -1703,8 +1731,10 @@ glow_result glow__links_build(const glow__scene *scene, const glow__rt *rt, cons
     {
         float(*pts)[3] = malloc(((size_t)surfels->count + 1) * sizeof *pts);
         if (pts) {
-            for (uint32_t i = 0; i < surfels->count; ++i) memcpy(pts[i], surfels->s[i].pos, sizeof pts[i]);
-            job.surfel_tree = glow__kdtree_build((const float(*)[3])pts, surfels->count);
+            /* this system's surfels only: the near field and the detail credit no neighbour's */
+            const uint32_t own = settings->own_leaves ? settings->own_leaves : surfels->count;
+            for (uint32_t i = 0; i < own; ++i) memcpy(pts[i], surfels->s[i].pos, sizeof pts[i]);
+            job.surfel_tree = glow__kdtree_build((const float(*)[3])pts, own);
             free(pts);
         }
         if (!job.surfel_tree) {

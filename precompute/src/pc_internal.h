@@ -189,6 +189,14 @@ typedef struct glow__link_settings {
                                   within this many lightmap texels (links.c "Lightmap detail") */
     uint32_t detail_links;     /* at most this many per detail texel */
     const glow_pc_distribution *dist; /* several ranks: this one computes its share (links.c "Ranks") */
+    /* A system of a world (pipeline.c, "Light across systems"): the hierarchy joins this system's tree
+     * and its neighbours' whole trees. Leaves [0, own_leaves) are this system's (0: every leaf is);
+     * nodes with join[v] set only join the trees, are split first and never linked; a neighbour leaf
+     * outside [trace_lo, trace_hi] (where the system's ray scene holds every occluder) is not traced
+     * and counts as hidden. Only own leaves are credited by the near field and normalised. */
+    uint32_t own_leaves;
+    const uint8_t *join;
+    float trace_lo[3], trace_hi[3];
 } glow__link_settings;
 
 typedef struct glow__link {

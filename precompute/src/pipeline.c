@@ -107,6 +107,11 @@ glow_result glow_pc_settings_validate(const glow_pc_settings *s, char *msg, size
         BAD("--detail-radius %g is out of range (0..4 lightmap texels)", (double)s->detail_radius);
     if (s->surfel_adapt != 0.0f && !(s->surfel_adapt >= 1.0f && s->surfel_adapt <= 4.0f))
         BAD("--surfel-adapt %g is out of range (1..4)", (double)s->surfel_adapt);
+    if (s->system_reach != 0.0f && !(s->system_reach > 0.0f && s->system_reach <= 4.0f))
+        BAD("--system-reach %g is out of range (0..4 system diagonals)", (double)s->system_reach);
+    if (s->system_area > 0.0f && s->sh_links)
+        BAD("--sh-links with --system-area: full-SH links to neighbouring systems are not supported (the runtime "
+            "reads them from node flux, which proxies do not carry)");
     if (s->distribution) {
         const glow_pc_distribution *d = s->distribution;
         if (d->ranks == 0 || d->rank >= d->ranks) BAD("distribution: rank %u of %u ranks", d->rank, d->ranks);
@@ -175,7 +180,7 @@ static void add_section(sections *ss, uint32_t fourcc, void *data, uint64_t size
 
 static glow_result serialise(const glow_pc_settings *set, const glow__scene *sc, const glow__surfels *sf,
                              const glow__hierarchy *h, const glow__caches *ca, const glow__links *lk, uint8_t *gvis,
-                             sections *ss, glow__log *log) {
+                             void *xref, uint64_t xref_size, sections *ss, glow__log *log) {
     const uint32_t nl = lk->per_cache;
     const uint32_t blocks = (nl + GLOW_LINK_BLOCK - 1) / GLOW_LINK_BLOCK;
     /* LINK stores 24-bit node indices. --surfels <= 2^22 keeps node_count < 2^23; this guards the
@@ -409,6 +414,7 @@ static glow_result serialise(const glow_pc_settings *set, const glow__scene *sc,
         }
         add_section(ss, GLOW_SECTION_TEXP, paths, (uint64_t)sc->material_count * GLOW_BAKE_TEXTURE_PATH);
     }
+    if (xref) add_section(ss, GLOW_SECTION_XREF, xref, xref_size); /* the sections own it now */
     return GLOW_OK;
 }
 
@@ -539,12 +545,40 @@ static void report_audit(const glow__caches *c, const glow__links *l, FILE *csv,
 #define STAGE_END(k) do { stats->stage_seconds[k] = now_seconds() - t0; stats->stage_peak_rss[k] = peak_read(); \
                           stage_progress(&pc, 1.0); } while (0)
 
+/* Light across systems (bake_systems): a system's surfels and hierarchy, placed once and shared by its
+ * own bake and the bakes of the systems that link it. */
+typedef struct sys_base {
+    bool done;
+    glow__surfels surfels;
+    glow__hierarchy hier;
+    double seconds[2]; /* surfels, hierarchy */
+} sys_base;
+
+#define SYS_DEP_JOIN 0xFFFFFFFEu /* map_dep of a join */
+#define SYS_DEP_OWN 0xFFFFFFFFu  /* map_dep of the system's own nodes */
+
+/* What a system's links see: its tree and its neighbours' whole trees under a chain of joins (own
+ * leaves first, then each neighbour's; internal nodes likewise; the joins last), and how each node of
+ * that tree maps to the bake: its own node, or node map_node of dependency map_dep (a proxy, XREF). */
+typedef struct sys_links_in {
+    glow__surfels surfels;
+    glow__hierarchy hier;
+    uint8_t *join;
+    uint32_t *map_dep, *map_node;
+    uint32_t own_leaves, own_nodes;
+    float trace_lo[3], trace_hi[3];
+    uint64_t key;           /* the system's own key (XREF system_key) */
+    uint32_t deps;
+    const uint64_t *dep_keys; /* the dependencies' own keys */
+} sys_links_in;
+
 /* One system (the whole scene when the bake is not split): surfels -> hierarchy -> caches -> links ->
  * file, from its triangles and its rays. grid_target: the grid's cache budget. Fills the stats of these
  * stages; a rank other than the writer (`writer` false) stops before the file. */
 static glow_result bake_system(const glow_pc_settings *setp, uint32_t grid_target, const glow__scene *sc,
                                const glow__rt *rt, const char *out_path, bool writer, glow__pool *pool,
-                               glow__log *log, FILE *audit_csv, glow_pc_stats *stats) {
+                               glow__log *log, FILE *audit_csv, glow_pc_stats *stats, const sys_base *base,
+                               const sys_links_in *w) {
     glow_pc_settings set = *setp;
     const char *scene_path = sc->source;
     glow__surfels surfels = {0};
@@ -556,27 +590,38 @@ static glow_result bake_system(const glow_pc_settings *setp, uint32_t grid_targe
     float *audit_radiance = NULL;
     glow_result res = GLOW_OK;
     double t0;
+    void *xref = NULL;
+    uint32_t *proxy_of = NULL;
     progress_ctx pc = {.s = setp};
-    STAGE_BEGIN(ST_SURFELS);
-    glow__surfel_settings ssurf = {.count = set.surfels, .seed = set.seed, .relax_iterations = set.relax_iterations,
-                                   .adapt = set.surfel_adapt, .rt = rt};
-    res = glow__surfels_place(sc, &ssurf, pool, log, &surfels);
-    STAGE_END(ST_SURFELS);
-    if (res != GLOW_OK) goto done;
-    stats->surfels = surfels.count;
+    const glow__surfels *SF = &surfels;
+    const glow__hierarchy *H = &hier;
+    if (base) { /* placed before (bake_systems: shared with the systems that link this one) */
+        SF = &base->surfels;
+        H = &base->hier;
+        stats->stage_seconds[ST_SURFELS] = base->seconds[0];
+        stats->stage_seconds[ST_HIER] = base->seconds[1];
+    } else {
+        STAGE_BEGIN(ST_SURFELS);
+        glow__surfel_settings ssurf = {.count = set.surfels, .seed = set.seed, .relax_iterations = set.relax_iterations,
+                                       .adapt = set.surfel_adapt, .rt = rt};
+        res = glow__surfels_place(sc, &ssurf, pool, log, &surfels);
+        STAGE_END(ST_SURFELS);
+        if (res != GLOW_OK) goto done;
 
-    STAGE_BEGIN(ST_HIER);
-    res = glow__hierarchy_build_rt(&surfels, sc->bounds_min, sc->bounds_max, rt, pool, log, &hier);
-    STAGE_END(ST_HIER);
-    if (res != GLOW_OK) goto done;
-    stats->nodes = hier.node_count;
-    stats->levels = hier.level_count;
+        STAGE_BEGIN(ST_HIER);
+        res = glow__hierarchy_build_rt(&surfels, sc->bounds_min, sc->bounds_max, rt, pool, log, &hier);
+        STAGE_END(ST_HIER);
+        if (res != GLOW_OK) goto done;
+    }
+    stats->surfels = SF->count;
+    stats->nodes = H->node_count;
+    stats->levels = H->level_count;
 
     STAGE_BEGIN(ST_CACHES);
     glow__cache_settings scache = {.grid_spacing = set.grid_spacing, .texel_density = set.texel_density,
                                    .target_grid = grid_target, .target_lightmap = set.lightmap_caches, .seed = set.seed,
                                    .detail_factor = set.lightmap_detail >= 2 ? set.lightmap_detail : 0u};
-    res = glow__caches_build(sc, rt, &surfels, &scache, pool, log, &caches);
+    res = glow__caches_build(sc, rt, SF, &scache, pool, log, &caches);
     if (res == GLOW_OK && caches.grid_dims[0] && caches.grid_dims[1] && caches.grid_dims[2]) {
         /* which corners of each grid cell a lookup may blend (grid_vis.c) */
         const size_t cells = (size_t)caches.grid_dims[0] * caches.grid_dims[1] * caches.grid_dims[2];
@@ -622,7 +667,7 @@ static glow_result bake_system(const glow_pc_settings *setp, uint32_t grid_targe
         }
     }
     if (set.audit_radiance) {
-        res = read_audit_radiance(set.audit_radiance, surfels.count, log, &audit_radiance);
+        res = read_audit_radiance(set.audit_radiance, SF->count, log, &audit_radiance);
         if (res != GLOW_OK) goto done;
     }
     STAGE_BEGIN(ST_LINKS);
@@ -634,9 +679,62 @@ static glow_result bake_system(const glow_pc_settings *setp, uint32_t grid_targe
                                  .cluster_samples = set.link_cluster_rays,
                                  .detail_radius = set.detail_radius, .detail_links = set.detail_links,
                                  .dist = set.distribution && set.distribution->ranks > 1 ? set.distribution : NULL};
-    res = glow__links_build(sc, rt, &surfels, &hier, &caches, &slink, pool, log, stage_progress, &pc, &links);
+    if (w) {
+        slink.own_leaves = w->own_leaves;
+        slink.join = w->join;
+        memcpy(slink.trace_lo, w->trace_lo, sizeof slink.trace_lo);
+        memcpy(slink.trace_hi, w->trace_hi, sizeof slink.trace_hi);
+    }
+    res = glow__links_build(sc, rt, w ? &w->surfels : SF, w ? &w->hier : H, &caches, &slink, pool, log, stage_progress,
+                            &pc, &links);
     STAGE_END(ST_LINKS);
     if (res != GLOW_OK) goto done;
+    uint64_t xref_size = 0;
+    if (w) { /* links into the neighbours' trees become proxies (XREF), the rest this system's nodes */
+        const uint32_t MN = w->hier.node_count;
+        const size_t nlinks = (size_t)caches.count * links.per_cache;
+        uint32_t P = 0;
+        if (!(proxy_of = malloc(((size_t)MN + 1) * sizeof *proxy_of))) {
+            res = GLOW_ERROR_OUT_OF_MEMORY;
+            goto done;
+        }
+        memset(proxy_of, 0xFF, ((size_t)MN + 1) * sizeof *proxy_of);
+        for (size_t j = 0; j < nlinks; ++j) {
+            const uint32_t v = links.links[j].node;
+            if (v >= MN || w->map_dep[v] == SYS_DEP_JOIN) {
+                glow__errorf(log, "%s: link %zu reads node %u, which joins the systems' trees (a linker bug)", scene_path, j, v);
+                res = GLOW_ERROR_INVALID_ARGUMENT;
+                goto done;
+            }
+            if (w->map_dep[v] != SYS_DEP_OWN && proxy_of[v] == 0xFFFFFFFFu) proxy_of[v] = P++;
+        }
+        if ((uint64_t)w->own_nodes + P > GLOW_LINK_MAX_NODES) {
+            glow__errorf(log, "%s: %u nodes and %u proxy nodes exceed %u; lower the system area", scene_path, w->own_nodes, P,
+                         GLOW_LINK_MAX_NODES);
+            res = GLOW_ERROR_INVALID_ARGUMENT;
+            goto done;
+        }
+        xref_size = sizeof(glow_bake_xref) + 8u * (uint64_t)w->deps + sizeof(glow_bake_xref_proxy) * (uint64_t)P;
+        if (!(xref = calloc(1, (size_t)xref_size))) {
+            res = GLOW_ERROR_OUT_OF_MEMORY;
+            goto done;
+        }
+        glow_bake_xref *xh = xref;
+        xh->system_key = w->key;
+        xh->dependency_count = w->deps;
+        xh->proxy_count = P;
+        uint64_t *dk = (uint64_t *)(xh + 1);
+        if (w->deps) memcpy(dk, w->dep_keys, 8u * (size_t)w->deps);
+        glow_bake_xref_proxy *px = (glow_bake_xref_proxy *)(dk + w->deps);
+        for (uint32_t v = 0; v < MN; ++v)
+            if (proxy_of[v] != 0xFFFFFFFFu) px[proxy_of[v]] = (glow_bake_xref_proxy){w->map_dep[v], w->map_node[v]};
+        for (size_t j = 0; j < nlinks; ++j) {
+            const uint32_t v = links.links[j].node;
+            links.links[j].node = w->map_dep[v] == SYS_DEP_OWN ? w->map_node[v] : w->own_nodes + proxy_of[v];
+        }
+        stats->proxies = P;
+        stats->dependencies = w->deps;
+    }
     if (links.audit) report_audit(&caches, &links, audit_csv, set.audit_csv, log);
     stats->links = (uint64_t)caches.count * set.links;
     if (links.detail_count) {
@@ -652,8 +750,10 @@ static glow_result bake_system(const glow_pc_settings *setp, uint32_t grid_targe
     if (!writer) goto done; /* every rank holds the whole link table now; rank 0 writes it */
 
     STAGE_BEGIN(ST_WRITE);
-    res = serialise(&set, sc, &surfels, &hier, &caches, &links, gvis, &ss, log);
+    res = serialise(&set, sc, SF, H, &caches, &links, gvis, xref, xref_size, &ss, log);
     gvis = NULL; /* the sections own it now */
+    for (uint32_t i = 0; i < ss.n; ++i)
+        if (ss.owned[i] == xref) xref = NULL; /* ... and this, once serialise got that far */
     if (res == GLOW_OK) res = glow__bake_write_file(out_path, ss.s, ss.n, log, &stats->file_size);
     STAGE_END(ST_WRITE);
     if (res != GLOW_OK) goto done;
@@ -667,6 +767,8 @@ static glow_result bake_system(const glow_pc_settings *setp, uint32_t grid_targe
 done:
     free(audit_radiance);
     free(gvis);
+    free(xref);
+    free(proxy_of);
     for (uint32_t i = 0; i < ss.n; ++i) free(ss.owned[i]);
     glow__links_free(&links);
     glow__caches_free(&caches);
@@ -683,8 +785,9 @@ done:
  * and each half again, down to cells of at most the target area (a single triangle larger than that
  * stays whole, in a cell of its own). Empty cells are no systems. A system is named by its cell:
  * depth and the path of halves (bit i: upper half at depth i). Centroids on a halving plane go up. */
-/* Other systems' triangles within this fraction of a system's bounds diagonal occlude its rays. */
-#define SYS_OCCLUDER_MARGIN 0.1f
+/* Other systems' triangles within this fraction of a system's bounds diagonal occlude its rays, and
+ * its caches link their light (glow_pc_settings.system_reach's default). */
+#define SYS_REACH_DEFAULT 0.5f
 
 typedef struct sys_part {
     uint32_t first, count; /* range of the partition's triangle order */
@@ -801,6 +904,8 @@ static void add_vec3(cJSON *o, const char *name, const float v[3]) {
 
 /* Sums one system's stats into the world's (see glow_pc_stats.systems). */
 static void sys_stats_add(glow_pc_stats *w, const glow_pc_stats *s, bool largest) {
+    w->dependencies += s->dependencies;
+    w->proxies += s->proxies;
     for (int k = ST_SURFELS; k < GLOW_PC_STAGE_COUNT; ++k) {
         w->stage_seconds[k] += s->stage_seconds[k];
         if (s->stage_peak_rss[k] > w->stage_peak_rss[k]) w->stage_peak_rss[k] = s->stage_peak_rss[k];
@@ -893,7 +998,7 @@ static uint64_t world_key(const glow_pc_settings *s, const glow__scene *w) {
                           s->lightmap_caches, s->no_link_subsets, (uint32_t)s->link_visibility, s->link_cluster_rays,
                           s->lightmap_detail, s->detail_links, w->material_count, w->texture_count};
     const float f[] = {s->grid_spacing, s->texel_density, s->link_cluster_angle, s->detail_radius, s->surfel_adapt,
-                       s->system_area};
+                       s->system_area, s->system_reach > 0.0f ? s->system_reach : SYS_REACH_DEFAULT};
     h = fnv64(h, v, sizeof v);
     h = fnv64(h, f, sizeof f);
     for (uint32_t m = 0; m < w->material_count; ++m) {
@@ -983,8 +1088,8 @@ static void beside(const char *out_path, const char *file, char *buf, size_t n) 
 }
 
 /* A baked system's figures in the manifest: surfels, caches, grid caches, lightmap caches, texel
- * density, bytes. */
-#define SYS_REC 6
+ * density, bytes, proxy nodes. */
+#define SYS_REC 7
 
 /* A system's manifest entry up to what its bake reports (bake_systems adds that, in SYS_REC's order). */
 static cJSON *sys_entry(uint32_t index, const char *file, const char *key, const glow__scene *sub, uint32_t occluders) {
@@ -998,6 +1103,201 @@ static cJSON *sys_entry(uint32_t index, const char *file, const char *key, const
     cJSON_AddNumberToObject(o, "triangles", sub->tri_count);
     cJSON_AddNumberToObject(o, "occluders", occluders);
     return o;
+}
+
+/* ------------------------------------------------------------ light across systems */
+/* The systems of a world link their neighbours' trees. A system's neighbours are the systems whose
+ * triangles it traces as occluders (within the reach of its bounds): where its rays see
+ * every surface, so where a link's visibility is exact. At most SYS_MAX_DEPS (and a quarter of the
+ * links per cache, so that the cut always has room for its roots), those with the most occluders. */
+#define SYS_MAX_DEPS GLOW_BAKE_MAX_DEPENDENCIES
+
+typedef struct sys_world {
+    const glow__scene *w;
+    const glow_pc_settings *set;
+    const preset *p;
+    const double *tri_area;
+    const sys_split *sp;
+    float reach; /* glow_pc_settings.system_reach, resolved */
+    float *foreign; /* scratch: the occluders of the system being prepared (its rays keep a pointer) */
+    glow__pool *pool;
+    glow__log *log;
+} sys_world;
+
+/* System s's budgets: the preset's per system_area of surface */
+static void sys_budget(const sys_world *W, uint32_t s, glow_pc_settings *sset, uint32_t *grid_target) {
+    const glow_pc_settings *set = W->set;
+    const double f = W->sp->parts[s].area / set->system_area;
+    *sset = *set;
+    const double sv = (double)set->surfels * f;
+    sset->surfels = sv < 16.0 ? 16u : (sv > (double)(1u << 22) ? (1u << 22) : (uint32_t)lround(sv));
+    const double lv = (double)set->lightmap_caches * f;
+    sset->lightmap_caches = lv < 1.0 ? 1u : (uint32_t)lround(lv);
+    const double gv = (double)W->p->grid * f;
+    *grid_target = gv < 8.0 ? 8u : (uint32_t)lround(gv);
+    sset->distribution = NULL; /* a system is baked by one rank, whole */
+}
+
+/* System s's scene, its occluders (into W->foreign; *nf of them), the box they fill (bounds grown by
+ * the margin) and, when owner_count is given, how many occluders each other system owns. */
+static bool sys_prepare(const sys_world *W, uint32_t s, glow__scene *sub, uint32_t *nf, float olo[3], float ohi[3],
+                        const uint32_t *sys_of, uint32_t *owner_count) {
+    const sys_part *part = &W->sp->parts[s];
+    const uint32_t n = W->w->tri_count;
+    if (!sys_scene(W->w, W->tri_area, W->sp->order + part->first, part->count, s, sub)) return false;
+    /* The rest of the world occludes within the reach: the box of the system's bounds grown by a
+     * fraction of their diagonal (system_reach). Every ray whose hits this system uses runs between its
+     * own caches and surfels, within their near field, or to a neighbour's surfel inside that box (the
+     * links skip those beyond it), so inside the box, where every occluder is traced; a ray that would
+     * have hit another system beyond counts as sky either way. */
+    float e[3];
+    glow__sub(sub->bounds_max, sub->bounds_min, e);
+    const float m = W->reach * sqrtf(glow__dot(e, e));
+    for (int k = 0; k < 3; ++k) {
+        olo[k] = sub->bounds_min[k] - m;
+        ohi[k] = sub->bounds_max[k] + m;
+    }
+    *nf = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        if (i == part->first) i += part->count;
+        if (i >= n) break;
+        const float(*P)[3] = W->w->pos + 3 * (size_t)W->sp->order[i];
+        bool near = true;
+        for (int k = 0; k < 3 && near; ++k) {
+            const float a = fminf(P[0][k], fminf(P[1][k], P[2][k])), b = fmaxf(P[0][k], fmaxf(P[1][k], P[2][k]));
+            near = b >= olo[k] && a <= ohi[k];
+        }
+        if (!near) continue;
+        memcpy(W->foreign + 9 * (size_t)*nf, P, 9 * sizeof(float));
+        (*nf)++;
+        if (owner_count) owner_count[sys_of[i]]++;
+    }
+    return true;
+}
+
+/* System s's surfels and hierarchy (once), from its scene and rays as its own bake would place them */
+static glow_result sys_base_build(const sys_world *W, uint32_t s, const glow__scene *sub, const glow__rt *rt,
+                                  sys_base *b) {
+    if (b->done) return GLOW_OK;
+    glow_pc_settings sset;
+    uint32_t gt;
+    sys_budget(W, s, &sset, &gt);
+    double t0 = now_seconds();
+    glow__surfel_settings ssurf = {.count = sset.surfels, .seed = sset.seed, .relax_iterations = sset.relax_iterations,
+                                   .adapt = sset.surfel_adapt, .rt = rt};
+    glow_result res = glow__surfels_place(sub, &ssurf, W->pool, W->log, &b->surfels);
+    double t1 = now_seconds();
+    if (res == GLOW_OK)
+        res = glow__hierarchy_build_rt(&b->surfels, sub->bounds_min, sub->bounds_max, rt, W->pool, W->log, &b->hier);
+    b->seconds[0] = t1 - t0;
+    b->seconds[1] = now_seconds() - t1;
+    b->done = res == GLOW_OK;
+    return res;
+}
+
+/* sys_base_build for a neighbour: its scene and rays made, used and dropped here */
+static glow_result sys_base_of(const sys_world *W, uint32_t s, sys_base *b) {
+    if (b->done) return GLOW_OK;
+    glow__scene sub;
+    uint32_t nf = 0;
+    float olo[3], ohi[3];
+    glow__rt *rt = NULL;
+    glow_result res = GLOW_ERROR_OUT_OF_MEMORY;
+    if (sys_prepare(W, s, &sub, &nf, olo, ohi, NULL, NULL)) {
+        res = glow__rt_create_system(&sub, W->foreign, nf, W->log, &rt);
+        if (res == GLOW_OK) res = sys_base_build(W, s, &sub, rt, b);
+    } else {
+        glow__errorf(W->log, "%s: out of memory for system %u", W->w->source, s);
+    }
+    glow__rt_destroy(rt);
+    sys_scene_free(&sub);
+    return res;
+}
+
+static void sys_base_free(sys_base *b) {
+    glow__surfels_free(&b->surfels);
+    glow__hierarchy_free(&b->hier);
+    memset(b, 0, sizeof *b);
+}
+
+static void sys_links_free(sys_links_in *x) {
+    free(x->surfels.s);
+    free(x->hier.nodes);
+    free(x->join);
+    free(x->map_dep);
+    free(x->map_node);
+    memset(x, 0, sizeof *x);
+}
+
+/* The tree a system's links see: its own (b[0]) and its neighbours' (b[1..nb]), joined. */
+static bool sys_links_merge(const sys_base *const *b, uint32_t nb, sys_links_in *x) {
+    uint32_t nL = 0, nI = 0;
+    for (uint32_t t = 0; t <= nb; ++t) {
+        nL += b[t]->hier.leaf_count;
+        nI += b[t]->hier.node_count - b[t]->hier.leaf_count;
+    }
+    const uint32_t N = nL + nI + nb;
+    x->surfels.s = malloc(((size_t)nL + 1) * sizeof *x->surfels.s);
+    x->hier.nodes = malloc(((size_t)N + 1) * sizeof *x->hier.nodes);
+    x->join = calloc((size_t)N + 1, 1);
+    x->map_dep = malloc(((size_t)N + 1) * sizeof *x->map_dep);
+    x->map_node = malloc(((size_t)N + 1) * sizeof *x->map_node);
+    if (!x->surfels.s || !x->hier.nodes || !x->join || !x->map_dep || !x->map_node) return false;
+    x->surfels.count = nL;
+    x->surfels.area = b[0]->surfels.area;
+    x->surfels.adapted = b[0]->surfels.adapted;
+    x->hier.leaf_count = nL;
+    x->hier.node_count = N;
+    x->own_leaves = b[0]->hier.leaf_count;
+    x->own_nodes = b[0]->hier.node_count;
+    uint32_t bL = 0, bI = nL, prev = 0, top = 0;
+    for (uint32_t t = 0; t <= nb; ++t) {
+        const glow__hierarchy *h = &b[t]->hier;
+        const uint32_t L = h->leaf_count;
+        memcpy(x->surfels.s + bL, b[t]->surfels.s, (size_t)L * sizeof *x->surfels.s);
+#define SYS_MAP(u) ((u) < L ? bL + (u) : bI + ((u) - L))
+        for (uint32_t u = 0; u < h->node_count; ++u) {
+            const uint32_t m = SYS_MAP(u);
+            glow__node nd = h->nodes[u];
+            for (int c = 0; c < 2; ++c)
+                if (nd.child[c] != GLOW_NODE_NONE) nd.child[c] = SYS_MAP(nd.child[c]);
+            if (nd.parent != GLOW_NODE_NONE) nd.parent = SYS_MAP(nd.parent);
+            x->hier.nodes[m] = nd;
+            x->map_dep[m] = t == 0 ? SYS_DEP_OWN : t - 1;
+            x->map_node[m] = u;
+        }
+        const uint32_t root = SYS_MAP(h->node_count - 1);
+#undef SYS_MAP
+        if (t == 0) {
+            prev = root;
+        } else { /* join the trees so far with this one */
+            const uint32_t j = nL + nI + t - 1;
+            glow__node *a = &x->hier.nodes[prev], *c = &x->hier.nodes[root], *J = &x->hier.nodes[j];
+            J->child[0] = prev;
+            J->child[1] = root;
+            J->parent = GLOW_NODE_NONE;
+            a->parent = c->parent = j;
+            J->level = 1 + (a->level > c->level ? a->level : c->level);
+            J->area = a->area + c->area;
+            float nrm[3];
+            for (int k = 0; k < 3; ++k) {
+                J->pos[k] = J->area > 0.0f ? (a->pos[k] * a->area + c->pos[k] * c->area) / J->area : 0.5f * (a->pos[k] + c->pos[k]);
+                nrm[k] = a->nrm[k] * a->area + c->nrm[k] * c->area;
+            }
+            const float nl = sqrtf(glow__dot(nrm, nrm));
+            for (int k = 0; k < 3; ++k) J->nrm[k] = nl > 0.0f ? nrm[k] / nl : 0.0f;
+            x->join[j] = 1;
+            x->map_dep[j] = SYS_DEP_JOIN;
+            x->map_node[j] = 0;
+            prev = j;
+        }
+        top = prev;
+        bL += L;
+        bI += h->node_count - L;
+    }
+    x->hier.level_count = x->hier.nodes[top].level + 1;
+    x->hier.level_start = NULL; /* the links read no level table */
+    return true;
 }
 
 /* The systems of a split bake, one after the other (each with every thread, and over the ranks of a
@@ -1024,7 +1324,10 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
     cJSON *root = cJSON_CreateObject(), *list = NULL, *prev = read_previous(out_path);
     glow_result res = GLOW_OK;
     uint32_t nmade = 0, largest = 0, reused = 0;
-    uint64_t nf_total = 0;
+    uint64_t nf_total = 0, dep_total = 0;
+    uint64_t *own_key = NULL, *full_key = NULL;
+    uint32_t *dep_first = NULL, *deps = NULL, *occ_count = NULL, *sys_of = NULL;
+    sys_base *bases = NULL;
     if (!tri_area_v || !cent || !sp.order || !sp.tmp || !foreign || !root) {
         glow__errorf(log, "%s: out of memory for the systems", world->source);
         res = GLOW_ERROR_OUT_OF_MEMORY;
@@ -1068,53 +1371,76 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
     cJSON_AddStringToObject(root, "source", world->source);
     cJSON_AddNumberToObject(root, "system_area", set->system_area);
     cJSON_AddNumberToObject(root, "seed", set->seed);
-    cJSON_AddStringToObject(root, "cross_system_light", "none");
+    cJSON_AddStringToObject(root, "cross_system_light", "links");
     if (!(list = cJSON_AddArrayToObject(root, "systems"))) {
         glow__errorf(log, "%s: out of memory for the world manifest", out_path);
         res = GLOW_ERROR_OUT_OF_MEMORY;
         goto done;
     }
+    /* Pass 1: every system's own key (its inputs) and its neighbours (the systems whose triangles it
+     * traces); its key, which names its file, adds the neighbours' own keys, whose trees it links. */
+    sys_world W = {.w = world, .set = set, .p = p, .tri_area = tri_area_v, .sp = &sp, .foreign = foreign, .pool = pool,
+                   .log = log, .reach = set->system_reach > 0.0f ? set->system_reach : SYS_REACH_DEFAULT};
+    const uint32_t dep_cap = set->links / 4u < SYS_MAX_DEPS ? (set->links / 4u ? set->links / 4u : 1u) : SYS_MAX_DEPS;
+    own_key = calloc(sp.n + 1, sizeof *own_key);
+    full_key = calloc(sp.n + 1, sizeof *full_key);
+    dep_first = calloc(sp.n + 2, sizeof *dep_first);
+    deps = malloc(((size_t)sp.n * dep_cap + 1) * sizeof *deps);
+    occ_count = calloc(sp.n + 1, sizeof *occ_count);
+    sys_of = malloc(((size_t)n + 1) * sizeof *sys_of);
+    bases = calloc(sp.n + 1, sizeof *bases);
+    if (!own_key || !full_key || !dep_first || !deps || !occ_count || !sys_of || !bases) {
+        glow__errorf(log, "%s: out of memory for the systems", world->source);
+        res = GLOW_ERROR_OUT_OF_MEMORY;
+        goto done;
+    }
+    for (uint32_t s = 0; s < sp.n; ++s)
+        for (uint32_t i = sp.parts[s].first; i < sp.parts[s].first + sp.parts[s].count; ++i) sys_of[i] = s;
     for (uint32_t s = 0; s < sp.n && res == GLOW_OK; ++s) {
-        const sys_part *part = &sp.parts[s];
         glow__scene sub;
-        glow__rt *rt = NULL;
-        if (!sys_scene(world, tri_area_v, sp.order + part->first, part->count, s, &sub)) {
-            sys_scene_free(&sub);
+        uint32_t nf = 0;
+        float olo[3], ohi[3];
+        memset(occ_count, 0, sp.n * sizeof *occ_count);
+        if (!sys_prepare(&W, s, &sub, &nf, olo, ohi, sys_of, occ_count)) {
             glow__errorf(log, "%s: out of memory for system %u", world->source, s);
             res = GLOW_ERROR_OUT_OF_MEMORY;
-            break;
+        } else {
+            own_key[s] = system_key(wkey, &sp.parts[s], &sub, foreign, nf);
+            nf_total += nf;
         }
-        /* The rest of the world occludes, as far as it can matter: every ray whose hits this system
-         * uses runs between its own caches and surfels, or within its near field of them, so inside its
-         * bounds grown by a tenth of their diagonal (SYS_OCCLUDER_MARGIN); a ray that would have hit
-         * another system beyond counts as sky either way. Only those triangles are traced. */
-        float olo[3], ohi[3];
-        {
-            float e[3];
-            glow__sub(sub.bounds_max, sub.bounds_min, e);
-            const float m = SYS_OCCLUDER_MARGIN * sqrtf(glow__dot(e, e));
-            for (int k = 0; k < 3; ++k) {
-                olo[k] = sub.bounds_min[k] - m;
-                ohi[k] = sub.bounds_max[k] + m;
+        sys_scene_free(&sub);
+        /* the neighbours: the most occluders first (ties: the lower index), at most dep_cap, by index */
+        uint32_t *d = deps + (size_t)s * dep_cap, nd = 0;
+        for (uint32_t k = 0; k < sp.n; ++k) {
+            if (!occ_count[k]) continue;
+            uint32_t at = nd < dep_cap ? nd++ : dep_cap;
+            if (at == dep_cap) { /* full: replace the weakest if this one beats it */
+                if (occ_count[k] <= occ_count[d[dep_cap - 1]]) continue;
+                at = dep_cap - 1;
             }
+            while (at > 0 && occ_count[d[at - 1]] < occ_count[k]) { d[at] = d[at - 1]; at--; }
+            d[at] = k;
         }
-        uint32_t nf = 0;
-        for (uint32_t i = 0; i < n; ++i) {
-            if (i == part->first) i += part->count;
-            if (i >= n) break;
-            const float(*P)[3] = world->pos + 3 * (size_t)sp.order[i];
-            bool near = true;
-            for (int k = 0; k < 3 && near; ++k) {
-                const float a = fminf(P[0][k], fminf(P[1][k], P[2][k])), b = fmaxf(P[0][k], fmaxf(P[1][k], P[2][k]));
-                near = b >= olo[k] && a <= ohi[k];
-            }
-            if (near) memcpy(foreign + 9 * (size_t)nf++, P, 9 * sizeof(float));
-        }
-        nf_total += nf;
-        const uint64_t key = system_key(wkey, part, &sub, foreign, nf);
+        for (uint32_t q = 1; q < nd; ++q)
+            for (uint32_t y = q; y > 0 && d[y - 1] > d[y]; --y) { const uint32_t t = d[y]; d[y] = d[y - 1]; d[y - 1] = t; }
+        dep_first[s + 1] = nd;
+        dep_total += nd;
+    }
+    for (uint32_t s = 0; s < sp.n && res == GLOW_OK; ++s) {
+        uint64_t h = own_key[s];
+        HASH_VAL(h, dep_first[s + 1]);
+        for (uint32_t q = 0; q < dep_first[s + 1]; ++q) HASH_VAL(h, own_key[deps[(size_t)s * dep_cap + q]]);
+        full_key[s] = h;
+    }
+    /* Pass 2: the systems, each with its neighbours' trees (placed once, kept for the systems after) */
+    for (uint32_t s = 0; s < sp.n && res == GLOW_OK; ++s) {
+        const sys_part *part = &sp.parts[s];
+        const uint32_t *d = deps + (size_t)s * dep_cap, nd = dep_first[s + 1];
+        const uint64_t key = full_key[s];
         /* STEM.sDEPTH-PATH-KEY.glow beside the manifest, STEM: out_path less a ".json" or ".glow" ending */
-        char path[4200], keyhex[20];
+        char path[4200], keyhex[20], ownhex[20];
         snprintf(keyhex, sizeof keyhex, "%016llx", (unsigned long long)key);
+        snprintf(ownhex, sizeof ownhex, "%016llx", (unsigned long long)own_key[s]);
         {
             size_t len = strlen(out_path), st = 0;
             if (len > 5 && (strcmp(out_path + len - 5, ".json") == 0 || strcmp(out_path + len - 5, ".glow") == 0)) len -= 5;
@@ -1140,46 +1466,82 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
             stats->lightmap_caches += (uint32_t)json_num(old, "lightmap_caches");
             stats->file_size += (uint64_t)json_num(old, "bytes");
             glow__infof(log, "system %u: unchanged (key %s) -> %s", s, keyhex, path);
-        } else if (dist && (to_bake++ % dist->ranks) != dist->rank) {
-            /* another rank bakes this system (whole systems per rank): its entry waits for its figures */
-            o = objs[s] = sys_entry(s, base, keyhex, &sub, nf);
         } else {
-            res = glow__rt_create_system(&sub, foreign, nf, log, &rt);
-            /* budgets per system_area of surface */
-            const double f = part->area / set->system_area;
-            glow_pc_settings sset = *set;
-            double sv = (double)set->surfels * f;
-            sset.surfels = sv < 16.0 ? 16u : (sv > (double)(1u << 22) ? (1u << 22) : (uint32_t)lround(sv));
-            const double lv = (double)set->lightmap_caches * f;
-            sset.lightmap_caches = lv < 1.0 ? 1u : (uint32_t)lround(lv);
-            const double gv = (double)p->grid * f;
-            const uint32_t grid_target = gv < 8.0 ? 8u : (uint32_t)lround(gv);
-            sset.distribution = NULL; /* a system is baked by one rank, whole */
-            glow_pc_stats ss = {0};
-            /* every rank writes the systems it bakes (a distributed bake needs a shared folder) */
-            const bool mine = dist || writer;
-            if (res == GLOW_OK) res = bake_system(&sset, grid_target, &sub, rt, path, mine, pool, log, NULL, &ss);
-            if (res == GLOW_OK) {
-                if (mine && !(made[nmade++] = strdup(path))) res = GLOW_ERROR_OUT_OF_MEMORY;
-                const bool big = ss.surfels > largest;
-                if (big) largest = ss.surfels;
-                sys_stats_add(stats, &ss, big);
-                glow__infof(log, "system %u: %u triangles, area %.6g, %u surfels, %u caches (%u grid, %u lightmap), "
-                            "%.3g texels/unit -> %s", s, sub.tri_count, sub.area, ss.surfels, ss.caches, ss.grid_caches,
-                            ss.lightmap_caches, (double)ss.texel_density, path);
-                o = objs[s] = sys_entry(s, base, keyhex, &sub, nf);
-                double *r = rec + (size_t)s * SYS_REC;
-                r[0] = ss.surfels;
-                r[1] = ss.caches;
-                r[2] = ss.grid_caches;
-                r[3] = ss.lightmap_caches;
-                r[4] = ss.texel_density;
-                r[5] = (double)ss.file_size;
+            const bool other = dist && (to_bake++ % dist->ranks) != dist->rank;
+            glow__scene sub;
+            uint32_t nf = 0;
+            float olo[3], ohi[3];
+            glow__rt *rt = NULL;
+            sys_links_in win = {0};
+            uint64_t dkeys[SYS_MAX_DEPS];
+            const sys_base *bl[SYS_MAX_DEPS + 1];
+            /* the neighbours' trees first: each is placed with its own rays, made and dropped in turn */
+            for (uint32_t q = 0; !other && q < nd && res == GLOW_OK; ++q) res = sys_base_of(&W, d[q], &bases[d[q]]);
+            if (!sys_prepare(&W, s, &sub, &nf, olo, ohi, NULL, NULL)) {
+                glow__errorf(log, "%s: out of memory for system %u", world->source, s);
+                if (res == GLOW_OK) res = GLOW_ERROR_OUT_OF_MEMORY;
             }
+            if (other) {
+                /* another rank bakes this system (whole systems per rank): its entry waits for its figures */
+            } else if (res == GLOW_OK) {
+                res = glow__rt_create_system(&sub, foreign, nf, log, &rt);
+                if (res == GLOW_OK) res = sys_base_build(&W, s, &sub, rt, &bases[s]);
+                bl[0] = &bases[s];
+                for (uint32_t q = 0; q < nd; ++q) {
+                    bl[q + 1] = &bases[d[q]];
+                    dkeys[q] = own_key[d[q]];
+                }
+                if (res == GLOW_OK && !sys_links_merge(bl, nd, &win)) {
+                    glow__errorf(log, "%s: out of memory for system %u's links to its neighbours", world->source, s);
+                    res = GLOW_ERROR_OUT_OF_MEMORY;
+                }
+                win.key = own_key[s];
+                win.deps = nd;
+                win.dep_keys = dkeys;
+                memcpy(win.trace_lo, olo, sizeof olo);
+                memcpy(win.trace_hi, ohi, sizeof ohi);
+                glow_pc_settings sset;
+                uint32_t grid_target;
+                sys_budget(&W, s, &sset, &grid_target);
+                glow_pc_stats ss = {0};
+                /* every rank writes the systems it bakes (a distributed bake needs a shared folder) */
+                const bool mine = dist || writer;
+                if (res == GLOW_OK)
+                    res = bake_system(&sset, grid_target, &sub, rt, path, mine, pool, log, NULL, &ss, &bases[s], &win);
+                if (res == GLOW_OK) {
+                    if (mine && !(made[nmade++] = strdup(path))) res = GLOW_ERROR_OUT_OF_MEMORY;
+                    const bool big = ss.surfels > largest;
+                    if (big) largest = ss.surfels;
+                    sys_stats_add(stats, &ss, big);
+                    glow__infof(log, "system %u: %u triangles, area %.6g, %u surfels, %u caches (%u grid, %u lightmap), "
+                                "%.3g texels/unit, %u neighbours, %llu proxy nodes -> %s", s, sub.tri_count, sub.area,
+                                ss.surfels, ss.caches, ss.grid_caches, ss.lightmap_caches, (double)ss.texel_density, nd,
+                                (unsigned long long)ss.proxies, path);
+                    double *r = rec + (size_t)s * SYS_REC;
+                    r[0] = ss.surfels;
+                    r[1] = ss.caches;
+                    r[2] = ss.grid_caches;
+                    r[3] = ss.lightmap_caches;
+                    r[4] = ss.texel_density;
+                    r[5] = (double)ss.file_size;
+                    r[6] = (double)ss.proxies;
+                }
+            }
+            if (res == GLOW_OK) {
+                o = objs[s] = sys_entry(s, base, keyhex, &sub, nf);
+                cJSON_AddStringToObject(o, "system_key", ownhex);
+                cJSON *da = cJSON_AddArrayToObject(o, "dependencies");
+                for (uint32_t q = 0; q < nd; ++q) {
+                    char dh[20];
+                    snprintf(dh, sizeof dh, "%016llx", (unsigned long long)own_key[d[q]]);
+                    cJSON_AddItemToArray(da, cJSON_CreateString(dh));
+                }
+            }
+            sys_links_free(&win);
+            glow__rt_destroy(rt);
+            sys_scene_free(&sub);
         }
         if (o) cJSON_AddItemToArray(list, o);
-        glow__rt_destroy(rt);
-        sys_scene_free(&sub);
     }
     if (res == GLOW_OK && dist && to_bake) { /* every rank's figures for the systems it baked */
         size_t *off = calloc((size_t)dist->ranks + 1, sizeof *off);
@@ -1225,13 +1587,15 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
         cJSON_AddNumberToObject(objs[s2], "lightmap_caches", r[3]);
         cJSON_AddNumberToObject(objs[s2], "texel_density", (float)r[4]);
         cJSON_AddNumberToObject(objs[s2], "bytes", r[5]);
+        cJSON_AddNumberToObject(objs[s2], "proxies", r[6]);
     }
     stats->systems = sp.n;
     stats->systems_reused = reused;
     if (res == GLOW_OK)
         glow__infof(log, "systems: %u baked, %u unchanged; %.1f other systems' triangles per system traced as occluders "
-                    "(within %.0f %% of its diagonal)", sp.n - reused, reused, sp.n ? (double)nf_total / sp.n : 0.0,
-                    100.0 * SYS_OCCLUDER_MARGIN);
+                    "(within %.0f %% of its diagonal), whose %.1f systems on average its caches link (light across "
+                    "systems)", sp.n - reused, reused, sp.n ? (double)nf_total / sp.n : 0.0, 100.0 * W.reach,
+                    sp.n ? (double)dep_total / sp.n : 0.0);
     for (uint32_t i = 0; i < stats->section_count && i < 16; ++i)
         if (stats->section_fourcc[i] == GLOW_SECTION_LINK && stats->links)
             stats->bytes_per_link = (double)stats->section_size[i] / (double)stats->links;
@@ -1270,6 +1634,14 @@ done:
     free(made);
     free(objs);
     free(rec);
+    for (uint32_t s = 0; bases && s < sp.n; ++s) sys_base_free(&bases[s]);
+    free(bases);
+    free(own_key);
+    free(full_key);
+    free(dep_first);
+    free(deps);
+    free(occ_count);
+    free(sys_of);
     cJSON_Delete(prev);
     cJSON_Delete(root);
     free(foreign);
@@ -1349,7 +1721,8 @@ static glow_result bake(const char *scene_path, const char *out_path, const glow
         STAGE_BEGIN(ST_BVH);
         res = glow__rt_create(&scene, &log, &rt);
         STAGE_END(ST_BVH);
-        if (res == GLOW_OK) res = bake_system(&set, p->grid, &scene, rt, out_path, writer, pool, &log, audit_csv, stats);
+        if (res == GLOW_OK)
+            res = bake_system(&set, p->grid, &scene, rt, out_path, writer, pool, &log, audit_csv, stats, NULL, NULL);
     }
     stats->total_seconds = now_seconds() - t_all;
 done:

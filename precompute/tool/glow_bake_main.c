@@ -79,7 +79,9 @@ static const char *usage_text =
     "                         and links and the preset's budgets per A units²; -o then names the\n"
     "                         world manifest (JSON) and the systems are written beside it, named by\n"
     "                         their content keys; a world already there keeps its unchanged systems\n"
-    "                         (incremental). Light does not cross systems yet\n"
+    "                         (incremental). Caches link the light of the systems within reach\n"
+    "  --system-reach F       with --system-area: other systems within F times a system's bounds\n"
+    "                         diagonal occlude its rays and light its caches (default 0.5, up to 4)\n"
     "  --surfel-adapt F       surfels up to F times as dense where surfaces face each other within\n"
     "                         the near field (concave places) as on open ground, same count:\n"
     "                         1 = area-uniform, up to 4 (default: low and moderate 4, high and\n"
@@ -245,6 +247,8 @@ static void print_summary(const char *scene, const char *out, const glow_pc_stat
         cJSON_AddNumberToObject(x, "area", s->scene_area);
         cJSON_AddNumberToObject(o, "systems", s->systems);
         cJSON_AddNumberToObject(o, "systems_reused", s->systems_reused);
+        cJSON_AddNumberToObject(o, "dependencies", s->dependencies);
+        cJSON_AddNumberToObject(o, "proxies", (double)s->proxies);
         cJSON_AddNumberToObject(o, "surfels", s->surfels);
         cJSON_AddNumberToObject(o, "nodes", s->nodes);
         cJSON_AddNumberToObject(o, "levels", s->levels);
@@ -314,6 +318,9 @@ static void print_summary(const char *scene, const char *out, const glow_pc_stat
                s->shared_texels);
     printf("  links     %llu (%u per cache, l=%u), %.2f bytes per link\n", (unsigned long long)s->links,
            s->links_per_cache, s->bands, s->bytes_per_link);
+    if (s->systems > 1 && s->systems > s->systems_reused)
+        printf("  across    the caches of the baked systems link the light of %u neighbouring systems through %llu "
+               "proxy nodes\n", s->dependencies, (unsigned long long)s->proxies);
     if (s->detail_factor)
         printf("  detail    %u texels of %.3g units (%u per lightmap texel side) cover a surface; %u of them correct "
                "the near light with %llu links (%.1f each)\n",
@@ -414,6 +421,9 @@ static int run_info(const char *path, bool json) {
                (double)in.texel_density);
         printf("  links     %.0f (%u per cache, l=%u%s)\n", links, in.links_per_cache, in.sh_bands,
                (in.link_kind & GLOW_LINK_KIND_FULL_SH) ? ", with full-SH links" : "");
+        if (in.system_key)
+            printf("  system    key %016llx, %u dependencies, %u proxy nodes (its links to their nodes)\n",
+                   (unsigned long long)in.system_key, in.dependency_count, in.proxy_count);
         printf("  scene     %u triangles, %u materials, bounds (%.4g %.4g %.4g)-(%.4g %.4g %.4g)\n", in.triangle_count,
                in.material_count, (double)in.bounds_min[0], (double)in.bounds_min[1], (double)in.bounds_min[2],
                (double)in.bounds_max[0], (double)in.bounds_max[1], (double)in.bounds_max[2]);
@@ -538,6 +548,13 @@ int main(int argc, char **argv) {
             if (!end || *end || !(x > 0.0 && x < 1e30))
                 return usage_error("--system-area '%s': expected a positive area in scene units squared", v);
             s.system_area = (float)x;
+        } else if (!strcmp(a, "--system-reach")) {
+            NEED_VALUE();
+            char *end = NULL;
+            double x = strtod(v, &end);
+            if (!end || *end || !(x > 0.0 && x <= 4.0))
+                return usage_error("--system-reach '%s': expected a fraction of a system's diagonal in (0, 4]", v);
+            s.system_reach = (float)x;
         } else if (!strcmp(a, "--surfel-adapt")) {
             NEED_VALUE();
             char *end = NULL;
@@ -573,6 +590,9 @@ int main(int argc, char **argv) {
     if (!scene) return usage_error("no scene given");
     if (s.audit_csv && !s.audit_radiance) return usage_error("--audit-csv needs --audit-radiance");
     if (s.audit_radiance && s.system_area > 0.0f) return usage_error("--audit-radiance audits a bake of one system (no --system-area)");
+    if (s.system_reach > 0.0f && !(s.system_area > 0.0f)) return usage_error("--system-reach needs --system-area");
+    if (s.sh_links && s.system_area > 0.0f)
+        return usage_error("--sh-links with --system-area: full-SH links to neighbouring systems are not supported");
     if (!out) return usage_error("no output file given (-o OUT.glow)");
     char msg[512];
     if (glow_pc_settings_validate(&s, msg, sizeof msg) != GLOW_OK) return usage_error("%s", msg);

@@ -38,12 +38,12 @@
 #define MAX_SH_BANDS 16u
 
 enum { S_META, S_MATL, S_SURF, S_NODE, S_LEVL, S_CACH, S_GRID, S_LMAP, S_LINK, S_SHLK, S_GEOM, S_GVIS, S_LSUB, S_TUV0, S_TEXP,
-       S_LDET, S_KNOWN_COUNT };
+       S_LDET, S_XREF, S_KNOWN_COUNT };
 
 static const uint32_t known_fourcc[S_KNOWN_COUNT] = {
     GLOW_SECTION_META, GLOW_SECTION_MATL, GLOW_SECTION_SURF, GLOW_SECTION_NODE, GLOW_SECTION_LEVL, GLOW_SECTION_CACH,
     GLOW_SECTION_GRID, GLOW_SECTION_LMAP, GLOW_SECTION_LINK, GLOW_SECTION_SHLK, GLOW_SECTION_GEOM, GLOW_SECTION_GVIS,
-    GLOW_SECTION_LSUB, GLOW_SECTION_TUV0, GLOW_SECTION_TEXP, GLOW_SECTION_LDET,
+    GLOW_SECTION_LSUB, GLOW_SECTION_TUV0, GLOW_SECTION_TEXP, GLOW_SECTION_LDET, GLOW_SECTION_XREF,
 };
 
 typedef struct section_ref {
@@ -497,16 +497,21 @@ static glow_result check_map(const vstate *v, const char *what, const uint32_t *
 /* Every lane is read by the solver, so every lane's node must exist; the direction bits need no
  * check (all 12-bit values decode to unit vectors). */
 static glow_result check_links(const vstate *v, const glow_bake_meta *m, const derived *d,
-                               const glow_bake_link_block *b) {
+                               const glow_bake_link_block *b, uint32_t proxies, const uint16_t *subsets) {
     const uint32_t bpc = m->link_blocks_per_cache;
+    const uint64_t nodes = (uint64_t)m->node_count + proxies; /* proxy p is node node_count + p (XREF) */
     for (uint64_t i = 0; i < d->link_blocks; i++) {
         const glow_bake_link_block *blk = &b[i];
         uint64_t first = (i % bpc) * GLOW_LINK_BLOCK; /* link index of lane 0 within its cache */
         for (uint32_t j = 0; j < GLOW_LINK_BLOCK; j++) {
             uint32_t node = glow_bake_link_node(blk, j);
-            if (node >= m->node_count)
-                FAIL(GLOW_ERROR_OUT_OF_RANGE, "LINK cache %llu link %llu: node %u out of range (node_count %u)",
-                     (unsigned long long)(i / bpc), (unsigned long long)(first + j), node, m->node_count);
+            if (node >= nodes)
+                FAIL(GLOW_ERROR_OUT_OF_RANGE, "LINK cache %llu link %llu: node %u out of range (node_count %u%s)",
+                     (unsigned long long)(i / bpc), (unsigned long long)(first + j), node, m->node_count,
+                     proxies ? " and the XREF proxies" : "");
+            if (node >= m->node_count && subsets && subsets[i * GLOW_LINK_BLOCK + j])
+                FAIL(GLOW_ERROR_CORRUPT_DATA, "LINK cache %llu link %llu: a link to proxy node %u has LSUB weights",
+                     (unsigned long long)(i / bpc), (unsigned long long)(first + j), node);
             uint16_t omc = blk->one_minus_cos[j];
             if (!(omc <= 0x4000u || omc == 0x8000u)) /* [+0, 2.0] or -0: excludes negatives, Inf, NaN */
                 FAIL(GLOW_ERROR_CORRUPT_DATA, "LINK cache %llu link %llu: one_minus_cos %g must be finite and in [0, 2]",
@@ -602,6 +607,34 @@ static glow_result check_detail(const vstate *v, const glow_bake_meta *m, const 
     return GLOW_OK;
 }
 
+/* XREF (optional, 1.4; bake_format.h glow_bake_xref): sizes, dependency indices, the node budget. The
+ * dependencies' node indices are checked when a neighbour is attached (glow_system_set_neighbour). */
+static glow_result check_xref(const vstate *v, const glow_bake_meta *m, const section_ref *s, uint32_t *out_proxies) {
+    glow_bake_xref xh;
+    if (s->size < sizeof xh) FAIL(GLOW_ERROR_CORRUPT_DATA, "section 'XREF' is %llu bytes, shorter than its header",
+                                  (unsigned long long)s->size);
+    read_at(v, s->offset, &xh, sizeof xh);
+    if (xh.dependency_count > GLOW_BAKE_MAX_DEPENDENCIES)
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "XREF: %u dependencies (at most %u)", xh.dependency_count, GLOW_BAKE_MAX_DEPENDENCIES);
+    if ((uint64_t)m->node_count + xh.proxy_count > GLOW_LINK_MAX_NODES)
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "XREF: %u nodes and %u proxies exceed %u (LINK node indices are 24 bits)",
+             m->node_count, xh.proxy_count, GLOW_LINK_MAX_NODES);
+    if (xh.proxy_count && !xh.dependency_count)
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "XREF: %u proxies but no dependency", xh.proxy_count);
+    const uint64_t want = sizeof xh + 8u * (uint64_t)xh.dependency_count + sizeof(glow_bake_xref_proxy) * (uint64_t)xh.proxy_count;
+    if (s->size != want)
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "section 'XREF' is %llu bytes; %u dependencies and %u proxies need %llu",
+             (unsigned long long)s->size, xh.dependency_count, xh.proxy_count, (unsigned long long)want);
+    const glow_bake_xref_proxy *px =
+        (const glow_bake_xref_proxy *)(const void *)(v->data + s->offset + sizeof xh + 8u * (uint64_t)xh.dependency_count);
+    for (uint32_t p = 0; p < xh.proxy_count; ++p)
+        if (px[p].dependency >= xh.dependency_count)
+            FAIL(GLOW_ERROR_OUT_OF_RANGE, "XREF proxy %u: dependency %u out of range (dependency_count %u)", p,
+                 px[p].dependency, xh.dependency_count);
+    *out_proxies = xh.proxy_count;
+    return GLOW_OK;
+}
+
 /* Validates v's bytes (which must be GLOW_BAKE_ALIGN-aligned) and fills the bake's views. */
 static glow_result validate(const vstate *v, struct glow_bake *b) {
     glow_result r;
@@ -643,7 +676,11 @@ static glow_result validate(const vstate *v, struct glow_bake *b) {
     if (sec[S_LMAP].present && (r = check_map(v, "LMAP", payload(v, &sec[S_LMAP]), d.lm_texels, m.grid_cache_count,
                                               m.cache_count)))
         return r;
-    if ((r = check_links(v, &m, &d, payload(v, &sec[S_LINK])))) return r;
+    uint32_t proxies = 0;
+    if (sec[S_XREF].present && (r = check_xref(v, &m, &sec[S_XREF], &proxies))) return r;
+    if ((r = check_links(v, &m, &d, payload(v, &sec[S_LINK]), proxies,
+                         sec[S_LSUB].present ? (const uint16_t *)payload(v, &sec[S_LSUB]) : NULL)))
+        return r;
     if (sec[S_SHLK].present && (r = check_shlk(v, &m, &d, payload(v, &sec[S_SHLK])))) return r;
     if (sec[S_GEOM].present && (r = check_geom(v, &m, payload(v, &sec[S_GEOM])))) return r;
     if ((sec[S_TUV0].present || sec[S_TEXP].present) &&
@@ -822,6 +859,12 @@ glow_result glow_bake_get_info(const glow_bake *bake, glow_bake_info *out_info) 
     i.texel_density = m->texel_density;
     i.scene_area = m->scene_area;
     i.file_size = bake->size;
+    const glow_bake_xref *xh = glow__bake_xref(bake, NULL, NULL);
+    if (xh) {
+        i.system_key = xh->system_key;
+        i.dependency_count = xh->dependency_count;
+        i.proxy_count = xh->proxy_count;
+    }
     *out_info = i;
     return GLOW_OK;
 }
@@ -945,6 +988,25 @@ const glow_bake_detail *glow__bake_detail(const glow_bake *b, const uint32_t **t
     if (surfel) *surfel = t + 2u * (size_t)dh->texel_count + 1u;
     if (weight) *weight = (const float *)(const void *)(t + 2u * (size_t)dh->texel_count + 1u + dh->link_count);
     return dh;
+}
+
+const glow_bake_xref *glow__bake_xref(const glow_bake *b, const uint64_t **dependency_key,
+                                      const glow_bake_xref_proxy **proxies) {
+    const glow_bake_xref *xh = b->known[S_XREF].present ? known_ptr(b, S_XREF) : NULL;
+    if (!xh) return NULL;
+    const uint64_t *k = (const uint64_t *)(const void *)(xh + 1);
+    if (dependency_key) *dependency_key = k;
+    if (proxies) *proxies = (const glow_bake_xref_proxy *)(const void *)(k + xh->dependency_count);
+    return xh;
+}
+
+glow_result glow_bake_get_dependency(const glow_bake *bake, uint32_t index, uint64_t *out_key) {
+    if (!bake || !out_key) return GLOW_ERROR_INVALID_ARGUMENT;
+    const uint64_t *keys = NULL;
+    const glow_bake_xref *xh = glow__bake_xref(bake, &keys, NULL);
+    if (!xh || index >= xh->dependency_count) return GLOW_ERROR_INVALID_ARGUMENT;
+    memcpy(out_key, keys + index, sizeof *out_key);
+    return GLOW_OK;
 }
 
 const void *glow__bake_section(const glow_bake *b, uint32_t fourcc, uint64_t *out_size) {

@@ -95,6 +95,9 @@ const glow_bake_link_block *glow__bake_link_blocks(const glow_bake *bake);
  * blocks; NULL unless link_kind has GLOW_LINK_KIND_FULL_SH. */
 const void *glow__bake_shlk_blocks(const glow_bake *bake);
 const uint16_t *glow__bake_link_subsets(const glow_bake *bake); /* LSUB, or NULL */
+/* XREF (a system of a world), or NULL; its dependency keys and proxies through the pointers */
+const glow_bake_xref *glow__bake_xref(const glow_bake *bake, const uint64_t **dependency_key,
+                                      const glow_bake_xref_proxy **proxies);
 /* LDET (bake_format.h glow_bake_detail), or NULL; the arrays follow its header */
 const glow_bake_detail *glow__bake_detail(const glow_bake *bake, const uint32_t **texel, const uint32_t **first,
                                           const uint32_t **surfel, const float **weight);

@@ -127,6 +127,14 @@ struct glow_system {
     double drift;          /* Σ over updates of the node luma's relative L1 change */
     double ema_other_ms, ema_cache_ms_per_group; /* recent stage times, for budget_ms (0 = none yet) */
     float scene_diag;
+    /* a system of a world (XREF): proxy node p (index N + p) reads node proxies[p].node of the system
+     * attached as dependency proxies[p].dependency (glow_system_set_neighbour); rad holds N + P nodes */
+    uint32_t P, deps;
+    const glow_bake_xref_proxy *proxies;
+    const uint64_t *dep_keys;
+    uint32_t *dep_max_node;         /* [deps] the largest node index its proxies read, + 1 */
+    glow_system *nbr[GLOW_BAKE_MAX_DEPENDENCIES];
+    atomic_uint attached;           /* how many systems have this one attached as a neighbour */
 };
 
 /* ------------------------------------------------------------------------------------------ */
@@ -456,7 +464,7 @@ static void free_system(glow_system *s) {
                     s->cache_sh, s->grid_sh, s->lm_sh, s->grid_map, s->lm_map, s->mat_emis_scale,
                     s->mat_albedo_scale, s->batch_status, s->batch_negative, s->out_index, s->out_cache,
                     s->xblocks, s->slots, s->sub_ratio, s->sub_nodes, s->grp_age, s->grp_delta, s->grp_drift_at, s->grp_centre,
-                    s->grp_pack, s->grp_sel, s->rad_prev, s->uv0, s->det_out, s->rad_out};
+                    s->grp_pack, s->grp_sel, s->rad_prev, s->uv0, s->det_out, s->rad_out, s->dep_max_node};
     for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; ++i) glow__ctx_free(ctx, bufs[i]);
     glow__ctx_free(ctx, s);
 }
@@ -508,6 +516,14 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
                         label);
         return GLOW_ERROR_UNSUPPORTED;
     }
+    if (link_mode == GLOW_LINK_MODE_SH && glow__bake_xref(desc->bake, NULL, NULL) &&
+        glow__bake_xref(desc->bake, NULL, NULL)->proxy_count) {
+        GLOW__LOG_ERROR(ctx, GLOW_ERROR_UNSUPPORTED,
+                        "glow_system_create(%s): GLOW_LINK_MODE_SH reads node flux, which proxy nodes (links to "
+                        "neighbouring systems) do not carry; use the compact or expanded link mode",
+                        label);
+        return GLOW_ERROR_UNSUPPORTED;
+    }
     if (link_mode == GLOW_LINK_MODE_SH && luma > m->sh_bands) {
         GLOW__LOG_ERROR(ctx, GLOW_ERROR_INVALID_ARGUMENT,
                         "glow_system_create(%s): sh_bands_luma %u > the bake's %u: full-SH links carry only %u bands",
@@ -535,6 +551,12 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     s->M = m->material_count;
     s->levels = m->level_count;
     s->bpc = m->link_blocks_per_cache;
+    {
+        const glow_bake_xref *xh = glow__bake_xref(desc->bake, &s->dep_keys, &s->proxies);
+        s->P = xh ? xh->proxy_count : 0u;
+        s->deps = xh ? xh->dependency_count : 0u;
+    }
+    atomic_init(&s->attached, 0);
     s->batch = batch;
     s->nbatches = div_up(s->S, batch);
     s->luma = luma;
@@ -572,7 +594,7 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     s->fb_w = alloc_array(s, S, (size_t)s->fbk * sizeof(float), &ok);
     s->rho_ind_max = alloc_array(s, S, sizeof(float), &ok);
     s->flux = alloc_array(s, N, 3 * sizeof(float), &ok);
-    s->rad = alloc_array(s, N, 4 * sizeof(float), &ok); /* interleaved Y Co Cg pad */
+    s->rad = alloc_array(s, N + s->P, 4 * sizeof(float), &ok); /* interleaved Y Co Cg pad; then the proxies */
     s->inv_pi_area = alloc_array(s, N, sizeof(float), &ok);
     s->leaf_area = alloc_array(s, S, sizeof(float), &ok);
     s->cache_sh = alloc_array(s, s->C, (size_t)s->coeffs * sizeof(float), &ok);
@@ -593,7 +615,7 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
         s->xblocks = alloc_array(s, (size_t)s->C * s->bpc, glow__cl_xblock_size(luma), &ok);
     if (glow__bake_link_subsets(desc->bake))
         s->slots = alloc_array(s, N, 4 * sizeof(uint32_t), &ok);
-    if (s->slots) s->sub_ratio = alloc_array(s, N, 4 * sizeof(uint16_t), &ok);
+    if (s->slots) s->sub_ratio = alloc_array(s, N + s->P, 4 * sizeof(uint16_t), &ok); /* proxies: ratio 1 */
     if (s->slots && ok) { /* which internal nodes a weighted link reads (their ratios are computed each update) */
         const uint16_t *sub = glow__bake_link_subsets(desc->bake);
         const glow_bake_link_block *lb = glow__bake_link_blocks(desc->bake);
@@ -627,7 +649,8 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     s->grp_centre = alloc_array(s, G, 3 * sizeof(float), &ok);
     s->grp_pack = alloc_array(s, G, sizeof(uint64_t), &ok);
     s->grp_sel = alloc_array(s, G, sizeof(uint32_t), &ok);
-    s->rad_prev = alloc_array(s, N ? N : 1u, sizeof(float), &ok);
+    s->rad_prev = alloc_array(s, N + s->P ? N + s->P : 1u, sizeof(float), &ok);
+    if (s->deps) s->dep_max_node = alloc_array(s, s->deps, sizeof(uint32_t), &ok);
     s->rad_out = alloc_array(s, N ? N : 1u, 4 * sizeof(float), &ok);
     glow_bake_geometry geo;
     glow_bake_get_geometry(desc->bake, &geo);
@@ -680,7 +703,12 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     memset(s->direct, 0, S * 3 * sizeof(float));
     memset(s->direct_spare, 0, S * 3 * sizeof(float));
     memset(s->flux, 0, N * 3 * sizeof(float));
-    memset(s->rad, 0, N * 4 * sizeof(float));
+    memset(s->rad, 0, (N + s->P) * 4 * sizeof(float));
+    if (s->deps) memset(s->dep_max_node, 0, s->deps * sizeof *s->dep_max_node);
+    for (uint32_t p = 0; p < s->P; ++p) {
+        uint32_t *mx = &s->dep_max_node[s->proxies[p].dependency];
+        if (s->proxies[p].node + 1u > *mx) *mx = s->proxies[p].node + 1u;
+    }
     for (size_t n = 0; n < N; ++n) s->inv_pi_area[n] = 1.0f / (PI_F * s->nodes[n].area);
     if (s->slots) {
         s->subsets = glow__bake_link_subsets(desc->bake);
@@ -691,6 +719,8 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
                                  ch[1] != GLOW_NODE_NONE ? s->nodes[ch[1]].child : none, s->slots + 4 * n);
             for (int i = 0; i < 4; ++i) s->sub_ratio[4 * n + (size_t)i] = 0x3C00u; /* 1: leaves keep it */
         }
+        for (size_t n = N; n < N + s->P; ++n)
+            for (int i = 0; i < 4; ++i) s->sub_ratio[4 * n + (size_t)i] = 0x3C00u;
     }
     memset(s->cache_sh, 0, (size_t)s->C * s->coeffs * sizeof(float));
     { /* budget state: every group stale and unconverged; centres for the focus */
@@ -705,7 +735,7 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
             s->grp_delta[g] = INFINITY;
             s->grp_drift_at[g] = 0.0;
         }
-        memset(s->rad_prev, 0, (N ? N : 1u) * sizeof(float));
+        memset(s->rad_prev, 0, (N + s->P ? N + s->P : 1u) * sizeof(float));
         double d2 = 0.0;
         for (int k = 0; k < 3; ++k) d2 += (double)(m->bounds_max[k] - m->bounds_min[k]) * (m->bounds_max[k] - m->bounds_min[k]);
         s->scene_diag = (float)sqrt(d2);
@@ -785,8 +815,62 @@ static bool busy(glow_system *s, const char *fn) {
 void glow_system_destroy(glow_system *s) {
     if (!s) return;
     if (busy(s, "glow_system_destroy")) return;
+    if (atomic_load(&s->attached)) {
+        GLOW__LOG_ERROR(s->ctx, GLOW_ERROR_INVALID_OPERATION,
+                        "glow_system_destroy(%s): %u system(s) still read its light as a neighbour; detach it first "
+                        "(glow_system_set_neighbour with NULL); not destroyed",
+                        s->label, atomic_load(&s->attached));
+        return;
+    }
+    for (uint32_t i = 0; i < s->deps; ++i)
+        if (s->nbr[i]) atomic_fetch_sub(&s->nbr[i]->attached, 1u);
     glow__bake_release(s->bake);
     free_system(s);
+}
+
+/* ------------------------------------------------------------------------------ neighbours */
+/* The proxies' radiance from the attached neighbours' nodes, as their last updates left it; a proxy
+ * whose neighbour is not attached keeps what it last read (zero until one was): the documented
+ * fallback, its last known radiance. */
+static void fill_proxies(glow_system *s) {
+    for (uint32_t p = 0; p < s->P; ++p) {
+        const glow_system *nb = s->nbr[s->proxies[p].dependency];
+        if (nb) memcpy(s->rad + 4 * ((size_t)s->N + p), nb->rad + 4 * (size_t)s->proxies[p].node, 4 * sizeof(float));
+    }
+}
+
+glow_result glow_system_set_neighbour(glow_system *s, uint32_t dependency, glow_system *nb) {
+    if (!s) return GLOW_ERROR_INVALID_ARGUMENT;
+    if (busy(s, "glow_system_set_neighbour")) return GLOW_ERROR_INVALID_OPERATION;
+    if (dependency >= s->deps) {
+        GLOW__LOG_ERROR(s->ctx, GLOW_ERROR_INVALID_ARGUMENT,
+                        "glow_system_set_neighbour(%s): dependency %u out of range (its bake has %u)", s->label,
+                        dependency, s->deps);
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    if (nb) {
+        glow_bake_info bi;
+        glow_bake_get_info(nb->bake, &bi);
+        uint64_t want;
+        memcpy(&want, s->dep_keys + dependency, sizeof want);
+        if (nb == s || bi.system_key != want) {
+            GLOW__LOG_ERROR(s->ctx, GLOW_ERROR_INVALID_ARGUMENT,
+                            "glow_system_set_neighbour(%s): dependency %u is the system with key %016llx; %s has key "
+                            "%016llx (a bake from another world or an older bake of it)",
+                            s->label, dependency, (unsigned long long)want, nb->label, (unsigned long long)bi.system_key);
+            return GLOW_ERROR_INVALID_ARGUMENT;
+        }
+        if (s->dep_max_node[dependency] > nb->N) { /* the key matched, so only a forged bake gets here */
+            GLOW__LOG_ERROR(s->ctx, GLOW_ERROR_OUT_OF_RANGE,
+                            "glow_system_set_neighbour(%s): its proxies read node %u of %s, which has %u nodes",
+                            s->label, s->dep_max_node[dependency] - 1u, nb->label, nb->N);
+            return GLOW_ERROR_OUT_OF_RANGE;
+        }
+        atomic_fetch_add(&nb->attached, 1u);
+    }
+    if (s->nbr[dependency]) atomic_fetch_sub(&s->nbr[dependency]->attached, 1u);
+    s->nbr[dependency] = nb;
+    return GLOW_OK;
 }
 
 /* ------------------------------------------------------------------------------ inputs */
@@ -1016,7 +1100,7 @@ static void schedule(glow_system *s, const glow_update_desc *d, glow_update_stat
     const uint32_t G = s->groups;
     /* the input drift: relative L1 change of the node luma since the last update */
     double dn = 0.0, dv = 0.0;
-    for (uint32_t n = 0; n < s->N; ++n) {
+    for (uint32_t n = 0; n < s->N + s->P; ++n) { /* the proxies too: a neighbour's light changes the caches */
         const float y = s->rad[4 * (size_t)n];
         dn += fabs((double)y - s->rad_prev[n]);
         dv += fabs((double)y);
@@ -1162,6 +1246,7 @@ static glow_result system_update(glow_system *s, const glow_update_desc *desc) {
         if (!same) pull(s);
         memcpy(s->flux_key, key, sizeof key);
         s->flux_valid = true;
+        fill_proxies(s);
         double t2 = now_ms();
         if (!budgeted) {
             glow__ctx_run(s->ctx, task_caches, s, div_up(s->C, CACHE_CHUNK));
@@ -1232,6 +1317,7 @@ glow_result glow_system_get_solver_tables(const glow_system *s, glow_solver_tabl
     if (!s || !t) return null_arg(s, "glow_system_get_solver_tables");
     *t = (glow_solver_tables){.surfel_count = s->S,
                               .node_count = s->N,
+                              .proxy_count = s->P,
                               .level_count = s->levels,
                               .cache_count = s->C,
                               .material_count = s->M,

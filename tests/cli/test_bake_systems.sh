@@ -81,9 +81,25 @@ mkdir -p "$T/inc" "$T/full"
 expect 0 "boxes: a world" "$BIN/glow-bake" "$T/a.obj" "${SMALL[@]}" -o "$T/inc/w.json"
 n=$(python3 -c "import json,sys; print(len(json.load(open(sys.argv[1]))['systems']))" "$T/inc/w.json")
 cp "$T/b.obj" "$T/a.obj"
+cp "$T/inc/w.json" "$T/old.json"
 expect 0 "boxes: box 0 moved, re-baked into the same world" "$BIN/glow-bake" "$T/a.obj" "${SMALL[@]}" -o "$T/inc/w.json"
-grep -q "systems   $n, 1 of them baked and $((n - 1)) unchanged" "$T/out" && pass "  1 of $n systems baked again" \
-  || { fail "  summary:"; head -3 "$T/out"; }
+# baked again: the systems whose own inputs changed (the moved box's) and those that link their trees
+# (light across systems: a system's key holds its neighbours' own keys), nothing else
+python3 - "$T/old.json" "$T/inc/w.json" "$T/out" <<'PY' && pass "  baked again: exactly the systems whose own inputs changed and those that link them" \
+  || fail "  the wrong systems were baked again"
+import json, re, sys
+old = json.load(open(sys.argv[1]))["systems"]; new = json.load(open(sys.argv[2]))["systems"]
+old_files = {x["file"] for x in old}; old_own = {x["system_key"] for x in old}
+baked = [x for x in new if x["file"] not in old_files]
+changed_own = {x["system_key"] for x in new if x["system_key"] not in old_own}
+want = [x for x in new if x["system_key"] in changed_own or any(d in changed_own for d in x["dependencies"])]
+assert [x["index"] for x in baked] == [x["index"] for x in want], (baked, want)
+# the moved box's system, and those that trace it as an occluder (within the reach), changed
+assert 1 <= len(changed_own) < len(new) and len(baked) < len(new), (changed_own, len(baked))
+print("  (%d systems' own inputs changed, %d of %d baked again)" % (len(changed_own), len(baked), len(new)))
+summary = open(sys.argv[3]).read()
+assert re.search(r"systems   %d, %d of them baked and %d unchanged" % (len(new), len(baked), len(new) - len(baked)), summary), summary[:300]
+PY
 expect 0 "boxes: a full bake of the edited scene" "$BIN/glow-bake" "$T/a.obj" "${SMALL[@]}" -o "$T/full/w.json"
 [ "$(ls "$T/inc" | tr '\n' ' ')" = "$(ls "$T/full" | tr '\n' ' ')" ] && pass "  the same files (the moved box's old one removed)" \
   || fail "  files differ: $(ls "$T/inc") / $(ls "$T/full")"
@@ -99,6 +115,9 @@ python3 -c "import json,sys; m=json.load(open(sys.argv[1])); assert len(m['syste
 expect 2 "--system-area 0" "$BIN/glow-bake" builtin:pillar-hall --system-area 0 -o "$T/bad.json"; err_has "--system-area"
 expect 2 "--system-area -5" "$BIN/glow-bake" builtin:pillar-hall --system-area -5 -o "$T/bad.json"; err_has "--system-area"
 expect 2 "--system-area abc" "$BIN/glow-bake" builtin:pillar-hall --system-area abc -o "$T/bad.json"; err_has "--system-area"
+expect 2 "--system-reach 5" "$BIN/glow-bake" builtin:pillar-hall --system-area 100 --system-reach 5 -o "$T/bad.json"; err_has "--system-reach"
+expect 2 "--system-reach without --system-area" "$BIN/glow-bake" builtin:pillar-hall --system-reach 0.5 -o "$T/bad.glow"; err_has "--system-area"
+expect 2 "--sh-links with --system-area" "$BIN/glow-bake" builtin:pillar-hall --system-area 100 --sh-links -o "$T/bad.json"; err_has "--sh-links"
 SPONZA="${2:-}/scenes/sponza/dabrovic/sponza.obj"
 if [ -f "$SPONZA" ]; then
   mkdir -p "$T/many"

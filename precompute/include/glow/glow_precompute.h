@@ -139,8 +139,14 @@ typedef struct glow_pc_settings {
                                    area gets half the surfels and caches). out_path then names the world
                                    manifest (JSON), beside which the systems' bakes are written; a world
                                    already there is re-baked incrementally (unchanged systems kept). The
-                                   other systems' geometry occludes; their light does not reach this
-                                   system yet (docs/linker.md "Systems"). 0 = one system (--system-area) */
+                                   other systems' geometry within system_reach occludes, and their light
+                                   reaches this system's caches through links to their trees (bake
+                                   format 1.4, XREF; docs/linker.md "Systems"). 0 = one system
+                                   (--system-area) */
+    float system_reach;         /* with system_area: how far around a system, as a fraction of its bounds'
+                                   diagonal, other systems' triangles occlude its rays and its caches link
+                                   their light (its neighbours, the distance limit of its dependencies);
+                                   0 = 0.5, at most 4 (--system-reach) */
 } glow_pc_settings;
 
 typedef struct glow_pc_stats {
@@ -185,6 +191,10 @@ typedef struct glow_pc_stats {
     uint32_t systems;
     uint32_t systems_reused;  /* ... of which an incremental re-bake kept unchanged (their figures above
                                  are only those the manifest records: surfels, caches, bytes) */
+    /* light across systems: the systems whose trees the caches link (summed over the systems baked) and
+     * the proxy nodes those links read (bake format 1.4, XREF) */
+    uint32_t dependencies;
+    uint64_t proxies;
 } glow_pc_stats;
 
 /** Resolves presets: fills every zero field of `settings` from its quality. \since 0.1 */

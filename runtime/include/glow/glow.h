@@ -59,8 +59,9 @@ extern "C" {
 /* The bake format this runtime reads and glow-bake writes: a bake of another major is refused
  * (GLOW_ERROR_VERSION_MISMATCH); a newer minor loads, its unknown sections skipped. */
 #define GLOW_BAKE_FORMAT_VERSION_MAJOR 1u
-#define GLOW_BAKE_FORMAT_VERSION_MINOR 3u /* 1.1: material UVs and texture paths (TUV0, TEXP); 1.2: lightmap detail (LDET);
-                                            * 1.3: leaf surfels may differ in area (an adapted density) */
+#define GLOW_BAKE_FORMAT_VERSION_MINOR 4u /* 1.1: material UVs and texture paths (TUV0, TEXP); 1.2: lightmap detail (LDET);
+                                            * 1.3: leaf surfels may differ in area (an adapted density);
+                                            * 1.4: systems of a world and their links to neighbours (XREF) */
 #define GLOW_BAKE_FORMAT_MAJOR 1 /* the bake major this runtime reads */
 
 /* GLOW_API marks the public functions. A shared build (BUILD_SHARED_LIBS) compiles the libraries with
@@ -158,7 +159,19 @@ typedef struct glow_bake_info {
     float surfel_area, grid_spacing, texel_density; /* surfel_area: nominal, scene_area / surfel_count */
     double scene_area;
     uint64_t file_size;
+    /* A system of a world (glow-bake --system-area; format 1.4, XREF): its key (the world manifest's
+     * "key", 0 for a bake that is no system), how many systems it depends on (their light reaches its
+     * caches through proxy nodes, glow_system_set_neighbour) and how many proxy nodes its links read.
+     * \since 0.2 */
+    uint64_t system_key;
+    uint32_t dependency_count, proxy_count;
 } glow_bake_info;
+
+/** The key of dependency `index` of a system's bake (glow_bake_info.dependency_count): the
+ * "key" of the system in the world manifest whose bake glow_system_set_neighbour must be given.
+ * \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT for NULL or an index out of range.
+ * \threadsafety Any thread. \since 0.2 */
+GLOW_API glow_result glow_bake_get_dependency(const glow_bake *bake, uint32_t index, uint64_t *out_key);
 
 /** Reads the format version of a bake in memory without a context (cheap: header only).
  * \returns GLOW_OK, GLOW_ERROR_TRUNCATED (< 64 bytes), GLOW_ERROR_BAD_MAGIC. \threadsafety Any thread.
@@ -466,6 +479,24 @@ typedef struct glow_update_stats {
     uint32_t outputs_skipped;
 } glow_update_stats;
 
+/** Attaches `neighbour` as dependency `dependency` of `system` (glow_bake_info.dependency_count; a
+ * system of a world, glow-bake --system-area): the links of `system` that read its neighbours' nodes
+ * (proxy nodes) read that system's node radiance as its last update left it, at each of this
+ * system's bounce iterations. So light crosses systems with one update of lag per crossing, and
+ * updating the world's systems one after another each frame converges like the bounces within a
+ * system. NULL detaches: the proxies keep the radiance they last read (the fallback for a neighbour
+ * that is streamed out: its last known radiance; zero for one never attached).
+ * `neighbour` must be the system baked as that dependency: its bake's system_key must equal
+ * glow_bake_get_dependency(bake of `system`, dependency). A system attached as a neighbour is not
+ * destroyed (glow_system_destroy logs GLOW_ERROR_INVALID_OPERATION) until every system that reads it
+ * has detached it or is destroyed.
+ * \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT (NULL system, dependency out of range, a neighbour
+ * with another key or the system itself); GLOW_ERROR_OUT_OF_RANGE (a neighbour with fewer nodes than
+ * the proxies read: a forged bake); GLOW_ERROR_INVALID_OPERATION during an update of `system`.
+ * \threadsafety Not while `system` or `neighbour` updates: update the systems of a world one after
+ * another (each update uses every worker of the context). \since 0.2 */
+GLOW_API glow_result glow_system_set_neighbour(glow_system *system, uint32_t dependency, glow_system *neighbour);
+
 /** One frame: surfel lighting -> pull -> cache lighting -> outputs (x bounce_iterations).
  * `desc` may be NULL. Allocates nothing.
  * \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT (NULL system, unknown flags);
@@ -572,7 +603,7 @@ GLOW_API glow_result glow_sample_lightmap(const glow_cache_outputs *outputs, flo
  * add to glow_shade_sh(lightmap sample, normal, exponent 1) before clamping the sum at 0 and
  * multiplying by the albedo. What a GPU gets from a filtered RGBA texture fetch as rgb / a.
  * \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT (NULL, no detail); GLOW_ERROR_OUT_OF_RANGE when
- * none of the 4 texels covers a surface (out_rgb zeroed). \since 0.2 */
+ * none of the 4 texels covers a surface (out_rgb zeroed). \since 0.1 */
 GLOW_API glow_result glow_sample_lightmap_detail(const glow_cache_outputs *outputs, float u, float v, float out_rgb[3]);
 
 #ifdef __cplusplus

@@ -58,6 +58,12 @@
 /* Since 1.2 (optional; 1.0 and 1.1 readers skip it): the lightmap detail, see glow_bake_detail. */
 #define GLOW_SECTION_LDET GLOW_FOURCC('L', 'D', 'E', 'T')
 
+/* Since 1.4 (optional; written for the systems of a world, glow-bake --system-area): the system's key
+ * and its dependencies, and the proxy nodes its links may read, see glow_bake_xref. A reader that
+ * predates it refuses a bake whose links read proxies (GLOW_ERROR_OUT_OF_RANGE: a link node beyond
+ * node_count) and loads one without. */
+#define GLOW_SECTION_XREF GLOW_FOURCC('X', 'R', 'E', 'F')
+
 /* Cache-map entries (GRID and LMAP): the low 31 bits index the cache array. */
 #define GLOW_MAP_EMPTY 0xFFFFFFFFu   /* no cache here; samples read zero */
 #define GLOW_MAP_COPY_BIT 0x80000000u /* not a cache of its own: a dilated copy of cache (v & ~bit) */
@@ -290,6 +296,27 @@ typedef struct glow_bake_detail {
     /* 20 */ uint32_t reserved[3];
 } glow_bake_detail; /* 32 */
 #define GLOW_BAKE_DETAIL_MAX_FACTOR 8u
+
+/* XREF (since 1.4): light across systems. A world (glow-bake --system-area) is split into systems, each
+ * an ordinary bake; a system's links may also read nodes of its dependencies (neighbouring systems
+ * within reach). Such a link names a proxy node: index node_count + p for proxy p, whose radiance the
+ * runtime copies from node `node` of dependency `dependency` (glow_system_set_neighbour) before it
+ * gathers. Payload:
+ *     glow_bake_xref; uint64_t dependency_key[dependency_count] (each dependency's system_key);
+ *     glow_bake_xref_proxy proxy[proxy_count] (dependency < dependency_count). */
+typedef struct glow_bake_xref {
+    /*  0 */ uint64_t system_key;       /* this system's key, the world manifest's "key" */
+    /*  8 */ uint32_t dependency_count; /* at most GLOW_BAKE_MAX_DEPENDENCIES */
+    /* 12 */ uint32_t proxy_count;      /* node_count + proxy_count <= GLOW_LINK_MAX_NODES */
+    /* 16 */ uint32_t reserved[4];
+} glow_bake_xref; /* 32 */
+typedef struct glow_bake_xref_proxy {
+    uint32_t dependency;
+    uint32_t node; /* a node of the dependency's bake (checked when it is attached) */
+} glow_bake_xref_proxy;
+#define GLOW_BAKE_MAX_DEPENDENCIES 64u
+_Static_assert(sizeof(glow_bake_xref) == 32, "xref header is 32 bytes");
+_Static_assert(sizeof(glow_bake_xref_proxy) == 8, "xref proxy is 8 bytes");
 
 _Static_assert(sizeof(glow_bake_detail) == 32, "detail header is 32 bytes");
 _Static_assert(sizeof(glow_bake_header) == 64, "header is 64 bytes");

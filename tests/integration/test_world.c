@@ -1,0 +1,318 @@
+/* test_world.c — light across the systems of a world (issue 16 item 2, issue 17 item 1; bake format
+ * 1.4 XREF, glow_system_set_neighbour). The built-in pillar hall (a closed hall lit by one point light)
+ * is baked as a world of 4 systems of at most 100 m² and as one system with the same surfel and
+ * texel density. Each system is lit by the exact host from its own geometry, and updated in turn.
+ *  - every system's dependencies are systems of the same world (by key), and the keys find them;
+ *  - with the neighbours attached the caches gather the light of the systems around them: the mean
+ *    indirect light of all lightmap caches rises and comes at least half way back from the detached
+ *    world's to the one-system bake's (where no border exists);
+ *  - a detached neighbour's proxies keep its last radiance (the documented fallback): detaching and
+ *    updating again changes nothing;
+ *  - the errors: a dependency out of range, a neighbour with another key, the system itself, destroying
+ *    a system that another still reads;
+ *  - a bake whose XREF names a dependency out of range is refused at load (GLOW_ERROR_OUT_OF_RANGE). */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+#include <dirent.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "glow/glow.h"
+#include "glow/glow_host.h"
+#include "glow/glow_precompute.h"
+#include "glow/glow_scene.h"
+#include "bake/bake_format.h"
+
+#define MAXS 16
+
+typedef struct world {
+    uint32_t n;
+    glow_bake *bake[MAXS];
+    glow_host *host[MAXS];
+    glow_system *sys[MAXS];
+    char path[MAXS][600];
+} world;
+
+static char dir[256];
+static glow_context *ctx;
+static glow_scene_desc scene;
+static const char *scene_json = GLOW_TEST_DATA_DIR "/../../scenes/pillar-hall.json";
+
+static glow_pc_settings settings(float system_area) {
+    glow_pc_settings s = {0};
+    s.surfels = 1024; /* per 100 m² with systems; the one-system bake gets the same density below */
+    s.links = 32;
+    s.lightmap_caches = 300;
+    s.lightmap_detail = 1;
+    s.threads = 2;
+    s.system_area = system_area;
+    return s;
+}
+
+static void open_system(world *w, const char *path) {
+    assert_true(w->n < MAXS);
+    const uint32_t i = w->n++;
+    snprintf(w->path[i], sizeof w->path[i], "%s", path);
+    assert_int_equal(glow_bake_load_file(ctx, path, &w->bake[i]), GLOW_OK);
+    glow_host_desc hd = glow_host_desc_from_scene(&scene, w->bake[i], GLOW_HOST_KIND_EXACT);
+    assert_int_equal(glow_host_create(&hd, &w->host[i]), GLOW_OK);
+    assert_int_equal(glow_system_create(ctx,
+                                        &(glow_system_desc){.bake = w->bake[i], .lighting = glow_host_hooks(w->host[i]),
+                                                            .label = path},
+                                        &w->sys[i]),
+                     GLOW_OK);
+    glow_system_params p = GLOW_SYSTEM_PARAMS_INIT;
+    p.bounce_iterations = 4;
+    assert_int_equal(glow_system_set_params(w->sys[i], &p), GLOW_OK);
+}
+
+static void close_world(world *w) {
+    for (uint32_t i = 0; i < w->n; ++i) { /* detach everything first: a system others read is not destroyed */
+        glow_bake_info bi;
+        glow_bake_get_info(w->bake[i], &bi);
+        for (uint32_t d = 0; d < bi.dependency_count; ++d) assert_int_equal(glow_system_set_neighbour(w->sys[i], d, NULL), GLOW_OK);
+    }
+    for (uint32_t i = 0; i < w->n; ++i) {
+        glow_system_destroy(w->sys[i]);
+        glow_host_destroy(w->host[i]);
+        glow_bake_destroy(w->bake[i]);
+    }
+    memset(w, 0, sizeof *w);
+}
+
+/* the world's systems, as a host finds them without the manifest: every bake beside it */
+static void open_world(world *w) {
+    memset(w, 0, sizeof *w);
+    DIR *d = opendir(dir);
+    assert_non_null(d);
+    char names[MAXS][200];
+    uint32_t n = 0;
+    for (struct dirent *e; (e = readdir(d));)
+        if (strncmp(e->d_name, "w.s", 3) == 0 && strstr(e->d_name, ".glow") && n < MAXS && strlen(e->d_name) < 200)
+            memcpy(names[n++], e->d_name, strlen(e->d_name) + 1);
+    closedir(d);
+    qsort(names, n, sizeof names[0], (int (*)(const void *, const void *))strcmp);
+    for (uint32_t i = 0; i < n; ++i) {
+        char p[600];
+        snprintf(p, sizeof p, "%s/%.199s", dir, names[i]);
+        open_system(w, p);
+    }
+}
+
+/* attach (or detach) every dependency by key; returns how many links were made */
+static uint32_t attach_all(world *w, bool on) {
+    uint32_t made = 0;
+    for (uint32_t i = 0; i < w->n; ++i) {
+        glow_bake_info bi;
+        assert_int_equal(glow_bake_get_info(w->bake[i], &bi), GLOW_OK);
+        for (uint32_t d = 0; d < bi.dependency_count; ++d) {
+            uint64_t key = 0;
+            assert_int_equal(glow_bake_get_dependency(w->bake[i], d, &key), GLOW_OK);
+            glow_system *nb = NULL;
+            for (uint32_t j = 0; j < w->n; ++j) {
+                glow_bake_info bj;
+                glow_bake_get_info(w->bake[j], &bj);
+                if (bj.system_key == key) nb = w->sys[j];
+            }
+            assert_non_null(nb); /* every dependency is a system of this world */
+            assert_int_equal(glow_system_set_neighbour(w->sys[i], d, on ? nb : NULL), GLOW_OK);
+            made++;
+        }
+    }
+    return made;
+}
+
+/* mean Y (SH DC) of every lightmap cache of the world after `rounds` updates of each system in turn */
+static double run(world *w, uint32_t rounds) {
+    for (uint32_t r = 0; r < rounds; ++r)
+        for (uint32_t i = 0; i < w->n; ++i) assert_int_equal(glow_system_update(w->sys[i], NULL), GLOW_OK);
+    double sum = 0.0;
+    uint64_t count = 0;
+    for (uint32_t i = 0; i < w->n; ++i) {
+        const glow_cache_outputs *o = glow_system_outputs(w->sys[i]);
+        for (uint32_t c = o->grid_cache_count; c < o->cache_count; ++c) {
+            const float y = o->cache_sh[(size_t)c * o->coeff_count];
+            assert_true(isfinite(y));
+            sum += y;
+            count++;
+        }
+    }
+    assert_true(count > 0);
+    return sum / (double)count;
+}
+
+static void test_light_crosses_systems(void **state) {
+    (void)state;
+    char out[300];
+    glow_pc_stats st;
+    snprintf(out, sizeof out, "%s/w.json", dir);
+    glow_pc_settings s = settings(100.0f);
+    assert_int_equal(glow_pc_bake("builtin:pillar-hall", out, &s, &st), GLOW_OK);
+    assert_int_equal(st.systems, 4);
+    assert_true(st.dependencies >= 4); /* each system links at least one neighbour */
+    assert_true(st.proxies > 0);
+
+    /* the one-system bake at the same density: 1024 surfels and 300 texels per 100 m² */
+    char one[300];
+    snprintf(one, sizeof one, "%s/one.glow", dir);
+    glow_pc_settings s1 = settings(0.0f);
+    s1.surfels = (uint32_t)lround(1024.0 * st.scene_area / 100.0);
+    s1.lightmap_caches = (uint32_t)lround(300.0 * st.scene_area / 100.0);
+    glow_pc_stats st1;
+    assert_int_equal(glow_pc_bake("builtin:pillar-hall", one, &s1, &st1), GLOW_OK);
+    world single;
+    memset(&single, 0, sizeof single);
+    open_system(&single, one);
+    glow_bake_info b1;
+    glow_bake_get_info(single.bake[0], &b1);
+    assert_true(b1.system_key == 0 && b1.dependency_count == 0 && b1.proxy_count == 0); /* no world, no XREF */
+    const double e_one = run(&single, 3);
+    close_world(&single);
+
+    world w;
+    open_world(&w);
+    assert_int_equal(w.n, 4);
+    for (uint32_t i = 0; i < w.n; ++i) {
+        glow_bake_info bi;
+        glow_bake_get_info(w.bake[i], &bi);
+        assert_int_equal(bi.format_major, 1);
+        assert_int_equal(bi.format_minor, 4);
+        assert_true(bi.system_key != 0);
+    }
+    const double e_alone = run(&w, 3); /* nothing attached: each system alone, its neighbours dark */
+    close_world(&w);
+    open_world(&w);
+    assert_true(attach_all(&w, true) >= 4);
+    const double e_world = run(&w, 3);
+    print_message("mean lightmap-cache luma: one system %.5f, world of 4 alone %.5f, with neighbours %.5f\n", e_one,
+                  e_alone, e_world);
+    assert_true(e_alone < e_one);                                   /* the borders lose light ... */
+    assert_true(e_world > e_alone);                                 /* ... which the neighbours bring back */
+    assert_true(fabs(e_world - e_one) < 0.5 * fabs(e_alone - e_one)); /* at least half of it */
+
+    /* the fallback: detached neighbours' proxies keep their last radiance */
+    world *W = &w;
+    const double before = run(W, 1);
+    attach_all(W, false);
+    const double after = run(W, 1);
+    print_message("converged %.6f, after detaching %.6f\n", before, after);
+    assert_true(fabs(after - before) <= 1e-3 * before);
+
+    /* errors */
+    glow_bake_info b0;
+    glow_bake_get_info(W->bake[0], &b0);
+    assert_int_equal(glow_system_set_neighbour(W->sys[0], b0.dependency_count, W->sys[1]), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(glow_system_set_neighbour(W->sys[0], 0, W->sys[0]), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(glow_system_set_neighbour(NULL, 0, W->sys[0]), GLOW_ERROR_INVALID_ARGUMENT);
+    uint64_t k0 = 0;
+    assert_int_equal(glow_bake_get_dependency(W->bake[0], 0, &k0), GLOW_OK);
+    assert_int_equal(glow_bake_get_dependency(W->bake[0], b0.dependency_count, &k0), GLOW_ERROR_INVALID_ARGUMENT);
+    uint32_t wrong = UINT32_MAX, right = UINT32_MAX;
+    for (uint32_t j = 1; j < W->n; ++j) {
+        glow_bake_info bj;
+        glow_bake_get_info(W->bake[j], &bj);
+        if (bj.system_key == k0) right = j;
+        else wrong = j;
+    }
+    assert_true(right != UINT32_MAX);
+    if (wrong != UINT32_MAX) assert_int_equal(glow_system_set_neighbour(W->sys[0], 0, W->sys[wrong]), GLOW_ERROR_INVALID_ARGUMENT);
+    /* a system another reads is not destroyed; once detached it is */
+    assert_int_equal(glow_system_set_neighbour(W->sys[0], 0, W->sys[right]), GLOW_OK);
+    glow_system_destroy(W->sys[right]);
+    glow_update_stats us;
+    assert_int_equal(glow_system_get_stats(W->sys[right], &us), GLOW_OK); /* still alive */
+    close_world(W);
+}
+
+/* A bake whose XREF names a dependency out of range: section CRC fixed, refused at load */
+static uint32_t crc32_of(const unsigned char *p, size_t n) {
+    uint32_t c = 0xFFFFFFFFu;
+    for (size_t i = 0; i < n; ++i) {
+        c ^= p[i];
+        for (int k = 0; k < 8; ++k) c = (c >> 1) ^ (0xEDB88320u & (0u - (c & 1u)));
+    }
+    return ~c;
+}
+
+static void test_xref_validated(void **state) {
+    (void)state;
+    DIR *d = opendir(dir);
+    assert_non_null(d);
+    char path[600] = "";
+    for (struct dirent *e; (e = readdir(d));)
+        if (strncmp(e->d_name, "w.s", 3) == 0 && strstr(e->d_name, ".glow")) snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
+    closedir(d);
+    assert_true(path[0]);
+    FILE *f = fopen(path, "rb");
+    assert_non_null(f);
+    fseek(f, 0, SEEK_END);
+    const long size = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    unsigned char *buf = malloc((size_t)size);
+    assert_non_null(buf);
+    assert_int_equal(fread(buf, 1, (size_t)size, f), (size_t)size);
+    fclose(f);
+    glow_bake_header h;
+    memcpy(&h, buf, sizeof h);
+    glow_bake_section *tab = (glow_bake_section *)(void *)(buf + sizeof h);
+    uint32_t x = UINT32_MAX;
+    for (uint32_t i = 0; i < h.section_count; ++i)
+        if (tab[i].fourcc == GLOW_SECTION_XREF) x = i;
+    assert_true(x != UINT32_MAX);
+    glow_bake_xref xh;
+    memcpy(&xh, buf + tab[x].offset, sizeof xh);
+    assert_true(xh.proxy_count > 0);
+    glow_bake_xref_proxy *px = (glow_bake_xref_proxy *)(void *)(buf + tab[x].offset + sizeof xh + 8u * xh.dependency_count);
+    px[0].dependency = xh.dependency_count; /* out of range */
+    tab[x].crc32 = crc32_of(buf + tab[x].offset, (size_t)tab[x].size);
+    /* the table's CRC and the header's */
+    h.table_crc32 = crc32_of((const unsigned char *)tab, (size_t)h.section_count * sizeof *tab);
+    h.header_crc32 = 0;
+    memcpy(buf, &h, sizeof h);
+    h.header_crc32 = crc32_of(buf, sizeof h);
+    memcpy(buf, &h, sizeof h);
+    glow_bake *b = NULL;
+    assert_int_equal(glow_bake_load(ctx, buf, (size_t)size, &b), GLOW_ERROR_OUT_OF_RANGE);
+    assert_null(b);
+    free(buf);
+}
+
+static int setup(void **state) {
+    (void)state;
+    snprintf(dir, sizeof dir, "/tmp/glow_test_world_XXXXXX");
+    if (!mkdtemp(dir)) return -1;
+    if (glow_context_create(&(glow_context_desc){.api_version = GLOW_VERSION}, &ctx) != GLOW_OK) return -1;
+    return glow_scene_load(scene_json, NULL, &scene, NULL, 0) == GLOW_OK ? 0 : -1;
+}
+
+static int teardown(void **state) {
+    (void)state;
+    glow_scene_free(&scene);
+    glow_context_destroy(ctx);
+    DIR *d = opendir(dir);
+    if (d) {
+        for (struct dirent *e; (e = readdir(d));) {
+            if (e->d_name[0] == '.') continue;
+            char p[600];
+            snprintf(p, sizeof p, "%s/%.200s", dir, e->d_name);
+            remove(p);
+        }
+        closedir(d);
+    }
+    rmdir(dir);
+    return 0;
+}
+
+int main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_light_crosses_systems),
+        cmocka_unit_test(test_xref_validated),
+    };
+    return cmocka_run_group_tests(tests, setup, teardown);
+}
