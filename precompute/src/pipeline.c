@@ -1229,75 +1229,147 @@ static void sys_links_free(sys_links_in *x) {
     memset(x, 0, sizeof *x);
 }
 
-/* The tree a system's links see: its own (b[0]) and its neighbours' (b[1..nb]), joined. */
+/* A neighbour's tree as the links see it: its nodes of at most SYS_PROXY_LEAVES leaves whose parent has
+ * more become leaves (a disc of the node's area, centre and mean normal), the nodes below them go.
+ * The links' cost grows with the leaves they see; a neighbour seen through a border is linked at
+ * this coarser grain, at a sixteenth of the work its full tree would take. */
+#define SYS_PROXY_LEAVES 16u
+
+/* per node of h: its leaf count (children precede parents) */
+static uint32_t *leaf_counts(const glow__hierarchy *h) {
+    uint32_t *c = malloc(((size_t)h->node_count + 1) * sizeof *c);
+    if (!c) return NULL;
+    for (uint32_t v = 0; v < h->node_count; ++v)
+        c[v] = v < h->leaf_count ? 1u : c[h->nodes[v].child[0]] + c[h->nodes[v].child[1]];
+    return c;
+}
+
+/* The tree a system's links see: its own (b[0]) whole and its neighbours' (b[1..nb]) coarsened,
+ * joined. Merged order: leaves (own, then each neighbour's), internal nodes (likewise), the joins. */
 static bool sys_links_merge(const sys_base *const *b, uint32_t nb, sys_links_in *x) {
+    uint32_t *cnt[SYS_MAX_DEPS + 1] = {0}, *idx[SYS_MAX_DEPS + 1] = {0};
+    uint32_t nLt[SYS_MAX_DEPS + 1], nIt[SYS_MAX_DEPS + 1];
     uint32_t nL = 0, nI = 0;
-    for (uint32_t t = 0; t <= nb; ++t) {
-        nL += b[t]->hier.leaf_count;
-        nI += b[t]->hier.node_count - b[t]->hier.leaf_count;
+    bool ok = true;
+    /* which nodes each tree keeps, and their new indices (leaves then internal, in node order) */
+    for (uint32_t t = 0; t <= nb && ok; ++t) {
+        const glow__hierarchy *h = &b[t]->hier;
+        cnt[t] = leaf_counts(h);
+        idx[t] = malloc(((size_t)h->node_count + 1) * sizeof *idx[t]);
+        if (!cnt[t] || !idx[t]) { ok = false; break; }
+        nLt[t] = nIt[t] = 0;
+        /* the leaves in depth-first order (each subtree's leaves contiguous, as links.c needs): a
+         * coarsened leaf's place is that of its first original leaf, which the tree's leaf order gives */
+        uint32_t *first = malloc(((size_t)h->node_count + 1) * sizeof *first), *at = calloc((size_t)h->leaf_count + 1, sizeof *at);
+        if (!first || !at) { free(first); free(at); ok = false; break; }
+        for (uint32_t v = 0; v < h->node_count; ++v) {
+            if (v < h->leaf_count) { first[v] = v; continue; }
+            const uint32_t a = first[h->nodes[v].child[0]], c = first[h->nodes[v].child[1]];
+            first[v] = a < c ? a : c;
+        }
+        for (uint32_t v = 0; v < h->node_count; ++v) {
+            const uint32_t par = h->nodes[v].parent;
+            const bool leaf = t == 0 ? v < h->leaf_count
+                                     : cnt[t][v] <= SYS_PROXY_LEAVES && (par == GLOW_NODE_NONE || cnt[t][par] > SYS_PROXY_LEAVES);
+            const bool kept = t == 0 || leaf || cnt[t][v] > SYS_PROXY_LEAVES;
+            idx[t][v] = !kept ? GLOW_NODE_NONE : leaf ? 0x80000000u : nIt[t]++;
+            if (leaf) at[first[v]] = v + 1;
+        }
+        for (uint32_t i = 0; i < h->leaf_count; ++i)
+            if (at[i]) idx[t][at[i] - 1] = nLt[t]++ | 0x80000000u;
+        free(first);
+        free(at);
+        nL += nLt[t];
+        nI += nIt[t];
     }
     const uint32_t N = nL + nI + nb;
-    x->surfels.s = malloc(((size_t)nL + 1) * sizeof *x->surfels.s);
-    x->hier.nodes = malloc(((size_t)N + 1) * sizeof *x->hier.nodes);
-    x->join = calloc((size_t)N + 1, 1);
-    x->map_dep = malloc(((size_t)N + 1) * sizeof *x->map_dep);
-    x->map_node = malloc(((size_t)N + 1) * sizeof *x->map_node);
-    if (!x->surfels.s || !x->hier.nodes || !x->join || !x->map_dep || !x->map_node) return false;
-    x->surfels.count = nL;
-    x->surfels.area = b[0]->surfels.area;
-    x->surfels.adapted = b[0]->surfels.adapted;
-    x->hier.leaf_count = nL;
-    x->hier.node_count = N;
-    x->own_leaves = b[0]->hier.leaf_count;
-    x->own_nodes = b[0]->hier.node_count;
-    uint32_t bL = 0, bI = nL, prev = 0, top = 0;
-    for (uint32_t t = 0; t <= nb; ++t) {
-        const glow__hierarchy *h = &b[t]->hier;
-        const uint32_t L = h->leaf_count;
-        memcpy(x->surfels.s + bL, b[t]->surfels.s, (size_t)L * sizeof *x->surfels.s);
-#define SYS_MAP(u) ((u) < L ? bL + (u) : bI + ((u) - L))
-        for (uint32_t u = 0; u < h->node_count; ++u) {
-            const uint32_t m = SYS_MAP(u);
-            glow__node nd = h->nodes[u];
-            for (int c = 0; c < 2; ++c)
-                if (nd.child[c] != GLOW_NODE_NONE) nd.child[c] = SYS_MAP(nd.child[c]);
-            if (nd.parent != GLOW_NODE_NONE) nd.parent = SYS_MAP(nd.parent);
-            x->hier.nodes[m] = nd;
-            x->map_dep[m] = t == 0 ? SYS_DEP_OWN : t - 1;
-            x->map_node[m] = u;
-        }
-        const uint32_t root = SYS_MAP(h->node_count - 1);
-#undef SYS_MAP
-        if (t == 0) {
-            prev = root;
-        } else { /* join the trees so far with this one */
-            const uint32_t j = nL + nI + t - 1;
-            glow__node *a = &x->hier.nodes[prev], *c = &x->hier.nodes[root], *J = &x->hier.nodes[j];
-            J->child[0] = prev;
-            J->child[1] = root;
-            J->parent = GLOW_NODE_NONE;
-            a->parent = c->parent = j;
-            J->level = 1 + (a->level > c->level ? a->level : c->level);
-            J->area = a->area + c->area;
-            float nrm[3];
-            for (int k = 0; k < 3; ++k) {
-                J->pos[k] = J->area > 0.0f ? (a->pos[k] * a->area + c->pos[k] * c->area) / J->area : 0.5f * (a->pos[k] + c->pos[k]);
-                nrm[k] = a->nrm[k] * a->area + c->nrm[k] * c->area;
-            }
-            const float nl = sqrtf(glow__dot(nrm, nrm));
-            for (int k = 0; k < 3; ++k) J->nrm[k] = nl > 0.0f ? nrm[k] / nl : 0.0f;
-            x->join[j] = 1;
-            x->map_dep[j] = SYS_DEP_JOIN;
-            x->map_node[j] = 0;
-            prev = j;
-        }
-        top = prev;
-        bL += L;
-        bI += h->node_count - L;
+    if (ok) {
+        x->surfels.s = calloc((size_t)nL + 1, sizeof *x->surfels.s);
+        x->hier.nodes = malloc(((size_t)N + 1) * sizeof *x->hier.nodes);
+        x->join = calloc((size_t)N + 1, 1);
+        x->map_dep = malloc(((size_t)N + 1) * sizeof *x->map_dep);
+        x->map_node = malloc(((size_t)N + 1) * sizeof *x->map_node);
+        ok = x->surfels.s && x->hier.nodes && x->join && x->map_dep && x->map_node;
     }
-    x->hier.level_count = x->hier.nodes[top].level + 1;
-    x->hier.level_start = NULL; /* the links read no level table */
-    return true;
+    if (ok) {
+        x->surfels.count = nL;
+        x->surfels.area = b[0]->surfels.area;
+        x->surfels.adapted = b[0]->surfels.adapted;
+        x->hier.leaf_count = nL;
+        x->hier.node_count = N;
+        x->own_leaves = b[0]->hier.leaf_count;
+        x->own_nodes = b[0]->hier.node_count;
+        uint32_t bL = 0, bI = nL, prev = 0;
+        for (uint32_t t = 0; t <= nb; ++t) {
+            const glow__hierarchy *h = &b[t]->hier;
+            const uint32_t *ix = idx[t];
+#define SYS_MAP(u) ((ix[u] & 0x80000000u) ? bL + (ix[u] & 0x7FFFFFFFu) : bI + ix[u])
+            for (uint32_t u = 0; u < h->node_count; ++u) {
+                if (ix[u] == GLOW_NODE_NONE) continue;
+                const uint32_t m = SYS_MAP(u);
+                glow__node nd = h->nodes[u];
+                const bool leaf = (ix[u] & 0x80000000u) != 0;
+                if (leaf) { /* a leaf: the surfel, or a neighbour's node as one disc */
+                    glow__surfel *sf = &x->surfels.s[m];
+                    if (u < h->leaf_count) {
+                        *sf = b[t]->surfels.s[u];
+                    } else {
+                        memcpy(sf->pos, nd.pos, sizeof sf->pos);
+                        memcpy(sf->nrm, nd.nrm, sizeof sf->nrm);
+                        sf->area = nd.area;
+                        sf->tri = 0;
+                    }
+                    nd.child[0] = nd.child[1] = GLOW_NODE_NONE;
+                    nd.level = 0;
+                } else {
+                    for (int c = 0; c < 2; ++c) nd.child[c] = SYS_MAP(nd.child[c]);
+                }
+                if (nd.parent != GLOW_NODE_NONE) nd.parent = SYS_MAP(nd.parent);
+                x->hier.nodes[m] = nd;
+                x->map_dep[m] = t == 0 ? SYS_DEP_OWN : t - 1;
+                x->map_node[m] = u;
+            }
+            const uint32_t root = SYS_MAP(h->node_count - 1);
+#undef SYS_MAP
+            /* levels above the coarsened leaves: 1 + the children's */
+            for (uint32_t m = bI; m < bI + nIt[t]; ++m) {
+                const glow__node *a = &x->hier.nodes[x->hier.nodes[m].child[0]], *c = &x->hier.nodes[x->hier.nodes[m].child[1]];
+                x->hier.nodes[m].level = 1 + (a->level > c->level ? a->level : c->level);
+            }
+            if (t == 0) {
+                prev = root;
+            } else { /* join the trees so far with this one */
+                const uint32_t j = nL + nI + t - 1;
+                glow__node *a = &x->hier.nodes[prev], *c = &x->hier.nodes[root], *J = &x->hier.nodes[j];
+                J->child[0] = prev;
+                J->child[1] = root;
+                J->parent = GLOW_NODE_NONE;
+                a->parent = c->parent = j;
+                J->level = 1 + (a->level > c->level ? a->level : c->level);
+                J->area = a->area + c->area;
+                float nrm[3];
+                for (int k = 0; k < 3; ++k) {
+                    J->pos[k] = J->area > 0.0f ? (a->pos[k] * a->area + c->pos[k] * c->area) / J->area : 0.5f * (a->pos[k] + c->pos[k]);
+                    nrm[k] = a->nrm[k] * a->area + c->nrm[k] * c->area;
+                }
+                const float nl = sqrtf(glow__dot(nrm, nrm));
+                for (int k = 0; k < 3; ++k) J->nrm[k] = nl > 0.0f ? nrm[k] / nl : 0.0f;
+                x->join[j] = 1;
+                x->map_dep[j] = SYS_DEP_JOIN;
+                x->map_node[j] = 0;
+                prev = j;
+            }
+            bL += nLt[t];
+            bI += nIt[t];
+        }
+        x->hier.level_count = x->hier.nodes[N - 1].level + 1;
+        x->hier.level_start = NULL; /* the links read no level table */
+    }
+    for (uint32_t t = 0; t <= nb; ++t) {
+        free(cnt[t]);
+        free(idx[t]);
+    }
+    return ok;
 }
 
 /* The systems of a split bake, one after the other (each with every thread, and over the ranks of a
