@@ -1372,15 +1372,115 @@ static bool sys_links_merge(const sys_base *const *b, uint32_t nb, sys_links_in 
     return ok;
 }
 
+/* Triangles larger than a sixteenth of the system area are cut into 4^k similar pieces (midpoint
+ * subdivision, corner attributes interpolated), so that the partition can place them: a level's
+ * ground quad of two 7,821 m² triangles was two systems of its own whose reach took in every system
+ * of the level, so that an edit anywhere re-baked all of them, and whose caches saw little of their
+ * own. Pieces keep their source triangle (tri_source). NULL out: nothing to cut. */
+#define SYS_PIECE_FRACTION (1.0 / 16.0)
+#define SYS_PIECE_MAX_LEVELS 8u
+
+static void piece_emit(const glow__scene *w, uint32_t t, const float P[3][3], const float N[3][3], const float U0[3][2],
+                       const float U1[3][2], uint32_t levels, glow__scene *o) {
+    if (levels == 0) {
+        const uint32_t i = o->tri_count++;
+        memcpy(o->pos[3 * (size_t)i], P, sizeof(float[3][3]));
+        memcpy(o->nrm[3 * (size_t)i], N, sizeof(float[3][3]));
+        if (o->uv0) memcpy(o->uv0[3 * (size_t)i], U0, sizeof(float[3][2]));
+        if (o->uv1) memcpy(o->uv1[3 * (size_t)i], U1, sizeof(float[3][2]));
+        o->tri_material[i] = w->tri_material[t];
+        o->tri_source[i] = w->tri_source ? w->tri_source[t] : t;
+        return;
+    }
+    float mp[3][3], mn[3][3], m0[3][2], m1[3][2]; /* midpoints of edges 01, 12, 20 */
+    for (int e = 0; e < 3; ++e) {
+        const int a = e, b = (e + 1) % 3;
+        float len = 0.0f;
+        for (int k = 0; k < 3; ++k) {
+            mp[e][k] = 0.5f * (P[a][k] + P[b][k]);
+            mn[e][k] = 0.5f * (N[a][k] + N[b][k]);
+            len += mn[e][k] * mn[e][k];
+        }
+        len = sqrtf(len);
+        for (int k = 0; k < 3; ++k) mn[e][k] = len > 0.0f ? mn[e][k] / len : N[a][k];
+        for (int k = 0; k < 2; ++k) {
+            m0[e][k] = U0 ? 0.5f * (U0[a][k] + U0[b][k]) : 0.0f;
+            m1[e][k] = U1 ? 0.5f * (U1[a][k] + U1[b][k]) : 0.0f;
+        }
+    }
+    /* corner c with the midpoints of its two edges, then the middle triangle (same winding) */
+    for (int c = 0; c < 4; ++c) {
+        float q[3][3], n[3][3], u0[3][2], u1[3][2];
+        for (int j = 0; j < 3; ++j) {
+            int src_corner = -1, src_mid = -1;
+            if (c < 3) {
+                if (j == 0) src_corner = c;
+                else src_mid = j == 1 ? c : (c + 2) % 3;
+            } else {
+                src_mid = j;
+            }
+            memcpy(q[j], src_corner >= 0 ? P[src_corner] : mp[src_mid], sizeof q[j]);
+            memcpy(n[j], src_corner >= 0 ? N[src_corner] : mn[src_mid], sizeof n[j]);
+            if (U0) memcpy(u0[j], src_corner >= 0 ? U0[src_corner] : m0[src_mid], sizeof u0[j]);
+            if (U1) memcpy(u1[j], src_corner >= 0 ? U1[src_corner] : m1[src_mid], sizeof u1[j]);
+        }
+        piece_emit(w, t, (const float(*)[3])q, (const float(*)[3])n, U0 ? (const float(*)[2])u0 : NULL,
+                   U1 ? (const float(*)[2])u1 : NULL, levels - 1, o);
+    }
+}
+
+static bool split_large_triangles(const glow__scene *w, double target, glow__scene *o, uint32_t *cut) {
+    memset(o, 0, sizeof *o);
+    *cut = 0;
+    const double limit = target * SYS_PIECE_FRACTION;
+    size_t total = 0;
+    for (uint32_t t = 0; t < w->tri_count; ++t) {
+        uint32_t k = 0;
+        for (double a = glow__tri_area(w, t); a > limit && k < SYS_PIECE_MAX_LEVELS; a *= 0.25) k++;
+        total += (size_t)1 << (2 * k);
+        *cut += k > 0;
+    }
+    if (!*cut) return true;
+    if (total > UINT32_MAX / 4) return false;
+    *o = *w; /* materials, textures, bounds, statistics, source: the world's (shared, not owned) */
+    o->tri_count = 0;
+    o->pos = malloc(total * 3 * sizeof *o->pos);
+    o->nrm = malloc(total * 3 * sizeof *o->nrm);
+    o->uv0 = w->uv0 ? malloc(total * 3 * sizeof *o->uv0) : NULL;
+    o->uv1 = w->uv1 ? malloc(total * 3 * sizeof *o->uv1) : NULL;
+    o->tri_material = malloc(total * sizeof *o->tri_material);
+    o->tri_source = malloc(total * sizeof *o->tri_source);
+    if (!o->pos || !o->nrm || (w->uv0 && !o->uv0) || (w->uv1 && !o->uv1) || !o->tri_material || !o->tri_source) return false;
+    for (uint32_t t = 0; t < w->tri_count; ++t) {
+        uint32_t k = 0;
+        for (double a = glow__tri_area(w, t); a > limit && k < SYS_PIECE_MAX_LEVELS; a *= 0.25) k++;
+        piece_emit(w, t, (const float(*)[3])w->pos[3 * (size_t)t], (const float(*)[3])w->nrm[3 * (size_t)t],
+                   w->uv0 ? (const float(*)[2])w->uv0[3 * (size_t)t] : NULL,
+                   w->uv1 ? (const float(*)[2])w->uv1[3 * (size_t)t] : NULL, k, o);
+    }
+    return true;
+}
+
 /* The systems of a split bake, one after the other (each with every thread, and over the ranks of a
  * distributed bake), then the manifest. A system whose key (system_key) and file the previous manifest
  * at out_path already has is kept as it is (an incremental re-bake): its bytes are what a bake would
  * write again. Each file's name holds its key, so the previous world stays whole until the new manifest
  * replaces it; then the files only the previous manifest named are removed. On failure the files
  * written by this bake are removed and the previous world is left as it was. */
-static glow_result bake_systems(const glow_pc_settings *set, const preset *p, const glow__scene *world,
+static glow_result bake_systems(const glow_pc_settings *set, const preset *p, const glow__scene *world_in,
                                 const char *out_path, bool writer, glow__pool *pool, glow__log *log,
                                 glow_pc_stats *stats) {
+    glow__scene pieces;
+    uint32_t cut = 0;
+    if (!split_large_triangles(world_in, set->system_area, &pieces, &cut)) {
+        glow__errorf(log, "%s: out of memory cutting large triangles into pieces", world_in->source);
+        if (cut) sys_scene_free(&pieces);
+        return GLOW_ERROR_OUT_OF_MEMORY;
+    }
+    const glow__scene *world = cut ? &pieces : world_in;
+    if (cut)
+        glow__infof(log, "systems: %u triangles larger than %g units² cut into %u pieces", cut,
+                    set->system_area * SYS_PIECE_FRACTION, world->tri_count - (world_in->tri_count - cut));
     const uint32_t n = world->tri_count;
     double *tri_area_v = malloc(((size_t)n + 1) * sizeof *tri_area_v);
     float(*cent)[3] = malloc(((size_t)n + 1) * sizeof *cent);
@@ -1722,6 +1822,7 @@ done:
     free(sp.order);
     free(cent);
     free(tri_area_v);
+    if (cut) sys_scene_free(&pieces); /* its own arrays; materials and textures are the world's */
     return res;
 }
 

@@ -107,6 +107,43 @@ same=1
 for f in $(ls "$T/full"); do cmp -s "$T/inc/$f" "$T/full/$f" || { same=0; fail "  $f differs"; }; done
 [ $same = 1 ] && pass "  byte for byte the full bake"
 
+# Triangles larger than a sixteenth of the system area are cut into pieces, so that no system is a
+# single huge triangle (a level's ground quad once reached every system from two systems of its own)
+cat > "$T/ground.obj" <<'OBJ'
+v -20 0 -20
+v 20 0 -20
+v 20 0 20
+v -20 0 20
+f 1 3 2
+f 1 4 3
+v -15 0 -0.5
+v 15 0 -0.5
+v 15 2 -0.5
+v -15 2 -0.5
+v -15 0 0.5
+v 15 0 0.5
+v 15 2 0.5
+v -15 2 0.5
+f 5 8 7 6
+f 9 10 11 12
+f 8 12 11 7
+f 5 9 12 8
+f 6 7 11 10
+OBJ
+mkdir -p "$T/gw"
+expect 0 "a 40 x 40 m ground quad and a wall across it in systems of 100 m²" "$BIN/glow-bake" "$T/ground.obj" --system-area 100 --surfels 256 \
+  --links 16 --lightmap-caches 64 --lightmap-detail 1 -q -o "$T/gw/g.json"
+python3 - "$T/gw/g.json" <<'PY' && pass "  the ground's 800 m² triangles cut into pieces of 3.125 m², at least 16 systems of at most 100 m², linking neighbours" \
+  || fail "  the ground's pieces"
+import json, sys
+s = json.load(open(sys.argv[1]))["systems"]
+# the ground's 2 triangles cut into 2 x 256, the wall's 10 (at most 30 m² each) into 4 or 16 pieces each
+assert sum(x["triangles"] for x in s) >= 512 + 10 * 4, sum(x["triangles"] for x in s)
+assert abs(sum(x["area"] for x in s) - (1600 + 2 * 60 + 30 + 2 * 2)) < 0.01, sum(x["area"] for x in s)
+assert all(0 < x["area"] <= 100.0 for x in s), [x["area"] for x in s]
+assert len(s) >= 16, len(s)
+assert all(len(x["dependencies"]) > 0 for x in s) and sum(x["proxies"] > 0 for x in s) >= len(s) // 2  # the texels by the wall see its other systems' parts
+PY
 expect 0 "one system when the area is above the scene's" "$BIN/glow-bake" builtin:pillar-hall --system-area 1000 "${BUDGET[@]}" \
   -o "$T/one/hall.json"
 python3 -c "import json,sys; m=json.load(open(sys.argv[1])); assert len(m['systems'])==1 and m['systems'][0]['surfels']==int(round(1024*306.33/1000))" \
