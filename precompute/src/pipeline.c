@@ -1497,7 +1497,7 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
     glow_result res = GLOW_OK;
     uint32_t nmade = 0, largest = 0, reused = 0;
     uint64_t nf_total = 0, dep_total = 0;
-    uint64_t *own_key = NULL, *full_key = NULL;
+    uint64_t *own_key = NULL, *full_key = NULL, *tree_key = NULL;
     uint32_t *dep_first = NULL, *deps = NULL, *occ_count = NULL, *sys_of = NULL;
     sys_base *bases = NULL;
     if (!tri_area_v || !cent || !sp.order || !sp.tmp || !foreign || !root) {
@@ -1549,19 +1549,21 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
         res = GLOW_ERROR_OUT_OF_MEMORY;
         goto done;
     }
-    /* Pass 1: every system's own key (its inputs) and its neighbours (the systems whose triangles it
-     * traces); its key, which names its file, adds the neighbours' own keys, whose trees it links. */
+    /* Pass 1: every system's inputs key (own_key: its triangles and every occluder it traces), its
+     * tree key (what its surfels and tree follow from) and its neighbours (the systems whose triangles
+     * it traces); its file key adds the neighbours' tree keys, whose trees it links. */
     sys_world W = {.w = world, .set = set, .p = p, .tri_area = tri_area_v, .sp = &sp, .foreign = foreign, .pool = pool,
                    .log = log, .reach = set->system_reach > 0.0f ? set->system_reach : SYS_REACH_DEFAULT};
     const uint32_t dep_cap = set->links / 4u < SYS_MAX_DEPS ? (set->links / 4u ? set->links / 4u : 1u) : SYS_MAX_DEPS;
     own_key = calloc(sp.n + 1, sizeof *own_key);
     full_key = calloc(sp.n + 1, sizeof *full_key);
+    tree_key = calloc(sp.n + 1, sizeof *tree_key);
     dep_first = calloc(sp.n + 2, sizeof *dep_first);
     deps = malloc(((size_t)sp.n * dep_cap + 1) * sizeof *deps);
     occ_count = calloc(sp.n + 1, sizeof *occ_count);
     sys_of = malloc(((size_t)n + 1) * sizeof *sys_of);
     bases = calloc(sp.n + 1, sizeof *bases);
-    if (!own_key || !full_key || !dep_first || !deps || !occ_count || !sys_of || !bases) {
+    if (!own_key || !full_key || !tree_key || !dep_first || !deps || !occ_count || !sys_of || !bases) {
         glow__errorf(log, "%s: out of memory for the systems", world->source);
         res = GLOW_ERROR_OUT_OF_MEMORY;
         goto done;
@@ -1579,6 +1581,26 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
         } else {
             own_key[s] = system_key(wkey, &sp.parts[s], &sub, foreign, nf);
             nf_total += nf;
+            /* The key of its surfels and tree (what its dependents' proxies index): every ray that
+             * places and clusters them stays within its bounds grown by the concavity rays' reach (4
+             * nominal surfel radii, here 8) and a few ray offsets, so only the occluders there count. */
+            glow_pc_settings sset;
+            uint32_t gt;
+            sys_budget(&W, s, &sset, &gt);
+            float e[3];
+            glow__sub(sub.bounds_max, sub.bounds_min, e);
+            const float tm = 8.0f * sqrtf((float)(sub.area / sset.surfels / GLOW__PI)) + 1e-3f * sqrtf(glow__dot(e, e));
+            uint32_t nt = 0;
+            for (uint32_t i = 0; i < nf; ++i) {
+                const float *P = foreign + 9 * (size_t)i;
+                bool near = true;
+                for (int k = 0; k < 3 && near; ++k) {
+                    const float a = fminf(P[k], fminf(P[3 + k], P[6 + k])), b = fmaxf(P[k], fmaxf(P[3 + k], P[6 + k]));
+                    near = b >= sub.bounds_min[k] - tm && a <= sub.bounds_max[k] + tm;
+                }
+                if (near) memmove(foreign + 9 * (size_t)nt++, P, 9 * sizeof(float));
+            }
+            tree_key[s] = system_key(wkey ^ 0x7472656565ull, &sp.parts[s], &sub, foreign, nt);
         }
         sys_scene_free(&sub);
         /* the neighbours: the most occluders first (ties: the lower index), at most dep_cap, by index */
@@ -1601,7 +1623,7 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
     for (uint32_t s = 0; s < sp.n && res == GLOW_OK; ++s) {
         uint64_t h = own_key[s];
         HASH_VAL(h, dep_first[s + 1]);
-        for (uint32_t q = 0; q < dep_first[s + 1]; ++q) HASH_VAL(h, own_key[deps[(size_t)s * dep_cap + q]]);
+        for (uint32_t q = 0; q < dep_first[s + 1]; ++q) HASH_VAL(h, tree_key[deps[(size_t)s * dep_cap + q]]);
         full_key[s] = h;
     }
     /* Pass 2: the systems, each with its neighbours' trees (placed once, kept for the systems after) */
@@ -1612,7 +1634,7 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
         /* STEM.sDEPTH-PATH-KEY.glow beside the manifest, STEM: out_path less a ".json" or ".glow" ending */
         char path[4200], keyhex[20], ownhex[20];
         snprintf(keyhex, sizeof keyhex, "%016llx", (unsigned long long)key);
-        snprintf(ownhex, sizeof ownhex, "%016llx", (unsigned long long)own_key[s]);
+        snprintf(ownhex, sizeof ownhex, "%016llx", (unsigned long long)tree_key[s]);
         {
             size_t len = strlen(out_path), st = 0;
             if (len > 5 && (strcmp(out_path + len - 5, ".json") == 0 || strcmp(out_path + len - 5, ".glow") == 0)) len -= 5;
@@ -1661,13 +1683,13 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
                 bl[0] = &bases[s];
                 for (uint32_t q = 0; q < nd; ++q) {
                     bl[q + 1] = &bases[d[q]];
-                    dkeys[q] = own_key[d[q]];
+                    dkeys[q] = tree_key[d[q]];
                 }
                 if (res == GLOW_OK && !sys_links_merge(bl, nd, &win)) {
                     glow__errorf(log, "%s: out of memory for system %u's links to its neighbours", world->source, s);
                     res = GLOW_ERROR_OUT_OF_MEMORY;
                 }
-                win.key = own_key[s];
+                win.key = tree_key[s];
                 win.deps = nd;
                 win.dep_keys = dkeys;
                 memcpy(win.trace_lo, olo, sizeof olo);
@@ -1702,10 +1724,13 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
             if (res == GLOW_OK) {
                 o = objs[s] = sys_entry(s, base, keyhex, &sub, nf);
                 cJSON_AddStringToObject(o, "system_key", ownhex);
+                char inhex[20];
+                snprintf(inhex, sizeof inhex, "%016llx", (unsigned long long)own_key[s]);
+                cJSON_AddStringToObject(o, "inputs_key", inhex);
                 cJSON *da = cJSON_AddArrayToObject(o, "dependencies");
                 for (uint32_t q = 0; q < nd; ++q) {
                     char dh[20];
-                    snprintf(dh, sizeof dh, "%016llx", (unsigned long long)own_key[d[q]]);
+                    snprintf(dh, sizeof dh, "%016llx", (unsigned long long)tree_key[d[q]]);
                     cJSON_AddItemToArray(da, cJSON_CreateString(dh));
                 }
             }
@@ -1810,6 +1835,7 @@ done:
     free(bases);
     free(own_key);
     free(full_key);
+    free(tree_key);
     free(dep_first);
     free(deps);
     free(occ_count);
