@@ -1498,7 +1498,7 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
     uint32_t nmade = 0, largest = 0, reused = 0;
     uint64_t nf_total = 0, dep_total = 0;
     uint64_t *own_key = NULL, *full_key = NULL, *tree_key = NULL;
-    uint32_t *dep_first = NULL, *deps = NULL, *occ_count = NULL, *sys_of = NULL;
+    uint32_t *dep_first = NULL, *deps = NULL, *occ_count = NULL, *sys_of = NULL, *last_use = NULL;
     sys_base *bases = NULL;
     if (!tri_area_v || !cent || !sp.order || !sp.tmp || !foreign || !root) {
         glow__errorf(log, "%s: out of memory for the systems", world->source);
@@ -1563,7 +1563,8 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
     occ_count = calloc(sp.n + 1, sizeof *occ_count);
     sys_of = malloc(((size_t)n + 1) * sizeof *sys_of);
     bases = calloc(sp.n + 1, sizeof *bases);
-    if (!own_key || !full_key || !tree_key || !dep_first || !deps || !occ_count || !sys_of || !bases) {
+    last_use = calloc(sp.n + 1, sizeof *last_use);
+    if (!own_key || !full_key || !tree_key || !dep_first || !deps || !occ_count || !sys_of || !bases || !last_use) {
         glow__errorf(log, "%s: out of memory for the systems", world->source);
         res = GLOW_ERROR_OUT_OF_MEMORY;
         goto done;
@@ -1626,7 +1627,15 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
         for (uint32_t q = 0; q < dep_first[s + 1]; ++q) HASH_VAL(h, tree_key[deps[(size_t)s * dep_cap + q]]);
         full_key[s] = h;
     }
-    /* Pass 2: the systems, each with its neighbours' trees (placed once, kept for the systems after) */
+    /* Pass 2: the systems, each with its neighbours' trees (placed once, kept until the last system
+     * that links them) */
+    for (uint32_t s = 0; s < sp.n; ++s) {
+        last_use[s] = s;
+        for (uint32_t q = 0; q < dep_first[s + 1]; ++q) {
+            const uint32_t k = deps[(size_t)s * dep_cap + q];
+            if (s > last_use[k]) last_use[k] = s;
+        }
+    }
     for (uint32_t s = 0; s < sp.n && res == GLOW_OK; ++s) {
         const sys_part *part = &sp.parts[s];
         const uint32_t *d = deps + (size_t)s * dep_cap, nd = dep_first[s + 1];
@@ -1738,6 +1747,8 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
             glow__rt_destroy(rt);
             sys_scene_free(&sub);
         }
+        for (uint32_t k = 0; k < sp.n; ++k) /* the trees no later system links */
+            if (last_use[k] == s && bases[k].done) sys_base_free(&bases[k]);
         if (o) cJSON_AddItemToArray(list, o);
     }
     if (res == GLOW_OK && dist && to_bake) { /* every rank's figures for the systems it baked */
@@ -1840,6 +1851,7 @@ done:
     free(deps);
     free(occ_count);
     free(sys_of);
+    free(last_use);
     cJSON_Delete(prev);
     cJSON_Delete(root);
     free(foreign);
