@@ -10,7 +10,8 @@
  *    updating again changes nothing;
  *  - the errors: a dependency out of range, a neighbour with another key, the system itself, destroying
  *    a system that another still reads;
- *  - a bake whose XREF names a dependency out of range is refused at load (GLOW_ERROR_OUT_OF_RANGE). */
+ *  - a resealed bake whose XREF names a dependency out of range (GLOW_ERROR_OUT_OF_RANGE), whose counts do
+ *    not match its size or that has more than 64 dependencies (GLOW_ERROR_CORRUPT_DATA) is refused. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -269,17 +270,46 @@ static void test_xref_validated(void **state) {
     memcpy(&xh, buf + tab[x].offset, sizeof xh);
     assert_true(xh.proxy_count > 0);
     glow_bake_xref_proxy *px = (glow_bake_xref_proxy *)(void *)(buf + tab[x].offset + sizeof xh + 8u * xh.dependency_count);
-    px[0].dependency = xh.dependency_count; /* out of range */
-    tab[x].crc32 = crc32_of(buf + tab[x].offset, (size_t)tab[x].size);
-    /* the table's CRC and the header's */
-    h.table_crc32 = crc32_of((const unsigned char *)tab, (size_t)h.section_count * sizeof *tab);
-    h.header_crc32 = 0;
-    memcpy(buf, &h, sizeof h);
-    h.header_crc32 = crc32_of(buf, sizeof h);
-    memcpy(buf, &h, sizeof h);
+    unsigned char *orig = malloc((size_t)size);
+    assert_non_null(orig);
+    memcpy(orig, buf, (size_t)size);
+    /* reseal: the section's CRC, the table's and the header's */
+#define RESEAL()                                                                                  \
+    do {                                                                                          \
+        tab[x].crc32 = crc32_of(buf + tab[x].offset, (size_t)tab[x].size);                         \
+        h.table_crc32 = crc32_of((const unsigned char *)tab, (size_t)h.section_count * sizeof *tab); \
+        h.header_crc32 = 0;                                                                       \
+        memcpy(buf, &h, sizeof h);                                                                \
+        h.header_crc32 = crc32_of(buf, sizeof h);                                                 \
+        memcpy(buf, &h, sizeof h);                                                                \
+    } while (0)
     glow_bake *b = NULL;
+    RESEAL(); /* unchanged: loads */
+    assert_int_equal(glow_bake_load(ctx, buf, (size_t)size, &b), GLOW_OK);
+    glow_bake_destroy(b);
+    b = NULL;
+    px[0].dependency = xh.dependency_count; /* a dependency out of range */
+    RESEAL();
     assert_int_equal(glow_bake_load(ctx, buf, (size_t)size, &b), GLOW_ERROR_OUT_OF_RANGE);
     assert_null(b);
+    memcpy(buf, orig, (size_t)size);
+    memcpy(&h, buf, sizeof h);
+    glow_bake_xref bad = xh;
+    bad.proxy_count = xh.proxy_count - 1; /* counts that do not match the section's size */
+    memcpy(buf + tab[x].offset, &bad, sizeof bad);
+    RESEAL();
+    assert_int_equal(glow_bake_load(ctx, buf, (size_t)size, &b), GLOW_ERROR_CORRUPT_DATA);
+    assert_null(b);
+    memcpy(buf, orig, (size_t)size);
+    memcpy(&h, buf, sizeof h);
+    bad = xh;
+    bad.dependency_count = GLOW_BAKE_MAX_DEPENDENCIES + 1; /* too many dependencies */
+    memcpy(buf + tab[x].offset, &bad, sizeof bad);
+    RESEAL();
+    assert_int_equal(glow_bake_load(ctx, buf, (size_t)size, &b), GLOW_ERROR_CORRUPT_DATA);
+    assert_null(b);
+#undef RESEAL
+    free(orig);
     free(buf);
 }
 
