@@ -1429,14 +1429,20 @@ static void piece_emit(const glow__scene *w, uint32_t t, const float P[3][3], co
     }
 }
 
+/* how many times triangle t is cut in four for its pieces to be at most `limit` */
+static uint32_t piece_levels(const glow__scene *w, uint32_t t, double limit) {
+    uint32_t k = 0;
+    for (double a = glow__tri_area(w, t); a > limit && k < SYS_PIECE_MAX_LEVELS; a *= 0.25) k++;
+    return k;
+}
+
 static bool split_large_triangles(const glow__scene *w, double target, glow__scene *o, uint32_t *cut) {
     memset(o, 0, sizeof *o);
     *cut = 0;
     const double limit = target * SYS_PIECE_FRACTION;
     size_t total = 0;
     for (uint32_t t = 0; t < w->tri_count; ++t) {
-        uint32_t k = 0;
-        for (double a = glow__tri_area(w, t); a > limit && k < SYS_PIECE_MAX_LEVELS; a *= 0.25) k++;
+        const uint32_t k = piece_levels(w, t, limit);
         total += (size_t)1 << (2 * k);
         *cut += k > 0;
     }
@@ -1452,8 +1458,7 @@ static bool split_large_triangles(const glow__scene *w, double target, glow__sce
     o->tri_source = malloc(total * sizeof *o->tri_source);
     if (!o->pos || !o->nrm || (w->uv0 && !o->uv0) || (w->uv1 && !o->uv1) || !o->tri_material || !o->tri_source) return false;
     for (uint32_t t = 0; t < w->tri_count; ++t) {
-        uint32_t k = 0;
-        for (double a = glow__tri_area(w, t); a > limit && k < SYS_PIECE_MAX_LEVELS; a *= 0.25) k++;
+        const uint32_t k = piece_levels(w, t, limit);
         piece_emit(w, t, (const float(*)[3])w->pos[3 * (size_t)t], (const float(*)[3])w->nrm[3 * (size_t)t],
                    w->uv0 ? (const float(*)[2])w->uv0[3 * (size_t)t] : NULL,
                    w->uv1 ? (const float(*)[2])w->uv1[3 * (size_t)t] : NULL, k, o);
@@ -1498,7 +1503,7 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
     uint32_t nmade = 0, largest = 0, reused = 0;
     uint64_t nf_total = 0, dep_total = 0;
     uint64_t *own_key = NULL, *full_key = NULL, *tree_key = NULL;
-    uint32_t *dep_first = NULL, *deps = NULL, *occ_count = NULL, *sys_of = NULL, *last_use = NULL;
+    uint32_t *dep_count = NULL, *deps = NULL, *occ_count = NULL, *sys_of = NULL, *last_use = NULL;
     sys_base *bases = NULL;
     if (!tri_area_v || !cent || !sp.order || !sp.tmp || !foreign || !root) {
         glow__errorf(log, "%s: out of memory for the systems", world->source);
@@ -1558,13 +1563,13 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
     own_key = calloc(sp.n + 1, sizeof *own_key);
     full_key = calloc(sp.n + 1, sizeof *full_key);
     tree_key = calloc(sp.n + 1, sizeof *tree_key);
-    dep_first = calloc(sp.n + 2, sizeof *dep_first);
+    dep_count = calloc(sp.n + 1, sizeof *dep_count);
     deps = malloc(((size_t)sp.n * dep_cap + 1) * sizeof *deps);
     occ_count = calloc(sp.n + 1, sizeof *occ_count);
     sys_of = malloc(((size_t)n + 1) * sizeof *sys_of);
     bases = calloc(sp.n + 1, sizeof *bases);
     last_use = calloc(sp.n + 1, sizeof *last_use);
-    if (!own_key || !full_key || !tree_key || !dep_first || !deps || !occ_count || !sys_of || !bases || !last_use) {
+    if (!own_key || !full_key || !tree_key || !dep_count || !deps || !occ_count || !sys_of || !bases || !last_use) {
         glow__errorf(log, "%s: out of memory for the systems", world->source);
         res = GLOW_ERROR_OUT_OF_MEMORY;
         goto done;
@@ -1618,27 +1623,27 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
         }
         for (uint32_t q = 1; q < nd; ++q)
             for (uint32_t y = q; y > 0 && d[y - 1] > d[y]; --y) { const uint32_t t = d[y]; d[y] = d[y - 1]; d[y - 1] = t; }
-        dep_first[s + 1] = nd;
+        dep_count[s] = nd;
         dep_total += nd;
     }
     for (uint32_t s = 0; s < sp.n && res == GLOW_OK; ++s) {
         uint64_t h = own_key[s];
-        HASH_VAL(h, dep_first[s + 1]);
-        for (uint32_t q = 0; q < dep_first[s + 1]; ++q) HASH_VAL(h, tree_key[deps[(size_t)s * dep_cap + q]]);
+        HASH_VAL(h, dep_count[s]);
+        for (uint32_t q = 0; q < dep_count[s]; ++q) HASH_VAL(h, tree_key[deps[(size_t)s * dep_cap + q]]);
         full_key[s] = h;
     }
     /* Pass 2: the systems, each with its neighbours' trees (placed once, kept until the last system
      * that links them) */
     for (uint32_t s = 0; s < sp.n; ++s) {
         last_use[s] = s;
-        for (uint32_t q = 0; q < dep_first[s + 1]; ++q) {
+        for (uint32_t q = 0; q < dep_count[s]; ++q) {
             const uint32_t k = deps[(size_t)s * dep_cap + q];
             if (s > last_use[k]) last_use[k] = s;
         }
     }
     for (uint32_t s = 0; s < sp.n && res == GLOW_OK; ++s) {
         const sys_part *part = &sp.parts[s];
-        const uint32_t *d = deps + (size_t)s * dep_cap, nd = dep_first[s + 1];
+        const uint32_t *d = deps + (size_t)s * dep_cap, nd = dep_count[s];
         const uint64_t key = full_key[s];
         /* STEM.sDEPTH-PATH-KEY.glow beside the manifest, STEM: out_path less a ".json" or ".glow" ending */
         char path[4200], keyhex[20], ownhex[20];
@@ -1847,7 +1852,7 @@ done:
     free(own_key);
     free(full_key);
     free(tree_key);
-    free(dep_first);
+    free(dep_count);
     free(deps);
     free(occ_count);
     free(sys_of);

@@ -516,8 +516,8 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
                         label);
         return GLOW_ERROR_UNSUPPORTED;
     }
-    if (link_mode == GLOW_LINK_MODE_SH && glow__bake_xref(desc->bake, NULL, NULL) &&
-        glow__bake_xref(desc->bake, NULL, NULL)->proxy_count) {
+    const glow_bake_xref *xref = glow__bake_xref(desc->bake, NULL, NULL);
+    if (link_mode == GLOW_LINK_MODE_SH && xref && xref->proxy_count) {
         GLOW__LOG_ERROR(ctx, GLOW_ERROR_UNSUPPORTED,
                         "glow_system_create(%s): GLOW_LINK_MODE_SH reads node flux, which proxy nodes (links to "
                         "neighbouring systems) do not carry; use the compact or expanded link mode",
