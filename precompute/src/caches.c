@@ -664,8 +664,140 @@ static glow_result lm_try(const glow__scene *scene, const glow__chart_set *cs, d
     return GLOW_OK;
 }
 
+/* ------------------------------------------------------------------ texel density per chart */
+/* A lightmap cache stands for its whole texel; where surfaces face each other within the near field
+ * (an arch's soffit and springing, a capital, a pier's foot) light changes within a texel, and there
+ * the texels should be finer than on open walls and floors, as the surfels are (surfels.c, adaptive
+ * density). Each generated chart gets the fraction f of CONC_RAYS cosine-distributed rays, cast from
+ * area-proportional points on its surface (CONC_POINTS_PER_TEXEL per texel of the budget), that meet
+ * a surface within the reach, and its texels' area density is scaled by 1 + (F - 1) f (the linear
+ * density by the square root); the density search then meets the texel budget at a lower base
+ * density, which open ground gets. */
+#define CONC_RAYS 16u
+#define CONC_POINTS_PER_TEXEL 16.0
+
+typedef struct conc_ctx {
+    const glow__scene *scene;
+    const glow__rt *rt;
+    const uint32_t *pt_tri;
+    uint32_t *hits;
+    float reach, eps;
+} conc_ctx;
+
+static uint32_t conc_hash(uint32_t x) {
+    x ^= x >> 16;
+    x *= 0x7feb352du;
+    x ^= x >> 15;
+    x *= 0x846ca68bu;
+    return x ^ (x >> 16);
+}
+
+static void conc_range(void *vctx, uint32_t begin, uint32_t end, uint32_t worker) {
+    (void)worker;
+    conc_ctx *c = vctx;
+    const double golden = GLOW__PI * (3.0 - sqrt(5.0));
+    float dirs[CONC_RAYS][3], tfar[CONC_RAYS];
+    uint8_t occ[CONC_RAYS];
+    for (uint32_t k = 0; k < CONC_RAYS; ++k) tfar[k] = c->reach;
+    for (uint32_t i = begin; i < end; ++i) {
+        const uint32_t t = c->pt_tri[i];
+        const float(*p)[3] = c->scene->pos + 3 * (size_t)t;
+        double u = (conc_hash(2 * i + 1) + 0.5) / 4294967296.0, v = (conc_hash(2 * i + 2) + 0.5) / 4294967296.0;
+        if (u + v > 1.0) {
+            u = 1.0 - u;
+            v = 1.0 - v;
+        }
+        float org[3];
+        double e1[3], e2[3], n[3];
+        for (int k = 0; k < 3; ++k) {
+            e1[k] = (double)p[1][k] - p[0][k];
+            e2[k] = (double)p[2][k] - p[0][k];
+            org[k] = (float)(p[0][k] + u * e1[k] + v * e2[k]);
+        }
+        n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+        n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+        n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+        const double l = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        if (!(l > 0.0)) {
+            c->hits[i] = 0;
+            continue;
+        }
+        for (int k = 0; k < 3; ++k) n[k] /= l;
+        double ta[3], tb[3];
+        glow__tangent_frame(n, ta, tb);
+        const double phi0 = conc_hash(i ^ 0x9e3779b9u) * (2.0 * GLOW__PI / 4294967296.0);
+        for (uint32_t k = 0; k < CONC_RAYS; ++k) {
+            const double r = sqrt((k + 0.5) / CONC_RAYS), z = sqrt(fmax(0.0, 1.0 - r * r)), phi = phi0 + golden * k;
+            for (int a = 0; a < 3; ++a) dirs[k][a] = (float)(r * cos(phi) * ta[a] + r * sin(phi) * tb[a] + z * n[a]);
+        }
+        glow__rt_occluded16(c->rt, org, (const float(*)[3])dirs, tfar, CONC_RAYS, c->eps, occ);
+        uint32_t h = 0;
+        for (uint32_t k = 0; k < CONC_RAYS; ++k) h += occ[k];
+        c->hits[i] = h;
+    }
+}
+
+/* Fills cs->scale (see above) from `points` area-proportional points over the whole scene. */
+static glow_result chart_concavity(const glow__scene *scene, const glow__rt *rt, glow__chart_set *cs, double area,
+                                   uint32_t points, float adapt, float reach, glow__pool *pool, glow__log *log) {
+    const uint32_t n = scene->tri_count;
+    uint32_t *pt_tri = malloc(((size_t)points + 1) * sizeof *pt_tri);
+    uint32_t *hits = malloc(((size_t)points + 1) * sizeof *hits);
+    uint32_t *chart_of = malloc(((size_t)n + 1) * sizeof *chart_of);
+    double *sum = calloc((size_t)cs->chart_count + 1, sizeof *sum);
+    double *cnt = calloc((size_t)cs->chart_count + 1, sizeof *cnt);
+    cs->scale = malloc(((size_t)cs->chart_count + 1) * sizeof *cs->scale);
+    if (!pt_tri || !hits || !chart_of || !sum || !cnt || !cs->scale) {
+        free(pt_tri);
+        free(hits);
+        free(chart_of);
+        free(sum);
+        free(cnt);
+        glow__errorf(log, "%s: caches: out of memory for the charts' concavity", scene->source);
+        return GLOW_ERROR_OUT_OF_MEMORY;
+    }
+    for (uint32_t c = 0; c < cs->chart_count; ++c)
+        for (uint32_t j = cs->chart_start[c]; j < cs->chart_start[c + 1]; ++j) chart_of[cs->chart_tris[j]] = c;
+    double cum = 0.0;
+    uint32_t spawned = 0;
+    for (uint32_t t = 0; t < n; ++t) {
+        cum += glow__tri_area(scene, t);
+        double e = floor(cum / area * (double)points);
+        uint32_t upto = e >= (double)points ? points : (uint32_t)e;
+        if (t + 1 == n) upto = points;
+        while (spawned < upto) pt_tri[spawned++] = t;
+    }
+    float ext[3];
+    glow__sub(scene->bounds_max, scene->bounds_min, ext);
+    const float diag = sqrtf(glow__dot(ext, ext));
+    conc_ctx cc = {.scene = scene, .rt = rt, .pt_tri = pt_tri, .hits = hits, .reach = reach,
+                   .eps = 1e-4f * (diag > 0.0f ? diag : 1.0f)};
+    glow__parallel_for(pool, points, 0, conc_range, &cc);
+    for (uint32_t i = 0; i < points; ++i) {
+        const uint32_t c = chart_of[pt_tri[i]];
+        sum[c] += hits[i];
+        cnt[c] += CONC_RAYS;
+    }
+    double fsum = 0.0, ssum = 0.0;
+    for (uint32_t c = 0; c < cs->chart_count; ++c) {
+        const double f = cnt[c] > 0.0 ? sum[c] / cnt[c] : 0.0;
+        cs->scale[c] = (float)sqrt(1.0 + (adapt - 1.0) * f);
+        fsum += sum[c];
+        ssum += cnt[c];
+    }
+    glow__infof(log, "%s: caches: texel density follows the charts' concavity (up to %gx the area density; "
+                "%.1f %% of %u points' rays meet a surface within %.3g)", scene->source, (double)adapt,
+                ssum > 0.0 ? 100.0 * fsum / ssum : 0.0, points, (double)reach);
+    free(pt_tri);
+    free(hits);
+    free(chart_of);
+    free(sum);
+    free(cnt);
+    return GLOW_OK;
+}
+
 static glow_result build_lightmap_layout(const glow__scene *scene, const glow__rt *rt, const glow__cache_settings *set,
-                                         glow__log *log, glow__caches *out, lm_state *st) {
+                                         glow__pool *pool, glow__log *log, glow__caches *out, lm_state *st) {
     const uint32_t n = scene->tri_count;
     st->uv = malloc(3 * (size_t)n * sizeof *st->uv);
     if (!st->uv) {
@@ -714,6 +846,15 @@ static glow_result build_lightmap_layout(const glow__scene *scene, const glow__r
         glow_result r = glow__charts_segment(scene, rt, log, &cs);
         if (r != GLOW_OK) return r;
         out->chart_count = cs.chart_count;
+        if (set->texel_adapt > 1.0f && set->adapt_reach > 0.0f && cs.chart_count) {
+            const double target = set->target_lightmap ? set->target_lightmap : DEFAULT_TARGET_LIGHTMAP;
+            const double pts = fmin(fmax(CONC_POINTS_PER_TEXEL * target, 1.0), 4.0e6);
+            r = chart_concavity(scene, rt, &cs, area, (uint32_t)pts, set->texel_adapt, set->adapt_reach, pool, log);
+            if (r != GLOW_OK) {
+                glow__charts_free(&cs);
+                return r;
+            }
+        }
     }
     const glow__chart_set *csp = use_uv1 ? NULL : &cs;
     glow_result r;
@@ -737,11 +878,14 @@ static glow_result build_lightmap_layout(const glow__scene *scene, const glow__r
         }
         if (r == GLOW_OK && best_d != last_d) r = lm_try(scene, csp, uv_ratio, best_d, log, st);
     }
+    double smax = 1.0;
+    for (uint32_t c = 0; cs.scale && c < cs.chart_count; ++c) smax = fmax(smax, cs.scale[c]);
     glow__charts_free(&cs);
     if (r != GLOW_OK) return r;
     out->lm_width = st->w;
     out->lm_height = st->h;
     out->texel_density = st->density;
+    out->texel_density_max = (float)(st->density * smax);
     return GLOW_OK;
 }
 
@@ -857,7 +1001,7 @@ glow_result glow__caches_build(const glow__scene *scene, const glow__rt *rt, con
 
     uint32_t lm_candidates = 0;
     if (scene->tri_count) {
-        r = build_lightmap_layout(scene, rt, settings, log, out, &st);
+        r = build_lightmap_layout(scene, rt, settings, pool, log, out, &st);
         if (r != GLOW_OK) goto fail;
         const size_t texels = (size_t)st.w * st.h;
         cand = malloc(((size_t)st.covered + 1) * sizeof *cand);

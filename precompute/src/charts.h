@@ -16,6 +16,8 @@ typedef struct glow__chart_set {
     uint32_t blocked;        /* shared edges not crossed because geometry stands on the surface there */
     double (*normal)[3];     /* [chart_count] area-weighted mean geometric normal (unit; 0 when none) */
     double (*centre)[3];     /* [chart_count] area-weighted centroid */
+    float *scale;            /* [chart_count] texel density multiplier (texels per m = density x
+                                scale), or NULL for 1 everywhere; freed with the set */
 } glow__chart_set;
 
 /* What one packing did with the small charts (glow__charts_pack). */

@@ -118,6 +118,9 @@ typedef struct glow__cache_settings {
     uint32_t seed;
     uint32_t detail_factor;   /* >= 2: also place the lightmap's detail texels, this many a texel side
                                  (links.c "Lightmap detail"); 0 = none */
+    float texel_adapt;        /* > 1: generated charts' texel density follows their concavity, up to
+                                 this many times the area density of open flat charts; <= 1: uniform */
+    float adapt_reach;        /* m: how far the concavity rays look (the links' near field) */
 } glow__cache_settings;
 
 typedef struct glow__caches {
@@ -132,6 +135,7 @@ typedef struct glow__caches {
     /* lightmap (one atlas) */
     uint32_t lm_width, lm_height;
     float texel_density;
+    float texel_density_max;  /* the finest chart's (caches.c, texel density per chart) */
     uint32_t *lm_map;         /* [w*h], same encoding as grid_map */
     uint32_t lm_invalid;      /* texels that saw back faces (filled from neighbours) */
     uint32_t lm_gutter;       /* atlas texels outside every footprint that hold a copy (gutters) */

@@ -38,22 +38,27 @@ typedef struct preset {
                   * 0.123 -> 0.102 with 4; low 0.199 -> 0.197 (seeds 0-1); fine 0.081 / 0.088 ->
                   * 0.099 / 0.090 (seeds 0 / 1): at 131k surfels the open ground it thins costs more
                   * than the creases gain, so high and fine stay area-uniform (docs/results.md) */
+    float texel_adapt; /* the same for generated charts' texel density (caches.c, "texel density per
+                        * chart"), within the same texel budget. Sponza against the referee: moderate
+                        * 0.102 -> 0.097 with 4 (surfel seeds 0-3), low 0.197 -> 0.196, high 0.0803 ->
+                        * 0.0805 (seed 0), fine 0.0846 / 0.0890 -> 0.0839 / 0.0935 (seeds 0 / 1): high
+                        * and fine stay uniform, as their surfels do (docs/results.md) */
 } preset;
 static const preset presets[5] = {
-    /* default = moderate */ {32768, 128, 3, 2000, 8000, 6, 4.0f},
-    /* low      */ {8192, 64, 3, 500, 2000, 4, 4.0f},
+    /* default = moderate */ {32768, 128, 3, 2000, 8000, 6, 4.0f, 4.0f},
+    /* low      */ {8192, 64, 3, 500, 2000, 4, 4.0f, 4.0f},
     /* moderate: PIC's. Half the links on twice the lightmap caches (about the same links per bake)
      * was 4 % better on Sponza's block error averaged over 4 surfel seeds, 7 % worse on Cornell's, at
      * +11.5 % update time: not taken (docs/results.md, "More budget"); --lightmap-caches sets it */
-    /* moderate */ {32768, 128, 3, 2000, 8000, 6, 4.0f},
-    /* high     */ {131072, 254, 4, 2000, 8000, 6, 1.0f},
+    /* moderate */ {32768, 128, 3, 2000, 8000, 6, 4.0f, 4.0f},
+    /* high     */ {131072, 254, 4, 2000, 8000, 6, 1.0f, 1.0f},
     /* fine: moderate's links, bands and lightmap on 4x its surfels (0.24 m apart on Sponza), with the
      * lightmap detail (the default) for the receivers. It resolves light from surfaces a fraction of a
      * metre away (pillar feet next to a sunlit floor, capitals): Sponza's block error 0.124 -> 0.088
      * (surfel seeds 0-3), at about 1.8x moderate's update time and 2.3x its memory. Until 2026-11-27 it
      * also had 4x moderate's lightmap caches (32000: 0.079 without the detail, 0.060 with it on seed 0,
      * at about 4x the update): --lightmap-caches 32000 (docs/results.md, "Near light") */
-    /* fine     */ {131072, 128, 3, 2000, 8000, 6, 1.0f},
+    /* fine     */ {131072, 128, 3, 2000, 8000, 6, 1.0f, 1.0f},
 };
 
 static const preset *preset_of(glow_pc_quality q) {
@@ -77,6 +82,7 @@ glow_pc_settings glow_pc_settings_resolve(const glow_pc_settings *in) {
     if (!s.detail_links) s.detail_links = GLOW_PC_DETAIL_LINKS;
     if (s.detail_radius == 0.0f) s.detail_radius = GLOW_PC_DETAIL_RADIUS;
     if (s.surfel_adapt == 0.0f) s.surfel_adapt = p->adapt;
+    if (s.texel_adapt == 0.0f) s.texel_adapt = p->texel_adapt;
     return s;
 }
 
@@ -107,6 +113,8 @@ glow_result glow_pc_settings_validate(const glow_pc_settings *s, char *msg, size
         BAD("--detail-radius %g is out of range (0..4 lightmap texels)", (double)s->detail_radius);
     if (s->surfel_adapt != 0.0f && !(s->surfel_adapt >= 1.0f && s->surfel_adapt <= 4.0f))
         BAD("--surfel-adapt %g is out of range (1..4)", (double)s->surfel_adapt);
+    if (s->texel_adapt != 0.0f && !(s->texel_adapt >= 1.0f && s->texel_adapt <= 8.0f))
+        BAD("--texel-adapt %g is out of range (1..8)", (double)s->texel_adapt);
     if (s->system_reach != 0.0f && !(s->system_reach > 0.0f && s->system_reach <= 4.0f))
         BAD("--system-reach %g is out of range (0..4 system diagonals)", (double)s->system_reach);
     if (s->system_area > 0.0f && s->sh_links)
@@ -620,7 +628,9 @@ static glow_result bake_system(const glow_pc_settings *setp, uint32_t grid_targe
     STAGE_BEGIN(ST_CACHES);
     glow__cache_settings scache = {.grid_spacing = set.grid_spacing, .texel_density = set.texel_density,
                                    .target_grid = grid_target, .target_lightmap = set.lightmap_caches, .seed = set.seed,
-                                   .detail_factor = set.lightmap_detail >= 2 ? set.lightmap_detail : 0u};
+                                   .detail_factor = set.lightmap_detail >= 2 ? set.lightmap_detail : 0u,
+                                   .texel_adapt = set.texel_adapt,
+                                   .adapt_reach = 4.0f * sqrtf(SF->area / (float)GLOW__PI)};
     res = glow__caches_build(sc, rt, SF, &scache, pool, log, &caches);
     if (res == GLOW_OK && caches.grid_dims[0] && caches.grid_dims[1] && caches.grid_dims[2]) {
         /* which corners of each grid cell a lookup may blend (grid_vis.c) */
@@ -639,6 +649,7 @@ static glow_result bake_system(const glow_pc_settings *setp, uint32_t grid_targe
     if (res != GLOW_OK) goto done;
     stats->grid_spacing = caches.grid_spacing;
     stats->texel_density = caches.texel_density;
+    stats->texel_density_max = caches.texel_density_max;
     memcpy(stats->grid_dims, caches.grid_dims, sizeof stats->grid_dims);
     stats->grid_caches = caches.grid_cache_count;
     stats->grid_inside = caches.grid_inside;
@@ -916,6 +927,7 @@ static void sys_stats_add(glow_pc_stats *w, const glow_pc_stats *s, bool largest
         w->seed = s->seed;
         w->grid_spacing = s->grid_spacing;
         w->texel_density = s->texel_density;
+        w->texel_density_max = s->texel_density_max;
         memcpy(w->grid_dims, s->grid_dims, sizeof w->grid_dims);
         w->lightmap_width = s->lightmap_width;
         w->lightmap_height = s->lightmap_height;
@@ -998,7 +1010,7 @@ static uint64_t world_key(const glow_pc_settings *s, const glow__scene *w) {
                           s->lightmap_caches, s->no_link_subsets, (uint32_t)s->link_visibility, s->link_cluster_rays,
                           s->lightmap_detail, s->detail_links, w->material_count, w->texture_count};
     const float f[] = {s->grid_spacing, s->texel_density, s->link_cluster_angle, s->detail_radius, s->surfel_adapt,
-                       s->system_area, s->system_reach > 0.0f ? s->system_reach : SYS_REACH_DEFAULT};
+                       s->system_area, s->system_reach > 0.0f ? s->system_reach : SYS_REACH_DEFAULT, s->texel_adapt};
     h = fnv64(h, v, sizeof v);
     h = fnv64(h, f, sizeof f);
     for (uint32_t m = 0; m < w->material_count; ++m) {

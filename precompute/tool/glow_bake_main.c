@@ -86,6 +86,10 @@ static const char *usage_text =
     "                         the near field (concave places) as on open ground, same count:\n"
     "                         1 = area-uniform, up to 4 (default: low and moderate 4, high and\n"
     "                         fine 1)\n"
+    "  --texel-adapt F        generated lightmap charts up to F times as many texels per area where\n"
+    "                         surfaces face each other within the near field as on open walls and\n"
+    "                         floors, same budget: 1 = uniform, up to 8 (default: low and\n"
+    "                         moderate 4, high and fine 1)\n"
     "  --audit-radiance FILE  audit the cuts under a lighting: FILE holds one float32 radiance per surfel\n"
     "                         (glow-stability audit --radiance-out, for a bake with the same settings);\n"
     "                         logs each cut's gather against the exact gather through visible surfels\n"
@@ -307,9 +311,12 @@ static void print_summary(const char *scene, const char *out, const glow_pc_stat
            s->grid_inside, s->lightmap_caches, s->lightmap_width, s->lightmap_height, (double)s->texel_density,
            s->charts, s->lightmap_invalid);
     if (s->lightmap_width)
-        printf("  lightmap  %.3g units per texel; the atlas holds %u caches (%.0f %% of their area is surface), %u gutter "
+        printf("  lightmap  %.3g units per texel (%.3g in the most concave charts); the atlas holds %u caches (%.0f %% of their area is surface), %u gutter "
                "copies and %u unused texels (%.0f %%); %u charts narrower than a texel share %u texels\n",
-               s->texel_density > 0.0f ? 1.0 / (double)s->texel_density : 0.0, s->lightmap_caches,
+               s->texel_density > 0.0f ? 1.0 / (double)s->texel_density : 0.0,
+               s->texel_density_max > 0.0f ? 1.0 / (double)s->texel_density_max
+                                           : s->texel_density > 0.0f ? 1.0 / (double)s->texel_density : 0.0,
+               s->lightmap_caches,
                100.0 * (double)s->lightmap_coverage, s->lightmap_gutter, s->lightmap_unused,
                100.0 * s->lightmap_unused /
                    (s->systems > 1 ? (double)s->lightmap_caches + s->lightmap_invalid + s->lightmap_gutter + s->lightmap_unused
@@ -562,6 +569,13 @@ int main(int argc, char **argv) {
             if (!end || *end || !(x >= 1.0 && x <= 4.0))
                 return usage_error("--surfel-adapt '%s': expected a density ratio in [1, 4] (1 = area-uniform)", v);
             s.surfel_adapt = (float)x;
+        } else if (!strcmp(a, "--texel-adapt")) {
+            NEED_VALUE();
+            char *end = NULL;
+            double x = strtod(v, &end);
+            if (!end || *end || !(x >= 1.0 && x <= 8.0))
+                return usage_error("--texel-adapt '%s': expected a density ratio in [1, 8] (1 = uniform)", v);
+            s.texel_adapt = (float)x;
         } else if (!strcmp(a, "--detail-links")) {
             NEED_VALUE();
             if (!parse_u32(v, 1, 256, &s.detail_links)) return usage_error("--detail-links '%s': expected an integer in 1..256", v);

@@ -701,6 +701,60 @@ static void test_open_scene_keeps_air(void **state) {
     scene_free(&s);
 }
 
+/* Linear texel density (texels per m) of triangle t in the atlas. */
+static double tri_texel_density(const glow__caches *c, const glow__scene *s, uint32_t t) {
+    const float(*q)[2] = c->lm_uv + 3 * (size_t)t;
+    const double ua = 0.5 * fabs(((double)q[1][0] - q[0][0]) * ((double)q[2][1] - q[0][1]) -
+                                 ((double)q[1][1] - q[0][1]) * ((double)q[2][0] - q[0][0])) *
+                      c->lm_width * c->lm_height;
+    return sqrt(ua / glow__tri_area(s, t));
+}
+
+/* Texel density per chart (caches.c): a 0.3 m slot between two facing walls gets finer texels than an
+ * open floor with texel_adapt 4, the same with 1; the lightmap budget holds either way, so the floor's
+ * texels get coarser. */
+static void test_texel_adapt(void **state) {
+    (void)state;
+    builder b = {0};
+    b_grid(&b, (double[3]){0, 0, 0}, (double[3]){0, 0, 10}, (double[3]){10, 0, 0}, 4, 4);   /* floor +y */
+    b_grid(&b, (double[3]){30, 10, 0}, (double[3]){0, 2, 0}, (double[3]){0, 0, 10}, 1, 1);  /* wall +x */
+    b_grid(&b, (double[3]){30.3, 10, 0}, (double[3]){0, 0, 10}, (double[3]){0, 2, 0}, 1, 1); /* wall -x */
+    glow__scene s;
+    b_finish(&b, &s);
+    glow__rt *rt = make_rt(&s);
+    glow__pool *pool = glow__pool_create(2);
+    glow__log log = {0};
+    double floor_d[2], slot_d[2];
+    uint32_t texels[2];
+    for (int k = 0; k < 2; ++k) {
+        glow__cache_settings set = {.grid_spacing = 4.0f, .target_lightmap = 1500, .texel_adapt = k ? 4.0f : 1.0f,
+                                    .adapt_reach = 1.0f};
+        glow__caches c;
+        assert_int_equal(glow__caches_build(&s, rt, NULL, &set, pool, &log, &c), GLOW_OK);
+        check_structure(&c, &s, NULL);
+        floor_d[k] = tri_texel_density(&c, &s, 0);
+        slot_d[k] = 0.5 * (tri_texel_density(&c, &s, 32) + tri_texel_density(&c, &s, 34));
+        texels[k] = c.lm_cache_count + c.lm_invalid;
+        print_message("texel_adapt %g: floor %.3f texels/m, slot %.3f (%.2fx), %u texels (density %.3f..%.3f)\n",
+                      (double)set.texel_adapt, floor_d[k], slot_d[k], slot_d[k] / floor_d[k], texels[k],
+                      (double)c.texel_density, (double)c.texel_density_max);
+        assert_true(fabs(floor_d[k] / c.texel_density - 1.0) < 0.02);
+        assert_true(c.texel_density_max >= c.texel_density);
+        glow__caches_free(&c);
+    }
+    assert_true(fabs(slot_d[0] / floor_d[0] - 1.0) < 0.02); /* uniform */
+    /* facing walls 0.3 m apart see each other through most of their rays within 1 m: f > 0.6, so the
+     * area density is > 2.8x and the linear density > 1.67x the floor's */
+    assert_true(slot_d[1] / floor_d[1] > 1.67);
+    assert_true(slot_d[1] / floor_d[1] <= 2.0 + 1e-3); /* at most sqrt(4) */
+    /* the budget is shared: the open floor pays (100 m² of floor, 40 m² of slot at about 3x) */
+    assert_true(floor_d[1] < 0.9 * floor_d[0]);
+    for (int k = 0; k < 2; ++k) assert_true(texels[k] >= 1500 / 1.2 && texels[k] <= 1500 * 1.2);
+    glow__pool_destroy(pool);
+    glow__rt_destroy(rt);
+    scene_free(&s);
+}
+
 static void test_bad_arguments(void **state) {
     (void)state;
     glow__scene s;
@@ -729,7 +783,7 @@ int main(void) {
         cmocka_unit_test(test_wall_through_floor),
         cmocka_unit_test(test_uv1_followed),    cmocka_unit_test(test_targets),
         cmocka_unit_test(test_deterministic_threads), cmocka_unit_test(test_open_scene_keeps_air),
-        cmocka_unit_test(test_bad_arguments),
+        cmocka_unit_test(test_texel_adapt),     cmocka_unit_test(test_bad_arguments),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

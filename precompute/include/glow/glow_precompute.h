@@ -147,6 +147,13 @@ typedef struct glow_pc_settings {
                                    diagonal, other systems' triangles occlude its rays and its caches link
                                    their light (its neighbours, the distance limit of its dependencies);
                                    0 = 0.5, at most 4 (--system-reach) */
+    float texel_adapt;          /* generated lightmap charts get up to this many times as many texels per
+                                   area where their surface faces other surfaces within the links' near
+                                   field (an arch, a capital, a pier's foot) as open walls and floors,
+                                   within the same lightmap budget (docs/linker.md "Caches"); a mesh's
+                                   own second UV set keeps its layout. 0 = preset (low and moderate 4,
+                                   high and fine 1), 1 = uniform, at most 8 (--texel-adapt).
+                                   \since 0.2 */
 } glow_pc_settings;
 
 typedef struct glow_pc_stats {
@@ -195,6 +202,8 @@ typedef struct glow_pc_stats {
      * the proxy nodes those links read (bake format 1.4, XREF) */
     uint32_t dependencies;
     uint64_t proxies;
+    float texel_density_max;  /* texels per m of the most concave generated chart (texel_adapt; equal to
+                                 texel_density when uniform) \since 0.2 */
 } glow_pc_stats;
 
 /** Resolves presets: fills every zero field of `settings` from its quality. \since 0.1 */
