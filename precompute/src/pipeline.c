@@ -807,6 +807,8 @@ typedef struct sys_part {
     uint64_t path;
 } sys_part;
 
+#define SYS_SPLIT_BINS 1024u
+
 typedef struct sys_split {
     const glow__scene *sc;
     const double *tri_area;
@@ -815,6 +817,7 @@ typedef struct sys_split {
     double target;
     sys_part *parts;
     uint32_t n, cap;
+    double cross[SYS_SPLIT_BINS + 2]; /* scratch: surface crossing each candidate plane */
 } sys_split;
 
 #define SYS_MAX_DEPTH 60u
@@ -835,8 +838,74 @@ static bool split_systems(sys_split *sp, uint32_t first, uint32_t count, const d
         sp->parts[sp->n++] = (sys_part){first, count, area, depth, path};
         return true;
     }
-    const int axis = (int)(depth % 3u);
-    const double mid = 0.5 * (lo[axis] + hi[axis]);
+    /* The axis: the longest extent of the cell's triangles' centroids (ties: x, y, z). A level is wide
+     * and low: halving y in turn with x and z cut floors from the walls that stand on them (the 4x4
+     * level's floor cells, up to 146 m long, were neighbours of every building along them). Extents
+     * are quantised to 1/64 of the cell, so that an edit of a few centimetres does not flip the choice
+     * where two are about equal. */
+    double cmin[3] = {INFINITY, INFINITY, INFINITY}, cmax[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (uint32_t i = first; i < first + count; ++i)
+        for (int k = 0; k < 3; ++k) {
+            const double c = (double)sp->cent[sp->order[i]][k];
+            cmin[k] = c < cmin[k] ? c : cmin[k];
+            cmax[k] = c > cmax[k] ? c : cmax[k];
+        }
+    int axis = 0;
+    double best = -1.0;
+    const double quantum = fmax(fmax(hi[0] - lo[0], hi[1] - lo[1]), hi[2] - lo[2]) / 64.0;
+    for (int k = 0; k < 3; ++k) {
+        const double q = quantum > 0.0 ? floor((cmax[k] - cmin[k]) / quantum) : cmax[k] - cmin[k];
+        if (q > best) {
+            best = q;
+            axis = k;
+        }
+    }
+    /* The plane: of the cell's SYS_SPLIT_BINS - 1 evenly spaced planes (fixed in the world) within the
+     * middle half of the centroids' range, the one that the least surface crosses (triangles whose
+     * extent along the axis contains it), ties to the nearest the middle: a street between two
+     * buildings, a gap between rooms, rather than through a building, so that one building is one
+     * system or a few and an edit to it changes few systems' trees. Only an edit that adds surface
+     * where a plane was chosen, or moves the centroids' range, moves a border. */
+    const double w = (hi[axis] - lo[axis]) / SYS_SPLIT_BINS;
+    const double mid_c = 0.5 * (cmin[axis] + cmax[axis]), span = cmax[axis] - cmin[axis];
+    double a_lo = ceil((mid_c - 0.25 * span - lo[axis]) / w), a_hi = floor((mid_c + 0.25 * span - lo[axis]) / w);
+    a_lo = fmax(a_lo, 1.0);
+    a_hi = fmin(a_hi, (double)SYS_SPLIT_BINS - 1.0);
+    double mid;
+    if (!(w > 0.0) || !(a_lo <= a_hi)) {
+        mid = 0.5 * (lo[axis] + hi[axis]);
+    } else {
+        const uint32_t b0 = (uint32_t)a_lo, b1 = (uint32_t)a_hi;
+        memset(sp->cross, 0, sizeof sp->cross);
+        for (uint32_t i = first; i < first + count; ++i) { /* difference array over the planes */
+            const uint32_t t = sp->order[i];
+            double e0 = INFINITY, e1 = -INFINITY;
+            for (int c = 0; c < 3; ++c) {
+                const double v = (double)sp->sc->pos[3 * (size_t)t + (size_t)c][axis];
+                e0 = v < e0 ? v : e0;
+                e1 = v > e1 ? v : e1;
+            }
+            /* planes j with lo + j w strictly inside (e0, e1) */
+            double j0 = floor((e0 - lo[axis]) / w) + 1.0, j1 = ceil((e1 - lo[axis]) / w) - 1.0;
+            j0 = fmax(j0, (double)b0);
+            j1 = fmin(j1, (double)b1);
+            if (!(j0 <= j1)) continue;
+            sp->cross[(uint32_t)j0] += sp->tri_area[t];
+            sp->cross[(uint32_t)j1 + 1] -= sp->tri_area[t];
+        }
+        double run = 0.0, best_cross = INFINITY, best_dist = INFINITY;
+        uint32_t pick = b0;
+        for (uint32_t j = b0; j <= b1; ++j) {
+            run += sp->cross[j];
+            const double c = run > 0.0 ? run : 0.0, pos = lo[axis] + j * w, dist = fabs(pos - mid_c);
+            if (c < best_cross * (1.0 - 1e-9) || (c <= best_cross * (1.0 + 1e-9) && dist < best_dist)) {
+                best_cross = c;
+                best_dist = dist;
+                pick = j;
+            }
+        }
+        mid = lo[axis] + pick * w;
+    }
     /* stable: the lower half keeps its order, then the upper half */
     uint32_t nl = 0, nu = 0;
     for (uint32_t i = first; i < first + count; ++i) {

@@ -15,13 +15,17 @@ BUDGET=(--surfels 1024 --links 16 --lightmap-caches 300 --lightmap-detail 1 -q)
 mkdir -p "$T/w" "$T/w1" "$T/one"
 expect 0 "pillar hall in systems of at most 100 m²" "$BIN/glow-bake" builtin:pillar-hall --system-area 100 "${BUDGET[@]}" \
   -o "$T/w/hall.json" --threads 2
-grep -q "systems   4" "$T/out" && pass "  the summary names 4 systems" || { fail "  summary:"; head -3 "$T/out"; }
-python3 - "$T/w/hall.json" <<'PY' && pass "  manifest: 4 systems, areas sum to the scene's 306.33, each <= 100, surfels ~ 1024 x area / 100" || fail "  manifest wrong"
+nsys=$(sed -n 's/^  systems   \([0-9]*\).*/\1/p' "$T/out")
+# 306 m² in cells of at most 100 m²: at least 4; the split at the least crossed of the cell's planes
+# (not its middle) may take a few more
+[ -n "$nsys" ] && [ "$nsys" -ge 4 ] && [ "$nsys" -le 8 ] && pass "  the summary names $nsys systems (4..8)" \
+  || { fail "  summary:"; head -3 "$T/out"; }
+python3 - "$T/w/hall.json" "$nsys" <<'PY' && pass "  manifest: $nsys systems, areas sum to the scene's 306.33, each <= 100, surfels ~ 1024 x area / 100" || fail "  manifest wrong"
 import json, os, sys
 m = json.load(open(sys.argv[1]))
 assert m["glow_world"] == 1 and m["source"] == "builtin:pillar-hall" and m["system_area"] == 100, m
 s = m["systems"]
-assert len(s) == 4, len(s)
+assert len(s) == int(sys.argv[2]), len(s)
 assert abs(sum(x["area"] for x in s) - 306.33) < 0.01, sum(x["area"] for x in s)
 assert sum(x["triangles"] for x in s) == 236
 import re
@@ -48,7 +52,7 @@ for f in hall.json $(files "$T/w/hall.json"); do cmp -s "$T/w/$f" "$T/w1/$f" || 
 [ $same = 1 ] && pass "  the same bytes for 1 and 2 threads"
 expect 0 "again into the same world: every system unchanged" "$BIN/glow-bake" builtin:pillar-hall --system-area 100 \
   "${BUDGET[@]}" -o "$T/w1/hall.json" --threads 2
-grep -q "0 of them baked and 4 unchanged" "$T/out" && pass "  0 baked, 4 kept" || { fail "  summary:"; head -3 "$T/out"; }
+grep -q "0 of them baked and $nsys unchanged" "$T/out" && pass "  0 baked, $nsys kept" || { fail "  summary:"; head -3 "$T/out"; }
 same=1
 for f in hall.json $(files "$T/w/hall.json"); do cmp -s "$T/w/$f" "$T/w1/$f" || { same=0; fail "  $f differs"; }; done
 [ $same = 1 ] && pass "  the same bytes"
