@@ -6,6 +6,7 @@
  *   result.c   glow_result_string
  *   bake.c     glow_bake: load + full validation, and the typed section accessors below
  *   bake/format_util.c  CRC-32, octahedral and half conversions (declared in bake/bake_format.h)
+ *   system.c   glow_system: the solver; world.c  glow_world: systems attached to each other by key
  */
 #ifndef GLOW_RUNTIME_INTERNAL_H
 #define GLOW_RUNTIME_INTERNAL_H
@@ -110,6 +111,12 @@ const void *glow__bake_data(const glow_bake *bake, uint64_t *out_size);
 /* Systems using the bake (glow_bake_destroy refuses while any is live). */
 void glow__bake_retain(const glow_bake *bake);
 void glow__bake_release(const glow_bake *bake);
+
+/* ---------------------------------------------------------------- systems (system.c, for world.c) */
+/* The bake a system was created from, and its label (never NULL for a valid system). */
+const glow_bake *glow__system_bake(const glow_system *system);
+const char *glow__system_label(const glow_system *system);
+uint32_t glow__system_cache_count(const glow_system *system);
 /* The context the bake was loaded with. */
 glow_context *glow__bake_context(const glow_bake *bake);
 

@@ -828,6 +828,10 @@ void glow_system_destroy(glow_system *s) {
     free_system(s);
 }
 
+const glow_bake *glow__system_bake(const glow_system *s) { return s->bake; }
+const char *glow__system_label(const glow_system *s) { return s->label; }
+uint32_t glow__system_cache_count(const glow_system *s) { return s->C; }
+
 /* ------------------------------------------------------------------------------ neighbours */
 /* The proxies' radiance from the attached neighbours' nodes, as their last updates left it; a proxy
  * whose neighbour is not attached keeps what it last read (zero until one was): the documented

@@ -232,6 +232,96 @@ static void test_light_crosses_systems(void **state) {
     close_world(W);
 }
 
+/* glow_world: the same systems added to a world attach themselves by key and update in the order they
+ * were added, as attach_all + run do by hand (the same light); a system streamed out leaves its
+ * dependents its last radiance and may be destroyed; streamed in again, it is attached again. */
+static void test_world_api(void **state) {
+    (void)state;
+    world ref, w;
+    open_world(&ref);
+    assert_true(attach_all(&ref, true) > 0);
+    const double e_ref = run(&ref, 3);
+    close_world(&ref);
+
+    open_world(&w);
+    uint32_t deps = 0;
+    for (uint32_t i = 0; i < w.n; ++i) {
+        glow_bake_info bi;
+        glow_bake_get_info(w.bake[i], &bi);
+        deps += bi.dependency_count;
+    }
+    glow_world *W = NULL;
+    assert_int_equal(glow_world_create(ctx, 0, &W), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_null(W);
+    assert_int_equal(glow_world_create(ctx, w.n, &W), GLOW_OK);
+    glow_world_stats ws;
+    for (uint32_t i = 0; i < w.n; ++i) {
+        assert_int_equal(glow_world_add(W, w.sys[i]), GLOW_OK);
+        assert_int_equal(glow_world_get_stats(W, &ws), GLOW_OK);
+        assert_int_equal(ws.systems, i + 1);
+    }
+    assert_int_equal(glow_world_get_stats(W, &ws), GLOW_OK);
+    assert_int_equal(ws.dependencies_attached, deps); /* every dependency is a member */
+    assert_int_equal(ws.dependencies_missing, 0);
+    assert_int_equal(glow_world_system_count(W), w.n);
+    assert_ptr_equal(glow_world_system(W, 1), w.sys[1]);
+    assert_null(glow_world_system(W, w.n));
+    /* refused: a second add, NULL, a full world */
+    assert_int_equal(glow_world_add(W, w.sys[0]), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(glow_world_add(W, NULL), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(glow_world_remove(W, NULL), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(glow_world_update(NULL, NULL), GLOW_ERROR_INVALID_ARGUMENT);
+    glow_world *one = NULL;
+    assert_int_equal(glow_world_create(ctx, 1, &one), GLOW_OK);
+    assert_int_equal(glow_world_add(one, w.sys[2]), GLOW_OK);
+    assert_int_equal(glow_world_add(one, w.sys[3]), GLOW_ERROR_INVALID_OPERATION); /* full */
+    glow_world_destroy(one);
+    for (uint32_t r = 0; r < 3; ++r) assert_int_equal(glow_world_update(W, NULL), GLOW_OK);
+    const double e_api = run(&w, 0);
+    print_message("glow_world: %u systems, %u dependencies; mean lightmap-cache luma %.6f (by hand %.6f)\n", w.n,
+                  deps, e_api, e_ref);
+    assert_true(fabs(e_api - e_ref) <= 1e-6 * e_ref);
+    assert_int_equal(glow_world_get_stats(W, &ws), GLOW_OK);
+    assert_int_equal(ws.last_update.updates, 3);
+    assert_true(ws.last_update.caches_gathered > 0 && ws.last_update.total_ms > 0.0);
+
+    /* stream system 1 out: detached both ways, then destroyed (a system another reads would not be) */
+    glow_bake_info b1;
+    glow_bake_get_info(w.bake[1], &b1);
+    assert_int_equal(glow_world_remove(W, w.sys[1]), GLOW_OK);
+    assert_int_equal(glow_world_remove(W, w.sys[1]), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(glow_world_get_stats(W, &ws), GLOW_OK);
+    assert_int_equal(ws.systems, w.n - 1);
+    assert_int_equal(ws.dependencies_attached + b1.dependency_count + ws.dependencies_missing, deps);
+    assert_true(ws.dependencies_missing > 0); /* the pillar hall's systems all see each other */
+    glow_system_destroy(w.sys[1]);
+    w.sys[1] = NULL;
+    for (uint32_t r = 0; r < 2; ++r) assert_int_equal(glow_world_update(W, NULL), GLOW_OK); /* reads no freed memory */
+    /* and in again, as a new system from the same bake */
+    assert_int_equal(glow_system_create(ctx,
+                                        &(glow_system_desc){.bake = w.bake[1], .lighting = glow_host_hooks(w.host[1]),
+                                                            .label = w.path[1]},
+                                        &w.sys[1]),
+                     GLOW_OK);
+    glow_system_params p = GLOW_SYSTEM_PARAMS_INIT;
+    p.bounce_iterations = 4;
+    assert_int_equal(glow_system_set_params(w.sys[1], &p), GLOW_OK);
+    assert_int_equal(glow_world_add(W, w.sys[1]), GLOW_OK);
+    assert_int_equal(glow_world_get_stats(W, &ws), GLOW_OK);
+    assert_int_equal(ws.dependencies_attached, deps);
+    assert_int_equal(ws.dependencies_missing, 0);
+    for (uint32_t r = 0; r < 3; ++r) assert_int_equal(glow_world_update(W, NULL), GLOW_OK);
+    const double e_back = run(&w, 0);
+    print_message("streamed out and in again: %.6f\n", e_back);
+    assert_true(fabs(e_back - e_ref) <= 0.02 * e_ref);
+    /* a caches budget shared between the members */
+    assert_int_equal(glow_world_update(W, &(glow_update_desc){.max_caches = 64}), GLOW_OK);
+    assert_int_equal(glow_world_get_stats(W, &ws), GLOW_OK);
+    assert_true(ws.last_update.caches_skipped_budget > 0);
+    glow_world_destroy(W); /* detaches everything: the systems can go */
+    close_world(&w);
+}
+
 /* Resealed bakes (zlib's CRC-32 is the format's) with a bad XREF are refused at load */
 static uint32_t crc32_of(const unsigned char *p, size_t n) { return (uint32_t)crc32(0L, p, (uInt)n); }
 
@@ -336,6 +426,7 @@ static int teardown(void **state) {
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_light_crosses_systems),
+        cmocka_unit_test(test_world_api),
         cmocka_unit_test(test_xref_validated),
     };
     return cmocka_run_group_tests(tests, setup, teardown);

@@ -555,6 +555,54 @@ typedef struct glow_cache_outputs {
  * NULL for a NULL system. \threadsafety Read concurrently, but not during an update. \since 0.1 */
 GLOW_API const glow_cache_outputs *glow_system_outputs(const glow_system *system);
 
+/* ------------------------------------------------------------------------------------ worlds */
+/* A world: the systems of a level baked in systems (glow-bake --system-area) that the host has loaded
+ * now. Adding a system attaches it to the members it depends on and the members that depend on it
+ * (glow_system_set_neighbour, by key); removing it detaches both ways, so its dependents keep its last
+ * radiance and the host may destroy it: systems stream in and out between updates. The world borrows
+ * its systems (the host creates and destroys them, and their bakes) and allocates only at create, so
+ * adding, removing and updating allocate nothing. See docs/runtime.md, "A world of systems". */
+typedef struct glow_world glow_world;
+
+typedef struct glow_world_stats {
+    uint32_t systems;               /* members */
+    uint32_t dependencies_attached; /* the members' dependencies whose system is a member (attached) */
+    uint32_t dependencies_missing;  /* ... whose system is not: their proxies keep their last radiance,
+                                       or zero for a neighbour never attached */
+    glow_update_stats last_update;  /* the last glow_world_update, summed over the members (times, links,
+                                       caches, memory); updates counts the world's successful updates */
+} glow_world_stats;
+
+/** Creates an empty world that holds at most `capacity` systems (1..1048576).
+ * \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT; GLOW_ERROR_OUT_OF_MEMORY. \since 0.2 */
+GLOW_API glow_result glow_world_create(glow_context *context, uint32_t capacity, glow_world **out_world);
+/** Removes every member (detaching them from each other) and frees the world; the systems stay the
+ * host's. NULL is a no-op. \since 0.2 */
+GLOW_API void glow_world_destroy(glow_world *world);
+/** Adds `system` and attaches it both ways to the members of the same world. A system whose bake is not
+ * part of a world (system_key 0) may be added: it links nothing.
+ * \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT (NULL, already a member, or another member with the
+ * same system_key); GLOW_ERROR_INVALID_OPERATION (the world is full, or a member is updating: nothing
+ * attached); GLOW_ERROR_OUT_OF_RANGE (a forged bake, as glow_system_set_neighbour).
+ * \threadsafety Not during glow_world_update or an update of a member. \since 0.2 */
+GLOW_API glow_result glow_world_add(glow_world *world, glow_system *system);
+/** Removes `system` and detaches it both ways: the members that read it keep its last radiance.
+ * The system may then be destroyed. \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT (NULL, not a
+ * member); GLOW_ERROR_INVALID_OPERATION (a member is updating). \since 0.2 */
+GLOW_API glow_result glow_world_remove(glow_world *world, glow_system *system);
+/** The members, in the order they were added (the order glow_world_update updates them). \since 0.2 */
+GLOW_API uint32_t glow_world_system_count(const glow_world *world);
+GLOW_API glow_system *glow_world_system(const glow_world *world, uint32_t index);
+/** Updates every member once, one after another in the order they were added, each with every worker
+ * of the context: light crosses a border with one update of lag. A budget in `desc` (max_caches,
+ * budget_ms) is shared between the members in proportion to their caches; flags, focus points and
+ * converged_epsilon go to each. A member whose update fails (its hook, GLOW_ERROR_HOST_CALLBACK) keeps
+ * its last good outputs and the others still update. Allocates nothing.
+ * \returns GLOW_OK, or the first member's error. \since 0.2 */
+GLOW_API glow_result glow_world_update(glow_world *world, const glow_update_desc *desc);
+/** \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT for NULL. \since 0.2 */
+GLOW_API glow_result glow_world_get_stats(const glow_world *world, glow_world_stats *out_stats);
+
 /* The solver's tables for other backends (the link bit layout, per-surfel arrays) are not part of this
  * API: glow/glow_backend.h, for Glow's own GL backend, tools and the samples' debug views. */
 
