@@ -8,21 +8,34 @@
  * its dependents keep its last radiance (the documented fallback) and the host may destroy it. An
  * update updates the members one after another in the order they were added, each with every worker
  * of the context: light crosses a border with one update of lag, as between two systems attached by
- * hand. A budget (max_caches, budget_ms) is shared between the members in proportion to their
- * caches; the focus points go to every member. */
+ * hand. A caches budget (max_caches) is shared between the members in proportion to their caches; a
+ * time budget (budget_ms) goes to the members by priority (schedule, below); the focus points go to
+ * every member. */
+#include <math.h>
+#include <stdbool.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "runtime_internal.h"
+
+typedef struct member_state {
+    uint32_t stale;  /* world updates since it was last updated */
+    double est_ms;   /* its last update's total time; 0 = never updated */
+    float lo[3], hi[3]; /* its bake's bounds */
+} member_state;
 
 struct glow_world {
     glow_context *ctx;
     uint32_t capacity, count;
     glow_system **sys;  /* [capacity], in the order they were added */
     uint64_t *key;      /* [capacity] each member's bake system_key (0: not a system of a world) */
+    member_state *ms;   /* [capacity] */
+    uint32_t *order;    /* [capacity] scratch: the members by priority */
+    double *prio;       /* [capacity] scratch */
     glow_update_stats stats;
     uint32_t attached;  /* dependencies currently attached over all members */
     uint32_t missing;   /* dependencies whose system is not a member */
+    uint32_t updated;   /* members the last update updated */
 };
 
 glow_result glow_world_create(glow_context *ctx, uint32_t capacity, glow_world **out) {
@@ -39,9 +52,15 @@ glow_result glow_world_create(glow_context *ctx, uint32_t capacity, glow_world *
     w->capacity = capacity;
     w->sys = glow__ctx_alloc(ctx, (size_t)capacity * sizeof *w->sys, 0);
     w->key = glow__ctx_alloc(ctx, (size_t)capacity * sizeof *w->key, 0);
-    if (!w->sys || !w->key) {
+    w->ms = glow__ctx_alloc(ctx, (size_t)capacity * sizeof *w->ms, 0);
+    w->order = glow__ctx_alloc(ctx, (size_t)capacity * sizeof *w->order, 0);
+    w->prio = glow__ctx_alloc(ctx, (size_t)capacity * sizeof *w->prio, 0);
+    if (!w->sys || !w->key || !w->ms || !w->order || !w->prio) {
         glow__ctx_free(ctx, w->sys);
         glow__ctx_free(ctx, w->key);
+        glow__ctx_free(ctx, w->ms);
+        glow__ctx_free(ctx, w->order);
+        glow__ctx_free(ctx, w->prio);
         glow__ctx_free(ctx, w);
         goto oom;
     }
@@ -131,6 +150,9 @@ glow_result glow_world_add(glow_world *w, glow_system *s) {
     }
     w->sys[w->count] = s;
     w->key[w->count] = bi.system_key;
+    w->ms[w->count] = (member_state){.stale = 0, .est_ms = 0.0};
+    memcpy(w->ms[w->count].lo, bi.bounds_min, sizeof w->ms[w->count].lo);
+    memcpy(w->ms[w->count].hi, bi.bounds_max, sizeof w->ms[w->count].hi);
     w->count++;
     recount(w);
     return GLOW_OK;
@@ -156,6 +178,7 @@ glow_result glow_world_remove(glow_world *w, glow_system *s) {
     if (r != GLOW_OK) return r; /* only while a member updates: nothing else can fail to detach */
     memmove(w->sys + i, w->sys + i + 1, (size_t)(w->count - i - 1) * sizeof *w->sys);
     memmove(w->key + i, w->key + i + 1, (size_t)(w->count - i - 1) * sizeof *w->key);
+    memmove(w->ms + i, w->ms + i + 1, (size_t)(w->count - i - 1) * sizeof *w->ms);
     w->count--;
     recount(w);
     return GLOW_OK;
@@ -167,6 +190,9 @@ void glow_world_destroy(glow_world *w) {
     glow_context *ctx = w->ctx;
     glow__ctx_free(ctx, w->sys);
     glow__ctx_free(ctx, w->key);
+    glow__ctx_free(ctx, w->ms);
+    glow__ctx_free(ctx, w->order);
+    glow__ctx_free(ctx, w->prio);
     glow__ctx_free(ctx, w);
 }
 
@@ -176,43 +202,116 @@ glow_system *glow_world_system(const glow_world *w, uint32_t index) {
     return w && index < w->count ? w->sys[index] : NULL;
 }
 
+static void add_stats(glow_update_stats *sum, const glow_update_stats *st) {
+    sum->surfel_lighting_ms += st->surfel_lighting_ms;
+    sum->host_ms += st->host_ms;
+    sum->pull_ms += st->pull_ms;
+    sum->cache_lighting_ms += st->cache_lighting_ms;
+    sum->output_ms += st->output_ms;
+    sum->total_ms += st->total_ms;
+    sum->links += st->links;
+    sum->caches_gathered += st->caches_gathered;
+    sum->caches_skipped_budget += st->caches_skipped_budget;
+    sum->caches_skipped_converged += st->caches_skipped_converged;
+    sum->outputs_skipped += st->outputs_skipped;
+    sum->link_mode = st->link_mode;
+    sum->kernel = st->kernel;
+}
+
+/* A time budget (budget_ms): the members by priority, each (staleness + 1) x (1 + 4 f), f the largest
+ * over the focus points of 1 / (1 + d^2 / r^2), d the distance from the point to the member's bounds
+ * (0 inside), r the focus radius (0: a tenth of the members' bounds diagonal), as the groups of caches
+ * within a system (glow_update_desc); ties by order added. The first always updates, with the whole
+ * budget as its own; each next one only when its last update's time fits what is left, with what is
+ * left as its budget. A member never updated has no time yet and updates. The others keep their
+ * outputs and count as skipped (their caches in caches_skipped_budget). */
+static uint32_t schedule(glow_world *w, const glow_update_desc *desc) {
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (uint32_t i = 0; i < w->count; ++i)
+        for (int k = 0; k < 3; ++k) {
+            lo[k] = fminf(lo[k], w->ms[i].lo[k]);
+            hi[k] = fmaxf(hi[k], w->ms[i].hi[k]);
+        }
+    double diag2 = 0.0;
+    for (int k = 0; k < 3; ++k) diag2 += (double)(hi[k] - lo[k]) * (hi[k] - lo[k]);
+    double r = desc->focus_radius > 0.0f ? desc->focus_radius : 0.1 * sqrt(diag2);
+    if (!(r > 0.0)) r = 1.0;
+    for (uint32_t i = 0; i < w->count; ++i) {
+        double f = 0.0;
+        for (uint32_t p = 0; p < desc->focus_count; ++p) {
+            double d2 = 0.0;
+            for (int k = 0; k < 3; ++k) {
+                const double x = desc->focus[3 * p + k];
+                const double e = x < w->ms[i].lo[k] ? w->ms[i].lo[k] - x : x > w->ms[i].hi[k] ? x - w->ms[i].hi[k] : 0.0;
+                d2 += e * e;
+            }
+            f = fmax(f, 1.0 / (1.0 + d2 / (r * r)));
+        }
+        w->prio[i] = (w->ms[i].stale + 1.0) * (1.0 + 4.0 * f);
+        w->order[i] = i;
+    }
+    for (uint32_t i = 1; i < w->count; ++i) { /* insertion sort: stable, no allocation */
+        const uint32_t v = w->order[i];
+        uint32_t j = i;
+        while (j > 0 && w->prio[w->order[j - 1]] < w->prio[v]) {
+            w->order[j] = w->order[j - 1];
+            --j;
+        }
+        w->order[j] = v;
+    }
+    return w->count;
+}
+
 glow_result glow_world_update(glow_world *w, const glow_update_desc *desc) {
     if (!w) return GLOW_ERROR_INVALID_ARGUMENT;
+    if (desc && (!(desc->budget_ms >= 0.0f) || !isfinite(desc->budget_ms) || !(desc->focus_radius >= 0.0f) ||
+                 (desc->focus_count && !desc->focus))) {
+        GLOW__LOG_ERROR(w->ctx, GLOW_ERROR_INVALID_ARGUMENT,
+                        "glow_world_update: budget_ms and focus_radius must be finite and >= 0, focus given with focus_count");
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
     uint64_t caches = 0;
     for (uint32_t i = 0; i < w->count; ++i) caches += glow__system_cache_count(w->sys[i]);
     glow_update_stats sum;
     memset(&sum, 0, sizeof sum);
     glow_result first = GLOW_OK;
-    for (uint32_t i = 0; i < w->count; ++i) {
+    const bool timed = desc && desc->budget_ms > 0.0f;
+    if (timed) schedule(w, desc);
+    double left = timed ? desc->budget_ms : 0.0;
+    w->updated = 0;
+    for (uint32_t n = 0; n < w->count; ++n) {
+        const uint32_t i = timed ? w->order[n] : n;
         glow_update_desc d = desc ? *desc : (glow_update_desc){0};
-        const double share = caches ? (double)glow__system_cache_count(w->sys[i]) / (double)caches : 0.0;
-        if (desc && desc->max_caches) {
-            const double m = (double)desc->max_caches * share;
+        if (timed) {
+            if (n > 0 && (left <= 0.0 || w->ms[i].est_ms > left)) { /* does not fit: keeps its outputs */
+                w->ms[i].stale++;
+                sum.caches_skipped_budget += glow__system_cache_count(w->sys[i]);
+                continue;
+            }
+            d.budget_ms = (float)fmax(left, 1e-3);
+        }
+        if (desc && desc->max_caches) { /* a caches budget: shared by caches */
+            const double m = caches ? (double)desc->max_caches * glow__system_cache_count(w->sys[i]) / (double)caches : 0.0;
             d.max_caches = m < 1.0 ? 1u : (uint32_t)m;
         }
-        if (desc && desc->budget_ms > 0.0f) d.budget_ms = (float)((double)desc->budget_ms * share);
-        if (desc && desc->budget_ms > 0.0f && !(d.budget_ms > 0.0f)) d.budget_ms = 1e-3f;
         const glow_result r = glow_system_update(w->sys[i], &d);
         if (r != GLOW_OK) { /* the others still update: one system's failed hook stops no one */
             if (first == GLOW_OK) first = r;
+            w->ms[i].stale++;
             continue;
         }
         glow_update_stats st;
         glow_system_get_stats(w->sys[i], &st);
-        sum.surfel_lighting_ms += st.surfel_lighting_ms;
-        sum.host_ms += st.host_ms;
-        sum.pull_ms += st.pull_ms;
-        sum.cache_lighting_ms += st.cache_lighting_ms;
-        sum.output_ms += st.output_ms;
-        sum.total_ms += st.total_ms;
-        sum.links += st.links;
-        sum.caches_gathered += st.caches_gathered;
-        sum.caches_skipped_budget += st.caches_skipped_budget;
-        sum.caches_skipped_converged += st.caches_skipped_converged;
+        add_stats(&sum, &st);
+        w->ms[i].stale = 0;
+        w->ms[i].est_ms = st.total_ms > 0.0 ? st.total_ms : 1e-3;
+        left -= st.total_ms;
+        w->updated++;
+    }
+    for (uint32_t i = 0; i < w->count; ++i) { /* memory of every member, updated or not */
+        glow_update_stats st;
+        glow_system_get_stats(w->sys[i], &st);
         sum.memory_bytes += st.memory_bytes;
-        sum.outputs_skipped += st.outputs_skipped;
-        sum.link_mode = st.link_mode;
-        sum.kernel = st.kernel;
     }
     sum.updates = w->stats.updates + (first == GLOW_OK ? 1u : 0u);
     w->stats = sum;
@@ -226,5 +325,6 @@ glow_result glow_world_get_stats(const glow_world *w, glow_world_stats *out) {
     out->dependencies_attached = w->attached;
     out->dependencies_missing = w->missing;
     out->last_update = w->stats;
+    out->systems_updated = w->updated;
     return GLOW_OK;
 }

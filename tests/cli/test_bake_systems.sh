@@ -61,6 +61,31 @@ first=$(files "$T/w/hall.json" | cut -d' ' -f3)
 expect 0 "a system updates in the runtime (glow-bench, exact host)" "$BIN/glow-bench" "$T/w/$first" \
   "$ROOT/scenes/pillar-hall.json" --frames 2 --warmup 1 --threads 1 --no-machine -q
 
+# the whole world in the runtime (glow-bench WORLD.json: every system in one glow_world, issue 17 item 1):
+# all systems update, their dependencies attached; a time budget far too small updates one a frame
+expect 0 "the world updates in the runtime (glow-bench WORLD.json)" "$BIN/glow-bench" "$T/w/hall.json" \
+  "$ROOT/scenes/pillar-hall.json" --frames 3 --warmup 1 --threads 1 --no-machine -q --json
+cp "$T/out" "$T/bench_all.json"
+expect 0 "the world under a 0.001 ms budget (glow-bench --budget-ms 0.001 --walk)" "$BIN/glow-bench" "$T/w/hall.json" \
+  "$ROOT/scenes/pillar-hall.json" --frames 3 --warmup 1 --threads 1 --no-machine -q --json --budget-ms 0.001 --walk
+cp "$T/out" "$T/bench_budget.json"
+python3 - "$T/bench_all.json" "$T/bench_budget.json" "$nsys" <<'PY' && pass "  every system updated and linked; under the budget one a frame, its error against the twin reported" \
+  || fail "  glow-bench's world report is wrong"
+import json, sys
+def load(p):
+    t = open(p).read()
+    return json.loads(t[t.index("{"):])
+a, b, n = load(sys.argv[1]), load(sys.argv[2]), int(sys.argv[3])
+assert a["systems"] == n and a["median_systems_updated"] == n and a["dependencies_attached"] > 0, a
+assert a["median_update_ms"] > 0 and a["median_caches_gathered"] == a["caches"], a
+assert b["systems"] == n and b["median_systems_updated"] == 1 and b["median_caches_gathered"] < b["caches"], b
+assert b["budget"]["luma_error_mean"] > 0 and "walk_near_error_mean" in b["budget"], b
+PY
+printf '{"glow_world": 1, "systems": []}' > "$T/empty.json"
+expect 1 "glow-bench on a manifest with no systems" "$BIN/glow-bench" "$T/empty.json" "$ROOT/scenes/pillar-hall.json" \
+  --frames 1 --no-machine -q
+err_has "empty.json: not a world manifest"
+
 # An incremental re-bake (issue 16, item 3): 16 boxes in a 4 x 4 grid, 3 m apart; one box moves. Only
 # the systems whose inputs changed are baked again, and the world is byte for byte a full bake of the
 # edited scene; the file of the box's old system is gone.

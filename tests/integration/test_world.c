@@ -318,6 +318,36 @@ static void test_world_api(void **state) {
     assert_int_equal(glow_world_update(W, &(glow_update_desc){.max_caches = 64}), GLOW_OK);
     assert_int_equal(glow_world_get_stats(W, &ws), GLOW_OK);
     assert_true(ws.last_update.caches_skipped_budget > 0);
+    /* a time budget far too small for one member: one member a frame, the one nearest the focus first,
+     * then the stalest in turn: a member far from it waits at most about 5x as long as one beside it
+     * (priority (staleness + 1) x (1 + 4 f)), so none starves */
+    uint64_t seen[MAXS];
+    glow_bake_info bf;
+    glow_bake_get_info(w.bake[2], &bf);
+    float focus[3];
+    for (int k = 0; k < 3; ++k) focus[k] = 0.5f * (bf.bounds_min[k] + bf.bounds_max[k]);
+    for (uint32_t i = 0; i < w.n; ++i) {
+        glow_update_stats us;
+        glow_system_get_stats(w.sys[i], &us);
+        seen[i] = us.updates;
+    }
+    const glow_update_desc tiny = {.budget_ms = 1e-3f, .focus = focus, .focus_count = 1};
+    assert_int_equal(glow_world_update(W, &tiny), GLOW_OK);
+    assert_int_equal(glow_world_get_stats(W, &ws), GLOW_OK);
+    assert_int_equal(ws.systems_updated, 1);
+    assert_true(ws.last_update.caches_skipped_budget > 0);
+    for (uint32_t i = 0; i < w.n; ++i) {
+        glow_update_stats us;
+        glow_system_get_stats(w.sys[i], &us);
+        assert_int_equal(us.updates, seen[i] + (i == 2 ? 1u : 0u)); /* the focus's system */
+    }
+    for (uint32_t f = 0; f < 6 * w.n; ++f) assert_int_equal(glow_world_update(W, &tiny), GLOW_OK);
+    for (uint32_t i = 0; i < w.n; ++i) {
+        glow_update_stats us;
+        glow_system_get_stats(w.sys[i], &us);
+        assert_true(us.updates > seen[i]); /* every member got its turn */
+    }
+    assert_int_equal(glow_world_update(W, &(glow_update_desc){.budget_ms = -1.0f}), GLOW_ERROR_INVALID_ARGUMENT);
     glow_world_destroy(W); /* detaches everything: the systems can go */
     close_world(&w);
 }

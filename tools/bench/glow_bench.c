@@ -58,7 +58,8 @@ static void usage(FILE *f) {
             "                  [--probe X,Y,Z]... [--no-machine] [--backend cpu|gl]\n"
             "                  [--budget-ms MS] [--budget-caches N] [--converge EPS] [--focus X,Y,Z] [--still [--keep-lighting]]\n"
             "                  [--json] [-q]\n"
-            "  BAKE   a bake written by glow-bake;  SCENE  its scene description JSON (docs/scene-format.md)\n"
+            "  BAKE   a bake written by glow-bake, or a world manifest (glow-bake --system-area: every system in one\n"
+            "         glow_world, one host each, CPU backend);  SCENE  its scene description JSON (docs/scene-format.md)\n"
             "  --frames N      timed updates (default 60); --warmup N untimed first (default 5)\n"
             "  --threads N     runtime workers (default: one per online CPU); the machine probes use the same\n"
             "  --luma/--chroma SH bands (default: the bake's; chroma = luma)\n"
@@ -255,6 +256,256 @@ static void animate(const glow_scene_light *base, glow_scene_light *out, uint32_
     }
 }
 
+/* ------------------------------------------------------------------------------------ worlds */
+/* BAKE a world manifest (glow-bake --system-area): every system loaded, one host each (shadows from
+ * its own GEOM: the other systems' triangles do not shadow it), all in a glow_world, updated as one
+ * (glow_world_update). With a budget an unbudgeted twin world runs the same frames (untimed) and the
+ * report gives the budget's cost as for one system; --walk walks the focus across the world's bounds. */
+#define WORLD_MAX 1024u
+
+typedef struct world_set {
+    uint32_t n;
+    glow_bake *bake[WORLD_MAX];
+    glow_host *host[WORLD_MAX];
+    glow_system *sys[WORLD_MAX], *twin[WORLD_MAX];
+    glow_cache_info *cinfo[WORLD_MAX];
+} world_set;
+
+static int is_world(const char *path) {
+    const size_t n = strlen(path);
+    return n > 5 && strcmp(path + n - 5, ".json") == 0;
+}
+
+static int run_world(options *o, glow_scene_desc *scene, glow_logger logger) {
+    int rc = 1;
+    glow_result r = GLOW_OK;
+    world_set *ws = calloc(1, sizeof *ws);
+    char *text = NULL;
+    cJSON *man = NULL;
+    glow_context *ctx = NULL;
+    glow_world *W = NULL, *T = NULL;
+    double *v_total = NULL, *v_wall = NULL, *v_upd = NULL, *v_err = NULL, *v_errn = NULL, *v_gath = NULL;
+    if (!ws) goto done;
+    FILE *f = fopen(o->bake, "rb");
+    if (!f) {
+        fprintf(stderr, "glow-bench: %s: cannot open the world manifest\n", o->bake);
+        goto done;
+    }
+    fseek(f, 0, SEEK_END);
+    const long size = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    text = size > 0 ? malloc((size_t)size + 1) : NULL;
+    if (!text || fread(text, 1, (size_t)size, f) != (size_t)size) {
+        fclose(f);
+        fprintf(stderr, "glow-bench: %s: cannot read the world manifest\n", o->bake);
+        goto done;
+    }
+    fclose(f);
+    text[size] = 0;
+    man = cJSON_Parse(text);
+    const cJSON *systems = man ? cJSON_GetObjectItemCaseSensitive(man, "systems") : NULL;
+    if (!man || !cJSON_IsNumber(cJSON_GetObjectItemCaseSensitive(man, "glow_world")) || !cJSON_IsArray(systems) ||
+        cJSON_GetArraySize(systems) < 1 || cJSON_GetArraySize(systems) > (int)WORLD_MAX) {
+        fprintf(stderr, "glow-bench: %s: not a world manifest (glow_world, systems[1..%u]; glow-bake --system-area)\n",
+                o->bake, WORLD_MAX);
+        goto done;
+    }
+    char dir[4096];
+    snprintf(dir, sizeof dir, "%s", o->bake);
+    char *slash = strrchr(dir, '/');
+    if (slash) slash[1] = 0;
+    else dir[0] = 0;
+    r = glow_context_create(
+        &(glow_context_desc){.api_version = GLOW_VERSION, .logger = logger, .tasks = {.worker_count = o->threads}}, &ctx);
+    if (r != GLOW_OK) goto done;
+    const bool budget = o->budget_ms > 0.0f || o->budget_caches || o->converge > 0.0f;
+    const glow_system_params params = {.bounce_intensity = 1.0f, .emission_scale = scene->emission_scale,
+                                       .bounce_iterations = o->iterations};
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    uint64_t caches = 0, surfels = 0;
+    const cJSON *it;
+    cJSON_ArrayForEach(it, systems) {
+        const cJSON *file = cJSON_GetObjectItemCaseSensitive(it, "file");
+        if (!cJSON_IsString(file)) {
+            fprintf(stderr, "glow-bench: %s: a system without a \"file\"\n", o->bake);
+            goto done;
+        }
+        char path[8192];
+        snprintf(path, sizeof path, "%s%s", dir, file->valuestring);
+        const uint32_t i = ws->n++;
+        if ((r = glow_bake_load_file(ctx, path, &ws->bake[i])) != GLOW_OK) goto done;
+        glow_bake_info bi;
+        glow_bake_get_info(ws->bake[i], &bi);
+        for (int k = 0; k < 3; ++k) {
+            lo[k] = fminf(lo[k], bi.bounds_min[k]);
+            hi[k] = fmaxf(hi[k], bi.bounds_max[k]);
+        }
+        caches += bi.cache_count;
+        surfels += bi.surfel_count;
+        glow_host_desc hd = glow_host_desc_from_scene(scene, ws->bake[i], o->host);
+        hd.logger = logger;
+        if ((r = glow_host_create(&hd, &ws->host[i])) != GLOW_OK) goto done;
+        glow_system_desc sd = {.bake = ws->bake[i], .lighting = glow_host_hooks(ws->host[i]), .sh_bands_luma = o->luma,
+                               .sh_bands_chroma = o->chroma, .label = file->valuestring, .link_mode = o->link_mode};
+        if ((r = glow_system_create(ctx, &sd, &ws->sys[i])) != GLOW_OK ||
+            (r = glow_system_set_params(ws->sys[i], &params)) != GLOW_OK)
+            goto done;
+        if (budget && ((r = glow_system_create(ctx, &sd, &ws->twin[i])) != GLOW_OK ||
+                       (r = glow_system_set_params(ws->twin[i], &params)) != GLOW_OK))
+            goto done;
+        ws->cinfo[i] = malloc(((size_t)bi.cache_count + 1) * sizeof *ws->cinfo[i]);
+        if (!ws->cinfo[i] || (r = glow_bake_get_caches(ws->bake[i], 0, bi.cache_count, ws->cinfo[i])) != GLOW_OK) goto done;
+    }
+    if ((r = glow_world_create(ctx, ws->n, &W)) != GLOW_OK || (budget && (r = glow_world_create(ctx, ws->n, &T)) != GLOW_OK))
+        goto done;
+    for (uint32_t i = 0; i < ws->n; ++i)
+        if ((r = glow_world_add(W, ws->sys[i])) != GLOW_OK || (T && (r = glow_world_add(T, ws->twin[i])) != GLOW_OK)) goto done;
+    glow_world_stats wst;
+    glow_world_get_stats(W, &wst);
+    float diag = 0.0f;
+    for (int k = 0; k < 3; ++k) diag += (hi[k] - lo[k]) * (hi[k] - lo[k]);
+    diag = sqrtf(diag);
+    const uint32_t n = o->frames, total = o->warmup + o->frames;
+    v_total = calloc(n, sizeof(double)); v_wall = calloc(n, sizeof(double)); v_upd = calloc(n, sizeof(double));
+    v_err = calloc(n, sizeof(double)); v_errn = calloc(n, sizeof(double)); v_gath = calloc(n, sizeof(double));
+    if (!v_total || !v_wall || !v_upd || !v_err || !v_errn || !v_gath) goto done;
+    glow_update_desc ud = {0};
+    if (!o->has_focus && scene->has_camera) {
+        memcpy(o->focus, scene->camera.position, sizeof o->focus);
+        o->has_focus = 1;
+    }
+    if (budget)
+        ud = (glow_update_desc){.max_caches = o->budget_caches, .budget_ms = o->budget_ms, .converged_epsilon = o->converge,
+                                .focus = o->has_focus ? o->focus : NULL, .focus_count = o->has_focus ? 1u : 0u};
+    const bool walk = o->walk && budget;
+    float walk_a[3], walk_b[3];
+    if (walk) {
+        const int ax = hi[0] - lo[0] >= hi[2] - lo[2] ? 0 : 2;
+        for (int k = 0; k < 3; ++k) walk_a[k] = walk_b[k] = 0.5f * (lo[k] + hi[k]);
+        if (scene->has_camera) walk_a[1] = walk_b[1] = scene->camera.position[1];
+        walk_a[ax] = lo[ax] + 0.05f * (hi[ax] - lo[ax]);
+        walk_b[ax] = hi[ax] - 0.05f * (hi[ax] - lo[ax]);
+        ud.focus = o->focus;
+        ud.focus_count = 1;
+    }
+    const float near_r = 0.1f * diag;
+    for (uint32_t fr = 0; fr < total; ++fr) {
+        if (walk) {
+            const float u = total > 1 ? (float)fr / (float)(total - 1) : 0.0f;
+            for (int k = 0; k < 3; ++k) o->focus[k] = walk_a[k] + u * (walk_b[k] - walk_a[k]);
+        }
+        if (!o->still && scene->light_count > 0) {
+            glow_scene_light l;
+            animate(&scene->lights[0], &l, fr, total, 0.05f * diag);
+            for (uint32_t i = 0; i < ws->n; ++i)
+                if ((r = glow_host_set_light(ws->host[i], 0, &l)) != GLOW_OK) goto done;
+        }
+        const double t0 = now_ms();
+        if ((r = glow_world_update(W, budget ? &ud : NULL)) != GLOW_OK) goto done;
+        const double t1 = now_ms();
+        if (T && (r = glow_world_update(T, NULL)) != GLOW_OK) goto done; /* untimed reference */
+        glow_world_get_stats(W, &wst);
+        if (fr < o->warmup) continue;
+        const uint32_t i = fr - o->warmup;
+        v_wall[i] = t1 - t0;
+        v_total[i] = wst.last_update.total_ms;
+        v_upd[i] = wst.systems_updated;
+        v_gath[i] = wst.last_update.caches_gathered;
+        if (!T) continue;
+        double num = 0.0, den = 0.0, numn = 0.0, denn = 0.0;
+        for (uint32_t s = 0; s < ws->n; ++s) {
+            const glow_cache_outputs *a = glow_system_outputs(ws->sys[s]), *b = glow_system_outputs(ws->twin[s]);
+            for (uint32_t c = 0; c < a->cache_count; ++c) {
+                const double x = a->cache_sh[(size_t)c * a->coeff_count], y = b->cache_sh[(size_t)c * b->coeff_count];
+                num += fabs(x - y);
+                den += fabs(y);
+                float d[3];
+                for (int k = 0; k < 3; ++k) d[k] = ws->cinfo[s][c].position[k] - o->focus[k];
+                if (walk && d[0] * d[0] + d[1] * d[1] + d[2] * d[2] <= near_r * near_r) {
+                    numn += fabs(x - y);
+                    denn += fabs(y);
+                }
+            }
+        }
+        v_err[i] = den > 0.0 ? num / den : 0.0;
+        v_errn[i] = denn > 0.0 ? numn / denn : 0.0;
+    }
+    double e_mean = 0.0, en_mean = 0.0, en_last = 0.0;
+    const uint32_t q0 = n - n / 4;
+    for (uint32_t i = 0; i < n; ++i) {
+        e_mean += v_err[i] / n;
+        en_mean += v_errn[i] / n;
+        if (i >= q0) en_last += v_errn[i] / (double)(n - q0);
+    }
+    const double m_wall = glow_cli_median(v_wall, n), m_total = glow_cli_median(v_total, n),
+                 m_upd = glow_cli_median(v_upd, n), m_gath = glow_cli_median(v_gath, n);
+    const double e_med = glow_cli_median(v_err, n), en_med = glow_cli_median(v_errn, n);
+    if (o->json) {
+        cJSON *jo = cJSON_CreateObject();
+        if (!jo) goto done;
+        cJSON_AddStringToObject(jo, "world", o->bake);
+        cJSON_AddNumberToObject(jo, "systems", ws->n);
+        cJSON_AddNumberToObject(jo, "surfels", (double)surfels);
+        cJSON_AddNumberToObject(jo, "caches", (double)caches);
+        cJSON_AddNumberToObject(jo, "dependencies_attached", wst.dependencies_attached);
+        cJSON_AddNumberToObject(jo, "frames", n);
+        glow_json_num(jo, "median_update_ms", m_wall);
+        glow_json_num(jo, "median_systems_ms", m_total);
+        glow_json_num(jo, "median_systems_updated", m_upd);
+        glow_json_num(jo, "median_caches_gathered", m_gath);
+        glow_json_num(jo, "memory_mib", (double)wst.last_update.memory_bytes / (1024.0 * 1024.0));
+        if (budget) {
+            cJSON *jb = cJSON_AddObjectToObject(jo, "budget");
+            glow_json_num(jb, "budget_ms", o->budget_ms);
+            cJSON_AddNumberToObject(jb, "budget_caches", o->budget_caches);
+            glow_json_num(jb, "luma_error_mean", e_mean);
+            glow_json_num(jb, "luma_error_median", e_med);
+            if (walk) {
+                glow_json_num(jb, "walk_near_radius", near_r);
+                glow_json_num(jb, "walk_near_error_mean", en_mean);
+                glow_json_num(jb, "walk_near_error_median", en_med);
+                glow_json_num(jb, "walk_near_error_last_quarter", en_last);
+            }
+        }
+        if (glow_json_print(jo) != 0) goto done;
+    } else {
+        printf("glow-bench %s + %s: a world of %u systems (%u dependencies attached), %llu surfels, %llu caches, "
+               "%s host per system\n",
+               o->bake, o->scene, ws->n, wst.dependencies_attached, (unsigned long long)surfels,
+               (unsigned long long)caches, o->host == GLOW_HOST_KIND_EXACT ? "exact" : "shadow-map");
+        printf("memory %.1f MiB; median of %u world updates: %.3f ms (the systems' own totals %.3f ms), %.0f of %u "
+               "systems updated, %.0f caches gathered\n",
+               (double)wst.last_update.memory_bytes / (1024.0 * 1024.0), n, m_wall, m_total, m_upd, ws->n, m_gath);
+        if (budget)
+            printf("budget (%.3g ms, %u caches): the caches' luma against an unbudgeted twin world: error mean %.4f, "
+                   "median %.4f (relative L1)\n",
+                   (double)o->budget_ms, o->budget_caches, e_mean, e_med);
+        if (walk)
+            printf("walk: the focus crosses the world (%.3g, %.3g, %.3g) -> (%.3g, %.3g, %.3g); caches within %.3g of it: "
+                   "error mean %.4f, median %.4f, last quarter of the walk %.4f\n",
+                   walk_a[0], walk_a[1], walk_a[2], walk_b[0], walk_b[1], walk_b[2], (double)near_r, en_mean, en_med, en_last);
+    }
+    rc = 0;
+done:
+    if (rc != 0 && r != GLOW_OK) fprintf(stderr, "glow-bench: failed: %s\n", glow_result_string(r));
+    glow_world_destroy(W);
+    glow_world_destroy(T);
+    for (uint32_t i = 0; ws && i < ws->n; ++i) {
+        glow_system_destroy(ws->twin[i]);
+        glow_system_destroy(ws->sys[i]);
+        glow_host_destroy(ws->host[i]);
+        free(ws->cinfo[i]);
+    }
+    for (uint32_t i = 0; ws && i < ws->n; ++i) glow_bake_destroy(ws->bake[i]);
+    free(v_total); free(v_wall); free(v_upd); free(v_err); free(v_errn); free(v_gath);
+    glow_context_destroy(ctx);
+    cJSON_Delete(man);
+    free(text);
+    free(ws);
+    glow_scene_free(scene);
+    return rc;
+}
+
 int main(int argc, char **argv) {
     options o;
     if (!parse_args(argc, argv, &o)) {
@@ -268,6 +519,15 @@ int main(int argc, char **argv) {
     if (glow_scene_load(o.scene, &logger, &scene, msg, sizeof msg) != GLOW_OK) {
         fprintf(stderr, "glow-bench: %s\n", msg);
         return 1;
+    }
+    if (is_world(o.bake)) {
+        if (o.gl) {
+            fprintf(stderr, "glow-bench: --backend gl: worlds run on the CPU backend only (the GL backend refuses "
+                            "bakes with proxies)\n");
+            glow_scene_free(&scene);
+            return 2;
+        }
+        return run_world(&o, &scene, logger);
     }
     glow_context *ctx = NULL;
     glow_bake *bake = NULL;

@@ -569,8 +569,12 @@ typedef struct glow_world_stats {
     uint32_t dependencies_attached; /* the members' dependencies whose system is a member (attached) */
     uint32_t dependencies_missing;  /* ... whose system is not: their proxies keep their last radiance,
                                        or zero for a neighbour never attached */
-    glow_update_stats last_update;  /* the last glow_world_update, summed over the members (times, links,
-                                       caches, memory); updates counts the world's successful updates */
+    glow_update_stats last_update;  /* the last glow_world_update, summed over the members it updated
+                                       (times, links, caches; a member a time budget skipped adds its
+                                       caches to caches_skipped_budget), memory over all members;
+                                       updates counts the world's successful updates */
+    uint32_t systems_updated;       /* members the last glow_world_update updated (a time budget may
+                                       skip some: they keep their outputs) */
 } glow_world_stats;
 
 /** Creates an empty world that holds at most `capacity` systems (1..1048576).
@@ -593,12 +597,17 @@ GLOW_API glow_result glow_world_remove(glow_world *world, glow_system *system);
 /** The members, in the order they were added (the order glow_world_update updates them). \since 0.2 */
 GLOW_API uint32_t glow_world_system_count(const glow_world *world);
 GLOW_API glow_system *glow_world_system(const glow_world *world, uint32_t index);
-/** Updates every member once, one after another in the order they were added, each with every worker
- * of the context: light crosses a border with one update of lag. A budget in `desc` (max_caches,
- * budget_ms) is shared between the members in proportion to their caches; flags, focus points and
- * converged_epsilon go to each. A member whose update fails (its hook, GLOW_ERROR_HOST_CALLBACK) keeps
- * its last good outputs and the others still update. Allocates nothing.
- * \returns GLOW_OK, or the first member's error. \since 0.2 */
+/** Updates the members once, one after another, each with every worker of the context: light crosses
+ * a border with one update of lag. Without a time budget every member updates, in the order added; a
+ * caches budget (max_caches) is shared between them in proportion to their caches. With budget_ms the
+ * members go by priority, the stalest and those nearest the focus points first (as the groups of
+ * caches within a system; docs/runtime.md "A world of systems"): the first updates with the whole
+ * budget as its own, each next one only if its last update's time fits what is left; the others keep
+ * their outputs (glow_world_stats.systems_updated). Flags, focus points and converged_epsilon go to
+ * each. A member whose update fails (its hook, GLOW_ERROR_HOST_CALLBACK) keeps its last good outputs
+ * and the others still update. Allocates nothing.
+ * \returns GLOW_OK, or the first member's error; GLOW_ERROR_INVALID_ARGUMENT for a NULL world, a
+ * negative or non-finite budget_ms or focus_radius, or focus_count with NULL focus. \since 0.2 */
 GLOW_API glow_result glow_world_update(glow_world *world, const glow_update_desc *desc);
 /** \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT for NULL. \since 0.2 */
 GLOW_API glow_result glow_world_get_stats(const glow_world *world, glow_world_stats *out_stats);
