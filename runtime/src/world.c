@@ -283,7 +283,8 @@ glow_result glow_world_update(glow_world *w, const glow_update_desc *desc) {
         const uint32_t i = timed ? w->order[n] : n;
         glow_update_desc d = desc ? *desc : (glow_update_desc){0};
         if (timed) {
-            if (n > 0 && (left <= 0.0 || w->ms[i].est_ms > left)) { /* does not fit: keeps its outputs */
+            const bool fresh = w->ms[i].est_ms == 0.0; /* never updated: no time yet, and no light */
+            if (n > 0 && !fresh && (left <= 0.0 || w->ms[i].est_ms > left)) { /* does not fit: keeps its outputs */
                 w->ms[i].stale++;
                 sum.caches_skipped_budget += glow__system_cache_count(w->sys[i]);
                 continue;

@@ -310,6 +310,11 @@ static void test_world_api(void **state) {
     assert_int_equal(glow_world_get_stats(W, &ws), GLOW_OK);
     assert_int_equal(ws.dependencies_attached, deps);
     assert_int_equal(ws.dependencies_missing, 0);
+    /* a system never updated updates under any time budget (it has no light yet) */
+    assert_int_equal(glow_world_update(W, &(glow_update_desc){.budget_ms = 1e-3f}), GLOW_OK);
+    glow_update_stats fresh;
+    glow_system_get_stats(w.sys[1], &fresh);
+    assert_int_equal(fresh.updates, 1);
     for (uint32_t r = 0; r < 3; ++r) assert_int_equal(glow_world_update(W, NULL), GLOW_OK);
     const double e_back = run(&w, 0);
     print_message("streamed out and in again: %.6f\n", e_back);

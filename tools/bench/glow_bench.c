@@ -400,8 +400,10 @@ static int run_world(options *o, glow_scene_desc *scene, glow_logger logger) {
             for (uint32_t i = 0; i < ws->n; ++i)
                 if ((r = glow_host_set_light(ws->host[i], 0, &l)) != GLOW_OK) goto done;
         }
+        glow_update_desc u = ud; /* --keep-lighting (with --still): the hosts are not called after the first */
+        if (o->keep_lighting && fr > 0) u.flags |= GLOW_UPDATE_FLAG_KEEP_LIGHTING;
         const double t0 = now_ms();
-        if ((r = glow_world_update(W, budget ? &ud : NULL)) != GLOW_OK) goto done;
+        if ((r = glow_world_update(W, &u)) != GLOW_OK) goto done;
         const double t1 = now_ms();
         if (T && (r = glow_world_update(T, NULL)) != GLOW_OK) goto done; /* untimed reference */
         glow_world_get_stats(W, &wst);
