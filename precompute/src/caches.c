@@ -673,7 +673,7 @@ static glow_result lm_try(const glow__scene *scene, const glow__chart_set *cs, d
  * a surface within the reach, and its texels' area density is scaled by 1 + (F - 1) f (the linear
  * density by the square root); the density search then meets the texel budget at a lower base
  * density, which open ground gets. */
-#define CONC_RAYS 16u
+#define CONC_RAYS GLOW__NEAR_RAYS
 #define CONC_POINTS_PER_TEXEL 16.0
 
 typedef struct conc_ctx {
@@ -695,10 +695,6 @@ static uint32_t conc_hash(uint32_t x) {
 static void conc_range(void *vctx, uint32_t begin, uint32_t end, uint32_t worker) {
     (void)worker;
     conc_ctx *c = vctx;
-    const double golden = GLOW__PI * (3.0 - sqrt(5.0));
-    float dirs[CONC_RAYS][3], tfar[CONC_RAYS];
-    uint8_t occ[CONC_RAYS];
-    for (uint32_t k = 0; k < CONC_RAYS; ++k) tfar[k] = c->reach;
     for (uint32_t i = begin; i < end; ++i) {
         const uint32_t t = c->pt_tri[i];
         const float(*p)[3] = c->scene->pos + 3 * (size_t)t;
@@ -723,17 +719,8 @@ static void conc_range(void *vctx, uint32_t begin, uint32_t end, uint32_t worker
             continue;
         }
         for (int k = 0; k < 3; ++k) n[k] /= l;
-        double ta[3], tb[3];
-        glow__tangent_frame(n, ta, tb);
         const double phi0 = conc_hash(i ^ 0x9e3779b9u) * (2.0 * GLOW__PI / 4294967296.0);
-        for (uint32_t k = 0; k < CONC_RAYS; ++k) {
-            const double r = sqrt((k + 0.5) / CONC_RAYS), z = sqrt(fmax(0.0, 1.0 - r * r)), phi = phi0 + golden * k;
-            for (int a = 0; a < 3; ++a) dirs[k][a] = (float)(r * cos(phi) * ta[a] + r * sin(phi) * tb[a] + z * n[a]);
-        }
-        glow__rt_occluded16(c->rt, org, (const float(*)[3])dirs, tfar, CONC_RAYS, c->eps, occ);
-        uint32_t h = 0;
-        for (uint32_t k = 0; k < CONC_RAYS; ++k) h += occ[k];
-        c->hits[i] = h;
+        c->hits[i] = glow__near_hits(c->rt, org, n, phi0, c->reach, c->eps);
     }
 }
 

@@ -59,6 +59,11 @@ typedef struct glow__surfel_settings {
 
 /* The area of scene triangle t, in double precision (surfels.c). */
 double glow__tri_area(const glow__scene *scene, uint32_t t);
+/* Concavity (surfels.c; the surfels' adaptive density and caches.c's texel density per chart): how
+ * many of GLOW__NEAR_RAYS cosine-distributed rays (a Fibonacci spiral about unit normal n, turned by
+ * phi0 radians) from org meet any surface within reach (tnear eps). */
+#define GLOW__NEAR_RAYS 16u
+uint32_t glow__near_hits(const glow__rt *rt, const float org[3], const double n[3], double phi0, float reach, float eps);
 glow_result glow__surfels_place(const glow__scene *scene, const glow__surfel_settings *settings,
                                 glow__pool *pool, glow__log *log, glow__surfels *out);
 void glow__surfels_free(glow__surfels *s);

@@ -319,7 +319,7 @@ static void eval_range(void *vctx, uint32_t begin, uint32_t end, uint32_t worker
  * share A / (M p_i), normalised so the areas sum to the scene's area exactly: the flux a node
  * pulls up stays an unbiased integral of radiosity over its surface. */
 #define ADAPT_OVERSAMPLE 4u
-#define ADAPT_RAYS 16u
+#define ADAPT_RAYS GLOW__NEAR_RAYS
 #define ADAPT_RADII 4.0
 
 typedef struct adapt_ctx {
@@ -334,13 +334,26 @@ typedef struct adapt_ctx {
     uint32_t hash;
 } adapt_ctx;
 
+uint32_t glow__near_hits(const glow__rt *rt, const float org[3], const double n[3], double phi0, float reach, float eps) {
+    const double golden = GLOW__PI * (3.0 - sqrt(5.0));
+    float dirs[GLOW__NEAR_RAYS][3], tfar[GLOW__NEAR_RAYS];
+    uint8_t occ[GLOW__NEAR_RAYS];
+    double ta[3], tb[3];
+    glow__tangent_frame(n, ta, tb);
+    for (uint32_t k = 0; k < GLOW__NEAR_RAYS; ++k) { /* cosine-distributed Fibonacci spiral */
+        const double r = sqrt((k + 0.5) / GLOW__NEAR_RAYS), z = sqrt(fmax(0.0, 1.0 - r * r)), phi = phi0 + golden * k;
+        for (int a = 0; a < 3; ++a) dirs[k][a] = (float)(r * cos(phi) * ta[a] + r * sin(phi) * tb[a] + z * n[a]);
+        tfar[k] = reach;
+    }
+    glow__rt_occluded16(rt, org, (const float (*)[3])dirs, tfar, GLOW__NEAR_RAYS, eps, occ);
+    uint32_t hits = 0;
+    for (uint32_t k = 0; k < GLOW__NEAR_RAYS; ++k) hits += occ[k];
+    return hits;
+}
+
 static void adapt_range(void *vctx, uint32_t begin, uint32_t end, uint32_t worker) {
     (void)worker;
     adapt_ctx *c = vctx;
-    const double golden = GLOW__PI * (3.0 - sqrt(5.0));
-    float dirs[ADAPT_RAYS][3], tfar[ADAPT_RAYS];
-    uint8_t occ[ADAPT_RAYS];
-    for (uint32_t k = 0; k < ADAPT_RAYS; ++k) tfar[k] = c->reach;
     for (uint32_t i = begin; i < end; ++i) {
         glow__surfel t;
         memset(&t, 0, sizeof t);
@@ -349,16 +362,9 @@ static void adapt_range(void *vctx, uint32_t begin, uint32_t end, uint32_t worke
         surfel_eval(c->scene, c->area, &t);
         c->cand_bary[i][0] = t.bary[0];
         c->cand_bary[i][1] = t.bary[1];
-        double n[3] = {t.nrm[0], t.nrm[1], t.nrm[2]}, ta[3], tb[3];
-        glow__tangent_frame(n, ta, tb);
+        const double n[3] = {t.nrm[0], t.nrm[1], t.nrm[2]};
         const double phi0 = (double)hash32(i ^ c->hash) * (2.0 * GLOW__PI / 4294967296.0);
-        for (uint32_t k = 0; k < ADAPT_RAYS; ++k) { /* cosine-distributed Fibonacci spiral */
-            const double r = sqrt((k + 0.5) / ADAPT_RAYS), z = sqrt(fmax(0.0, 1.0 - r * r)), phi = phi0 + golden * k;
-            for (int a = 0; a < 3; ++a) dirs[k][a] = (float)(r * cos(phi) * ta[a] + r * sin(phi) * tb[a] + z * n[a]);
-        }
-        glow__rt_occluded16(c->rt, t.pos, (const float (*)[3])dirs, tfar, ADAPT_RAYS, c->eps, occ);
-        uint32_t hits = 0;
-        for (uint32_t k = 0; k < ADAPT_RAYS; ++k) hits += occ[k];
+        const uint32_t hits = glow__near_hits(c->rt, t.pos, n, phi0, c->reach, c->eps);
         c->w[i] = 1.0f + (c->adapt - 1.0f) * (float)hits / (float)ADAPT_RAYS;
     }
 }

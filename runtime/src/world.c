@@ -38,6 +38,16 @@ struct glow_world {
     uint32_t updated;   /* members the last update updated */
 };
 
+static void free_world(glow_world *w) {
+    glow_context *ctx = w->ctx;
+    glow__ctx_free(ctx, w->sys);
+    glow__ctx_free(ctx, w->key);
+    glow__ctx_free(ctx, w->ms);
+    glow__ctx_free(ctx, w->order);
+    glow__ctx_free(ctx, w->prio);
+    glow__ctx_free(ctx, w);
+}
+
 glow_result glow_world_create(glow_context *ctx, uint32_t capacity, glow_world **out) {
     if (out) *out = NULL;
     if (!ctx || !out || capacity == 0 || capacity > (1u << 20)) {
@@ -56,12 +66,7 @@ glow_result glow_world_create(glow_context *ctx, uint32_t capacity, glow_world *
     w->order = glow__ctx_alloc(ctx, (size_t)capacity * sizeof *w->order, 0);
     w->prio = glow__ctx_alloc(ctx, (size_t)capacity * sizeof *w->prio, 0);
     if (!w->sys || !w->key || !w->ms || !w->order || !w->prio) {
-        glow__ctx_free(ctx, w->sys);
-        glow__ctx_free(ctx, w->key);
-        glow__ctx_free(ctx, w->ms);
-        glow__ctx_free(ctx, w->order);
-        glow__ctx_free(ctx, w->prio);
-        glow__ctx_free(ctx, w);
+        free_world(w);
         goto oom;
     }
     *out = w;
@@ -187,13 +192,7 @@ glow_result glow_world_remove(glow_world *w, glow_system *s) {
 void glow_world_destroy(glow_world *w) {
     if (!w) return;
     while (w->count) (void)glow_world_remove(w, w->sys[w->count - 1]);
-    glow_context *ctx = w->ctx;
-    glow__ctx_free(ctx, w->sys);
-    glow__ctx_free(ctx, w->key);
-    glow__ctx_free(ctx, w->ms);
-    glow__ctx_free(ctx, w->order);
-    glow__ctx_free(ctx, w->prio);
-    glow__ctx_free(ctx, w);
+    free_world(w);
 }
 
 uint32_t glow_world_system_count(const glow_world *w) { return w ? w->count : 0u; }
