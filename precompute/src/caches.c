@@ -745,15 +745,7 @@ static glow_result chart_concavity(const glow__scene *scene, const glow__rt *rt,
     }
     for (uint32_t c = 0; c < cs->chart_count; ++c)
         for (uint32_t j = cs->chart_start[c]; j < cs->chart_start[c + 1]; ++j) chart_of[cs->chart_tris[j]] = c;
-    double cum = 0.0;
-    uint32_t spawned = 0;
-    for (uint32_t t = 0; t < n; ++t) {
-        cum += glow__tri_area(scene, t);
-        double e = floor(cum / area * (double)points);
-        uint32_t upto = e >= (double)points ? points : (uint32_t)e;
-        if (t + 1 == n) upto = points;
-        while (spawned < upto) pt_tri[spawned++] = t;
-    }
+    glow__spawn_tris(scene, area, points, pt_tri);
     float ext[3];
     glow__sub(scene->bounds_max, scene->bounds_min, ext);
     const float diag = sqrtf(glow__dot(ext, ext));

@@ -62,6 +62,10 @@ double glow__tri_area(const glow__scene *scene, uint32_t t);
 /* Concavity (surfels.c; the surfels' adaptive density and caches.c's texel density per chart): how
  * many of GLOW__NEAR_RAYS cosine-distributed rays (a Fibonacci spiral about unit normal n, turned by
  * phi0 radians) from org meet any surface within reach (tnear eps). */
+/* Area-proportional points (surfels.c): out_tri[0, count) the triangle of each, from a running
+ * cumulative area over the triangles in order (units of `total`, their summed area), so that small
+ * triangles accumulate area until one gets a point. */
+void glow__spawn_tris(const glow__scene *scene, double total, uint32_t count, uint32_t *out_tri);
 #define GLOW__NEAR_RAYS 16u
 uint32_t glow__near_hits(const glow__rt *rt, const float org[3], const double n[3], double phi0, float reach, float eps);
 glow_result glow__surfels_place(const glow__scene *scene, const glow__surfel_settings *settings,

@@ -371,7 +371,7 @@ static void adapt_range(void *vctx, uint32_t begin, uint32_t end, uint32_t worke
 
 /* Area-proportional spawning with the running cumulative area (in units of the total, so the
  * triangles' own sum is the reference and the last triangle ends exactly at count). */
-static void spawn_tris(const glow__scene *scene, double total, uint32_t count, uint32_t *out_tri) {
+void glow__spawn_tris(const glow__scene *scene, double total, uint32_t count, uint32_t *out_tri) {
     double cum = 0.0;
     uint32_t spawned = 0;
     const uint32_t tri_count = scene->tri_count;
@@ -425,7 +425,7 @@ static glow_result place_adaptive(const glow__scene *scene, const glow__surfel_s
         glow__errorf(log, "%s: out of memory for %u surfel candidates", src, M);
         return GLOW_ERROR_OUT_OF_MEMORY;
     }
-    spawn_tris(scene, total, M, cand_tri);
+    glow__spawn_tris(scene, total, M, cand_tri);
     float ext[3];
     glow__sub(scene->bounds_max, scene->bounds_min, ext);
     const float diag = sqrtf(glow__dot(ext, ext));
@@ -674,7 +674,7 @@ glow_result glow__surfels_place(const glow__scene *scene, const glow__surfel_set
     float *areas = NULL;      /* adaptive density: each surfel's area */
     const bool adaptive = settings->adapt > 1.0f && settings->rt && n > 1;
     if (!adaptive) {
-        spawn_tris(scene, total, n, surfel_tri);
+        glow__spawn_tris(scene, total, n, surfel_tri);
         place_ctx pc = {.scene = scene, .surfel_tri = surfel_tri, .s = s, .area = a, .rot = {rot[0], rot[1]}};
         glow__parallel_for(pool, n, 0, place_range, &pc);
         free(surfel_tri);
