@@ -20,7 +20,8 @@
 
 typedef struct member_state {
     uint32_t stale;  /* world updates since it was last updated */
-    double est_ms;   /* its last update's total time; 0 = never updated */
+    double est_ms;   /* its last update's time outside the cache gathers (what a budget cannot cut:
+                        surfel lighting, pull, outputs); 0 = never updated */
     float lo[3], hi[3]; /* its bake's bounds */
 } member_state;
 
@@ -221,9 +222,10 @@ static void add_stats(glow_update_stats *sum, const glow_update_stats *st) {
  * over the focus points of 1 / (1 + d^2 / r^2), d the distance from the point to the member's bounds
  * (0 inside), r the focus radius (0: a tenth of the members' bounds diagonal), as the groups of caches
  * within a system (glow_update_desc); ties by order added. The first always updates, with the whole
- * budget as its own; each next one only when its last update's time fits what is left, with what is
- * left as its budget. A member never updated has no time yet and updates. The others keep their
- * outputs and count as skipped (their caches in caches_skipped_budget). */
+ * budget as its own; each next one only when the part of its last update that a budget cannot cut
+ * (all but the cache gathers) fits what is left, with what is left as its budget (its gathers take
+ * the rest). A member never updated has no time yet and updates. The others keep their outputs and
+ * count as skipped (their caches in caches_skipped_budget). */
 static uint32_t schedule(glow_world *w, const glow_update_desc *desc) {
     float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (uint32_t i = 0; i < w->count; ++i)
@@ -304,7 +306,7 @@ glow_result glow_world_update(glow_world *w, const glow_update_desc *desc) {
         glow_system_get_stats(w->sys[i], &st);
         add_stats(&sum, &st);
         w->ms[i].stale = 0;
-        w->ms[i].est_ms = st.total_ms > 0.0 ? st.total_ms : 1e-3;
+        w->ms[i].est_ms = fmax(st.total_ms - st.cache_lighting_ms, 1e-3);
         left -= st.total_ms;
         w->updated++;
     }

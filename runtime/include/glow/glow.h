@@ -602,8 +602,9 @@ GLOW_API glow_system *glow_world_system(const glow_world *world, uint32_t index)
  * caches budget (max_caches) is shared between them in proportion to their caches. With budget_ms the
  * members go by priority, the stalest and those nearest the focus points first (as the groups of
  * caches within a system; docs/runtime.md "A world of systems"): the first updates with the whole
- * budget as its own, each next one only if its last update's time fits what is left; the others keep
- * their outputs (glow_world_stats.systems_updated). Flags, focus points and converged_epsilon go to
+ * budget as its own, each next one only if the part of its last update that a budget cannot cut (all
+ * but the cache gathers) fits what is left, with what is left as its budget; the others keep their
+ * outputs (glow_world_stats.systems_updated). Flags, focus points and converged_epsilon go to
  * each. A member whose update fails (its hook, GLOW_ERROR_HOST_CALLBACK) keeps its last good outputs
  * and the others still update. Allocates nothing.
  * \returns GLOW_OK, or the first member's error; GLOW_ERROR_INVALID_ARGUMENT for a NULL world, a
