@@ -23,6 +23,9 @@ expect 2 "zero links" "$BIN" builtin:cornell -o "$T/a.glow" --links 0
 expect 2 "nan grid spacing" "$BIN" builtin:cornell -o "$T/a.glow" --grid-spacing nan
 expect 2 "negative texel density" "$BIN" builtin:cornell -o "$T/a.glow" --texel-density -1
 expect 2 "zero lightmap caches" "$BIN" builtin:cornell -o "$T/a.glow" --lightmap-caches 0; err_has "lightmap-caches"
+expect 2 "texel adapt 9" "$BIN" builtin:cornell -o "$T/a.glow" --texel-adapt 9; err_has "texel-adapt"
+expect 2 "texel adapt 0.5" "$BIN" builtin:cornell -o "$T/a.glow" --texel-adapt 0.5; err_has "texel-adapt"
+expect 2 "surfel adapt 5" "$BIN" builtin:cornell -o "$T/a.glow" --surfel-adapt 5; err_has "surfel-adapt"
 expect 2 "missing value" "$BIN" builtin:cornell -o
 expect 2 "no output" "$BIN" builtin:cornell
 no_file "$T/a.glow"
