@@ -856,6 +856,12 @@ static glow_result build_lightmap_layout(const glow__scene *scene, const glow__r
             d *= fmin(fmax(sqrt(1.0 / q), 0.25), 4.0);
         }
         if (r == GLOW_OK && best_d != last_d) r = lm_try(scene, csp, uv_ratio, best_d, log, st);
+        if (r == GLOW_OK && st->covered > 1.2 * target) /* the budget is exceeded: say so (issue 16, item 5) */
+            glow__warnf(log,
+                        "%s: caches: the lightmap holds %u caches, %.1fx its budget of %.0f (--lightmap-caches): "
+                        "%u chart footprints take a texel or more each even at %.3g texels per unit; raise the budget",
+                        scene->source, st->covered, st->covered / target, target, csp ? st->pack.slots : 0u,
+                        (double)st->density);
     }
     double smax = 1.0;
     for (uint32_t c = 0; cs.scale && c < cs.chart_count; ++c) smax = fmax(smax, cs.scale[c]);

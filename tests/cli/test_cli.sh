@@ -23,6 +23,8 @@ expect 2 "zero links" "$BIN" builtin:cornell -o "$T/a.glow" --links 0
 expect 2 "nan grid spacing" "$BIN" builtin:cornell -o "$T/a.glow" --grid-spacing nan
 expect 2 "negative texel density" "$BIN" builtin:cornell -o "$T/a.glow" --texel-density -1
 expect 2 "zero lightmap caches" "$BIN" builtin:cornell -o "$T/a.glow" --lightmap-caches 0; err_has "lightmap-caches"
+expect 0 "a lightmap budget too small for the charts (--lightmap-caches 3)" "$BIN" builtin:cornell -o "$T/lb.glow" \
+  --lightmap-caches 3 --surfels 256 -q; err_has "its budget of 3"
 expect 2 "texel adapt 9" "$BIN" builtin:cornell -o "$T/a.glow" --texel-adapt 9; err_has "texel-adapt"
 expect 2 "texel adapt 0.5" "$BIN" builtin:cornell -o "$T/a.glow" --texel-adapt 0.5; err_has "texel-adapt"
 expect 2 "surfel adapt 5" "$BIN" builtin:cornell -o "$T/a.glow" --surfel-adapt 5; err_has "surfel-adapt"

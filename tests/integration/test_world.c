@@ -357,6 +357,69 @@ static void test_world_api(void **state) {
     close_world(&w);
 }
 
+/* glow_host_desc.occluders: a system's host shadowed by its neighbours' geometry too. The hall's point
+ * light reaches a system's surfels past pillars and walls that are other systems': with the neighbours
+ * as occluders no surfel gets more direct light than without, and some get less. */
+static void test_host_occluders(void **state) {
+    (void)state;
+    world w;
+    open_world(&w);
+    uint32_t darker_systems = 0;
+    for (uint32_t i = 0; i < w.n; ++i) {
+        glow_bake_info bi;
+        glow_bake_get_info(w.bake[i], &bi);
+        const glow_bake *occ[MAXS];
+        uint32_t nocc = 0;
+        for (uint32_t d = 0; d < bi.dependency_count; ++d) {
+            uint64_t key = 0;
+            assert_int_equal(glow_bake_get_dependency(w.bake[i], d, &key), GLOW_OK);
+            for (uint32_t j = 0; j < w.n; ++j) {
+                glow_bake_info bj;
+                glow_bake_get_info(w.bake[j], &bj);
+                if (bj.system_key == key) occ[nocc++] = w.bake[j];
+            }
+        }
+        assert_true(nocc == bi.dependency_count);
+        glow_host_desc hd = glow_host_desc_from_scene(&scene, w.bake[i], GLOW_HOST_KIND_EXACT);
+        hd.occluders = occ;
+        hd.occluder_count = nocc;
+        glow_host *h = NULL;
+        assert_int_equal(glow_host_create(&hd, &h), GLOW_OK);
+        glow_host_stats hs0, hs1;
+        glow_host_get_stats(w.host[i], &hs0);
+        glow_host_get_stats(h, &hs1);
+        assert_int_equal(hs1.triangle_count, hs0.triangle_count); /* its own geometry's */
+        assert_true(hs1.epsilon == hs0.epsilon);
+        glow_surfel_view sv;
+        assert_int_equal(glow_system_get_surfels(w.sys[i], &sv), GLOW_OK);
+        float *a = malloc((size_t)sv.count * 3 * sizeof *a), *b = malloc((size_t)sv.count * 3 * sizeof *b);
+        assert_non_null(a);
+        assert_non_null(b);
+        const glow_surfel_batch batch = {0, sv.count, sv.positions, sv.normals, sv.materials};
+        const glow_lighting_hooks alone = glow_host_hooks(w.host[i]), with = glow_host_hooks(h);
+        assert_int_equal(alone.light_surfels(alone.user, &batch, a, 0), GLOW_OK);
+        assert_int_equal(with.light_surfels(with.user, &batch, b, 0), GLOW_OK);
+        uint32_t darker = 0;
+        for (size_t k = 0; k < 3 * (size_t)sv.count; ++k) {
+            assert_true(b[k] <= a[k] * (1.0f + 1e-5f) + 1e-6f);
+            darker += b[k] < 0.5f * a[k];
+        }
+        darker_systems += darker > 0;
+        print_message("system %u: %u neighbours as occluders; %u of %u surfel channels at least halved\n", i, nocc,
+                      darker, 3 * sv.count);
+        free(a);
+        free(b);
+        glow_host_destroy(h);
+    }
+    assert_true(darker_systems > 0);
+    glow_host_desc bad = glow_host_desc_from_scene(&scene, w.bake[0], GLOW_HOST_KIND_EXACT);
+    bad.occluder_count = 2; /* and no array */
+    glow_host *h = NULL;
+    assert_int_equal(glow_host_create(&bad, &h), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_null(h);
+    close_world(&w);
+}
+
 /* Resealed bakes (zlib's CRC-32 is the format's) with a bad XREF are refused at load */
 static uint32_t crc32_of(const unsigned char *p, size_t n) { return (uint32_t)crc32(0L, p, (uInt)n); }
 
@@ -462,6 +525,7 @@ int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_light_crosses_systems),
         cmocka_unit_test(test_world_api),
+        cmocka_unit_test(test_host_occluders),
         cmocka_unit_test(test_xref_validated),
     };
     return cmocka_run_group_tests(tests, setup, teardown);

@@ -59,7 +59,7 @@ static void usage(FILE *f) {
             "                  [--budget-ms MS] [--budget-caches N] [--converge EPS] [--focus X,Y,Z] [--still [--keep-lighting]]\n"
             "                  [--json] [-q]\n"
             "  BAKE   a bake written by glow-bake, or a world manifest (glow-bake --system-area: every system in one\n"
-            "         glow_world, one host each, CPU backend);  SCENE  its scene description JSON (docs/scene-format.md)\n"
+            "         glow_world, one host each shadowed by its neighbours too, CPU backend);  SCENE  its scene description JSON (docs/scene-format.md)\n"
             "  --frames N      timed updates (default 60); --warmup N untimed first (default 5)\n"
             "  --threads N     runtime workers (default: one per online CPU); the machine probes use the same\n"
             "  --luma/--chroma SH bands (default: the bake's; chroma = luma)\n"
@@ -258,7 +258,7 @@ static void animate(const glow_scene_light *base, glow_scene_light *out, uint32_
 
 /* ------------------------------------------------------------------------------------ worlds */
 /* BAKE a world manifest (glow-bake --system-area): every system loaded, one host each (shadows from
- * its own GEOM: the other systems' triangles do not shadow it), all in a glow_world, updated as one
+ * its own and its neighbours' geometry: glow_host_desc.occluders), all in a glow_world, updated as one
  * (glow_world_update). With a budget an unbudgeted twin world runs the same frames (untimed) and the
  * report gives the budget's cost as for one system; --walk walks the focus across the world's bounds. */
 #define WORLD_MAX 1024u
@@ -342,9 +342,30 @@ static int run_world(options *o, glow_scene_desc *scene, glow_logger logger) {
         }
         caches += bi.cache_count;
         surfels += bi.surfel_count;
+    }
+    for (uint32_t i = 0; i < ws->n; ++i) { /* hosts: each system shadowed by its own and its neighbours' geometry */
+        glow_bake_info bi;
+        glow_bake_get_info(ws->bake[i], &bi);
+        const glow_bake *occ[64];
+        uint32_t nocc = 0;
+        for (uint32_t d = 0; d < bi.dependency_count && nocc < 64; ++d) {
+            uint64_t key = 0;
+            glow_bake_get_dependency(ws->bake[i], d, &key);
+            for (uint32_t j = 0; j < ws->n; ++j) {
+                glow_bake_info bj;
+                glow_bake_get_info(ws->bake[j], &bj);
+                if (j != i && bj.system_key == key) {
+                    occ[nocc++] = ws->bake[j];
+                    break;
+                }
+            }
+        }
         glow_host_desc hd = glow_host_desc_from_scene(scene, ws->bake[i], o->host);
         hd.logger = logger;
+        hd.occluders = occ;
+        hd.occluder_count = nocc;
         if ((r = glow_host_create(&hd, &ws->host[i])) != GLOW_OK) goto done;
+        const cJSON *file = cJSON_GetObjectItemCaseSensitive(cJSON_GetArrayItem(systems, (int)i), "file");
         glow_system_desc sd = {.bake = ws->bake[i], .lighting = glow_host_hooks(ws->host[i]), .sh_bands_luma = o->luma,
                                .sh_bands_chroma = o->chroma, .label = file->valuestring, .link_mode = o->link_mode};
         if ((r = glow_system_create(ctx, &sd, &ws->sys[i])) != GLOW_OK ||

@@ -34,7 +34,7 @@ struct glow_host {
     glow_host_kind kind;
     glow_logger logger;
     const glow_bake *bake;
-    uint32_t surfel_count, tri_count;
+    uint32_t surfel_count, tri_count, own_tri_count; /* tri_count: own + occluders' */
     float *tris; /* tri_count x 9 floats, corners packed */
     float bmin[3], bmax[3], eps, diag;
     RTCDevice device;
@@ -700,6 +700,20 @@ glow_result glow_host_create(const glow_host_desc *desc, glow_host **out_host) {
     h->bake = desc->bake;
     h->surfel_count = info.surfel_count;
     h->tri_count = geo.triangle_count;
+    h->own_tri_count = geo.triangle_count;
+    if (desc->occluder_count && !desc->occluders) {
+        free(h);
+        return HOST_FAIL(lg, GLOW_ERROR_INVALID_ARGUMENT, "occluders is NULL with occluder_count %u", desc->occluder_count);
+    }
+    for (uint32_t b = 0; b < desc->occluder_count; ++b) {
+        glow_bake_geometry og;
+        if (!desc->occluders[b] || glow_bake_get_geometry(desc->occluders[b], &og) != GLOW_OK || !og.positions ||
+            og.triangle_count > UINT32_MAX / 9u - h->tri_count) {
+            free(h);
+            return HOST_FAIL(lg, GLOW_ERROR_INVALID_ARGUMENT, "occluder bake %u is NULL or has no readable geometry", b);
+        }
+        h->tri_count += og.triangle_count;
+    }
     h->sky = desc->sky == GLOW_HOST_SKY_UNSHADOWED ? GLOW_HOST_SKY_UNSHADOWED : GLOW_HOST_SKY_TRACED;
     h->sky_rays = desc->sky_rays ? desc->sky_rays : 128;
     h->sm_size = desc->shadow_map_size ? desc->shadow_map_size : 1024;
@@ -721,23 +735,31 @@ glow_result glow_host_create(const glow_host_desc *desc, glow_host **out_host) {
         h->bmin[i] = INFINITY;
         h->bmax[i] = -INFINITY;
     }
-    for (uint32_t t = 0; t < h->tri_count; ++t) {
-        const float *src = (const float *)((const char *)geo.positions + (size_t)t * geo.stride);
-        for (int k = 0; k < 9; ++k) {
-            float v = src[k];
-            if (!isfinite(v)) {
-                glow_host_destroy(h);
-                return HOST_FAIL(lg, GLOW_ERROR_CORRUPT_DATA, "bake triangle %u has a non-finite corner", t);
+    uint32_t t = 0;
+    for (uint32_t b = 0; b <= desc->occluder_count; ++b) { /* the bake's own triangles, then the occluders' */
+        glow_bake_geometry g = geo;
+        if (b > 0) glow_bake_get_geometry(desc->occluders[b - 1], &g);
+        for (uint32_t j = 0; j < g.triangle_count; ++j, ++t) {
+            const float *src = (const float *)((const char *)g.positions + (size_t)j * g.stride);
+            for (int k = 0; k < 9; ++k) {
+                float v = src[k];
+                if (!isfinite(v)) {
+                    glow_host_destroy(h);
+                    return HOST_FAIL(lg, GLOW_ERROR_CORRUPT_DATA, "%s triangle %u has a non-finite corner",
+                                     b ? "occluder bake" : "bake", j);
+                }
+                h->tris[9 * (size_t)t + k] = v;
+                h->bmin[k % 3] = fminf(h->bmin[k % 3], v);
+                h->bmax[k % 3] = fmaxf(h->bmax[k % 3], v);
             }
-            h->tris[9 * (size_t)t + k] = v;
-            h->bmin[k % 3] = fminf(h->bmin[k % 3], v);
-            h->bmax[k % 3] = fmaxf(h->bmax[k % 3], v);
+        }
+        if (b == 0) { /* the epsilon from the bake's own extent, as without occluders */
+            float ext[3] = {h->bmax[0] - h->bmin[0], h->bmax[1] - h->bmin[1], h->bmax[2] - h->bmin[2]};
+            h->diag = sqrtf(glow__dot3(ext, ext));
+            if (!(h->diag > 0.0f)) h->diag = 1.0f;
+            h->eps = 1e-4f * h->diag;
         }
     }
-    float ext[3] = {h->bmax[0] - h->bmin[0], h->bmax[1] - h->bmin[1], h->bmax[2] - h->bmin[2]};
-    h->diag = sqrtf(glow__dot3(ext, ext));
-    if (!(h->diag > 0.0f)) h->diag = 1.0f;
-    h->eps = 1e-4f * h->diag;
     make_sky_dirs(h->sky_dirs, h->sky_rays);
     for (uint32_t i = 0; i < h->surfel_count; ++i) {
         uint32_t bits = SKY_UNSET;
@@ -789,7 +811,7 @@ glow_result glow_host_get_stats(const glow_host *host, glow_host_stats *out_stat
     if (!host || !out_stats) return GLOW_ERROR_INVALID_ARGUMENT;
     memset(out_stats, 0, sizeof *out_stats);
     out_stats->kind = host->kind;
-    out_stats->triangle_count = host->tri_count;
+    out_stats->triangle_count = host->own_tri_count;
     out_stats->epsilon = host->eps;
     for (uint32_t i = 0; i < host->light_count; ++i) {
         const host_light *hl = &host->lights[i];

@@ -106,6 +106,12 @@ typedef struct glow_host_desc {
     float normal_offset;            /* texels along the normal; 0 = 1.0 */
     uint32_t pcf_size;              /* PCF kernel width in texels: odd, 1..9; 0 = 3 */
     glow_logger logger;             /* zero = silent; must be reentrant */
+    /* \since 0.2: other bakes whose geometry also casts shadows here (borrowed, must outlive the host):
+     * for a system of a world (glow-bake --system-area), its neighbours, so that the buildings of the
+     * systems around it shadow it. Their surfels are not lit. NULL / 0 = none. The epsilon and the
+     * stats' triangle_count stay those of `bake`'s own geometry; shadow maps cover all of it. */
+    const glow_bake *const *occluders;
+    uint32_t occluder_count;
 } glow_host_desc;
 
 /**
