@@ -29,11 +29,12 @@
 extern const char glow__shading_glsl[];
 extern const struct { const char *name, *source; } glow__kernels[];
 
-enum { K_DIRECT, K_FLUX, K_PULL, K_PULL_TAIL, K_CACHE, K_OUTPUT, K_DETAIL, K_COUNT };
+enum { K_DIRECT, K_FLUX, K_PULL, K_PULL_TAIL, K_CACHE, K_OUTPUT, K_DETAIL, K_PROXY, K_COUNT };
 static const char *const kernel_names[K_COUNT] = {"surfel_direct", "surfel_flux", "pull", "pull_tail", "cache_light",
-                                                  "outputs", "detail"};
+                                                  "outputs", "detail", "proxy_fill"};
 enum { B_GEOM, B_MAT, B_DIRECT, B_FBW, B_CACHE, B_NODES, B_FLUX, B_LINKS, B_PAIRS, B_STATUS, B_PARAMS, B_LEVELS, B_SUBSETS,
-       B_DET_TEXELS, B_DET_LINKS, B_COUNT };
+       B_DET_TEXELS, B_DET_LINKS, B_PROXY_MAP, B_COUNT };
+#define MAX_DEPS 64u /* GLOW_BAKE_MAX_DEPENDENCIES */
 enum { T_BEGIN, T_DIRECT, T_FLUX, T_PULL, T_CACHE, T_OUTPUT, T_COUNT };
 
 struct glow_gl_system {
@@ -45,7 +46,12 @@ struct glow_gl_system {
     glow_solver_tables t;
     uint32_t S, N, C, levels, planes;
     GLuint prog[K_COUNT];
-    GLint level_loc, tail_loc;
+    GLint level_loc, tail_loc, proxy_loc;
+    /* light across systems: proxy node N + p reads a neighbour's flux (proxy_fill.comp); PROXY_MAP holds
+     * (neighbour node, N + p) sorted by dependency, dependency d's entries at [dep_first[d], dep_first[d+1]) */
+    uint32_t P, deps, dep_first[MAX_DEPS + 1];
+    glow_gl_system *nbr[MAX_DEPS];
+    uint32_t attached; /* GL systems that read this one as a neighbour */
     uint32_t tail_level; /* levels [tail_level, levels) run in one pull_tail dispatch */
     GLuint buf[B_COUNT];
     GLuint grid_tex, grid_mask_tex, lm_tex, lm_valid_tex, det_tex;
@@ -272,13 +278,14 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
     }
     glow_system_get_solver_tables(desc->system, &s->t);
     const glow_solver_tables *t = &s->t;
-    if (t->proxy_count) { /* not yet: the node buffer would need the neighbours' radiance (issue 17) */
-        LOG_ERR(s, GLOW_ERROR_UNSUPPORTED,
-                "the bake is a system of a world whose links read %u nodes of neighbouring systems; the GL backend "
-                "does not carry light across systems yet (use the CPU solver)", t->proxy_count);
+    if (t->proxy_count && (!t->proxy_pairs || t->dependency_count > MAX_DEPS)) {
+        LOG_ERR(s, GLOW_ERROR_UNSUPPORTED, "the system's proxy tables are missing or name %u dependencies (at most %u)",
+                t->dependency_count, MAX_DEPS);
         free_system(s);
         return GLOW_ERROR_UNSUPPORTED;
     }
+    s->P = t->proxy_count;
+    s->deps = t->dependency_count;
     const glow_cache_outputs *co = glow_system_outputs(desc->system);
     s->S = t->surfel_count;
     s->N = t->node_count;
@@ -318,7 +325,8 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
     /* programs */
     glow_result err = GLOW_OK;
     for (int k = 0; k < K_COUNT; ++k) {
-        if ((k == K_DIRECT && !desc->hook_glsl) || (k == K_DETAIL && !t->detail_texels)) continue;
+        if ((k == K_DIRECT && !desc->hook_glsl) || (k == K_DETAIL && !t->detail_texels) || (k == K_PROXY && !t->proxy_count))
+            continue;
         s->prog[k] = build_program(s, k, desc->hook_glsl, &err);
         if (!s->prog[k]) {
             free_system(s);
@@ -327,6 +335,7 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
     }
     s->level_loc = gl->GetUniformLocation(s->prog[K_PULL], "glow_level");
     s->tail_loc = gl->GetUniformLocation(s->prog[K_PULL_TAIL], "glow_tail");
+    if (s->prog[K_PROXY]) s->proxy_loc = gl->GetUniformLocation(s->prog[K_PROXY], "glow_proxy_range");
     /* the narrow top: the lowest level from which every level up has at most GLOW_PULL_TAIL_MAX nodes */
     s->tail_level = s->levels;
     while (s->tail_level > 1 && t->level_starts[s->tail_level] - t->level_starts[s->tail_level - 1] <= GLOW_PULL_TAIL_MAX)
@@ -372,7 +381,28 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
     s->buf[B_FBW] = make_buffer(s, (size_t)s->S * t->sh_bands_luma * t->sh_bands_luma * 4u, t->feedback_weights, 0);
     s->buf[B_CACHE] = make_buffer(s, (size_t)s->C * t->coeff_count * 4u, NULL, dyn);
     s->buf[B_NODES] = make_buffer(s, (size_t)s->N * 16u, nodes, 0);
-    s->buf[B_FLUX] = make_buffer(s, (size_t)s->N * 16u, NULL, dyn);
+    s->buf[B_FLUX] = make_buffer(s, ((size_t)s->N + s->P) * 16u, NULL, dyn); /* + the proxy nodes */
+    if (s->P) {
+        uint32_t *map = malloc((size_t)s->P * 2u * sizeof *map);
+        if (!map) {
+            free(geom), free(nodes), free(pairs);
+            LOG_ERR(s, GLOW_ERROR_OUT_OF_MEMORY, "out of host memory (%u proxy nodes)", s->P);
+            free_system(s);
+            return GLOW_ERROR_OUT_OF_MEMORY;
+        }
+        memset(s->dep_first, 0, sizeof s->dep_first);
+        for (uint32_t p = 0; p < s->P; ++p) s->dep_first[t->proxy_pairs[2 * (size_t)p] + 1]++;
+        for (uint32_t d = 0; d < s->deps; ++d) s->dep_first[d + 1] += s->dep_first[d];
+        uint32_t at[MAX_DEPS];
+        memcpy(at, s->dep_first, sizeof at);
+        for (uint32_t p = 0; p < s->P; ++p) { /* counting sort by dependency, proxies in order within one */
+            const uint32_t d = t->proxy_pairs[2 * (size_t)p], k = at[d]++;
+            map[2 * (size_t)k] = t->proxy_pairs[2 * (size_t)p + 1];
+            map[2 * (size_t)k + 1] = s->N + p;
+        }
+        s->buf[B_PROXY_MAP] = make_buffer(s, (size_t)s->P * 8u, map, 0);
+        free(map);
+    }
     s->buf[B_LINKS] = make_buffer(s, links_bytes, t->link_blocks, 0);
     s->buf[B_PAIRS] = make_buffer(s, pairs_n * 8u, pairs, 0);
     s->buf[B_STATUS] = make_buffer(s, sizeof(glow_gl_status), NULL, dyn);
@@ -545,7 +575,29 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
     return GLOW_OK;
 }
 
-void glow_gl_system_destroy(glow_gl_system *s) { free_system(s); }
+void glow_gl_system_destroy(glow_gl_system *s) {
+    if (!s) return;
+    if (s->attached) {
+        LOG_ERR(s, GLOW_ERROR_INVALID_OPERATION,
+                "glow_gl_system_destroy(%s): %u GL system(s) read it as a neighbour; detach it first "
+                "(glow_gl_system_set_neighbour with NULL); not destroyed", s->label, s->attached);
+        return;
+    }
+    for (uint32_t d = 0; d < s->deps; ++d)
+        if (s->nbr[d]) s->nbr[d]->attached--;
+    free_system(s);
+}
+
+glow_result glow_gl_system_set_neighbour(glow_gl_system *s, uint32_t dependency, glow_gl_system *nb) {
+    if (!s) return GLOW_ERROR_INVALID_ARGUMENT;
+    /* the checks (range, key, node count) and the CPU system's own attachment: glow_system_set_neighbour */
+    glow_result r = glow_system_set_neighbour(s->sys, dependency, nb ? nb->sys : NULL);
+    if (r != GLOW_OK) return r;
+    if (nb) nb->attached++;
+    if (s->nbr[dependency]) s->nbr[dependency]->attached--;
+    s->nbr[dependency] = nb;
+    return GLOW_OK;
+}
 
 /* ------------------------------------------------------------------------------------- update */
 static void dispatch(glow_gl_system *s, uint32_t groups) {
@@ -674,7 +726,25 @@ glow_result glow_gl_system_update(glow_gl_system *s, const glow_update_desc *des
             s->pull_dispatches++;
         }
         if (it == 0) stamp(s, T_PULL);
-        /* 4. cache lighting: one workgroup per cache */
+        /* 4. the proxy nodes from the attached neighbours' flux (a detached one's stay as last read) */
+        if (s->prog[K_PROXY]) {
+            int any = 0;
+            for (uint32_t d = 0; d < s->deps; ++d) {
+                const uint32_t first = s->dep_first[d], count = s->dep_first[d + 1] - first;
+                if (!s->nbr[d] || !count) continue;
+                if (!any) {
+                    gl->UseProgram(s->prog[K_PROXY]);
+                    bind(s, GLOW_BINDING_PROXY_MAP, B_PROXY_MAP);
+                    bind(s, GLOW_BINDING_FLUX, B_FLUX);
+                    any = 1;
+                }
+                gl->BindBufferBase(GL_SHADER_STORAGE_BUFFER, GLOW_BINDING_PROXY_SRC, s->nbr[d]->buf[B_FLUX]);
+                gl->Uniform2ui(s->proxy_loc, first, count);
+                dispatch(s, (count + GLOW_PROXY_GROUP - 1u) / GLOW_PROXY_GROUP);
+            }
+            if (any) gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        }
+        /* 5. cache lighting: one workgroup per cache */
         gl->UseProgram(s->prog[K_CACHE]);
         bind(s, GLOW_BINDING_LINKS, B_LINKS);
         bind(s, GLOW_BINDING_FLUX, B_FLUX);

@@ -1322,6 +1322,8 @@ glow_result glow_system_get_solver_tables(const glow_system *s, glow_solver_tabl
     *t = (glow_solver_tables){.surfel_count = s->S,
                               .node_count = s->N,
                               .proxy_count = s->P,
+                              .dependency_count = s->deps,
+                              .proxy_pairs = (const uint32_t *)(const void *)s->proxies, /* {dependency, node}: 8 bytes */
                               .level_count = s->levels,
                               .cache_count = s->C,
                               .material_count = s->M,

@@ -15,6 +15,7 @@
  *   cache_light       LINKS, FLUX, CACHE_SH (w)                                  params
  *   outputs           OUTPUT_PAIRS, CACHE_SH; images 0 grid, 1 lightmap          params
  *   detail            DETAIL_TEXELS, DETAIL_LINKS, FLUX; image 2 detail           params
+ *   proxy_fill        PROXY_SRC (a neighbour's FLUX), PROXY_MAP, FLUX (w)    uniform uvec2 glow_proxy_range
  */
 #ifndef GLOW_SHARED_H
 #define GLOW_SHARED_H
@@ -47,6 +48,8 @@ typedef struct glow_vec4 { float x, y, z, w; } glow_vec4;
 #define GLOW_BINDING_LEVELS 7       /* pull_tail only: uint[level_count + 1] level starts */
 #define GLOW_BINDING_DETAIL_TEXELS 0 /* detail only: uvec2[texels + 1] (texel y * width + x, first link) */
 #define GLOW_BINDING_DETAIL_LINKS 1  /* detail only: uvec2[links] (leaf surfel, floatBits(weight)) */
+#define GLOW_BINDING_PROXY_SRC 5    /* proxy_fill only: vec4[]: a neighbouring system's FLUX */
+#define GLOW_BINDING_PROXY_MAP 7    /* proxy_fill only: uvec2[]: (neighbour node, own proxy node N + p) */
 #define GLOW_BINDING_HOST_FIRST 8   /* first SSBO/UBO binding the host hook may use */
 /* UBO binding of glow_gl_params */
 #define GLOW_BINDING_PARAMS 0
@@ -62,6 +65,7 @@ typedef struct glow_vec4 { float x, y, z, w; } glow_vec4;
 #define GLOW_CACHE_GROUP 64   /* one workgroup per cache, threads across its links */
 #define GLOW_OUTPUT_GROUP 64
 #define GLOW_DETAIL_GROUP 64
+#define GLOW_PROXY_GROUP 64
 #define GLOW_REDUCE_CHUNK 32  /* coefficients reduced per shared-memory pass */
 #define GLOW_MAX_GROUPS_X 65535u /* dispatches wider than this use y (index = y * 65535 + x) */
 

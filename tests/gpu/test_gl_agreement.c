@@ -14,7 +14,8 @@
  * change between updates (emission override, material scales), a hook that does not compile
  * (GLOW_ERROR_HOST_CALLBACK with the GL log), a hook that returns NaN (counted, stored as 0: the
  * caches stay finite; with GLOW_GL_FLAG_CHECK_HOOK the update fails and keeps the previous outputs),
- * and the GLSL SH constants against the runtime's. Exits 77 (skipped) without a GL 4.5 context. */
+ * the GLSL SH constants against the runtime's, and light across systems (a world's GL systems attached to
+ * each other, against the CPU solvers attached the same way). Exits 77 (skipped) without a GL 4.5 context. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -24,6 +25,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <dirent.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "glow/glow.h"
@@ -393,6 +396,100 @@ static void test_bad_hooks(void **state) {
     free_fixture(&f);
 }
 
+/* Light across systems on the GPU (glow_gl_system_set_neighbour, proxy_fill.comp): the pillar hall baked
+ * as a world of systems of at most 100 m², each system's GL backend attached to its neighbours' GL
+ * systems, agrees with the CPU solvers attached the same way, after 1 and after 6 rounds of updates of
+ * every system in turn (each round's light crossing the borders one update late on both). A GL system
+ * that another reads is not destroyed until detached. */
+#define WORLD_MAX 16
+static void test_world_systems(void **state) {
+    (void)state;
+    char dir[128], out[200];
+    snprintf(dir, sizeof dir, "/tmp/glow_gpu_world_%d", (int)getpid());
+    snprintf(out, sizeof out, "%s/w.json", dir);
+    assert_int_equal(mkdir(dir, 0700), 0);
+    glow_pc_settings st = {.surfels = 1024, .links = 32, .lightmap_caches = 300, .lightmap_detail = 1, .threads = 2,
+                           .seed = 1, .system_area = 100.0f};
+    glow_pc_stats stats;
+    if (glow_pc_bake("builtin:pillar-hall", out, &st, &stats) != GLOW_OK) fail_msg("world bake: %s", stats.error);
+    assert_true(stats.systems >= 2 && stats.systems <= WORLD_MAX && stats.proxies > 0);
+    DIR *d = opendir(dir);
+    assert_non_null(d);
+    char names[WORLD_MAX][300];
+    uint32_t n = 0;
+    for (struct dirent *e; (e = readdir(d));)
+        if (strncmp(e->d_name, "w.s", 3) == 0 && strstr(e->d_name, ".glow") && n < WORLD_MAX && strlen(e->d_name) < 100)
+            snprintf(names[n++], sizeof names[0], "%s/%.100s", dir, e->d_name);
+    closedir(d);
+    assert_int_equal(n, stats.systems);
+    fixture f[WORLD_MAX];
+    memset(f, 0, sizeof f);
+    for (uint32_t i = 0; i < n; ++i) {
+        glow_context_desc cd = {.api_version = GLOW_VERSION, .tasks = {.worker_count = 2}, .logger = {logger, NULL}};
+        assert_int_equal(glow_context_create(&cd, &f[i].ctx), GLOW_OK);
+        assert_int_equal(glow_bake_load_file(f[i].ctx, names[i], &f[i].bake), GLOW_OK);
+        assert_int_equal(glow_system_create(f[i].ctx, &(glow_system_desc){.bake = f[i].bake, .label = names[i]}, &f[i].cpu),
+                         GLOW_OK);
+        glow_gl_desc gd = {.system = f[i].cpu, .get_proc_address = glow_glctx_get_proc_address(g_gl), .label = names[i],
+                           .logger = {logger, NULL}};
+        assert_int_equal(glow_gl_system_create(&gd, &f[i].gpu), GLOW_OK);
+        push_light(&f[i], 1.0f);
+    }
+    uint32_t attached = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        glow_bake_info bi;
+        glow_bake_get_info(f[i].bake, &bi);
+        for (uint32_t dep = 0; dep < bi.dependency_count; ++dep) {
+            uint64_t key = 0;
+            assert_int_equal(glow_bake_get_dependency(f[i].bake, dep, &key), GLOW_OK);
+            for (uint32_t j = 0; j < n; ++j) {
+                glow_bake_info bj;
+                glow_bake_get_info(f[j].bake, &bj);
+                if (bj.system_key != key) continue;
+                assert_int_equal(glow_gl_system_set_neighbour(f[i].gpu, dep, f[j].gpu), GLOW_OK); /* and the CPUs' */
+                attached++;
+            }
+        }
+    }
+    assert_true(attached > 0);
+    assert_int_equal(glow_gl_system_set_neighbour(f[0].gpu, 64, f[1].gpu), GLOW_ERROR_INVALID_ARGUMENT);
+    printf("pillar hall in %u systems, %u dependencies attached on the CPU and the GPU:\n", n, attached);
+    for (uint32_t round = 0; round < 6; ++round) {
+        for (uint32_t i = 0; i < n; ++i) assert_int_equal(glow_system_update(f[i].cpu, NULL), GLOW_OK);
+        for (uint32_t i = 0; i < n; ++i) assert_int_equal(glow_gl_system_update(f[i].gpu, NULL), GLOW_OK);
+        if (round != 0 && round != 5) continue;
+        for (uint32_t i = 0; i < n; ++i) {
+            char what[64];
+            snprintf(what, sizeof what, "system %u, round %u", i, round + 1);
+            assert_true(compare(&f[i], what) <= 1.0);
+        }
+    }
+    /* a GL system another reads is not destroyed (logged, still usable) */
+    glow_bake_info b0;
+    glow_bake_get_info(f[0].bake, &b0);
+    uint64_t k0 = 0;
+    assert_int_equal(glow_bake_get_dependency(f[0].bake, 0, &k0), GLOW_OK);
+    for (uint32_t j = 0; j < n; ++j) {
+        glow_bake_info bj;
+        glow_bake_get_info(f[j].bake, &bj);
+        if (bj.system_key != k0) continue;
+        glow_gl_system_destroy(f[j].gpu);
+        assert_int_equal(glow_gl_system_update(f[j].gpu, NULL), GLOW_OK);
+    }
+    for (uint32_t i = 0; i < n; ++i) { /* detach everything, then free */
+        glow_bake_info bi;
+        glow_bake_get_info(f[i].bake, &bi);
+        for (uint32_t dep = 0; dep < bi.dependency_count; ++dep)
+            assert_int_equal(glow_gl_system_set_neighbour(f[i].gpu, dep, NULL), GLOW_OK);
+    }
+    for (uint32_t i = 0; i < n; ++i) {
+        free_fixture(&f[i]);
+        remove(names[i]);
+    }
+    remove(out);
+    rmdir(dir);
+}
+
 int main(void) {
     char why[512];
     glow_result r = glow_glctx_create(&(glow_glctx_desc){.kind = GLOW_GLCTX_HEADLESS}, &g_gl, why, sizeof why);
@@ -404,7 +501,7 @@ int main(void) {
            glow_glctx_kind_name(glow_glctx_get_kind(g_gl)));
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_cornell), cmocka_unit_test(test_two_rooms), cmocka_unit_test(test_bands),
-        cmocka_unit_test(test_hook), cmocka_unit_test(test_bad_hooks),
+        cmocka_unit_test(test_hook), cmocka_unit_test(test_bad_hooks), cmocka_unit_test(test_world_systems),
     };
     int rc = cmocka_run_group_tests(tests, NULL, NULL);
     glow_glctx_destroy(g_gl);

@@ -545,8 +545,8 @@ int main(int argc, char **argv) {
     }
     if (is_world(o.bake)) {
         if (o.gl) {
-            fprintf(stderr, "glow-bench: --backend gl: worlds run on the CPU backend only (the GL backend refuses "
-                            "bakes with proxies)\n");
+            fprintf(stderr, "glow-bench: --backend gl: worlds run on the CPU backend only (glow_world drives CPU "
+                            "systems; GL systems of a world attach with glow_gl_system_set_neighbour)\n");
             glow_scene_free(&scene);
             return 2;
         }

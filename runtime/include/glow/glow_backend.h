@@ -69,9 +69,14 @@ typedef struct glow_solver_tables {
     const uint32_t *detail_texel, *detail_first, *detail_surfel;
     const float *detail_weight;
     /* \since 0.2: proxy nodes (a system of a world, bake format 1.4 XREF): links may name node
-     * node_count + p, whose radiance the CPU solver copies from a neighbouring system; a backend that
-     * does not carry them must refuse a bake with proxy_count > 0 */
+     * node_count + p, whose radiance the CPU solver copies from a neighbouring system (the GL backend:
+     * glow_gl_system_set_neighbour); a backend that does not carry them must refuse a bake with
+     * proxy_count > 0 */
     uint32_t proxy_count;
+    /* \since 0.2: proxy p reads node proxy_pairs[2p + 1] of the system attached as dependency
+     * proxy_pairs[2p] (< dependency_count; glow_system_set_neighbour) */
+    uint32_t dependency_count;
+    const uint32_t *proxy_pairs;
 } glow_solver_tables;
 /** Fills `out_tables`. \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT for NULL. \threadsafety Between
  * updates; the views change only through the setters and updates. \since 0.1 */

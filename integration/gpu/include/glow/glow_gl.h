@@ -130,6 +130,15 @@ typedef struct glow_gl_stats {
 GLOW_API glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out);
 /** Deletes every GL object it made (NULL is a no-op). The CPU system is not touched. */
 GLOW_API void glow_gl_system_destroy(glow_gl_system *system);
+/** Light across systems (a system of a world, glow-bake --system-area; docs/runtime.md "A world of
+ * systems"): attaches the GL system of `neighbour` as dependency `dependency` of `system`, as
+ * glow_system_set_neighbour does for their CPU systems (which it also calls: same checks, same
+ * errors). Before each cache gather the proxy nodes copy the neighbour's node flux as its last GL update
+ * left it; NULL detaches (the proxies keep what they last read, zero if never attached). Both must
+ * live in the same GL context (or share objects). A GL system another reads is not destroyed until
+ * detached. \since 0.2 */
+GLOW_API glow_result glow_gl_system_set_neighbour(glow_gl_system *system, uint32_t dependency,
+                                                  glow_gl_system *neighbour);
 /** One frame on the GPU (flags: GLOW_UPDATE_FLAG_RESET_BOUNCE, GLOW_UPDATE_FLAG_KEEP_LIGHTING), x the CPU
  * system's bounce_iterations. Allocates nothing; does not wait for the GPU (unless CHECK_HOOK).
  * The desc's budgets (max_caches, budget_ms, focus, converged_epsilon) are CPU-only so far:
