@@ -37,6 +37,7 @@ struct glow_world {
     uint32_t attached;  /* dependencies currently attached over all members */
     uint32_t missing;   /* dependencies whose system is not a member */
     uint32_t updated;   /* members the last update updated */
+    double diag;        /* the diagonal of the members' bounds (recount) */
 };
 
 static void free_world(glow_world *w) {
@@ -83,9 +84,19 @@ static uint32_t find(const glow_world *w, const glow_system *s) {
     return UINT32_MAX;
 }
 
-/* Counts the members' dependencies that are attached and those whose system is absent. */
+/* Counts the members' dependencies that are attached and those whose system is absent, and measures
+ * the members' bounds (the focus radius's default). After every add and remove. */
 static void recount(glow_world *w) {
     w->attached = w->missing = 0;
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (uint32_t i = 0; i < w->count; ++i)
+        for (int k = 0; k < 3; ++k) {
+            lo[k] = fminf(lo[k], w->ms[i].lo[k]);
+            hi[k] = fmaxf(hi[k], w->ms[i].hi[k]);
+        }
+    double diag2 = 0.0;
+    for (int k = 0; w->count && k < 3; ++k) diag2 += (double)(hi[k] - lo[k]) * (hi[k] - lo[k]);
+    w->diag = sqrt(diag2);
     for (uint32_t i = 0; i < w->count; ++i) {
         const glow_bake *b = glow__system_bake(w->sys[i]);
         glow_bake_info bi;
@@ -226,16 +237,8 @@ static void add_stats(glow_update_stats *sum, const glow_update_stats *st) {
  * (all but the cache gathers) fits what is left, with what is left as its budget (its gathers take
  * the rest). A member never updated has no time yet and updates. The others keep their outputs and
  * count as skipped (their caches in caches_skipped_budget). */
-static uint32_t schedule(glow_world *w, const glow_update_desc *desc) {
-    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (uint32_t i = 0; i < w->count; ++i)
-        for (int k = 0; k < 3; ++k) {
-            lo[k] = fminf(lo[k], w->ms[i].lo[k]);
-            hi[k] = fmaxf(hi[k], w->ms[i].hi[k]);
-        }
-    double diag2 = 0.0;
-    for (int k = 0; k < 3; ++k) diag2 += (double)(hi[k] - lo[k]) * (hi[k] - lo[k]);
-    double r = desc->focus_radius > 0.0f ? desc->focus_radius : 0.1 * sqrt(diag2);
+static void schedule(glow_world *w, const glow_update_desc *desc) {
+    double r = desc->focus_radius > 0.0f ? desc->focus_radius : 0.1 * w->diag;
     if (!(r > 0.0)) r = 1.0;
     for (uint32_t i = 0; i < w->count; ++i) {
         double f = 0.0;
@@ -260,7 +263,6 @@ static uint32_t schedule(glow_world *w, const glow_update_desc *desc) {
         }
         w->order[j] = v;
     }
-    return w->count;
 }
 
 glow_result glow_world_update(glow_world *w, const glow_update_desc *desc) {

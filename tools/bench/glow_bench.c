@@ -256,6 +256,17 @@ static void animate(const glow_scene_light *base, glow_scene_light *out, uint32_
     }
 }
 
+/* --walk: from 5 % in at one end of the longest horizontal extent of [lo, hi] to 5 % in at the other, at
+ * the camera's height (else the middle's) */
+static void walk_ends(const float lo[3], const float hi[3], const glow_scene_desc *scene, float a[3], float b[3]) {
+    const int ax = hi[0] - lo[0] >= hi[2] - lo[2] ? 0 : 2;
+    for (int k = 0; k < 3; ++k) a[k] = b[k] = 0.5f * (lo[k] + hi[k]);
+    if (scene->has_camera) a[1] = b[1] = scene->camera.position[1];
+    const float ext = hi[ax] - lo[ax];
+    a[ax] = lo[ax] + 0.05f * ext;
+    b[ax] = hi[ax] - 0.05f * ext;
+}
+
 /* ------------------------------------------------------------------------------------ worlds */
 /* BAKE a world manifest (glow-bake --system-area): every system loaded, one host each (shadows from
  * its own and its neighbours' geometry: glow_host_desc.occluders), all in a glow_world, updated as one
@@ -401,11 +412,7 @@ static int run_world(options *o, glow_scene_desc *scene, glow_logger logger) {
     const bool walk = o->walk && budget;
     float walk_a[3], walk_b[3];
     if (walk) {
-        const int ax = hi[0] - lo[0] >= hi[2] - lo[2] ? 0 : 2;
-        for (int k = 0; k < 3; ++k) walk_a[k] = walk_b[k] = 0.5f * (lo[k] + hi[k]);
-        if (scene->has_camera) walk_a[1] = walk_b[1] = scene->camera.position[1];
-        walk_a[ax] = lo[ax] + 0.05f * (hi[ax] - lo[ax]);
-        walk_b[ax] = hi[ax] - 0.05f * (hi[ax] - lo[ax]);
+        walk_ends(lo, hi, scene, walk_a, walk_b);
         ud.focus = o->focus;
         ud.focus_count = 1;
     }
@@ -660,12 +667,7 @@ int main(int argc, char **argv) {
     if (walk) { /* from 5 % in at one end of the longest horizontal extent to 5 % in at the other */
         cinfo = malloc(((size_t)info.cache_count + 1) * sizeof *cinfo);
         if (!cinfo || (r = glow_bake_get_caches(bake, 0, info.cache_count, cinfo)) != GLOW_OK) goto done;
-        const int ax = info.bounds_max[0] - info.bounds_min[0] >= info.bounds_max[2] - info.bounds_min[2] ? 0 : 2;
-        for (int k = 0; k < 3; ++k) walk_a[k] = walk_b[k] = 0.5f * (info.bounds_min[k] + info.bounds_max[k]);
-        if (scene.has_camera) walk_a[1] = walk_b[1] = scene.camera.position[1];
-        const float ext = info.bounds_max[ax] - info.bounds_min[ax];
-        walk_a[ax] = info.bounds_min[ax] + 0.05f * ext;
-        walk_b[ax] = info.bounds_max[ax] - 0.05f * ext;
+        walk_ends(info.bounds_min, info.bounds_max, &scene, walk_a, walk_b);
         o.has_focus = 1;
         ud.focus = o.focus;
         ud.focus_count = 1;
