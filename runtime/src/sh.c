@@ -120,9 +120,13 @@ static void axis_coord(float f, uint32_t dim, uint32_t *i0, uint32_t *i1, float 
     *t = f - fl;
 }
 
-glow_result glow_sample_grid(const glow_cache_outputs *o, const float p[3], float *out) {
-    if (!o || !p || !out || !o->grid_map || o->grid_dims[0] == 0 || !(o->grid_spacing > 0.0f))
+/* The grid lookup of glow_sample_grid (n == NULL) and glow_sample_grid_oriented (unit normal n). */
+static glow_result grid_lookup(const glow_cache_outputs *o, const float p_in[3], const float *n, float *out) {
+    if (!o || !p_in || !out || !o->grid_map || o->grid_dims[0] == 0 || !(o->grid_spacing > 0.0f))
         return GLOW_ERROR_INVALID_ARGUMENT;
+    float p[3] = {p_in[0], p_in[1], p_in[2]};
+    if (n)
+        for (int a = 0; a < 3; ++a) p[a] += GLOW_GRID_NORMAL_BIAS * o->grid_spacing * n[a];
     uint32_t i0[3], i1[3];
     float t[3];
     for (int a = 0; a < 3; ++a) axis_coord((p[a] - o->grid_origin[a]) / o->grid_spacing, o->grid_dims[a], &i0[a], &i1[a], &t[a]);
@@ -138,9 +142,29 @@ glow_result glow_sample_grid(const glow_cache_outputs *o, const float p[3], floa
         uint32_t x = (c & 1) ? i1[0] : i0[0], y = (c & 2) ? i1[1] : i0[1], z = (c & 4) ? i1[2] : i0[2];
         w[c] = ((c & 1) ? t[0] : 1.0f - t[0]) * ((c & 2) ? t[1] : 1.0f - t[1]) * ((c & 4) ? t[2] : 1.0f - t[2]);
         if (!((vis >> c) & 1u)) w[c] = 0.0f;
+        if (n && w[c] > 0.0f) { /* corners behind the surface count less (see glow.h) */
+            const float d[3] = {o->grid_origin[0] + o->grid_spacing * (float)x - p_in[0],
+                                o->grid_origin[1] + o->grid_spacing * (float)y - p_in[1],
+                                o->grid_origin[2] + o->grid_spacing * (float)z - p_in[2]};
+            const float len = sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+            const float h = len > 0.0f ? 0.5f * (1.0f + (d[0] * n[0] + d[1] * n[1] + d[2] * n[2]) / len) : 1.0f;
+            w[c] *= h * h + GLOW_GRID_BACKFACE_FLOOR;
+        }
         idx[c] = o->grid_map[(size_t)z * dxy + (size_t)y * dx + x];
     }
     return blend(o, idx, w, 8, out);
+}
+
+glow_result glow_sample_grid(const glow_cache_outputs *o, const float p[3], float *out) {
+    return grid_lookup(o, p, NULL, out);
+}
+
+glow_result glow_sample_grid_oriented(const glow_cache_outputs *o, const float p[3], const float normal[3], float *out) {
+    if (!normal) return GLOW_ERROR_INVALID_ARGUMENT;
+    const float l2 = normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2];
+    if (!(l2 > 0.0f) || !isfinite(l2)) return GLOW_ERROR_INVALID_ARGUMENT;
+    const float inv = 1.0f / sqrtf(l2), n[3] = {normal[0] * inv, normal[1] * inv, normal[2] * inv};
+    return grid_lookup(o, p, n, out);
 }
 
 glow_result glow_sample_lightmap(const glow_cache_outputs *o, float u, float v, float *out) {

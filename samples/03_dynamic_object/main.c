@@ -1,5 +1,5 @@
 /* 03_dynamic_object — a dynamic object lit by Glow: a sphere moving through the baked scene, shaded
- * per pixel from the GRID caches (glow_sample_grid in GLSL: the trilinear lookup of the 3D texture of
+ * per pixel from the GRID caches (glow_sample_grid_oriented in GLSL: the trilinear lookup of the 3D texture of
  * SH caches at the pixel's position, convolved with its normal's cosine lobe) plus the direct light of
  * the GPU lights' hook, drawn with the static scene (lightmap caches) by samples/common/sample_gl.h.
  *

@@ -10,7 +10,7 @@
  *                glow_gl_lights_hook_source — the same function that lights Glow's surfels on the GPU)
  *     indirect = albedo · (glow_shade_sh(SH, n, 1) + detail)                    (glow_shading.glsl: SH =
  *                glow_sample_lightmap at the triangle's lightmap uv, detail = glow_sample_lightmap_detail
- *                there for bakes with a lightmap detail; spheres: glow_sample_grid at p, no detail)
+ *                there for bakes with a lightmap detail; spheres: glow_sample_grid_oriented at p, n, no detail)
  *     emission = the material's (front faces), through an optional GLSL hook (animated emitters)
  * albedo and emission are the bake's materials (glow_bake_get_material) times the CPU system's scales
  * (glow_system_params.emission_scale, glow_system_set_material; effective albedo clamped to 0.999 as
@@ -298,7 +298,7 @@ static const char sample_gl__scene_fs[] =
     "    if (u_object == 0 && gl_FrontFacing) emission = sample_emission(v_pos, n, v_mat, sample_mat[v_mat].emission.rgb);\n"
     "    vec4 sh[GLOW_SH_PLANES];\n"
     "    bool has = false;\n"
-    "    if (u_object != 0) { if (u_has_grid != 0) has = glow_sample_grid(u_grid, u_grid_mask, u_grid_origin, u_grid_spacing, ivec3(u_grid_dims), v_pos, sh); }\n"
+    "    if (u_object != 0) { if (u_has_grid != 0) has = glow_sample_grid_oriented(u_grid, u_grid_mask, u_grid_origin, u_grid_spacing, ivec3(u_grid_dims), v_pos, n, sh); }\n"
     "    else if (u_has_lightmap != 0) has = glow_sample_lightmap(u_lightmap, u_lightmap_valid, v_uv, sh);\n"
     "    vec3 e_ind = has ? glow_shade_sh(sh, n, 1.0) : vec3(0.0);\n"
     "    if (has && u_object == 0 && u_has_detail != 0) e_ind += glow_sample_lightmap_detail(u_lightmap_detail, v_uv);\n"

@@ -70,12 +70,15 @@ vec3 glow_shade_sh(vec4 sh[GLOW_SH_PLANES], vec3 axis, float exponent) {
     return glow_ycocg_to_rgb(ycc);
 }
 
-/** Trilinear lookup of the grid at `p` (m; clamped to the grid), blending only the corners the mask allows,
- * renormalised. origin = centre of cell (0,0,0), spacing in m, dims = cells (dx, dy, dz).
- * \returns false (sh zeroed) when no corner may be blended. */
-bool glow_sample_grid(sampler3D grid, usampler3D grid_mask, vec3 origin, float spacing, ivec3 dims, vec3 p,
-                      out vec4 sh[GLOW_SH_PLANES]) {
+/* glow_sample_grid_oriented's constants: glow.h's GLOW_GRID_NORMAL_BIAS and GLOW_GRID_BACKFACE_FLOOR */
+const float GLOW_GRID_NORMAL_BIAS = 0.25;
+const float GLOW_GRID_BACKFACE_FLOOR = 0.2;
+
+/* The lookup of glow_sample_grid (oriented = false) and glow_sample_grid_oriented (unit n). */
+bool glow__grid_lookup(sampler3D grid, usampler3D grid_mask, vec3 origin, float spacing, ivec3 dims, vec3 p0,
+                       bool oriented, vec3 n, out vec4 sh[GLOW_SH_PLANES]) {
     for (int q = 0; q < GLOW_SH_PLANES; ++q) sh[q] = vec4(0.0);
+    vec3 p = oriented ? p0 + GLOW_GRID_NORMAL_BIAS * spacing * n : p0;
     vec3 f = clamp((p - origin) / spacing, vec3(0.0), vec3(dims - 1));
     vec3 fl = floor(f);
     ivec3 i0 = ivec3(fl), i1 = min(i0 + 1, dims - 1);
@@ -89,12 +92,35 @@ bool glow_sample_grid(sampler3D grid, usampler3D grid_mask, vec3 origin, float s
         ivec3 cc = ivec3((c & 1) != 0 ? i1.x : i0.x, (c & 2) != 0 ? i1.y : i0.y, (c & 4) != 0 ? i1.z : i0.z);
         float w = ((c & 1) != 0 ? t.x : 1.0 - t.x) * ((c & 2) != 0 ? t.y : 1.0 - t.y) * ((c & 4) != 0 ? t.z : 1.0 - t.z);
         if (!(w > 0.0)) continue;
+        if (oriented) { /* corners behind the surface count less */
+            vec3 d = origin + spacing * vec3(cc) - p0;
+            float len = length(d);
+            float h = len > 0.0 ? 0.5 * (1.0 + dot(d, n) / len) : 1.0;
+            w *= h * h + GLOW_GRID_BACKFACE_FLOOR;
+        }
         wsum += w;
         for (int q = 0; q < GLOW_SH_PLANES; ++q) sh[q] += w * texelFetch(grid, cc + ivec3(0, 0, q * dims.z), 0);
     }
     if (!(wsum > 0.0)) return false;
     for (int q = 0; q < GLOW_SH_PLANES; ++q) sh[q] /= wsum;
     return true;
+}
+
+/** Trilinear lookup of the grid at `p` (m; clamped to the grid), blending only the corners the mask allows,
+ * renormalised. origin = centre of cell (0,0,0), spacing in m, dims = cells (dx, dy, dz).
+ * \returns false (sh zeroed) when no corner may be blended. */
+bool glow_sample_grid(sampler3D grid, usampler3D grid_mask, vec3 origin, float spacing, ivec3 dims, vec3 p,
+                      out vec4 sh[GLOW_SH_PLANES]) {
+    return glow__grid_lookup(grid, grid_mask, origin, spacing, dims, p, false, vec3(0.0), sh);
+}
+
+/** The grid's light for a surface point p with normal n (any length > 0), as glow.h's
+ * glow_sample_grid_oriented: the lookup moves GLOW_GRID_NORMAL_BIAS spacings along n, and corners behind
+ * the surface are weighted down by ((1 + cos)/2)² + GLOW_GRID_BACKFACE_FLOOR. Use it to shade dynamic
+ * objects. \returns as glow_sample_grid. */
+bool glow_sample_grid_oriented(sampler3D grid, usampler3D grid_mask, vec3 origin, float spacing, ivec3 dims, vec3 p,
+                               vec3 n, out vec4 sh[GLOW_SH_PLANES]) {
+    return glow__grid_lookup(grid, grid_mask, origin, spacing, dims, p, true, normalize(n), sh);
 }
 
 /** Bilinear lookup of the lightmap at uv in [0,1]² (texel centres at (i + 0.5)/size, v = 0 is row 0),

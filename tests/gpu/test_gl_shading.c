@@ -5,7 +5,8 @@
  *   - glow_sh_lobe_factor for l = 0..7 and exponents 1, 8, 100 vs glow_sh_lobe_factor: relative 1e-5;
  *   - glow_sample_grid + glow_shade_sh (diffuse and exponent 20) at 512 random points of the built-in
  *     Cornell box's grid (GVIS masks, empty cells, clamping at the border) vs glow_sample_grid +
- *     glow_shade_sh on the same caches (the GPU's, read back), and glow_sample_lightmap at 512 random
+ *     glow_shade_sh on the same caches (the GPU's, read back), glow_sample_grid_oriented (the random
+ *     direction as the normal, diffuse) vs glow_sample_grid_oriented the same way, and glow_sample_lightmap at 512 random
  *     uvs vs glow_sample_lightmap: |diff| <= 1e-4 · (max |result|) — the two blend the same texels with
  *     weights renormalised in a different order; glow_sample_lightmap_detail at the same uvs on the
  *     GPU's lightmap detail vs glow_sample_lightmap_detail: |diff| <= 1e-5 · (max |result|).
@@ -176,13 +177,15 @@ static void test_sampling(void **state) {
         "void main() { uint i = gl_GlobalInvocationID.x; vec4 sh[GLOW_SH_PLANES];\n"
         "  float phi = uvs[i].z, z = uvs[i].w, r = sqrt(max(0.0, 1.0 - z * z)); vec3 axis = vec3(r * cos(phi), r * sin(phi), z);\n"
         "  bool g = glow_sample_grid(grid, grid_mask, origin, spacing, dims, pts[i].xyz, sh);\n"
-        "  res[4u * i] = vec4(glow_shade_sh(sh, axis, 1.0), g ? 1.0 : 0.0);\n"
-        "  res[4u * i + 1u] = vec4(glow_shade_sh(sh, axis, 20.0), 0.0);\n"
+        "  res[5u * i] = vec4(glow_shade_sh(sh, axis, 1.0), g ? 1.0 : 0.0);\n"
+        "  res[5u * i + 1u] = vec4(glow_shade_sh(sh, axis, 20.0), 0.0);\n"
         "  bool l = glow_sample_lightmap(lm, lm_valid, uvs[i].xy, sh);\n"
-        "  res[4u * i + 2u] = vec4(glow_shade_sh(sh, axis, 1.0), l ? 1.0 : 0.0);\n"
-        "  res[4u * i + 3u] = vec4(glow_shade_sh(sh, axis, 20.0), 0.0); }\n";
+        "  res[5u * i + 2u] = vec4(glow_shade_sh(sh, axis, 1.0), l ? 1.0 : 0.0);\n"
+        "  res[5u * i + 3u] = vec4(glow_shade_sh(sh, axis, 20.0), 0.0);\n"
+        "  bool o = glow_sample_grid_oriented(grid, grid_mask, origin, spacing, dims, pts[i].xyz, axis, sh);\n"
+        "  res[5u * i + 4u] = vec4(glow_shade_sh(sh, axis, 1.0), o ? 1.0 : 0.0); }\n";
     GLuint p = compute_program(3, 2, body);
-    GLuint bp = ssbo(sizeof pts, pts), bu = ssbo(sizeof uvs, uvs), br = ssbo(N * 4 * 16, NULL);
+    GLuint bp = ssbo(sizeof pts, pts), bu = ssbo(sizeof uvs, uvs), br = ssbo(N * 5 * 16, NULL);
     gl.UseProgram(p);
     gl.Uniform3f(gl.GetUniformLocation(p, "origin"), go->grid_origin[0], go->grid_origin[1], go->grid_origin[2]);
     gl.Uniform1f(gl.GetUniformLocation(p, "spacing"), go->grid_spacing);
@@ -196,10 +199,10 @@ static void test_sampling(void **state) {
     gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, br);
     gl.DispatchCompute(N / 64, 1, 1);
     gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-    static float res[N * 16];
+    static float res[N * 20];
     gl.GetNamedBufferSubData(br, 0, sizeof res, res);
-    double worst[2] = {0, 0}, scale[2] = {0, 0};
-    int hits[2] = {0, 0}, mismatched_ok = 0;
+    double worst[3] = {0, 0, 0}, scale[3] = {0, 0, 0};
+    int hits[3] = {0, 0, 0}, mismatched_ok = 0;
     float *coeffs = malloc(co.coeff_count * sizeof *coeffs);
     for (int i = 0; i < N; ++i) {
         const float phi = uvs[4 * i + 2], z = uvs[4 * i + 3], r = sqrtf(fmaxf(0.0f, 1.0f - z * z));
@@ -207,7 +210,7 @@ static void test_sampling(void **state) {
         for (int which = 0; which < 2; ++which) {
             glow_result rr = which == 0 ? glow_sample_grid(&co, pts + 4 * i, coeffs)
                                         : glow_sample_lightmap(&co, uvs[4 * i], uvs[4 * i + 1], coeffs);
-            const float *g = res + 16 * i + 8 * which;
+            const float *g = res + 20 * i + 8 * which;
             if ((rr == GLOW_OK) != (g[3] == 1.0f)) mismatched_ok++;
             if (rr != GLOW_OK) continue;
             hits[which]++;
@@ -220,7 +223,22 @@ static void test_sampling(void **state) {
                 }
             }
         }
+        /* the oriented lookup with the axis as the normal, diffuse */
+        const glow_result ro = glow_sample_grid_oriented(&co, pts + 4 * i, axis, coeffs);
+        const float *g = res + 20 * i + 16;
+        if ((ro == GLOW_OK) != (g[3] == 1.0f)) mismatched_ok++;
+        if (ro != GLOW_OK) continue;
+        hits[2]++;
+        float ref[3];
+        glow_shade_sh(coeffs, 3, 2, axis, 1.0f, ref);
+        for (int c = 0; c < 3; ++c) {
+            worst[2] = fmax(worst[2], fabs((double)g[c] - ref[c]));
+            scale[2] = fmax(scale[2], fabs(ref[c]));
+        }
     }
+    printf("  oriented grid: %d/%d lookups hit a cache, worst |GLSL - C| %.2e (max %.3g)\n", hits[2], N, worst[2], scale[2]);
+    assert_true(hits[2] > N / 2 && scale[2] > 0.0);
+    assert_true(worst[2] <= 1e-4 * scale[2]);
     printf("  grid: %d/%d lookups hit a cache, worst |GLSL - C| %.2e (max %.3g); lightmap: %d/%d, worst %.2e (max %.3g)\n",
            hits[0], N, worst[0], scale[0], hits[1], N, worst[1], scale[1]);
     assert_int_equal(mismatched_ok, 0);

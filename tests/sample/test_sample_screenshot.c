@@ -4,7 +4,7 @@
  * each pixel's lightmap uv, material, normal and position (the renderer's aux targets), and every
  * covered pixel is shaded again on the CPU from the CPU system's outputs:
  *     bake triangles:  albedo · (glow_shade_sh(glow_sample_lightmap(uv), n, 1) + glow_sample_lightmap_detail(uv))
- *     the sphere:      albedo · glow_shade_sh(glow_sample_grid(p), n, 1)
+ *     the sphere:      albedo · glow_shade_sh(glow_sample_grid_oriented(p, n), n, 1)
  * Both systems are made from the same bake and lit by the same direct light (an analytic point light
  * pushed to the CPU system with glow_system_set_surfel_irradiance; the GL system has no hook and
  * uploads it), and updated the same number of times.
@@ -170,7 +170,7 @@ static errors compare(const fixture *f, const glow_system *sys, const image *img
             }
         } else {
             memcpy(albedo, SPHERE.albedo, sizeof albedo);
-            if (glow_sample_grid(o, a2, coeffs) == GLOW_OK)
+            if (glow_sample_grid_oriented(o, a2, a1, coeffs) == GLOW_OK)
                 glow_shade_sh(coeffs, o->sh_bands_luma, o->sh_bands_chroma, a1, 1.0f, rgb);
         }
         e.pixels[grp]++;

@@ -709,6 +709,58 @@ static void test_sample_grid(void **state) {
     assert_int_equal(glow_sample_grid(&none, p0, out), GLOW_ERROR_INVALID_ARGUMENT);
 }
 
+/* glow_sample_grid_oriented: the lookup moves GLOW_GRID_NORMAL_BIAS spacings along the normal, and
+ * each corner's weight is also scaled by ((1 + cos θ)/2)² + GLOW_GRID_BACKFACE_FLOOR, θ between the
+ * normal and the direction from the (unmoved) point to the corner. Hand-computed on a 2 x 1 x 1 grid. */
+static void test_sample_grid_oriented(void **state) {
+    (void)state;
+    fill_rows();
+    const uint32_t map[2] = {0, 1};
+    glow_cache_outputs o = {.sh_bands_luma = 1, .sh_bands_chroma = 1, .coeff_count = 3, .cache_count = 2,
+                            .grid_cache_count = 2, .cache_sh = &g_rows[0][0], .grid_dims = {2, 1, 1},
+                            .grid_origin = {0.0f, 0.0f, 0.0f}, .grid_spacing = 2.0f, .grid_map = map};
+    float out[3], want[3];
+    /* a wall at x = 1 facing +x: the point moves to x = 1 + 0.25·2 = 1.5 (t = 0.75); corner 0 is
+     * straight behind (cos −1: weight 0.2), corner 1 straight ahead (cos 1: 1.2) */
+    const float p[3] = {1.0f, 0.0f, 0.0f}, nx[3] = {3.0f, 0.0f, 0.0f}; /* any length */
+    {
+        const uint32_t idx[2] = {0, 1};
+        const double b = GLOW_GRID_NORMAL_BIAS * 2.0 / 2.0 + 0.5, f = GLOW_GRID_BACKFACE_FLOOR;
+        const double w[2] = {(1.0 - b) * f, b * (1.0 + f)};
+        expect_blend(idx, w, 2, want);
+    }
+    assert_int_equal(glow_sample_grid_oriented(&o, p, nx, out), GLOW_OK);
+    assert_row(out, want);
+    assert_true(fabs(out[0] - (0.25 * 0.2 * 1 + 0.75 * 1.2 * 2) / (0.25 * 0.2 + 0.75 * 1.2)) < 1e-5);
+    /* facing −x: moves to x = 0.5 (t = 0.25), corner 0 ahead, corner 1 behind: the mirror image */
+    const float mx[3] = {-1.0f, 0.0f, 0.0f};
+    assert_int_equal(glow_sample_grid_oriented(&o, p, mx, out), GLOW_OK);
+    assert_true(fabs(out[0] - (0.75 * 1.2 * 1 + 0.25 * 0.2 * 2) / (0.75 * 1.2 + 0.25 * 0.2)) < 1e-5);
+    /* a normal across the grid's only axis: no move along x, both corners at cos 0 (weight 0.45):
+     * glow_sample_grid's value */
+    const float ny[3] = {0.0f, 1.0f, 0.0f};
+    float plain[3];
+    assert_int_equal(glow_sample_grid_oriented(&o, p, ny, out), GLOW_OK);
+    assert_int_equal(glow_sample_grid(&o, p, plain), GLOW_OK);
+    assert_row(out, plain);
+    /* GVIS still applies, in the moved point's octant: cell 0's octant 1 (t >= 0.5 along x) hides
+     * corner 1, so facing +x reads cache 0 alone */
+    uint8_t vis[2][8];
+    memset(vis, 0xFF, sizeof vis);
+    vis[0][1] = 0x01;
+    glow_cache_outputs ov = o;
+    ov.grid_visibility = &vis[0][0];
+    assert_int_equal(glow_sample_grid_oriented(&ov, p, nx, out), GLOW_OK);
+    assert_row(out, g_rows[0]);
+    /* bad normals */
+    const float zero[3] = {0, 0, 0}, nan3[3] = {NAN, 0, 0}, inf3[3] = {INFINITY, 0, 0};
+    assert_int_equal(glow_sample_grid_oriented(&o, p, NULL, out), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(glow_sample_grid_oriented(&o, p, zero, out), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(glow_sample_grid_oriented(&o, p, nan3, out), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(glow_sample_grid_oriented(&o, p, inf3, out), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(glow_sample_grid_oriented(NULL, p, nx, out), GLOW_ERROR_INVALID_ARGUMENT);
+}
+
 static void test_sample_lightmap(void **state) {
     (void)state;
     fill_rows();
@@ -1001,7 +1053,7 @@ int main(void) {
         cmocka_unit_test(test_ycocg),          cmocka_unit_test(test_sh_orthonormal), cmocka_unit_test(test_sh_closed_forms), cmocka_unit_test(test_sh_scaled_basis),
         cmocka_unit_test(test_cone_factor),    cmocka_unit_test(test_sh_projection),  cmocka_unit_test(test_lobe_factor),
         cmocka_unit_test(test_sh_window),      cmocka_unit_test(test_shade_uniform),  cmocka_unit_test(test_shade_linear),   cmocka_unit_test(test_shade_cone),
-        cmocka_unit_test(test_sample_grid),    cmocka_unit_test(test_sample_lightmap), cmocka_unit_test(test_kernels), cmocka_unit_test(test_write_plane),
+        cmocka_unit_test(test_sample_grid),    cmocka_unit_test(test_sample_grid_oriented), cmocka_unit_test(test_sample_lightmap), cmocka_unit_test(test_kernels), cmocka_unit_test(test_write_plane),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

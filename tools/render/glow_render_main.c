@@ -22,7 +22,7 @@ static void usage(FILE *f) {
             "usage: glow-render SCENE.json --out PREFIX [--spp N] [--seed S] [--threads N] [--width W --height H]\n"
             "                   [--exposure E] [--max-depth D] [--albedo-scale A] [--near-split R]\n"
             "                   [--glow BAKE [--bounces K] [--sky-rays R] [--luma L] [--chroma C]\n"
-            "                   [--link-mode compact|expanded|sh] [--indirect-only] [--no-detail]] [--progress | -q]\n"
+            "                   [--link-mode compact|expanded|sh] [--indirect-only] [--no-detail] [--grid-only]] [--progress | -q]\n"
             "  SCENE.json       scene description (docs/scene-format.md): mesh, camera, lights, environment\n"
             "  --out PREFIX     writes PREFIX.exr (final), PREFIX_direct.exr, PREFIX_indirect.exr, PREFIX.png\n"
             "  --spp N          samples per pixel (default 64)\n"
@@ -45,6 +45,8 @@ static void usage(FILE *f) {
             "  --indirect-only  Glow's view without the direct term (only camera rays and cache lookups): its\n"
             "                   direct image equals the reference's for the same seed, size and spp\n"
             "  --no-detail      Glow's view without the bake's lightmap detail (glow-bake --lightmap-detail)\n"
+            "  --grid-only      Glow's view with every surface shaded from the grid, as a dynamic object\n"
+            "                   there (0.1 %% of the scene's diagonal off the surface): the grid's accuracy\n"
             "  --progress       progress bar on stderr even when it is not a terminal; -q: none, no summary\n");
 }
 
@@ -121,6 +123,7 @@ static int parse_args(int argc, char **argv, options *o) {
         else if (!strcmp(a, "--chroma")) NEED_U(1, GLOW_MAX_SH_BANDS, o->gs.sh_bands_chroma, "a band count in 1..8");
         else if (!strcmp(a, "--indirect-only")) o->gs.indirect_only = true;
         else if (!strcmp(a, "--no-detail")) o->gs.no_detail = true;
+        else if (!strcmp(a, "--grid-only")) o->gs.grid_only = true;
         else if (!strcmp(a, "--link-mode")) {
             if (!v || (strcmp(v, "compact") && strcmp(v, "expanded") && strcmp(v, "sh"))) {
                 fprintf(stderr, "glow-render: --link-mode must be compact, expanded or sh, not \"%s\"\n", v ? v : "nothing");
@@ -171,9 +174,9 @@ static int parse_args(int argc, char **argv, options *o) {
         return 0;
     }
     if (!o->bake && (o->gs.bounce_iterations || o->gs.sky_rays || o->gs.sh_bands_luma || o->gs.sh_bands_chroma ||
-                     o->gs.link_mode || o->gs.indirect_only || o->gs.no_detail)) {
-        fprintf(stderr, "glow-render: --bounces, --sky-rays, --luma, --chroma, --link-mode, --indirect-only and "
-                        "--no-detail go with --glow BAKE\n");
+                     o->gs.link_mode || o->gs.indirect_only || o->gs.no_detail || o->gs.grid_only)) {
+        fprintf(stderr, "glow-render: --bounces, --sky-rays, --luma, --chroma, --link-mode, --indirect-only, "
+                        "--no-detail and --grid-only go with --glow BAKE\n");
         return 0;
     }
     return 1;

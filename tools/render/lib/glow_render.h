@@ -106,6 +106,9 @@ typedef struct glow_render_glow_settings {
                                    for the same seed, size and spp, so final = reference direct + this
                                    indirect (glow-compare --add): the sweeps of glow-eval run this way */
     bool no_detail;             /* ignore the bake's lightmap detail (LDET): the lightmap alone */
+    bool grid_only;             /* shade every surface from the grid, as a dynamic object there would be
+                                   (glow_sample_grid 0.1 % of the scene's diagonal off the surface along
+                                   its shading normal): measures the light dynamic objects receive */
 } glow_render_glow_settings;
 
 typedef struct glow_render_result {

@@ -97,6 +97,7 @@ typedef struct glow_view {
     const glow_cache_outputs *out;
     bool indirect_only; /* glow_render_glow_settings.indirect_only */
     bool no_detail;     /* glow_render_glow_settings.no_detail */
+    bool grid_only;     /* glow_render_glow_settings.grid_only */
     float (*lm_uv)[6]; /* [tri] the bake's lightmap UV per corner, or NULL without a lightmap */
 } glow_view;
 
@@ -298,7 +299,7 @@ static void glow_indirect(const render_ctx *c, const surf *s, float *coeffs, wor
     float det[3] = {0.0f, 0.0f, 0.0f}; /* the lightmap detail's correction (bakes with LDET) */
     const glow_cache_outputs *o = c->gv->out;
     bool ok = false;
-    if (!s->back && c->gv->lm_uv) {
+    if (!s->back && c->gv->lm_uv && !c->gv->grid_only) {
         const float *uv = c->gv->lm_uv[s->tri];
         float b0 = 1.0f - s->b1 - s->b2;
         float u = b0 * uv[0] + s->b1 * uv[2] + s->b2 * uv[4];
@@ -307,8 +308,11 @@ static void glow_indirect(const render_ctx *c, const surf *s, float *coeffs, wor
         if (ok) ws->lm++;
         if (ok && o->lightmap_detail && !c->gv->no_detail) glow_sample_lightmap_detail(o, u, v, det);
     }
-    if (!ok && o->grid_sh) {
-        ok = glow_sample_grid(o, s->p, coeffs) == GLOW_OK;
+    if (!ok && o->grid_sh) { /* as a dynamic object's surface (with grid_only: 0.1 % of the diagonal off it) */
+        float p[3];
+        const float off = c->gv->grid_only ? 1e-3f * c->sc->diag : 0.0f;
+        for (int k = 0; k < 3; ++k) p[k] = s->p[k] + off * s->ns[k];
+        ok = glow_sample_grid_oriented(o, p, s->ns, coeffs) == GLOW_OK;
         if (ok) ws->grid++;
     }
     if (!ok) {
@@ -782,6 +786,7 @@ glow_result glow_render_glow(const glow_render_scene *sc, const char *bake_path,
     if (r == GLOW_OK) {
         gv.indirect_only = g.indirect_only;
         gv.no_detail = g.no_detail;
+        gv.grid_only = g.grid_only;
         r = render(sc, st, &gv, out, message, message_size);
         if (r == GLOW_OK) out->solve_seconds = t1 - t0;
         glow_view_free(&gv);
