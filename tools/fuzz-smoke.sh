@@ -3,8 +3,9 @@
 # directory and fuzzes each for SECONDS (default 60):
 #   fuzz_bake_reader  glow_bake_load (tests/fuzz/fuzz_bake_reader.c)
 #   fuzz_bake_solver  load + 3 updates, every output finite (tests/fuzz/fuzz_bake_solver.c)
-#     both seeded from tests/data/*.glow (the hand-built golden bake and three tiny real bakes of
-#     builtin:cornell written by glow-bake, one with link subsets, one with a lightmap detail)
+#     both seeded from tests/data/*.glow (the hand-built golden bake and four tiny real bakes of
+#     builtin:cornell written by glow-bake, one with link subsets, one with a lightmap detail, one
+#     with a refined grid)
 #   fuzz_scene_json   the scene JSON reader (tests/fuzz/fuzz_scene_json.c), seeded from scenes/*.json
 #                     and, where present, ../shared/scenes/*/*.json
 #   fuzz_mesh_import  mesh import through assimp and our cleaning (tests/fuzz/fuzz_mesh_import.c),

@@ -35,7 +35,7 @@
 #include "pc_internal.h"
 
 #define NONE 0xFFFFFFFFu
-#define GRID_RAYS 26u
+#define GRID_RAYS GLOW__GRID_RAYS
 #define LM_RAYS 16u
 #define GRID_INSIDE_FRACTION 0.4
 #define LM_INVALID_FRACTION 0.3
@@ -48,7 +48,7 @@
 #define DENSITY_ROUNDS 4
 
 /* ------------------------------------------------------------------ directions */
-static void fibonacci_sphere(uint32_t n, float (*out)[3]) {
+void glow__fibonacci_sphere(uint32_t n, float (*out)[3]) {
     const double golden = GLOW__PI * (3.0 - sqrt(5.0));
     for (uint32_t i = 0; i < n; ++i) {
         double z = 1.0 - (2.0 * i + 1.0) / n, r = sqrt(fmax(0.0, 1.0 - z * z)), phi = golden * i;
@@ -153,6 +153,17 @@ typedef struct grid_job {
     uint8_t *inside;
 } grid_job;
 
+int glow__grid_point_inside(const glow__rt *rt, const float o[3], const float (*dirs)[3]) {
+    uint32_t hits = 0, back = 0;
+    for (uint32_t r = 0; r < GRID_RAYS; ++r) {
+        glow__hit h = glow__rt_intersect(rt, o, dirs[r], 0.0f, INFINITY);
+        if (h.t == INFINITY) continue;
+        ++hits;
+        back += h.back_face;
+    }
+    return back > GRID_INSIDE_FRACTION * hits && 4 * back >= GRID_RAYS;
+}
+
 static void grid_range(void *p, uint32_t begin, uint32_t end, uint32_t worker) {
     grid_job *j = p;
     (void)worker;
@@ -160,14 +171,7 @@ static void grid_range(void *p, uint32_t begin, uint32_t end, uint32_t worker) {
         uint32_t x = c % j->dims[0], y = (c / j->dims[0]) % j->dims[1], z = c / (j->dims[0] * j->dims[1]);
         float o[3] = {j->origin[0] + j->spacing * (float)x, j->origin[1] + j->spacing * (float)y,
                       j->origin[2] + j->spacing * (float)z};
-        uint32_t hits = 0, back = 0;
-        for (uint32_t r = 0; r < GRID_RAYS; ++r) {
-            glow__hit h = glow__rt_intersect(j->rt, o, j->dirs[r], 0.0f, INFINITY);
-            if (h.t == INFINITY) continue;
-            ++hits;
-            back += h.back_face;
-        }
-        j->inside[c] = back > GRID_INSIDE_FRACTION * hits && 4 * back >= GRID_RAYS;
+        j->inside[c] = (uint8_t)glow__grid_point_inside(j->rt, o, (const float(*)[3])j->dirs);
     }
 }
 
@@ -195,17 +199,29 @@ static glow_result build_grid(const glow__scene *scene, const glow__rt *rt, cons
         centre[a] = 0.5 * ((double)scene->bounds_max[a] + scene->bounds_min[a]);
     }
     double s;
+    const uint32_t R = set->grid_refine >= 2 ? set->grid_refine : 1u;
+    out->grid_refine = R > 1 ? R : 0u; /* to be refined (caches_build), unless no refined grid fits */
     if (set->grid_spacing > 0.0f) {
-        s = set->grid_spacing;
+        s = (double)set->grid_spacing * R; /* refined: the given spacing is the fine one */
     } else {
         uint32_t target = set->target_grid ? set->target_grid : DEFAULT_TARGET_GRID;
-        s = spacing_for_target(ext, target);
+        s = R > 1 ? glow__grid_refined_spacing(scene, R, target, MAX_GRID_CELLS) : 0.0;
+        if (!(s > 0.0)) {
+            if (R > 1)
+                glow__infof(log, "%s: caches: no grid refined %ux fits %u points; the grid stays uniform", scene->source,
+                            R, target);
+            out->grid_refine = 0;
+            s = spacing_for_target(ext, target);
+        }
     }
     double dims[3], cells = 1.0;
+    uint32_t rdims[3] = {0, 0, 0};
+    float rorigin[3] = {0, 0, 0};
     for (int it = 0; it < 8; ++it) {
         cells = 1.0;
+        if (out->grid_refine) glow__grid_refined_lattice(scene, s, out->grid_refine, rdims, rorigin);
         for (int a = 0; a < 3; ++a) {
-            dims[a] = fmax(1.0, ceil(ext[a] / s - 1e-6));
+            dims[a] = out->grid_refine ? (double)rdims[a] : fmax(1.0, ceil(ext[a] / s - 1e-6));
             cells *= dims[a];
         }
         if (cells <= MAX_GRID_CELLS) break;
@@ -218,7 +234,7 @@ static glow_result build_grid(const glow__scene *scene, const glow__rt *rt, cons
     out->grid_spacing = (float)s;
     for (int a = 0; a < 3; ++a) {
         out->grid_dims[a] = (uint32_t)dims[a];
-        out->grid_origin[a] = (float)(centre[a] - 0.5 * dims[a] * s + 0.5 * s);
+        out->grid_origin[a] = out->grid_refine ? rorigin[a] : (float)(centre[a] - 0.5 * dims[a] * s + 0.5 * s);
     }
     const uint32_t n = (uint32_t)cells;
     uint8_t *inside = malloc(n);
@@ -231,7 +247,7 @@ static glow_result build_grid(const glow__scene *scene, const glow__rt *rt, cons
     grid_job j = {.rt = rt, .spacing = out->grid_spacing, .inside = inside};
     memcpy(j.origin, out->grid_origin, sizeof j.origin);
     memcpy(j.dims, out->grid_dims, sizeof j.dims);
-    fibonacci_sphere(GRID_RAYS, j.dirs);
+    glow__fibonacci_sphere(GRID_RAYS, j.dirs);
     glow__parallel_for(pool, n, 64, grid_range, &j);
     uint32_t count = 0;
     for (uint32_t c = 0; c < n; ++c) {
@@ -582,6 +598,10 @@ void glow__caches_free(glow__caches *c) {
     if (!c) return;
     free(c->caches);
     free(c->grid_map);
+    free(c->grid_brick_of_cell);
+    free(c->grid_bricks);
+    free(c->grid_fine_pos);
+    free(c->grid_fine_cell);
     free(c->lm_map);
     free(c->lm_uv);
     free(c->surfel_feedback);
@@ -983,6 +1003,12 @@ glow_result glow__caches_build(const glow__scene *scene, const glow__rt *rt, con
 
     r = build_grid(scene, rt, settings, pool, log, out, &inside);
     if (r != GLOW_OK) goto fail;
+    const uint32_t coarse_count = out->grid_cache_count;
+    if (out->grid_refine >= 2) {
+        r = glow__grid_refine(scene, rt, out->grid_refine, pool, log, out);
+        if (r != GLOW_OK) goto fail;
+        out->grid_cache_count += out->grid_fine_count;
+    }
 
     uint32_t lm_candidates = 0;
     if (scene->tri_count) {
@@ -1035,6 +1061,16 @@ glow_result glow__caches_build(const glow__scene *scene, const glow__rt *rt, con
             ca->kind = GLOW_CACHE_KIND_GRID;
             ca->texel = c;
         }
+        for (uint32_t i = 0; i < out->grid_fine_count; ++i) { /* the refined grid's own points */
+            glow__cache *ca = &out->caches[coarse_count + i];
+            memcpy(ca->pos, out->grid_fine_pos[i], sizeof ca->pos);
+            ca->kind = GLOW_CACHE_KIND_GRID;
+            ca->texel = out->grid_fine_cell[i];
+        }
+        free(out->grid_fine_pos);
+        free(out->grid_fine_cell);
+        out->grid_fine_pos = NULL;
+        out->grid_fine_cell = NULL;
         int nb[26][3];
         uint32_t nbn = neighbour_offsets(3, nb);
         if (!dilate(out->grid_map, d, inside, (const int(*)[3])nb, nbn, GRID_DILATE_PASSES)) goto oom;
@@ -1106,6 +1142,14 @@ glow_result glow__caches_build(const glow__scene *scene, const glow__rt *rt, con
                 scene->source, out->grid_dims[0], out->grid_dims[1], out->grid_dims[2], (double)out->grid_spacing,
                 out->grid_cache_count, out->grid_inside, out->lm_width, out->lm_height, (double)out->texel_density,
                 out->chart_count, out->small_charts, out->shared_texels, out->lm_cache_count, out->lm_invalid);
+    if (out->grid_refine)
+        glow__infof(log,
+                    "%s: caches: grid refined %ux near geometry: %u of %u cells are bricks of %u³ cells at %g; %u coarse "
+                    "and %u fine grid caches (%u fine points inside geometry)",
+                    scene->source, out->grid_refine, out->grid_brick_count,
+                    (out->grid_dims[0] - 1) * (out->grid_dims[1] - 1) * (out->grid_dims[2] - 1), out->grid_refine,
+                    (double)out->grid_spacing / out->grid_refine, coarse_count, out->grid_fine_count,
+                    out->grid_fine_inside);
     free(inside);
     lm_state_free(&st);
     free(cand);

@@ -9,4 +9,8 @@
 glow_result glow__grid_visibility(const glow__rt *rt, const glow__caches *ca, float scene_diag, glow__pool *pool,
                                   uint8_t *out_mask);
 
+/* The same for the refined grid's fine cells: out_mask[brick][R³][8] (grid_fine.c, section GFIN). */
+glow_result glow__grid_fine_visibility(const glow__rt *rt, const glow__caches *ca, float scene_diag, glow__pool *pool,
+                                       uint8_t *out_mask);
+
 #endif /* GLOW_PC_GRID_VIS_H */

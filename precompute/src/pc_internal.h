@@ -130,6 +130,8 @@ typedef struct glow__cache_settings {
     float texel_adapt;        /* > 1: generated charts' texel density follows their concavity, up to
                                  this many times the area density of open flat charts; <= 1: uniform */
     float adapt_reach;        /* m: how far the concavity rays look (the links' near field) */
+    uint32_t grid_refine;     /* >= 2: the grid is refined this many times near geometry (grid_fine.c);
+                                 grid_spacing is then the fine spacing */
 } glow__cache_settings;
 
 typedef struct glow__caches {
@@ -141,6 +143,14 @@ typedef struct glow__caches {
     uint32_t grid_dims[3];
     uint32_t *grid_map;       /* [dims product]: cache index | GLOW_MAP_COPY_BIT | GLOW_MAP_EMPTY */
     uint32_t grid_inside;     /* grid points rejected as inside solid geometry */
+    /* the grid refined near geometry (grid_fine.c; bake section GFIN): grid_refine 0 = not refined */
+    uint32_t grid_refine, grid_brick_count;
+    uint32_t *grid_brick_of_cell; /* [dims product]: brick of the cell whose lowest corner is that point, or GLOW_MAP_EMPTY */
+    uint32_t *grid_bricks;    /* [brick][(R+1)³]: cache index of each fine lattice point (x fastest) or GLOW_MAP_EMPTY */
+    uint32_t grid_fine_count; /* fine caches, after the coarse grid caches (grid_cache_count counts both) */
+    uint32_t grid_fine_inside;/* fine points rejected as inside solid geometry */
+    float (*grid_fine_pos)[3];/* [grid_fine_count], until caches.c appends them */
+    uint32_t *grid_fine_cell; /* [grid_fine_count] the coarse cell each lies in */
     /* lightmap (one atlas) */
     uint32_t lm_width, lm_height;
     float texel_density;
@@ -167,6 +177,22 @@ glow_result glow__caches_build(const glow__scene *scene, const glow__rt *rt, con
                                const glow__cache_settings *settings, glow__pool *pool, glow__log *log,
                                glow__caches *out);
 void glow__caches_free(glow__caches *c);
+
+/* grid_fine.c: the coarse spacing whose points plus the fine points of its refined cells fit `target`
+ * (0 when the scene gives no answer: no triangles, no extent, refine < 2) ... */
+double glow__grid_refined_spacing(const glow__scene *scene, uint32_t refine, double target, double max_cells);
+/* ... the coarse lattice of a refined grid of coarse spacing s (the box grown by half a fine spacing) ... */
+void glow__grid_refined_lattice(const glow__scene *scene, double s, uint32_t refine, uint32_t dims[3], float origin[3]);
+/* ... and the refinement of the coarse grid in `ca` (grid_map without dilated copies yet; fine caches
+ * numbered from ca->grid_cache_count): fills the grid_refine ... grid_fine_cell fields. */
+glow_result glow__grid_refine(const glow__scene *scene, const glow__rt *rt, uint32_t refine, glow__pool *pool,
+                              glow__log *log, glow__caches *ca);
+/* n directions of a spherical Fibonacci set (caches.c) */
+void glow__fibonacci_sphere(uint32_t n, float (*out)[3]);
+/* Whether a grid point is inside solid geometry (caches.c, the header's "GRID" rule), from
+ * GLOW__GRID_RAYS directions of glow__fibonacci_sphere */
+#define GLOW__GRID_RAYS 26u
+int glow__grid_point_inside(const glow__rt *rt, const float o[3], const float (*dirs)[3]);
 
 /* Glow's own chart packer (charts.c): per-corner UVs in [0,1] for a w x h atlas at `texel_density`
  * texels per m with `padding` texels between charts. Chooses w, h (multiples of 4). */

@@ -43,22 +43,23 @@ typedef struct preset {
                         * 0.102 -> 0.097 with 4 (surfel seeds 0-3), low 0.197 -> 0.196, high 0.0803 ->
                         * 0.0805 (seed 0), fine 0.0846 / 0.0890 -> 0.0839 / 0.0935 (seeds 0 / 1): high
                         * and fine stay uniform, as their surfels do (docs/results.md) */
+    uint32_t grid_refine; /* the grid's refinement near geometry (grid_fine.c) */
 } preset;
 static const preset presets[5] = {
-    /* default = moderate */ {32768, 128, 3, 2000, 8000, 6, 4.0f, 4.0f},
-    /* low      */ {8192, 64, 3, 500, 2000, 4, 4.0f, 4.0f},
+    /* default = moderate */ {32768, 128, 3, 2000, 8000, 6, 4.0f, 4.0f, 1},
+    /* low      */ {8192, 64, 3, 500, 2000, 4, 4.0f, 4.0f, 1},
     /* moderate: PIC's. Half the links on twice the lightmap caches (about the same links per bake)
      * was 4 % better on Sponza's block error averaged over 4 surfel seeds, 7 % worse on Cornell's, at
      * +11.5 % update time: not taken (docs/results.md, "More budget"); --lightmap-caches sets it */
-    /* moderate */ {32768, 128, 3, 2000, 8000, 6, 4.0f, 4.0f},
-    /* high     */ {131072, 254, 4, 2000, 8000, 6, 1.0f, 1.0f},
+    /* moderate */ {32768, 128, 3, 2000, 8000, 6, 4.0f, 4.0f, 1},
+    /* high     */ {131072, 254, 4, 2000, 8000, 6, 1.0f, 1.0f, 1},
     /* fine: moderate's links, bands and lightmap on 4x its surfels (0.24 m apart on Sponza), with the
      * lightmap detail (the default) for the receivers. It resolves light from surfaces a fraction of a
      * metre away (pillar feet next to a sunlit floor, capitals): Sponza's block error 0.124 -> 0.088
      * (surfel seeds 0-3), at about 1.8x moderate's update time and 2.3x its memory. Until 2026-11-27 it
      * also had 4x moderate's lightmap caches (32000: 0.079 without the detail, 0.060 with it on seed 0,
      * at about 4x the update): --lightmap-caches 32000 (docs/results.md, "Near light") */
-    /* fine     */ {131072, 128, 3, 2000, 8000, 6, 1.0f, 1.0f},
+    /* fine     */ {131072, 128, 3, 2000, 8000, 6, 1.0f, 1.0f, 1},
 };
 
 static const preset *preset_of(glow_pc_quality q) {
@@ -83,6 +84,7 @@ glow_pc_settings glow_pc_settings_resolve(const glow_pc_settings *in) {
     if (s.detail_radius == 0.0f) s.detail_radius = GLOW_PC_DETAIL_RADIUS;
     if (s.surfel_adapt == 0.0f) s.surfel_adapt = p->adapt;
     if (s.texel_adapt == 0.0f) s.texel_adapt = p->texel_adapt;
+    if (!s.grid_refine) s.grid_refine = p->grid_refine;
     return s;
 }
 
@@ -115,6 +117,7 @@ glow_result glow_pc_settings_validate(const glow_pc_settings *s, char *msg, size
         BAD("--surfel-adapt %g is out of range (1..4)", (double)s->surfel_adapt);
     if (s->texel_adapt != 0.0f && !(s->texel_adapt >= 1.0f && s->texel_adapt <= 8.0f))
         BAD("--texel-adapt %g is out of range (1..8)", (double)s->texel_adapt);
+    if (s->grid_refine > 4 || s->grid_refine == 3) BAD("--grid-refine %u is not 1, 2 or 4", s->grid_refine);
     if (s->system_reach != 0.0f && !(s->system_reach > 0.0f && s->system_reach <= 4.0f))
         BAD("--system-reach %g is out of range (0..4 system diagonals)", (double)s->system_reach);
     if (s->system_area > 0.0f && s->sh_links)
@@ -358,6 +361,24 @@ static glow_result serialise(const glow_pc_settings *set, const glow__scene *sc,
     add_section(ss, GLOW_SECTION_CACH, cc, (uint64_t)ca->count * sizeof *cc);
     if (gm) add_section(ss, GLOW_SECTION_GRID, gm, grid_cells * sizeof *gm);
     else free(gm);
+    if (gvis && gm && ca->grid_refine && ca->grid_brick_count) { /* 1.5: GFIN (bake_format.h) */
+        const uint64_t R = ca->grid_refine, per = (R + 1) * (R + 1) * (R + 1), nb = ca->grid_brick_count;
+        const uint64_t size = sizeof(glow_bake_grid_fine) + 4u * grid_cells + 4u * nb * per + 8u * nb * R * R * R;
+        uint8_t *buf = calloc(1, (size_t)size);
+        if (!buf) {
+            free(gvis);
+            glow__errorf(log, "write: out of memory for the refined grid");
+            return GLOW_ERROR_OUT_OF_MEMORY;
+        }
+        glow_bake_grid_fine *gh = (glow_bake_grid_fine *)(void *)buf;
+        gh->refine = (uint32_t)R;
+        gh->brick_count = (uint32_t)nb;
+        uint8_t *q = buf + sizeof *gh;
+        memcpy(q, ca->grid_brick_of_cell, 4u * grid_cells);
+        memcpy(q + 4u * grid_cells, ca->grid_bricks, 4u * nb * per);
+        memcpy(q + 4u * grid_cells + 4u * nb * per, gvis + 8u * grid_cells, 8u * nb * R * R * R);
+        add_section(ss, GLOW_SECTION_GFIN, buf, size);
+    }
     if (gvis && gm) add_section(ss, GLOW_SECTION_GVIS, gvis, grid_cells * 8u);
     else free(gvis);
     if (lmm) add_section(ss, GLOW_SECTION_LMAP, lmm, lm_texels * sizeof *lmm);
@@ -629,7 +650,7 @@ static glow_result bake_system(const glow_pc_settings *setp, uint32_t grid_targe
     glow__cache_settings scache = {.grid_spacing = set.grid_spacing, .texel_density = set.texel_density,
                                    .target_grid = grid_target, .target_lightmap = set.lightmap_caches, .seed = set.seed,
                                    .detail_factor = set.lightmap_detail >= 2 ? set.lightmap_detail : 0u,
-                                   .texel_adapt = set.texel_adapt,
+                                   .texel_adapt = set.texel_adapt, .grid_refine = set.grid_refine,
                                    .adapt_reach = 4.0f * sqrtf(SF->area / (float)GLOW__PI)};
     res = glow__caches_build(sc, rt, SF, &scache, pool, log, &caches);
     if (res == GLOW_OK && caches.grid_dims[0] && caches.grid_dims[1] && caches.grid_dims[2]) {
@@ -637,12 +658,16 @@ static glow_result bake_system(const glow_pc_settings *setp, uint32_t grid_targe
         const size_t cells = (size_t)caches.grid_dims[0] * caches.grid_dims[1] * caches.grid_dims[2];
         float ext[3];
         glow__sub(sc->bounds_max, sc->bounds_min, ext);
-        gvis = malloc(cells * 8);
+        /* ... and of each fine cell of the refined grid's bricks, after them (serialise splits it) */
+        const size_t R = caches.grid_refine, fine = (size_t)caches.grid_brick_count * R * R * R;
+        gvis = malloc(cells * 8 + fine * 8);
         if (!gvis) {
             glow__errorf(log, "%s: out of memory for the grid visibility", scene_path);
             res = GLOW_ERROR_OUT_OF_MEMORY;
         } else {
             res = glow__grid_visibility(rt, &caches, sqrtf(glow__dot(ext, ext)), pool, gvis);
+            if (res == GLOW_OK && fine)
+                res = glow__grid_fine_visibility(rt, &caches, sqrtf(glow__dot(ext, ext)), pool, gvis + cells * 8);
         }
     }
     STAGE_END(ST_CACHES);
@@ -653,6 +678,9 @@ static glow_result bake_system(const glow_pc_settings *setp, uint32_t grid_targe
     memcpy(stats->grid_dims, caches.grid_dims, sizeof stats->grid_dims);
     stats->grid_caches = caches.grid_cache_count;
     stats->grid_inside = caches.grid_inside;
+    stats->grid_refine = caches.grid_refine;
+    stats->grid_bricks = caches.grid_brick_count;
+    stats->grid_fine_caches = caches.grid_fine_count;
     stats->lightmap_width = caches.lm_width;
     stats->lightmap_height = caches.lm_height;
     stats->lightmap_caches = caches.lm_cache_count;
@@ -1009,6 +1037,9 @@ static void sys_stats_add(glow_pc_stats *w, const glow_pc_stats *s, bool largest
     w->nodes += s->nodes;
     w->grid_caches += s->grid_caches;
     w->grid_inside += s->grid_inside;
+    w->grid_bricks += s->grid_bricks;
+    w->grid_fine_caches += s->grid_fine_caches;
+    if (s->grid_refine > w->grid_refine) w->grid_refine = s->grid_refine;
     w->lightmap_caches += s->lightmap_caches;
     w->lightmap_invalid += s->lightmap_invalid;
     w->lightmap_gutter += s->lightmap_gutter;
@@ -1077,7 +1108,7 @@ static uint64_t world_key(const glow_pc_settings *s, const glow__scene *w) {
                           (uint32_t)s->quality, s->surfels, s->links, s->bands, s->seed, s->sh_links,
                           s->relax_iterations, s->rays_per_surfel, s->no_link_normalize, s->cut_solid_angle,
                           s->lightmap_caches, s->no_link_subsets, (uint32_t)s->link_visibility, s->link_cluster_rays,
-                          s->lightmap_detail, s->detail_links, w->material_count, w->texture_count};
+                          s->lightmap_detail, s->detail_links, w->material_count, w->texture_count, s->grid_refine};
     const float f[] = {s->grid_spacing, s->texel_density, s->link_cluster_angle, s->detail_radius, s->surfel_adapt,
                        s->system_area, s->system_reach > 0.0f ? s->system_reach : SYS_REACH_DEFAULT, s->texel_adapt};
     h = fnv64(h, v, sizeof v);

@@ -47,7 +47,10 @@ static const char *usage_text =
     "  --surfels N            number of leaf surfels n_S (16..4194304)\n"
     "  --links N              links per cache n_L (1..4096)\n"
     "  --bands L              SH bands l (2..8; l*l coefficients)\n"
-    "  --grid-spacing M       grid cache spacing in scene units (default: from the scene size)\n"
+    "  --grid-spacing M       grid cache spacing in scene units (default: from the scene size); with\n"
+    "                         --grid-refine, the fine spacing near geometry\n"
+    "  --grid-refine R        grid R times finer in the cells near geometry than in open space, within\n"
+    "                         the same grid budget: 1 = uniform, 2 or 4 (default: 1)\n"
     "  --texel-density D      lightmap texels per scene unit (default: from the scene area and the\n"
     "                         lightmap budget)\n"
     "  --lightmap-caches N    the lightmap budget: texels that hold a cache (default: the preset's);\n"
@@ -263,6 +266,9 @@ static void print_summary(const char *scene, const char *out, const glow_pc_stat
         cJSON_AddItemToObject(x, "grid_dims", cJSON_CreateIntArray(dims, 3));
         cJSON_AddNumberToObject(x, "grid_spacing", s->grid_spacing);
         cJSON_AddNumberToObject(x, "grid_inside_rejected", s->grid_inside);
+        cJSON_AddNumberToObject(x, "grid_refine", s->grid_refine);
+        cJSON_AddNumberToObject(x, "grid_bricks", s->grid_bricks);
+        cJSON_AddNumberToObject(x, "grid_fine", s->grid_fine_caches);
         cJSON_AddNumberToObject(x, "lightmap", s->lightmap_caches);
         const int lsz[2] = {(int)s->lightmap_width, (int)s->lightmap_height};
         cJSON_AddItemToObject(x, "lightmap_size", cJSON_CreateIntArray(lsz, 2));
@@ -310,6 +316,11 @@ static void print_summary(const char *scene, const char *out, const glow_pc_stat
            s->caches, s->grid_caches, s->grid_dims[0], s->grid_dims[1], s->grid_dims[2], (double)s->grid_spacing,
            s->grid_inside, s->lightmap_caches, s->lightmap_width, s->lightmap_height, (double)s->texel_density,
            s->charts, s->lightmap_invalid);
+    if (s->grid_refine)
+        printf("  grid      refined %ux near geometry: %u cells of %.4g are bricks of %u³ cells of %.4g, holding %u of the "
+               "grid's caches\n",
+               s->grid_refine, s->grid_bricks, (double)s->grid_spacing, s->grid_refine,
+               (double)s->grid_spacing / s->grid_refine, s->grid_fine_caches);
     if (s->lightmap_width)
         printf("  lightmap  %.3g units per texel (%.3g in the most concave charts); the atlas holds %u caches (%.0f %% of their area is surface), %u gutter "
                "copies and %u unused texels (%.0f %%); %u charts narrower than a texel share %u texels\n",
@@ -569,6 +580,10 @@ int main(int argc, char **argv) {
             if (!end || *end || !(x >= 1.0 && x <= 4.0))
                 return usage_error("--surfel-adapt '%s': expected a density ratio in [1, 4] (1 = area-uniform)", v);
             s.surfel_adapt = (float)x;
+        } else if (!strcmp(a, "--grid-refine")) {
+            NEED_VALUE();
+            if (!parse_u32(v, 1, 4, &s.grid_refine) || s.grid_refine == 3)
+                return usage_error("--grid-refine '%s': expected 1 (uniform), 2 or 4", v);
         } else if (!strcmp(a, "--texel-adapt")) {
             NEED_VALUE();
             char *end = NULL;

@@ -38,12 +38,12 @@
 #define MAX_SH_BANDS 16u
 
 enum { S_META, S_MATL, S_SURF, S_NODE, S_LEVL, S_CACH, S_GRID, S_LMAP, S_LINK, S_SHLK, S_GEOM, S_GVIS, S_LSUB, S_TUV0, S_TEXP,
-       S_LDET, S_XREF, S_KNOWN_COUNT };
+       S_LDET, S_XREF, S_GFIN, S_KNOWN_COUNT };
 
 static const uint32_t known_fourcc[S_KNOWN_COUNT] = {
     GLOW_SECTION_META, GLOW_SECTION_MATL, GLOW_SECTION_SURF, GLOW_SECTION_NODE, GLOW_SECTION_LEVL, GLOW_SECTION_CACH,
     GLOW_SECTION_GRID, GLOW_SECTION_LMAP, GLOW_SECTION_LINK, GLOW_SECTION_SHLK, GLOW_SECTION_GEOM, GLOW_SECTION_GVIS,
-    GLOW_SECTION_LSUB, GLOW_SECTION_TUV0, GLOW_SECTION_TEXP, GLOW_SECTION_LDET, GLOW_SECTION_XREF,
+    GLOW_SECTION_LSUB, GLOW_SECTION_TUV0, GLOW_SECTION_TEXP, GLOW_SECTION_LDET, GLOW_SECTION_XREF, GLOW_SECTION_GFIN,
 };
 
 typedef struct section_ref {
@@ -563,6 +563,46 @@ static glow_result check_textures(const vstate *v, const glow_bake_meta *m, cons
     return GLOW_OK;
 }
 
+/* GFIN (optional, 1.5; bake_format.h glow_bake_grid_fine): with GRID and GVIS; R and the size; bricks
+ * only in cells with a +1 neighbour on every axis, each brick named once; brick corners EMPTY or a grid
+ * cache without the copy bit. The masks take any value. */
+static glow_result check_grid_fine(const vstate *v, const glow_bake_meta *m, const derived *d, const section_ref *s,
+                                   int have_gvis) {
+    glow_bake_grid_fine gh;
+    if (s->size < sizeof gh) FAIL(GLOW_ERROR_CORRUPT_DATA, "section 'GFIN' is %llu bytes, shorter than its header",
+                                  (unsigned long long)s->size);
+    read_at(v, s->offset, &gh, sizeof gh);
+    if (!d->grid_cells || !have_gvis) FAIL(GLOW_ERROR_CORRUPT_DATA, "section 'GFIN' (refined grid) without a grid and its GVIS");
+    if (gh.refine < 2 || gh.refine > 8 || gh.brick_count == 0 || gh.brick_count > d->grid_cells)
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "GFIN: refine %u (2..8) or %u bricks (1..%llu) out of range", gh.refine,
+             gh.brick_count, (unsigned long long)d->grid_cells);
+    for (int a = 0; a < 3; a++)
+        if (m->grid_dims[a] < 2) FAIL(GLOW_ERROR_CORRUPT_DATA, "GFIN: a refined grid needs 2 points an axis, not %u", m->grid_dims[a]);
+    const uint64_t R = gh.refine, per = (R + 1) * (R + 1) * (R + 1), nb = gh.brick_count;
+    const uint64_t expect = sizeof gh + 4u * d->grid_cells + 4u * nb * per + 8u * nb * R * R * R;
+    if (s->size != expect)
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "section 'GFIN' is %llu bytes; %llu cells and %u bricks of %u need %llu",
+             (unsigned long long)s->size, (unsigned long long)d->grid_cells, gh.brick_count, gh.refine,
+             (unsigned long long)expect);
+    const uint32_t *of = (const uint32_t *)(const void *)(v->data + s->offset + sizeof gh), *br = of + d->grid_cells;
+    uint64_t named = 0;
+    for (uint64_t c = 0; c < d->grid_cells; c++) {
+        if (of[c] == GLOW_MAP_EMPTY) continue;
+        const uint64_t x = c % m->grid_dims[0], y = (c / m->grid_dims[0]) % m->grid_dims[1],
+                       z = c / ((uint64_t)m->grid_dims[0] * m->grid_dims[1]);
+        if (of[c] >= nb || x + 1 >= m->grid_dims[0] || y + 1 >= m->grid_dims[1] || z + 1 >= m->grid_dims[2])
+            FAIL(GLOW_ERROR_OUT_OF_RANGE, "GFIN cell %llu: brick %u out of range or the cell on the grid's last layer",
+                 (unsigned long long)c, of[c]);
+        named++;
+    }
+    if (named != nb) FAIL(GLOW_ERROR_CORRUPT_DATA, "GFIN: %llu cells name bricks, not brick_count %u", (unsigned long long)named, gh.brick_count);
+    for (uint64_t i = 0; i < nb * per; i++)
+        if (br[i] != GLOW_MAP_EMPTY && br[i] >= m->grid_cache_count)
+            FAIL(GLOW_ERROR_OUT_OF_RANGE, "GFIN brick %llu corner %llu: cache %u is not a grid cache (%u)",
+                 (unsigned long long)(i / per), (unsigned long long)(i % per), br[i], m->grid_cache_count);
+    return GLOW_OK;
+}
+
 /* LDET (optional, 1.2; bake_format.h glow_bake_detail): sizes, ascending texels inside the detail grid,
  * link ranges, surfels in range, finite weights. */
 static glow_result check_detail(const vstate *v, const glow_bake_meta *m, const section_ref *s) {
@@ -688,6 +728,7 @@ static glow_result validate(const vstate *v, struct glow_bake *b) {
                             sec[S_TEXP].present ? (const char *)payload(v, &sec[S_TEXP]) : NULL)))
         return r;
     if (sec[S_LDET].present && (r = check_detail(v, &m, &sec[S_LDET]))) return r;
+    if (sec[S_GFIN].present && (r = check_grid_fine(v, &m, &d, &sec[S_GFIN], sec[S_GVIS].present))) return r;
 
     b->data = v->data;
     b->size = v->size;
@@ -970,6 +1011,9 @@ const uint32_t *glow__bake_grid_map(const glow_bake *b) {
 const uint8_t *glow__bake_grid_visibility(const glow_bake *b) {
     uint64_t cells = (uint64_t)b->meta.grid_dims[0] * b->meta.grid_dims[1] * b->meta.grid_dims[2];
     return cells && b->known[S_GVIS].present ? known_ptr(b, S_GVIS) : NULL;
+}
+const glow_bake_grid_fine *glow__bake_grid_fine(const glow_bake *b) {
+    return b->known[S_GFIN].present ? known_ptr(b, S_GFIN) : NULL;
 }
 const uint32_t *glow__bake_lightmap_map(const glow_bake *b) {
     return b->meta.lightmap_count ? known_ptr(b, S_LMAP) : NULL;

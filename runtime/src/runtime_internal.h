@@ -88,6 +88,8 @@ const uint32_t *glow__bake_grid_map(const glow_bake *bake);
 /* [grid cells][8]: per octant of each grid cell, the corners a lookup may blend (GVIS, optional,
  * see bake_format.h); NULL when the bake has no grid or was baked before it existed. */
 const uint8_t *glow__bake_grid_visibility(const glow_bake *bake);
+/* GFIN's header or NULL; brick_of_cell, the bricks and their masks follow it (bake_format.h) */
+const glow_bake_grid_fine *glow__bake_grid_fine(const glow_bake *bake);
 /* [lightmap_width*lightmap_height]; NULL when lightmap_count == 0. */
 const uint32_t *glow__bake_lightmap_map(const glow_bake *bake);
 /* [cache_count * link_blocks_per_cache] */

@@ -120,36 +120,96 @@ static void axis_coord(float f, uint32_t dim, uint32_t *i0, uint32_t *i1, float 
     *t = f - fl;
 }
 
-/* The grid lookup of glow_sample_grid (n == NULL) and glow_sample_grid_oriented (unit normal n). */
+/* The 8 corner weights of a cell lookup: trilinear (t), the octant's visibility mask, and with a normal
+ * n the backface weight about p_in (corner positions from the lattice's origin o and spacing h, the
+ * cell's lowest corner lattice index i0 and the clamped upper one i1). */
+static void corner_weights(const float t[3], uint32_t vis, const float *n, const float p_in[3], const float o[3],
+                           float h, const uint32_t i0[3], const uint32_t i1[3], float w[8]) {
+    for (int c = 0; c < 8; ++c) {
+        w[c] = ((c & 1) ? t[0] : 1.0f - t[0]) * ((c & 2) ? t[1] : 1.0f - t[1]) * ((c & 4) ? t[2] : 1.0f - t[2]);
+        if (!((vis >> c) & 1u)) w[c] = 0.0f;
+        if (n && w[c] > 0.0f) { /* corners behind the surface count less (see glow.h) */
+            const uint32_t x = (c & 1) ? i1[0] : i0[0], y = (c & 2) ? i1[1] : i0[1], z = (c & 4) ? i1[2] : i0[2];
+            const float d[3] = {o[0] + h * (float)x - p_in[0], o[1] + h * (float)y - p_in[1], o[2] + h * (float)z - p_in[2]};
+            const float len = sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+            const float hw = len > 0.0f ? 0.5f * (1.0f + (d[0] * n[0] + d[1] * n[1] + d[2] * n[2]) / len) : 1.0f;
+            w[c] *= hw * hw + GLOW_GRID_BACKFACE_FLOOR;
+        }
+    }
+}
+
+/* The refined grid's lookup at p (the moved point) in brick b of coarse cell c0 (f: p in coarse cell units). */
+static glow_result brick_lookup(const glow_cache_outputs *o, const float f[3], const uint32_t c0[3], uint32_t b,
+                                const float p_in[3], const float *n, float *out) {
+    const uint32_t R = o->grid_refine, side = R + 1u;
+    uint32_t i0[3], i1[3];
+    float t[3], fo[3];
+    for (int a = 0; a < 3; ++a) {
+        float u = (f[a] - (float)c0[a]) * (float)R; /* in [0, R] */
+        if (!(u > 0.0f)) u = 0.0f;
+        if (u > (float)R) u = (float)R;
+        float fl = floorf(u);
+        if (fl > (float)(R - 1u)) fl = (float)(R - 1u);
+        i0[a] = (uint32_t)fl;
+        i1[a] = i0[a] + 1u;
+        t[a] = u - fl;
+    }
+    const float h = o->grid_spacing / (float)R;
+    for (int a = 0; a < 3; ++a) fo[a] = o->grid_origin[a] + o->grid_spacing * (float)c0[a]; /* the brick's lattice origin */
+    uint32_t vis = 0xFFu;
+    if (o->grid_brick_visibility) {
+        const uint32_t oct = (t[0] >= 0.5f ? 1u : 0u) | (t[1] >= 0.5f ? 2u : 0u) | (t[2] >= 0.5f ? 4u : 0u);
+        const size_t cell = ((size_t)i0[2] * R + i0[1]) * R + i0[0];
+        vis = o->grid_brick_visibility[((size_t)b * R * R * R + cell) * 8u + oct];
+    }
+    float w[8];
+    uint32_t idx[8];
+    corner_weights(t, vis, n, p_in, fo, h, i0, i1, w);
+    const uint32_t *e = o->grid_bricks + (size_t)b * side * side * side;
+    for (int c = 0; c < 8; ++c) {
+        const uint32_t x = (c & 1) ? i1[0] : i0[0], y = (c & 2) ? i1[1] : i0[1], z = (c & 4) ? i1[2] : i0[2];
+        idx[c] = e[((size_t)z * side + y) * side + x];
+    }
+    return blend(o, idx, w, 8, out);
+}
+
+/* The grid lookup of glow_sample_grid (n == NULL) and glow_sample_grid_oriented (unit normal n): the
+ * fine cell of the point's brick when the grid is refined there and one of its corners may be blended,
+ * else the coarse cell. */
 static glow_result grid_lookup(const glow_cache_outputs *o, const float p_in[3], const float *n, float *out) {
     if (!o || !p_in || !out || !o->grid_map || o->grid_dims[0] == 0 || !(o->grid_spacing > 0.0f))
         return GLOW_ERROR_INVALID_ARGUMENT;
     float p[3] = {p_in[0], p_in[1], p_in[2]};
     if (n)
-        for (int a = 0; a < 3; ++a) p[a] += GLOW_GRID_NORMAL_BIAS * o->grid_spacing * n[a];
+        for (int a = 0; a < 3; ++a) p[a] += GLOW_GRID_NORMAL_BIAS * o->grid_spacing / (o->grid_refine ? (float)o->grid_refine : 1.0f) * n[a];
     uint32_t i0[3], i1[3];
-    float t[3];
-    for (int a = 0; a < 3; ++a) axis_coord((p[a] - o->grid_origin[a]) / o->grid_spacing, o->grid_dims[a], &i0[a], &i1[a], &t[a]);
+    float t[3], f[3];
+    for (int a = 0; a < 3; ++a) {
+        f[a] = (p[a] - o->grid_origin[a]) / o->grid_spacing;
+        axis_coord(f[a], o->grid_dims[a], &i0[a], &i1[a], &t[a]);
+    }
+    const uint32_t dx = o->grid_dims[0], dxy = dx * o->grid_dims[1];
+    if (o->grid_refine >= 2 && o->grid_bricks && o->grid_brick_of_cell) {
+        int inside = 1; /* a point outside the grid's box takes the clamped coarse lookup */
+        for (int a = 0; a < 3; ++a) inside &= f[a] >= 0.0f && f[a] <= (float)(o->grid_dims[a] - 1u);
+        if (inside) {
+            uint32_t c0[3];
+            for (int a = 0; a < 3; ++a) c0[a] = i0[a] + 1u < o->grid_dims[a] ? i0[a] : i0[a] - 1u; /* the last point: the cell below */
+            const uint32_t b = o->grid_brick_of_cell[(size_t)c0[2] * dxy + (size_t)c0[1] * dx + c0[0]];
+            if (b != 0xFFFFFFFFu && b < o->grid_brick_count && brick_lookup(o, f, c0, b, p_in, n, out) == GLOW_OK)
+                return GLOW_OK;
+        }
+    }
     uint32_t idx[8];
     float w[8];
-    const uint32_t dx = o->grid_dims[0], dxy = dx * o->grid_dims[1];
     uint32_t vis = 0xFFu;
     if (o->grid_visibility) { /* the corners visible from this octant of the cell (GVIS) */
         const uint32_t oct = (t[0] >= 0.5f ? 1u : 0u) | (t[1] >= 0.5f ? 2u : 0u) | (t[2] >= 0.5f ? 4u : 0u);
         vis = o->grid_visibility[((size_t)i0[2] * dxy + (size_t)i0[1] * dx + i0[0]) * 8u + oct];
     }
+    corner_weights(t, vis, n, p_in, o->grid_origin, o->grid_spacing, i0, i1, w);
     for (int c = 0; c < 8; ++c) {
         uint32_t x = (c & 1) ? i1[0] : i0[0], y = (c & 2) ? i1[1] : i0[1], z = (c & 4) ? i1[2] : i0[2];
-        w[c] = ((c & 1) ? t[0] : 1.0f - t[0]) * ((c & 2) ? t[1] : 1.0f - t[1]) * ((c & 4) ? t[2] : 1.0f - t[2]);
-        if (!((vis >> c) & 1u)) w[c] = 0.0f;
-        if (n && w[c] > 0.0f) { /* corners behind the surface count less (see glow.h) */
-            const float d[3] = {o->grid_origin[0] + o->grid_spacing * (float)x - p_in[0],
-                                o->grid_origin[1] + o->grid_spacing * (float)y - p_in[1],
-                                o->grid_origin[2] + o->grid_spacing * (float)z - p_in[2]};
-            const float len = sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-            const float h = len > 0.0f ? 0.5f * (1.0f + (d[0] * n[0] + d[1] * n[1] + d[2] * n[2]) / len) : 1.0f;
-            w[c] *= h * h + GLOW_GRID_BACKFACE_FLOOR;
-        }
         idx[c] = o->grid_map[(size_t)z * dxy + (size_t)y * dx + x];
     }
     return blend(o, idx, w, 8, out);

@@ -790,6 +790,15 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
         s->out.lightmap_width = m->lightmap_width;
         s->out.lightmap_height = m->lightmap_height;
     }
+    const glow_bake_grid_fine *gf = s->grid_cells ? glow__bake_grid_fine(desc->bake) : NULL;
+    if (gf) { /* the refined grid (GFIN), read in place: validated at load */
+        const uint64_t R = gf->refine, per = (R + 1) * (R + 1) * (R + 1);
+        s->out.grid_refine = gf->refine;
+        s->out.grid_brick_count = gf->brick_count;
+        s->out.grid_brick_of_cell = (const uint32_t *)(const void *)(gf + 1);
+        s->out.grid_bricks = s->out.grid_brick_of_cell + s->grid_cells;
+        s->out.grid_brick_visibility = (const uint8_t *)(const void *)(s->out.grid_bricks + (size_t)gf->brick_count * per);
+    }
     if (s->det) {
         s->out.detail_width = s->det->width;
         s->out.detail_height = s->det->height;

@@ -27,6 +27,9 @@ expect 0 "a lightmap budget too small for the charts (--lightmap-caches 3)" "$BI
   --lightmap-caches 3 --surfels 256 -q; err_has "its budget of 3"
 expect 2 "texel adapt 9" "$BIN" builtin:cornell -o "$T/a.glow" --texel-adapt 9; err_has "texel-adapt"
 expect 2 "texel adapt 0.5" "$BIN" builtin:cornell -o "$T/a.glow" --texel-adapt 0.5; err_has "texel-adapt"
+expect 2 "grid refine 3" "$BIN" builtin:cornell -o "$T/a.glow" --grid-refine 3; err_has "grid-refine"
+expect 2 "grid refine 8" "$BIN" builtin:cornell -o "$T/a.glow" --grid-refine 8; err_has "grid-refine"
+expect 2 "grid refine x" "$BIN" builtin:cornell -o "$T/a.glow" --grid-refine x; err_has "grid-refine"
 expect 2 "surfel adapt 5" "$BIN" builtin:cornell -o "$T/a.glow" --surfel-adapt 5; err_has "surfel-adapt"
 expect 2 "missing value" "$BIN" builtin:cornell -o
 expect 2 "no output" "$BIN" builtin:cornell

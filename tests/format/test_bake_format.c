@@ -25,6 +25,7 @@
 #include "bake_write.h"
 #include "glow/glow.h"
 #include "runtime_internal.h"
+#include "../fuzz/fuzz_reseal.h"
 
 #define GOLDEN_PATH GLOW_TEST_DATA_DIR "/golden_v1.glow"
 /* Frozen properties of tests/data/golden_v1.glow (zlib crc32 of the whole file). */
@@ -1680,6 +1681,94 @@ static void test_real_v1_2_detail(void **state) {
     glow_context_destroy(ctx);
 }
 
+/* A real format-1.5 bake with a refined grid (glow-bake builtin:cornell --surfels 16 --links 4
+ * --grid-spacing 0.9 --grid-refine 2 --texel-density 0.5, 2026-11-29; also a fuzz seed): it loads, its
+ * GFIN reaches the outputs, the solver runs it and lookups in the bricks are finite; GFIN's checks
+ * refuse a bad refine, a brick on the grid's last layer, a corner that is no grid cache and a short
+ * section (each patched in memory, CRCs resealed). */
+static unsigned char *read_file_all(const char *path, size_t *size) {
+    FILE *f = fopen(path, "rb");
+    assert_non_null(f);
+    fseek(f, 0, SEEK_END);
+    long n = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    unsigned char *buf = malloc((size_t)n);
+    assert_int_equal(fread(buf, 1, (size_t)n, f), (size_t)n);
+    fclose(f);
+    *size = (size_t)n;
+    return buf;
+}
+
+static void test_real_v1_5_grid_fine(void **state) {
+    (void)state;
+    size_t size = 0;
+    unsigned char *img = read_file_all(GLOW_TEST_DATA_DIR "/seed_cornell_tiny_gfin.glow", &size);
+    test_log log;
+    glow_context *ctx = make_ctx(&log);
+    glow_bake *bake = NULL;
+    assert_int_equal(glow_bake_load(ctx, img, size, &bake), GLOW_OK);
+    glow_bake_info info;
+    assert_int_equal(glow_bake_get_info(bake, &info), GLOW_OK);
+    assert_int_equal(info.format_minor, 5);
+    const glow_bake_grid_fine *gf = glow__bake_grid_fine(bake);
+    assert_non_null(gf);
+    assert_int_equal(gf->refine, 2);
+    assert_int_equal(gf->brick_count, 8);
+    glow_system *sys = NULL;
+    assert_int_equal(glow_system_create(ctx, &(glow_system_desc){.bake = bake}, &sys), GLOW_OK);
+    assert_int_equal(glow_system_update(sys, NULL), GLOW_OK);
+    const glow_cache_outputs *o = glow_system_outputs(sys);
+    assert_int_equal(o->grid_refine, 2);
+    assert_int_equal(o->grid_brick_count, 8);
+    assert_non_null(o->grid_bricks);
+    assert_non_null(o->grid_brick_visibility);
+    float coeffs[27];
+    uint32_t hits = 0;
+    for (int i = 0; i < 64; ++i) { /* points through the room */
+        const float p[3] = {-0.9f + 0.6f * (float)(i % 4), 0.1f + 0.6f * (float)((i / 4) % 4), -0.9f + 0.6f * (float)(i / 16)};
+        const float n[3] = {0.0f, 1.0f, 0.0f};
+        if (glow_sample_grid_oriented(o, p, n, coeffs) != GLOW_OK) continue;
+        ++hits;
+        for (uint32_t k = 0; k < o->coeff_count; ++k) assert_true(isfinite(coeffs[k]));
+    }
+    assert_true(hits > 32);
+    glow_system_destroy(sys);
+    glow_bake_destroy(bake);
+    glow_context_destroy(ctx);
+    /* patched copies */
+    unsigned char *bad = malloc(size);
+    const size_t off = (size_t)u64_at(entry_ptr(img, GLOW_SECTION_GFIN) + 8);
+    const glow_bake_meta *m = (const glow_bake_meta *)(const void *)payload_ptr(img, GLOW_SECTION_META);
+    const size_t cells = (size_t)m->grid_dims[0] * m->grid_dims[1] * m->grid_dims[2];
+    uint32_t v;
+#define PATCH_GFIN(at, value, code, needle)                                                                            \
+    do {                                                                                                               \
+        memcpy(bad, img, size);                                                                                        \
+        v = (value);                                                                                                   \
+        memcpy(bad + off + (at), &v, 4);                                                                               \
+        fuzz_fix_crcs(bad, size);                                                                                      \
+        EXPECT_LOAD_MSG(bad, size, code, needle);                                                                      \
+    } while (0)
+    PATCH_GFIN(0, 9u, GLOW_ERROR_CORRUPT_DATA, "GFIN: refine 9");
+    PATCH_GFIN(0, 1u, GLOW_ERROR_CORRUPT_DATA, "GFIN: refine 1");
+    PATCH_GFIN(4, 7u, GLOW_ERROR_CORRUPT_DATA, "section 'GFIN' is");
+    /* the cell whose lowest corner is the last grid point names brick 0 */
+    PATCH_GFIN(32 + 4 * (cells - 1), 0u, GLOW_ERROR_OUT_OF_RANGE, "the grid's last layer");
+    /* brick 0's first corner: the first lightmap cache */
+    PATCH_GFIN(32 + 4 * cells, m->grid_cache_count, GLOW_ERROR_OUT_OF_RANGE, "is not a grid cache");
+    PATCH_GFIN(32 + 4 * cells, 0x80000000u | 1u, GLOW_ERROR_OUT_OF_RANGE, "is not a grid cache");
+#undef PATCH_GFIN
+    /* a short GFIN: the section entry's size one word less */
+    memcpy(bad, img, size);
+    unsigned char *e = entry_ptr(bad, GLOW_SECTION_GFIN);
+    const uint64_t short_size = u64_at(e + 16) - 4u;
+    memcpy(e + 16, &short_size, 8);
+    fuzz_fix_crcs(bad, size);
+    EXPECT_LOAD_MSG(bad, size, GLOW_ERROR_CORRUPT_DATA, "section 'GFIN' is");
+    free(bad);
+    free(img);
+}
+
 static void test_golden_v1(void **state) {
     (void)state;
     test_bake tb;
@@ -1764,6 +1853,7 @@ int main(void) {
         cmocka_unit_test(test_atomic_write_failures),
         cmocka_unit_test(test_golden_v1),
         cmocka_unit_test(test_real_v1_2_detail),
+        cmocka_unit_test(test_real_v1_5_grid_fine),
     };
     return cmocka_run_group_tests(tests, setup_tmpdir, teardown_tmpdir);
 }

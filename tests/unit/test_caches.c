@@ -250,11 +250,55 @@ static void check_bilinear(const glow__caches *c, const glow__scene *s) {
 }
 
 /* Structural invariants of any result. */
+/* The refined grid (grid_fine.c): bricks only in cells below the last layer, each named once; every
+ * brick corner is EMPTY or a grid cache sitting exactly on that corner of the fine lattice (a coarse
+ * cache at coarse corners, a fine one elsewhere); every fine cache is some brick's corner, no two at
+ * one point. */
+static void check_refined(const glow__caches *c, uint32_t coarse) {
+    const uint32_t *d = c->grid_dims, R = c->grid_refine, side = R + 1, per = side * side * side;
+    const uint32_t cells = d[0] * d[1] * d[2];
+    const float fs = c->grid_spacing / (float)R;
+    assert_true(R >= 2 && c->grid_brick_count > 0);
+    uint32_t named = 0;
+    uint8_t *seen = calloc(c->grid_fine_count + 1, 1);
+    for (uint32_t k = 0; k < cells; ++k) {
+        const uint32_t b = c->grid_brick_of_cell[k];
+        if (b == GLOW_MAP_EMPTY) continue;
+        ++named;
+        const uint32_t x = k % d[0], y = (k / d[0]) % d[1], z = k / (d[0] * d[1]);
+        assert_true(b < c->grid_brick_count && x + 1 < d[0] && y + 1 < d[1] && z + 1 < d[2]);
+        uint32_t caches_here = 0;
+        for (uint32_t q = 0; q < per; ++q) {
+            const uint32_t e = c->grid_bricks[(size_t)b * per + q];
+            if (e == GLOW_MAP_EMPTY) continue;
+            ++caches_here;
+            assert_true(e < c->grid_cache_count);
+            const uint32_t g[3] = {x * R + q % side, y * R + (q / side) % side, z * R + q / (side * side)};
+            for (int a = 0; a < 3; ++a)
+                if (fabsf(c->caches[e].pos[a] - (c->grid_origin[a] + fs * (float)g[a])) > 1e-4f * (1.0f + c->grid_spacing))
+                    fail_msg("brick %u corner %u: cache %u at %g, not on the fine lattice (%g)", b, q, e,
+                             (double)c->caches[e].pos[a], (double)(c->grid_origin[a] + fs * (float)g[a]));
+            const bool at_coarse = g[0] % R == 0 && g[1] % R == 0 && g[2] % R == 0;
+            assert_true(at_coarse == (e < coarse));
+            if (e >= coarse) seen[e - coarse] = 1;
+        }
+        assert_true(caches_here > 0); /* bricks without a cache are dropped */
+    }
+    assert_int_equal(named, c->grid_brick_count);
+    for (uint32_t i = 0; i < c->grid_fine_count; ++i) assert_true(seen[i]);
+    free(seen);
+    for (uint32_t i = coarse + 1; i < c->grid_cache_count; ++i) /* one cache a point */
+        assert_true(c->caches[i].pos[0] != c->caches[i - 1].pos[0] || c->caches[i].pos[1] != c->caches[i - 1].pos[1] ||
+                    c->caches[i].pos[2] != c->caches[i - 1].pos[2]);
+}
+
 static void check_structure(const glow__caches *c, const glow__scene *s, const glow__surfels *sf) {
     assert_int_equal(c->count, c->grid_cache_count + c->lm_cache_count);
     const uint32_t cells = c->grid_dims[0] * c->grid_dims[1] * c->grid_dims[2];
-    assert_int_equal(cells, c->grid_cache_count + c->grid_inside);
-    for (uint32_t i = 0; i < c->grid_cache_count; ++i) {
+    const uint32_t coarse = c->grid_cache_count - c->grid_fine_count;
+    assert_int_equal(cells, coarse + c->grid_inside);
+    if (c->grid_refine) check_refined(c, coarse);
+    for (uint32_t i = 0; i < coarse; ++i) {
         const glow__cache *ca = &c->caches[i];
         assert_int_equal(ca->kind, GLOW_CACHE_KIND_GRID);
         assert_true(ca->texel < cells);
@@ -755,6 +799,109 @@ static void test_texel_adapt(void **state) {
     scene_free(&s);
 }
 
+/* The grid refined near geometry (grid_fine.c): an 8 x 8 floor with a 1 x 4 x 1 pillar in the middle,
+ * fine spacing 0.6 (coarse 1.2). The refined grid's coarse lattice spans the box grown by 0.3 on every
+ * side: x, z = -0.8 .. 8.8 (9 points), y = -0.4 .. 4.4 (5 points), 8 x 4 x 8 cells. A cell is a brick
+ * when a triangle comes within 0.6 of it: the whole bottom layer (y in [-0.4, 0.8] holds the floor; the
+ * next layer is 0.8 above it), and above it only the 2 x 2 columns of cells that hold the pillar
+ * (x, z in [2.8, 5.2]; the next cells out are 0.7 from it). So 64 + 3 x 4 bricks. Fine points inside
+ * the pillar (x = z = 4.0, y = 0.2 | 1.4 | 2.6 | 3.8) and under the floor are no caches. At the same
+ * fine spacing the uniform grid holds more caches; with a budget, the refined grid's points stay
+ * within it. */
+static void test_grid_refine(void **state) {
+    (void)state;
+    builder b = {0};
+    b_grid(&b, (double[3]){0, 0, 0}, (double[3]){0, 0, 8}, (double[3]){8, 0, 0}, 4, 4); /* floor +y */
+    b_box(&b, (double[3]){3.5, 0, 3.5}, (double[3]){4.5, 4, 4.5}, true, 2);               /* pillar */
+    glow__scene s;
+    b_finish(&b, &s);
+    glow__rt *rt = make_rt(&s);
+    glow__pool *pool = glow__pool_create(2);
+    glow__log log = {0};
+    glow__cache_settings set = {.grid_spacing = 0.6f, .texel_density = 2.0f, .grid_refine = 2};
+    glow__caches c;
+    assert_int_equal(glow__caches_build(&s, rt, NULL, &set, pool, &log, &c), GLOW_OK);
+    check_structure(&c, &s, NULL);
+    assert_int_equal(c.grid_refine, 2);
+    assert_true(fabsf(c.grid_spacing - 1.2f) < 1e-6f);
+    assert_int_equal(c.grid_dims[0], 9);
+    assert_int_equal(c.grid_dims[1], 5);
+    assert_int_equal(c.grid_dims[2], 9);
+    assert_true(fabsf(c.grid_origin[0] + 0.8f) < 1e-5f && fabsf(c.grid_origin[1] + 0.4f) < 1e-5f);
+    uint32_t layer[4] = {0, 0, 0, 0};
+    for (uint32_t z = 0; z < 8; ++z)
+        for (uint32_t y = 0; y < 4; ++y)
+            for (uint32_t x = 0; x < 8; ++x) {
+                const bool brick = c.grid_brick_of_cell[(z * 5 + y) * 9 + x] != GLOW_MAP_EMPTY;
+                const bool pillar = (x == 3 || x == 4) && (z == 3 || z == 4);
+                if (brick != (y == 0 || pillar))
+                    fail_msg("cell (%u, %u, %u): brick %d, expected %d", x, y, z, brick, y == 0 || pillar);
+                layer[y] += brick;
+            }
+    assert_int_equal(layer[0], 64);
+    assert_int_equal(layer[1] + layer[2] + layer[3], 12);
+    assert_int_equal(c.grid_brick_count, 76);
+    assert_true(c.grid_fine_count > 0);
+    assert_true(c.grid_fine_inside >= 4); /* the pillar's 4, and those under the floor */
+    glow__caches_free(&c);
+    /* a budget: no spacing, 600 points; the refined grid's points (coarse + fine, inside ones too) fit
+     * (here, where the floor fills the box, the fine spacing comes out no finer than a uniform grid's
+     * of the same budget: refining pays in open air, below) */
+    set = (glow__cache_settings){.target_grid = 600, .texel_density = 2.0f, .grid_refine = 2};
+    assert_int_equal(glow__caches_build(&s, rt, NULL, &set, pool, &log, &c), GLOW_OK);
+    check_structure(&c, &s, NULL);
+    assert_int_equal(c.grid_refine, 2);
+    const uint32_t points = c.grid_dims[0] * c.grid_dims[1] * c.grid_dims[2] + c.grid_fine_count + c.grid_fine_inside;
+    print_message("floor and pillar, budget 600: coarse %ux%ux%u at %g, %u bricks, %u points\n", c.grid_dims[0],
+                  c.grid_dims[1], c.grid_dims[2], (double)c.grid_spacing, c.grid_brick_count, points);
+    assert_true(points <= 600);
+    glow__caches_free(&c);
+    glow__rt_destroy(rt);
+    scene_free(&s);
+    /* Open air: two 0.8 m cubes at opposite corners of a 10 m box, fine spacing 0.4 (coarse 0.8,
+     * lattice -0.2 .. 10.2, 13 cells an axis). Each cube is within 0.4 of 2 x 2 x 2 cells (cube A
+     * [0.1, 0.9]: cells 0 and 1 along each axis, cell 2 starts 0.1 beyond the margin), so 16 bricks;
+     * the uniform grid of the fine spacing has 25³ points, the refined one 14³ + at most 16 x 26 */
+    builder b2 = {0};
+    b_box(&b2, (double[3]){0.1, 0.1, 0.1}, (double[3]){0.9, 0.9, 0.9}, true, 1);
+    b_box(&b2, (double[3]){9.1, 9.1, 9.1}, (double[3]){9.9, 9.9, 9.9}, true, 1);
+    b_finish(&b2, &s);
+    rt = make_rt(&s);
+    set = (glow__cache_settings){.grid_spacing = 0.4f, .texel_density = 2.0f, .grid_refine = 2};
+    assert_int_equal(glow__caches_build(&s, rt, NULL, &set, pool, &log, &c), GLOW_OK);
+    check_structure(&c, &s, NULL);
+    assert_int_equal(c.grid_dims[0], 14);
+    assert_int_equal(c.grid_brick_count, 16);
+    const uint32_t refined = c.grid_cache_count;
+    glow__caches_free(&c);
+    set.grid_refine = 1;
+    assert_int_equal(glow__caches_build(&s, rt, NULL, &set, pool, &log, &c), GLOW_OK);
+    check_structure(&c, &s, NULL);
+    print_message("two cubes in 10 m: refined grid %u caches, uniform at the same fine spacing %u\n", refined,
+                  c.grid_cache_count);
+    assert_int_equal(c.grid_dims[0], 25);
+    assert_true(refined <= 14 * 14 * 14 + 16 * 26 && refined < c.grid_cache_count / 4);
+    glow__caches_free(&c);
+    /* ... and at a budget of 3000 points the refined grid is finer near the cubes than the uniform one */
+    set = (glow__cache_settings){.target_grid = 3000, .texel_density = 2.0f, .grid_refine = 2};
+    assert_int_equal(glow__caches_build(&s, rt, NULL, &set, pool, &log, &c), GLOW_OK);
+    check_structure(&c, &s, NULL);
+    assert_int_equal(c.grid_refine, 2);
+    const uint32_t pts = c.grid_dims[0] * c.grid_dims[1] * c.grid_dims[2] + c.grid_fine_count + c.grid_fine_inside;
+    const float fine = c.grid_spacing / 2.0f;
+    glow__caches_free(&c);
+    set.grid_refine = 1;
+    assert_int_equal(glow__caches_build(&s, rt, NULL, &set, pool, &log, &c), GLOW_OK);
+    print_message("two cubes, budget 3000: refined %u points, fine spacing %g; uniform spacing %g\n", pts, (double)fine,
+                  (double)c.grid_spacing);
+    assert_true(pts <= 3000);
+    assert_true(fine < 0.75f * c.grid_spacing);
+    glow__caches_free(&c);
+    glow__pool_destroy(pool);
+    glow__rt_destroy(rt);
+    scene_free(&s);
+}
+
 static void test_bad_arguments(void **state) {
     (void)state;
     glow__scene s;
@@ -783,7 +930,7 @@ int main(void) {
         cmocka_unit_test(test_wall_through_floor),
         cmocka_unit_test(test_uv1_followed),    cmocka_unit_test(test_targets),
         cmocka_unit_test(test_deterministic_threads), cmocka_unit_test(test_open_scene_keeps_air),
-        cmocka_unit_test(test_texel_adapt),     cmocka_unit_test(test_bad_arguments),
+        cmocka_unit_test(test_texel_adapt),     cmocka_unit_test(test_grid_refine),    cmocka_unit_test(test_bad_arguments),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

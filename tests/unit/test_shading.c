@@ -761,6 +761,103 @@ static void test_sample_grid_oriented(void **state) {
     assert_int_equal(glow_sample_grid_oriented(NULL, p, nx, out), GLOW_ERROR_INVALID_ARGUMENT);
 }
 
+/* A refined grid (GFIN): a 2 x 2 x 2 coarse grid of spacing 2 whose one cell is a brick of 2³ fine
+ * cells (spacing 1). Lookups inside the brick blend the fine cell's corners (coarse caches at the
+ * brick's corners, fine ones elsewhere, empty ones weighted 0); a fine cell without any cache falls
+ * back to the coarse cell; GVIS masks of the fine cells apply; the oriented lookup moves a quarter of
+ * the fine spacing. Hand-computed. */
+static void test_sample_grid_refined(void **state) {
+    (void)state;
+    fill_rows();
+    const uint32_t map[8] = {0, 1, 2, 3, 4, 5, 6, 7};
+    uint32_t brick[27];
+    for (int k = 0; k < 27; ++k) brick[k] = E;
+    /* corners of the brick's lattice (x fastest, 3 a side): coarse points at 0 / 2 along each axis */
+    for (int c = 0; c < 8; ++c) brick[(c & 1 ? 2 : 0) + (c & 2 ? 6 : 0) + (c & 4 ? 18 : 0)] = (uint32_t)c;
+    brick[1] = 8;   /* (1, 0, 0) */
+    brick[3] = 9;   /* (0, 1, 0) */
+    brick[9] = 10;  /* (0, 0, 1) */
+    brick[13] = 11; /* (1, 1, 1), the centre */
+    const uint32_t of[8] = {0, E, E, E, E, E, E, E};
+    glow_cache_outputs o = {.sh_bands_luma = 1, .sh_bands_chroma = 1, .coeff_count = 3, .cache_count = 12,
+                            .grid_cache_count = 12, .cache_sh = &g_rows[0][0], .grid_dims = {2, 2, 2},
+                            .grid_origin = {0.0f, 0.0f, 0.0f}, .grid_spacing = 2.0f, .grid_map = map,
+                            .grid_refine = 2, .grid_brick_count = 1, .grid_brick_of_cell = of, .grid_bricks = brick};
+    float out[3], want[3];
+    /* fine cell (0, 0, 0) at t = (0.3, 0.6, 0.2): corners 0 (cache 0), 1 (8), 2 (9), 4 (10), 7 (11) */
+    {
+        const float p[3] = {0.3f, 0.6f, 0.2f};
+        const double t[3] = {0.3, 0.6, 0.2};
+        const uint32_t idx[8] = {0, 8, 9, E, 10, E, E, 11};
+        double w[8];
+        for (int c = 0; c < 8; ++c) w[c] = (c & 1 ? t[0] : 1 - t[0]) * (c & 2 ? t[1] : 1 - t[1]) * (c & 4 ? t[2] : 1 - t[2]);
+        expect_blend(idx, w, 8, want);
+        assert_int_equal(glow_sample_grid(&o, p, out), GLOW_OK);
+        assert_row(out, want);
+        /* GVIS of that fine cell's octant (t < 0.5, >= 0.5, < 0.5: octant 2): hide cache 9's corner 2 */
+        uint8_t vis[8][8];
+        memset(vis, 0xFF, sizeof vis);
+        vis[0][2] = (uint8_t)~(1u << 2);
+        glow_cache_outputs ov = o;
+        ov.grid_brick_visibility = &vis[0][0];
+        w[2] = 0.0;
+        expect_blend(idx, w, 8, want);
+        assert_int_equal(glow_sample_grid(&ov, p, out), GLOW_OK);
+        assert_row(out, want);
+    }
+    /* fine cell (1, 1, 1) (x, y, z in [1, 2]): corners (1,1,1) = cache 11 and the coarse corner 7 hold
+     * caches, the rest of its corners are empty */
+    {
+        const float p[3] = {1.5f, 1.25f, 1.75f};
+        const double t[3] = {0.5, 0.25, 0.75};
+        const uint32_t idx[8] = {11, E, E, E, E, E, E, 7};
+        double w[8];
+        for (int c = 0; c < 8; ++c) w[c] = (c & 1 ? t[0] : 1 - t[0]) * (c & 2 ? t[1] : 1 - t[1]) * (c & 4 ? t[2] : 1 - t[2]);
+        expect_blend(idx, w, 8, want);
+        assert_int_equal(glow_sample_grid(&o, p, out), GLOW_OK);
+        assert_row(out, want);
+    }
+    /* a fine cell whose corners hold no cache: the coarse cell's trilinear lookup */
+    {
+        uint32_t b2[27];
+        memcpy(b2, brick, sizeof b2);
+        for (int k = 0; k < 27; ++k) b2[k] = E;
+        b2[26] = 7; /* only the far corner: fine cell (0,0,0) is empty */
+        glow_cache_outputs o2 = o;
+        o2.grid_bricks = b2;
+        glow_cache_outputs oc = o;
+        oc.grid_refine = 0;
+        const float p[3] = {0.3f, 0.6f, 0.2f};
+        float coarse[3];
+        assert_int_equal(glow_sample_grid(&oc, p, coarse), GLOW_OK);
+        assert_int_equal(glow_sample_grid(&o2, p, out), GLOW_OK);
+        assert_row(out, coarse);
+        /* outside the grid's box: the clamped coarse lookup, as without bricks */
+        const float far[3] = {-5.0f, 0.5f, 0.5f};
+        assert_int_equal(glow_sample_grid(&oc, far, coarse), GLOW_OK);
+        assert_int_equal(glow_sample_grid(&o, far, out), GLOW_OK);
+        assert_row(out, coarse);
+    }
+    /* oriented: a wall at x = 0.5 facing +x moves the point to x = 0.75 (a quarter of the fine spacing),
+     * and corners behind it (x = 0) weigh ((1 + cos)/2)² + 0.2 of the direction from the wall point */
+    {
+        const float p[3] = {0.5f, 0.5f, 0.5f}, nx[3] = {1.0f, 0.0f, 0.0f};
+        const double t[3] = {0.75, 0.5, 0.5};
+        const uint32_t idx[8] = {0, 8, 9, E, 10, E, E, 11};
+        const double cx[8][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}, {0, 0, 1}, {1, 0, 1}, {0, 1, 1}, {1, 1, 1}};
+        double w[8];
+        for (int c = 0; c < 8; ++c) {
+            w[c] = (c & 1 ? t[0] : 1 - t[0]) * (c & 2 ? t[1] : 1 - t[1]) * (c & 4 ? t[2] : 1 - t[2]);
+            const double d[3] = {cx[c][0] - 0.5, cx[c][1] - 0.5, cx[c][2] - 0.5};
+            const double h = 0.5 * (1.0 + d[0] / sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
+            w[c] *= h * h + GLOW_GRID_BACKFACE_FLOOR;
+        }
+        expect_blend(idx, w, 8, want);
+        assert_int_equal(glow_sample_grid_oriented(&o, p, nx, out), GLOW_OK);
+        assert_row(out, want);
+    }
+}
+
 static void test_sample_lightmap(void **state) {
     (void)state;
     fill_rows();
@@ -1053,7 +1150,7 @@ int main(void) {
         cmocka_unit_test(test_ycocg),          cmocka_unit_test(test_sh_orthonormal), cmocka_unit_test(test_sh_closed_forms), cmocka_unit_test(test_sh_scaled_basis),
         cmocka_unit_test(test_cone_factor),    cmocka_unit_test(test_sh_projection),  cmocka_unit_test(test_lobe_factor),
         cmocka_unit_test(test_sh_window),      cmocka_unit_test(test_shade_uniform),  cmocka_unit_test(test_shade_linear),   cmocka_unit_test(test_shade_cone),
-        cmocka_unit_test(test_sample_grid),    cmocka_unit_test(test_sample_grid_oriented), cmocka_unit_test(test_sample_lightmap), cmocka_unit_test(test_kernels), cmocka_unit_test(test_write_plane),
+        cmocka_unit_test(test_sample_grid),    cmocka_unit_test(test_sample_grid_oriented), cmocka_unit_test(test_sample_grid_refined), cmocka_unit_test(test_sample_lightmap), cmocka_unit_test(test_kernels), cmocka_unit_test(test_write_plane),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -154,6 +154,11 @@ typedef struct glow_pc_settings {
                                    own second UV set keeps its layout. 0 = preset (low and moderate 4,
                                    high and fine 1), 1 = uniform, at most 8 (--texel-adapt).
                                    \since 0.2 */
+    uint32_t grid_refine;       /* the grid is this many times finer in the cells that geometry comes near
+                                   (bricks of R³ fine cells, bake format 1.5) than in open space, within
+                                   the same grid budget; grid_spacing, when given, is then the fine
+                                   spacing (docs/linker.md "Caches"). 0 = preset, 1 = uniform, 2 or 4
+                                   (--grid-refine). \since 0.2 */
 } glow_pc_settings;
 
 typedef struct glow_pc_stats {
@@ -204,6 +209,10 @@ typedef struct glow_pc_stats {
     uint64_t proxies;
     float texel_density_max;  /* texels per m of the most concave generated chart (texel_adapt; equal to
                                  texel_density when uniform) \since 0.2 */
+    uint32_t grid_refine;     /* the grid's refinement near geometry (grid_refine; 0 = uniform) ... */
+    uint32_t grid_bricks;     /* ... the coarse cells refined ... */
+    uint32_t grid_fine_caches;/* ... and the fine caches among grid_caches (grid_dims and grid_spacing are
+                                 the coarse lattice's) \since 0.2 */
 } glow_pc_stats;
 
 /** Resolves presets: fills every zero field of `settings` from its quality. \since 0.1 */

@@ -59,9 +59,10 @@ extern "C" {
 /* The bake format this runtime reads and glow-bake writes: a bake of another major is refused
  * (GLOW_ERROR_VERSION_MISMATCH); a newer minor loads, its unknown sections skipped. */
 #define GLOW_BAKE_FORMAT_VERSION_MAJOR 1u
-#define GLOW_BAKE_FORMAT_VERSION_MINOR 4u /* 1.1: material UVs and texture paths (TUV0, TEXP); 1.2: lightmap detail (LDET);
+#define GLOW_BAKE_FORMAT_VERSION_MINOR 5u /* 1.1: material UVs and texture paths (TUV0, TEXP); 1.2: lightmap detail (LDET);
                                             * 1.3: leaf surfels may differ in area (an adapted density);
-                                            * 1.4: systems of a world and their links to neighbours (XREF) */
+                                            * 1.4: systems of a world and their links to neighbours (XREF);
+                                            * 1.5: the grid refined near geometry (GFIN) */
 #define GLOW_BAKE_FORMAT_MAJOR 1 /* the bake major this runtime reads */
 
 /* GLOW_API marks the public functions. A shared build (BUILD_SHARED_LIBS) compiles the libraries with
@@ -550,6 +551,20 @@ typedef struct glow_cache_outputs {
      * be negative, the sum is not); A: 1 where a detail texel covers a surface, else 0 (RGB 0). */
     uint32_t detail_width, detail_height;
     const float *lightmap_detail; /* [detail_height][detail_width][4] RGBA, row-major */
+    /* \since 0.2, bakes with a refined grid (glow-bake --grid-refine R, bake format 1.5; 0 / NULL
+     * otherwise): near geometry a coarse cell (the one whose lowest corner is grid point (x, y, z)) may
+     * be a brick of R³ fine cells of spacing grid_spacing / R. glow_sample_grid and
+     * glow_sample_grid_oriented look a point up in its brick's fine cell when it has one (and fall back
+     * to the coarse cell when none of the fine corners they may blend holds a cache). The fine caches
+     * are grid caches (rows of cache_sh) with no cell in grid_sh; the GL backend's grid texture holds
+     * the coarse lattice only (docs/gpu.md). */
+    uint32_t grid_refine;        /* R (0: not refined) */
+    uint32_t grid_brick_count;
+    const uint32_t *grid_brick_of_cell; /* [dz][dy][dx]: brick of the cell, 0xFFFFFFFF = none */
+    const uint32_t *grid_bricks; /* [brick][(R+1)³]: cache index of each corner of the brick's fine
+                                    lattice, x fastest, 0xFFFFFFFF = none (inside geometry) */
+    const uint8_t *grid_brick_visibility; /* [brick][R³ fine cells, x fastest][8 octants]: as
+                                    grid_visibility, for the fine cells */
 } glow_cache_outputs;
 /** The outputs, owned by the system, valid (and unchanged) until the next update or destroy.
  * NULL for a NULL system. \threadsafety Read concurrently, but not during an update. \since 0.1 */
@@ -649,6 +664,9 @@ GLOW_API void glow_shade_sh(const float *coeffs, uint32_t sh_bands_luma, uint32_
 /** Trilinear sample of the grid at `position` (m) into out_coeffs[coeff_count]. Cells without a
  * cache get weight 0, and so do corners that outputs->grid_visibility marks as hidden from the
  * lookup's octant of the cell; the rest are renormalised. Outside the grid the position is clamped.
+ * In a refined grid (outputs->grid_refine) a position inside a brick is looked up in its fine cell
+ * the same way (grid_brick_visibility), and in the coarse cell when none of the fine corners it may
+ * blend holds a cache.
  * \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT (NULL, no grid); GLOW_ERROR_OUT_OF_RANGE when no
  * cache is among the 8 neighbours (out_coeffs zeroed). \since 0.1 */
 GLOW_API glow_result glow_sample_grid(const glow_cache_outputs *outputs, const float position[3], float *out_coeffs);
@@ -658,7 +676,7 @@ GLOW_API glow_result glow_sample_grid(const glow_cache_outputs *outputs, const f
 #define GLOW_GRID_NORMAL_BIAS 0.25f   /* of a grid spacing, along the normal */
 #define GLOW_GRID_BACKFACE_FLOOR 0.2f /* the least backface weight */
 /** The grid's light for a surface point: glow_sample_grid at position + GLOW_GRID_NORMAL_BIAS ·
- * spacing · normal (so that the cell and its GVIS octant are taken on the side the surface faces),
+ * spacing · normal (the fine spacing in a refined grid) (so that the cell and its GVIS octant are taken on the side the surface faces),
  * with each corner's trilinear weight also multiplied by ((1 + cos θ) / 2)² + GLOW_GRID_BACKFACE_FLOOR,
  * θ between `normal` and the direction from `position` to the corner: corners behind the surface
  * count about 6x less than those in front. Use it to shade a dynamic object's surface (its

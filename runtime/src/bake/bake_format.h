@@ -64,6 +64,10 @@
  * node_count) and loads one without. */
 #define GLOW_SECTION_XREF GLOW_FOURCC('X', 'R', 'E', 'F')
 
+/* Since 1.5 (optional, with GRID and GVIS; glow-bake --grid-refine): the grid refined near geometry,
+ * see glow_bake_grid_fine. Readers that predate it skip it and look the coarse grid up alone. */
+#define GLOW_SECTION_GFIN GLOW_FOURCC('G', 'F', 'I', 'N')
+
 /* Cache-map entries (GRID and LMAP): the low 31 bits index the cache array. */
 #define GLOW_MAP_EMPTY 0xFFFFFFFFu   /* no cache here; samples read zero */
 #define GLOW_MAP_COPY_BIT 0x80000000u /* not a cache of its own: a dilated copy of cache (v & ~bit) */
@@ -310,12 +314,27 @@ typedef struct glow_bake_xref {
     /* 12 */ uint32_t proxy_count;      /* node_count + proxy_count <= GLOW_LINK_MAX_NODES */
     /* 16 */ uint32_t reserved[4];
 } glow_bake_xref; /* 32 */
+/* GFIN: a coarse cell (the one whose lowest corner is grid point (x, y, z), x < dx - 1, y < dy - 1,
+ * z < dz - 1) may be a brick of R³ fine cells of spacing grid_spacing / R, whose (R + 1)³ corners
+ * are points of the fine lattice origin + (grid_spacing / R) · (gx, gy, gz). Payload:
+ *     glow_bake_grid_fine;
+ *     uint32_t brick_of_cell[dx·dy·dz]  (brick index, or GLOW_MAP_EMPTY);
+ *     uint32_t brick[brick_count][(R+1)³] (cache index of each corner, x fastest, a grid cache without
+ *              the copy bit, or GLOW_MAP_EMPTY: inside geometry);
+ *     uint8_t  visibility[brick_count][R³][8] (per fine cell, x fastest, and octant: GVIS's masks). */
+typedef struct glow_bake_grid_fine {
+    /*  0 */ uint32_t refine;      /* R, 2..8 */
+    /*  4 */ uint32_t brick_count; /* >= 1 */
+    /*  8 */ uint32_t reserved[6];
+} glow_bake_grid_fine; /* 32 */
+
 typedef struct glow_bake_xref_proxy {
     uint32_t dependency;
     uint32_t node; /* a node of the dependency's bake (checked when it is attached) */
 } glow_bake_xref_proxy;
 #define GLOW_BAKE_MAX_DEPENDENCIES 64u
 _Static_assert(sizeof(glow_bake_xref) == 32, "xref header is 32 bytes");
+_Static_assert(sizeof(glow_bake_grid_fine) == 32, "grid fine header is 32 bytes");
 _Static_assert(sizeof(glow_bake_xref_proxy) == 8, "xref proxy is 8 bytes");
 
 _Static_assert(sizeof(glow_bake_detail) == 32, "detail header is 32 bytes");
