@@ -49,6 +49,8 @@ void glow__scene_free(glow__scene *scene) {
     free(scene->uv1);
     free(scene->tri_material);
     free(scene->tri_source);
+    free(scene->object_name);
+    free(scene->source_object);
     free(scene->materials);
     if (scene->textures)
         for (uint32_t i = 0; i < scene->texture_count; i++) glow__texture_free(&scene->textures[i]);
@@ -578,6 +580,44 @@ static glow_result import_materials(import_ctx *c) {
     return GLOW_OK;
 }
 
+/* Each mesh's object: the name of the first node (depth first, in the file's order) that holds it, else
+ * the mesh's own name; objects of the same name are one. mesh_object[m] = its index in s->object_name. */
+static void name_node_meshes(const struct aiNode *nd, const struct aiScene *ai, const char **mesh_name, unsigned depth) {
+    if (!nd || depth > 256) return;
+    for (unsigned i = 0; i < nd->mNumMeshes; i++) {
+        const unsigned m = nd->mMeshes[i];
+        if (m < ai->mNumMeshes && !mesh_name[m] && nd->mName.length) mesh_name[m] = nd->mName.data;
+    }
+    for (unsigned i = 0; i < nd->mNumChildren; i++) name_node_meshes(nd->mChildren[i], ai, mesh_name, depth + 1);
+}
+
+static glow_result import_objects(import_ctx *c, uint32_t **out_mesh_object) {
+    const struct aiScene *ai = c->ai;
+    glow__scene *s = c->s;
+    const char **mesh_name = calloc(ai->mNumMeshes + 1u, sizeof *mesh_name);
+    uint32_t *mo = malloc((ai->mNumMeshes + 1u) * sizeof *mo);
+    s->object_name = malloc((ai->mNumMeshes + 1u) * sizeof *s->object_name);
+    if (!mesh_name || !mo || !s->object_name) {
+        free(mesh_name);
+        free(mo);
+        return GLOW_ERROR_OUT_OF_MEMORY;
+    }
+    name_node_meshes(ai->mRootNode, ai, mesh_name, 0);
+    s->object_count = 0;
+    for (unsigned m = 0; m < ai->mNumMeshes; m++) {
+        const struct aiMesh *me = ai->mMeshes[m];
+        char name[64];
+        snprintf(name, sizeof name, "%.63s", mesh_name[m] ? mesh_name[m] : (me && me->mName.length ? me->mName.data : ""));
+        uint32_t k = 0;
+        while (k < s->object_count && strcmp(s->object_name[k], name) != 0) k++;
+        if (k == s->object_count) memcpy(s->object_name[s->object_count++], name, sizeof name);
+        mo[m] = k;
+    }
+    free(mesh_name);
+    *out_mesh_object = mo;
+    return GLOW_OK;
+}
+
 static glow_result import_meshes(import_ctx *c) {
     glow__scene *s = c->s;
     const struct aiScene *ai = c->ai;
@@ -610,12 +650,17 @@ static glow_result import_meshes(import_ctx *c) {
     s->pos = malloc(n * 3 * sizeof *s->pos);
     s->tri_material = malloc(n * sizeof *s->tri_material);
     s->tri_source = malloc(n * sizeof *s->tri_source);
+    s->source_object = malloc(n * sizeof *s->source_object);
+    uint32_t *mesh_object = NULL;
+    if (!s->source_object || import_objects(c, &mesh_object) != GLOW_OK) return GLOW_ERROR_OUT_OF_MEMORY;
     if (with_nrm) s->nrm = malloc(n * 3 * sizeof *s->nrm);
     if (with_uv0) s->uv0 = malloc(n * 3 * sizeof *s->uv0);
     if (has_uv1) s->uv1 = malloc(n * 3 * sizeof *s->uv1);
     if (!s->pos || !s->tri_material || !s->tri_source || (with_nrm && !s->nrm) || (with_uv0 && !s->uv0) ||
-        (has_uv1 && !s->uv1))
+        (has_uv1 && !s->uv1)) {
+        free(mesh_object);
         return GLOW_ERROR_OUT_OF_MEMORY;
+    }
 
     uint32_t t = 0, bad_index = 0, bad_material = 0;
     for (unsigned m = 0; m < ai->mNumMeshes; m++) {
@@ -665,9 +710,11 @@ static glow_result import_meshes(import_ctx *c) {
             }
             s->tri_material[t] = mat;
             s->tri_source[t] = t;
+            s->source_object[t] = mesh_object[m];
             t++;
         }
     }
+    free(mesh_object);
     s->tri_count = t;
     s->source_tri_count = t;
     if (bad_index)

@@ -1,6 +1,7 @@
 /* pipeline.c — glow_pc_bake: import -> ray-tracing BVH -> surfels -> hierarchy -> caches -> links ->
  * bake file. Owns the presets, option validation, per-stage timing and peak memory, and the
  * serialisation of the in-memory results into the sections of bake_format.h. */
+#include <fnmatch.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -118,6 +119,19 @@ glow_result glow_pc_settings_validate(const glow_pc_settings *s, char *msg, size
     if (s->texel_adapt != 0.0f && !(s->texel_adapt >= 1.0f && s->texel_adapt <= 8.0f))
         BAD("--texel-adapt %g is out of range (1..8)", (double)s->texel_adapt);
     if (s->grid_refine > 4 || s->grid_refine == 3) BAD("--grid-refine %u is not 1, 2 or 4", s->grid_refine);
+    if (s->system_group_count && !(s->system_area > 0.0f)) BAD("--system-group needs --system-area");
+    if (s->system_group_count > 256) BAD("%u system groups; at most 256", s->system_group_count);
+    if (s->system_group_count && !s->system_groups) BAD("system_group_count %u without system_groups", s->system_group_count);
+    for (uint32_t g = 0; g < s->system_group_count; ++g) {
+        const char *e = s->system_groups[g], *eq = e ? strchr(e, '=') : NULL;
+        if (!eq || eq == e || eq - e > 48 || !eq[1])
+            BAD("--system-group '%s': expected NAME=PATTERN[,PATTERN...] with a name of 1..48 characters", e ? e : "(null)");
+        for (const char *q = e; q < eq; ++q)
+            if (!((*q >= 'A' && *q <= 'Z') || (*q >= 'a' && *q <= 'z') || (*q >= '0' && *q <= '9') || *q == '_' || *q == '-'))
+                BAD("--system-group '%s': the name may hold only A-Z a-z 0-9 _ -", e);
+        for (uint32_t h = 0; h < g; ++h)
+            if (!strncmp(s->system_groups[h], e, (size_t)(eq - e) + 1u)) BAD("--system-group '%.*s' is named twice", (int)(eq - e), e);
+    }
     if (s->system_reach != 0.0f && !(s->system_reach > 0.0f && s->system_reach <= 4.0f))
         BAD("--system-reach %g is out of range (0..4 system diagonals)", (double)s->system_reach);
     if (s->system_area > 0.0f && s->sh_links)
@@ -831,9 +845,11 @@ done:
 typedef struct sys_part {
     uint32_t first, count; /* range of the partition's triangle order */
     double area;
-    uint32_t depth;
+    uint32_t depth;        /* SYS_NAMED for a system named by the user (path: its name's hash) */
     uint64_t path;
+    int group;             /* its --system-group, or -1 */
 } sys_part;
+#define SYS_NAMED 0xFFFFFFFFu
 
 #define SYS_SPLIT_BINS 1024u
 
@@ -863,7 +879,7 @@ static bool split_systems(sys_split *sp, uint32_t first, uint32_t count, const d
             sp->parts = np;
             sp->cap = cap;
         }
-        sp->parts[sp->n++] = (sys_part){first, count, area, depth, path};
+        sp->parts[sp->n++] = (sys_part){first, count, area, depth, path, -1};
         return true;
     }
     /* The axis: the longest extent of the cell's triangles' centroids (ties: x, y, z). A level is wide
@@ -948,6 +964,88 @@ static bool split_systems(sys_split *sp, uint32_t first, uint32_t count, const d
     lo_u[axis] = hi_l[axis] = mid;
     return split_systems(sp, first, nl, lo, hi_l, depth + 1, path) &&
            split_systems(sp, first + nl, nu, lo_u, hi, depth + 1, path | (1ull << depth));
+}
+
+/* Systems named by the user (glow_pc_settings.system_groups): each group's triangles, in their order,
+ * one whole system each at the front of sp->order (groups in their given order, empty ones left out
+ * with a warning); *rest = how many. A triangle's object is its source triangle's (a cut piece keeps
+ * its triangle's). */
+static uint64_t fnv64(uint64_t h, const void *data, size_t n);
+static glow_result named_systems(const glow_pc_settings *set, const glow__scene *w, sys_split *sp, uint32_t *rest,
+                                 glow__log *log) {
+    *rest = 0;
+    if (!w->object_count || !w->source_object) {
+        glow__errorf(log, "%s: --system-group: the scene names no objects (a built-in scene)", w->source);
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    const uint32_t G = set->system_group_count, n = w->tri_count;
+    int *obj_group = malloc(((size_t)w->object_count + 1) * sizeof *obj_group);
+    uint32_t *count = calloc((size_t)G + 2, sizeof *count);
+    if (!obj_group || !count) {
+        free(obj_group);
+        free(count);
+        return GLOW_ERROR_OUT_OF_MEMORY;
+    }
+    for (uint32_t o = 0; o < w->object_count; ++o) { /* the first group with a pattern that matches */
+        obj_group[o] = -1;
+        for (uint32_t g = 0; g < G && obj_group[o] < 0; ++g) {
+            const char *p = strchr(set->system_groups[g], '=') + 1;
+            while (*p && obj_group[o] < 0) {
+                const char *e = strchr(p, ',');
+                const size_t len = e ? (size_t)(e - p) : strlen(p);
+                char pat[256];
+                if (len && len < sizeof pat) {
+                    memcpy(pat, p, len);
+                    pat[len] = 0;
+                    if (fnmatch(pat, w->object_name[o], 0) == 0) obj_group[o] = (int)g;
+                }
+                p += len + (e ? 1 : 0);
+            }
+        }
+    }
+    for (uint32_t t = 0; t < n; ++t) {
+        const uint32_t src = w->tri_source[t];
+        const int g = src < w->source_tri_count ? obj_group[w->source_object[src]] : -1;
+        count[g < 0 ? G : (uint32_t)g]++;
+    }
+    uint32_t start[257 + 1], at = 0;
+    for (uint32_t g = 0; g <= G; ++g) {
+        start[g] = at;
+        at += count[g];
+    }
+    for (uint32_t t = 0; t < n; ++t) { /* stable: by group, the rest last */
+        const uint32_t src = w->tri_source[t];
+        const int g = src < w->source_tri_count ? obj_group[w->source_object[src]] : -1;
+        sp->order[start[g < 0 ? G : (uint32_t)g]++] = t;
+    }
+    glow_result r = GLOW_OK;
+    for (uint32_t g = 0, first = 0; g < G; ++g) {
+        const char *e = set->system_groups[g];
+        const int nl = (int)(strchr(e, '=') - e);
+        if (!count[g]) {
+            glow__warnf(log, "%s: --system-group %s: no object of the scene matches; no such system", w->source, e);
+            continue;
+        }
+        if (sp->n == sp->cap) {
+            const uint32_t cap = sp->cap ? 2 * sp->cap : 16;
+            sys_part *np = realloc(sp->parts, cap * sizeof *np);
+            if (!np) {
+                r = GLOW_ERROR_OUT_OF_MEMORY;
+                break;
+            }
+            sp->parts = np;
+            sp->cap = cap;
+        }
+        double area = 0.0;
+        for (uint32_t i = first; i < first + count[g]; ++i) area += sp->tri_area[sp->order[i]];
+        sp->parts[sp->n++] = (sys_part){first, count[g], area, SYS_NAMED, fnv64(0xcbf29ce484222325ull, e, (size_t)nl), (int)g};
+        glow__infof(log, "%s: system %.*s: %u triangles, area %.6g (named)", w->source, nl, e, count[g], area);
+        first += count[g];
+        *rest = first;
+    }
+    free(obj_group);
+    free(count);
+    return r;
 }
 
 /* The triangles order[first, first + count) of `world` as a scene of their own: copies of the per-corner
@@ -1637,7 +1735,9 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
     while (half > 2.0 * ext && half > 0x1p-30) half *= 0.5;
     if (!(half > ext)) half *= 2.0;
     const double lo[3] = {-half, -half, -half}, hi[3] = {half, half, half};
-    if (!split_systems(&sp, 0, n, lo, hi, 0, 0)) {
+    uint32_t rest = 0; /* the triangles before it are the named systems' */
+    if (set->system_group_count && (res = named_systems(set, world, &sp, &rest, log)) != GLOW_OK) goto done;
+    if (!split_systems(&sp, rest, n - rest, lo, hi, 0, 0)) {
         glow__errorf(log, "%s: out of memory for the systems", world->source);
         res = GLOW_ERROR_OUT_OF_MEMORY;
         goto done;
@@ -1768,8 +1868,14 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
                 if (out_path[i] == '/') st = i + 1;
             const int sl = (int)(len - st);
             char name[4200];
-            snprintf(name, sizeof name, "%.*s.s%u-%llx-%s.glow", sl < 4000 ? sl : 4000, out_path + st, part->depth,
-                     (unsigned long long)part->path, keyhex);
+            if (part->group >= 0) {
+                const char *g = set->system_groups[part->group];
+                snprintf(name, sizeof name, "%.*s.%.*s-%s.glow", sl < 4000 ? sl : 4000, out_path + st,
+                         (int)(strchr(g, '=') - g), g, keyhex);
+            } else {
+                snprintf(name, sizeof name, "%.*s.s%u-%llx-%s.glow", sl < 4000 ? sl : 4000, out_path + st, part->depth,
+                         (unsigned long long)part->path, keyhex);
+            }
             beside(out_path, name, path, sizeof path);
         }
         const char *base = strrchr(path, '/');
@@ -1849,6 +1955,12 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
             }
             if (res == GLOW_OK) {
                 o = objs[s] = sys_entry(s, base, keyhex, &sub, nf);
+                if (part->group >= 0) {
+                    const char *g = set->system_groups[part->group];
+                    char nm[64];
+                    snprintf(nm, sizeof nm, "%.*s", (int)(strchr(g, '=') - g), g);
+                    cJSON_AddStringToObject(o, "name", nm);
+                }
                 cJSON_AddStringToObject(o, "system_key", ownhex);
                 char inhex[20];
                 snprintf(inhex, sizeof inhex, "%016llx", (unsigned long long)own_key[s]);

@@ -83,6 +83,9 @@ static const char *usage_text =
     "                         world manifest (JSON) and the systems are written beside it, named by\n"
     "                         their content keys; a world already there keeps its unchanged systems\n"
     "                         (incremental). Caches link the light of the systems within reach\n"
+    "  --system-group NAME=PATTERN[,PATTERN...]  with --system-area: the objects of the file (OBJ o/g,\n"
+    "                         glTF nodes) whose names match a pattern (* ? [...]) form system NAME,\n"
+    "                         whole; the rest is split by area. Repeat for more groups\n"
     "  --system-reach F       with --system-area: other systems within F times a system's bounds\n"
     "                         diagonal occlude its rays and light its caches (default 0.5, up to 4)\n"
     "  --surfel-adapt F       surfels up to F times as dense where surfaces face each other within\n"
@@ -458,6 +461,8 @@ static int run_info(const char *path, bool json) {
 
 int main(int argc, char **argv) {
     glow_pc_settings s = {0};
+    static const char *groups[256]; /* --system-group, pointing into argv */
+    s.system_groups = groups;
     const char *scene = NULL, *out = NULL, *info = NULL;
     bool json = false, quiet = false, mpi = false;
     for (int i = 1; i < argc; ++i) {
@@ -566,6 +571,10 @@ int main(int argc, char **argv) {
             if (!end || *end || !(x > 0.0 && x < 1e30))
                 return usage_error("--system-area '%s': expected a positive area in scene units squared", v);
             s.system_area = (float)x;
+        } else if (!strcmp(a, "--system-group")) {
+            NEED_VALUE();
+            if (s.system_group_count == 256) return usage_error("--system-group: at most 256 groups");
+            groups[s.system_group_count++] = v;
         } else if (!strcmp(a, "--system-reach")) {
             NEED_VALUE();
             char *end = NULL;

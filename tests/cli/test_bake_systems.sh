@@ -180,6 +180,43 @@ expect 0 "one system when the area is above the scene's" "$BIN/glow-bake" builti
 python3 -c "import json,sys; m=json.load(open(sys.argv[1])); assert len(m['systems'])==1 and m['systems'][0]['surfels']==int(round(1024*306.33/1000))" \
   "$T/one/hall.json" && pass "  1 system, surfels 1024 x 306.33 / 1000" || fail "  one-system manifest"
 
+# Systems named by the user (--system-group): tests/data/scenes/named-objects.obj holds objects house_a,
+# house_b (4 m boxes, 96 m² each) and ground (192 m²). house_a is system houseA and gro* system flat,
+# whole although above the area; house_b is split by area (4 systems of 24 m² at 30). A re-bake with the
+# groups given the other way round keeps every system (the keys follow the content, the named ones their
+# names too).
+NAMED="$ROOT/tests/data/scenes/named-objects.obj"
+mkdir -p "$T/named"
+expect 0 "named systems (--system-group houseA=house_a --system-group flat='gro*')" "$BIN/glow-bake" "$NAMED" \
+  --system-area 30 --system-group houseA=house_a --system-group 'flat=gro*' "${BUDGET[@]}" -o "$T/named/w.json"
+python3 - "$T/named/w.json" <<'PY' && pass "  manifest: houseA (96 m², 192 pieces) and flat (192 m²) named and whole, house_b in 4 systems of 24 m²" || fail "  named manifest wrong"
+import json, sys, re
+s = json.load(open(sys.argv[1]))["systems"]
+named = {x["name"]: x for x in s if "name" in x}
+assert set(named) == {"houseA", "flat"}, named.keys()
+assert abs(named["houseA"]["area"] - 96) < 1e-3 and abs(named["flat"]["area"] - 192) < 1e-3, named
+assert re.fullmatch(r"w\.houseA-[0-9a-f]{16}\.glow", named["houseA"]["file"]), named["houseA"]
+rest = [x for x in s if "name" not in x]
+assert len(rest) == 4 and all(abs(x["area"] - 24) < 1e-3 for x in rest), [x["area"] for x in rest]
+assert abs(sum(x["area"] for x in s) - 384) < 1e-3
+PY
+cp "$T/named/w.json" "$T/named/w1.json"
+expect 0 "the same groups the other way round: an incremental re-bake" "$BIN/glow-bake" "$NAMED" \
+  --system-area 30 --system-group 'flat=gro*' --system-group houseA=house_a "${BUDGET[@]}" -o "$T/named/w.json"
+grep -q "0 of them baked and 6 unchanged" "$T/out" \
+  && pass "  all 6 systems kept" || { fail "  systems re-baked:"; grep systems "$T/out"; }
+expect 0 "a group that matches nothing: warned" "$BIN/glow-bake" "$NAMED" --system-area 500 --system-group none=nothing_* \
+  "${BUDGET[@]}" -o "$T/named/n.json"; err_has "no object of the scene matches"
+expect 1 "--system-group on a built-in scene" "$BIN/glow-bake" builtin:pillar-hall --system-area 100 --system-group a=b \
+  "${BUDGET[@]}" -o "$T/named/b.json"; err_has "names no objects"
+expect 2 "--system-group without --system-area" "$BIN/glow-bake" "$NAMED" --system-group a=b -o "$T/bad.glow"; err_has "--system-area"
+expect 2 "--system-group with a bad name" "$BIN/glow-bake" "$NAMED" --system-area 30 --system-group 'a b=c' -o "$T/bad.json"
+err_has "only A-Z"
+expect 2 "--system-group without a pattern" "$BIN/glow-bake" "$NAMED" --system-area 30 --system-group a= -o "$T/bad.json"
+err_has "NAME=PATTERN"
+expect 2 "--system-group named twice" "$BIN/glow-bake" "$NAMED" --system-area 30 --system-group a=b --system-group a=c \
+  -o "$T/bad.json"; err_has "named twice"
+
 expect 2 "--system-area 0" "$BIN/glow-bake" builtin:pillar-hall --system-area 0 -o "$T/bad.json"; err_has "--system-area"
 expect 2 "--system-area -5" "$BIN/glow-bake" builtin:pillar-hall --system-area -5 -o "$T/bad.json"; err_has "--system-area"
 expect 2 "--system-area abc" "$BIN/glow-bake" builtin:pillar-hall --system-area abc -o "$T/bad.json"; err_has "--system-area"

@@ -87,6 +87,11 @@ typedef struct glow__scene {
     uint32_t textures_missing;
     bool normals_generated;
     char source[512];             /* file path or builtin:NAME */
+    /* the file's named objects (a node's name, else its mesh's: OBJ o / g, glTF nodes), for systems
+     * named by the user (glow_pc_settings.system_groups); 0 / NULL for builtin scenes */
+    uint32_t object_count;
+    char (*object_name)[64];      /* [object_count], NUL-terminated (longer names are cut) */
+    uint32_t *source_object;      /* [source_tri_count] the object of each triangle of the file */
 } glow__scene;
 
 /* Loads `path` (any assimp format) or `builtin:NAME`. On failure logs "PATH: problem". */

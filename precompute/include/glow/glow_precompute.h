@@ -159,6 +159,13 @@ typedef struct glow_pc_settings {
                                    the same grid budget; grid_spacing, when given, is then the fine
                                    spacing (docs/linker.md "Caches"). 0 = preset, 1 = uniform, 2 or 4
                                    (--grid-refine). \since 0.2 */
+    /* with system_area: systems named by the user, each "NAME=PATTERN[,PATTERN...]": the triangles of
+       the file's objects (a node's name, else its mesh's: OBJ o / g, glTF nodes) whose name matches a
+       pattern (fnmatch(3): *, ?, [...]) form system NAME, whole, whatever its area; the first group
+       that matches takes an object. The rest is split by system_area as without. NAME: 1..48 of
+       [A-Za-z0-9_-]. At most 256 groups (--system-group, repeated). \since 0.2 */
+    const char *const *system_groups;
+    uint32_t system_group_count;
 } glow_pc_settings;
 
 typedef struct glow_pc_stats {
