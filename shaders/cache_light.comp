@@ -57,8 +57,16 @@ float glow_subset_scale(uint v, uint q, float yn) {
 
 shared float glow_red[GLOW_REDUCE_CHUNK][GLOW_CACHE_GROUP + 1];
 
+/* a budget's caches (glow_budget_choose): workgroup i gathers cache glow_cache_list[i]; 0 = every cache */
+uniform uint glow_cache_list_count;
+layout(std430, binding = GLOW_BINDING_CACHE_LIST) readonly buffer GlowCacheList { uint glow_cache_list[]; };
+
 void main() {
     uint c = glow_group_index();
+    if (glow_cache_list_count != 0u) {
+        if (c >= glow_cache_list_count) return; /* whole workgroup: uniform */
+        c = glow_cache_list[c];
+    }
     if (c >= glow_p.cache_count) return; /* whole workgroup: uniform */
     uint lid = gl_LocalInvocationID.x;
     float acc[GLOW_NCO];

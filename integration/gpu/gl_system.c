@@ -33,7 +33,7 @@ enum { K_DIRECT, K_FLUX, K_PULL, K_PULL_TAIL, K_CACHE, K_OUTPUT, K_DETAIL, K_PRO
 static const char *const kernel_names[K_COUNT] = {"surfel_direct", "surfel_flux", "pull", "pull_tail", "cache_light",
                                                   "outputs", "detail", "proxy_fill"};
 enum { B_GEOM, B_MAT, B_DIRECT, B_FBW, B_CACHE, B_NODES, B_FLUX, B_LINKS, B_PAIRS, B_STATUS, B_PARAMS, B_LEVELS, B_SUBSETS,
-       B_DET_TEXELS, B_DET_LINKS, B_PROXY_MAP, B_COUNT };
+       B_DET_TEXELS, B_DET_LINKS, B_PROXY_MAP, B_LIST, B_COUNT };
 #define MAX_DEPS 64u /* GLOW_BAKE_MAX_DEPENDENCIES */
 enum { T_BEGIN, T_DIRECT, T_FLUX, T_PULL, T_CACHE, T_OUTPUT, T_COUNT };
 
@@ -46,7 +46,16 @@ struct glow_gl_system {
     glow_solver_tables t;
     uint32_t S, N, C, levels, planes;
     GLuint prog[K_COUNT];
-    GLint level_loc, tail_loc, proxy_loc;
+    GLint level_loc, tail_loc, proxy_loc, list_loc;
+    /* a budget (glow_update_desc max_caches, focus): groups of GLOW_BUDGET_GROUP caches chosen by
+     * glow_budget_choose, as the CPU solver chooses; LIST holds their caches for the cache kernel */
+    uint32_t groups;
+    float *grp_centre;   /* [groups][3] */
+    uint32_t *grp_age;   /* [groups] */
+    uint64_t *grp_pack;  /* [groups] scratch */
+    uint32_t *grp_sel;   /* [groups] */
+    uint32_t *list;      /* [C] the chosen caches */
+    uint32_t list_count, caches_gathered;
     /* light across systems: proxy node N + p reads a neighbour's flux (proxy_fill.comp); PROXY_MAP holds
      * (neighbour node, N + p) sorted by dependency, dependency d's entries at [dep_first[d], dep_first[d+1]) */
     uint32_t P, deps, dep_first[MAX_DEPS + 1];
@@ -213,6 +222,11 @@ static void free_system(glow_gl_system *s) {
     if (gl->DeleteQueries && s->queries[0]) gl->DeleteQueries(T_COUNT, s->queries);
     free(s->mat_staging);
     free(s->direct_staging);
+    free(s->grp_centre);
+    free(s->grp_age);
+    free(s->grp_pack);
+    free(s->grp_sel);
+    free(s->list);
     free(s);
 }
 
@@ -336,6 +350,7 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
     s->level_loc = gl->GetUniformLocation(s->prog[K_PULL], "glow_level");
     s->tail_loc = gl->GetUniformLocation(s->prog[K_PULL_TAIL], "glow_tail");
     if (s->prog[K_PROXY]) s->proxy_loc = gl->GetUniformLocation(s->prog[K_PROXY], "glow_proxy_range");
+    s->list_loc = gl->GetUniformLocation(s->prog[K_CACHE], "glow_cache_list_count");
     /* the narrow top: the lowest level from which every level up has at most GLOW_PULL_TAIL_MAX nodes */
     s->tail_level = s->levels;
     while (s->tail_level > 1 && t->level_starts[s->tail_level] - t->level_starts[s->tail_level - 1] <= GLOW_PULL_TAIL_MAX)
@@ -402,6 +417,28 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
         }
         s->buf[B_PROXY_MAP] = make_buffer(s, (size_t)s->P * 8u, map, 0);
         free(map);
+    }
+    { /* the budget's groups: their centres, every one stale */
+        s->groups = (s->C + GLOW_BUDGET_GROUP - 1u) / GLOW_BUDGET_GROUP;
+        s->grp_centre = malloc(((size_t)s->groups + 1u) * 3u * sizeof *s->grp_centre);
+        s->grp_age = calloc((size_t)s->groups + 1u, sizeof *s->grp_age);
+        s->grp_pack = malloc(((size_t)s->groups + 1u) * sizeof *s->grp_pack);
+        s->grp_sel = malloc(((size_t)s->groups + 1u) * sizeof *s->grp_sel);
+        s->list = malloc(((size_t)s->C + 1u) * sizeof *s->list);
+        if (!s->grp_centre || !s->grp_age || !s->grp_pack || !s->grp_sel || !s->list) {
+            free(geom), free(nodes), free(pairs);
+            LOG_ERR(s, GLOW_ERROR_OUT_OF_MEMORY, "out of host memory (%u cache groups)", s->groups);
+            free_system(s);
+            return GLOW_ERROR_OUT_OF_MEMORY;
+        }
+        for (uint32_t q = 0; q < s->groups; ++q) { /* as the CPU solver: the mean of its caches' positions */
+            const uint32_t first = q * GLOW_BUDGET_GROUP, end = first + GLOW_BUDGET_GROUP < s->C ? first + GLOW_BUDGET_GROUP : s->C;
+            double c[3] = {0, 0, 0};
+            for (uint32_t i = first; i < end; ++i)
+                for (int k = 0; k < 3; ++k) c[k] += t->cache_positions[(size_t)i * t->cache_stride + (size_t)k];
+            for (int k = 0; k < 3; ++k) s->grp_centre[3 * (size_t)q + (size_t)k] = (float)(c[k] / (double)(end - first));
+        }
+        s->buf[B_LIST] = make_buffer(s, ((size_t)s->C + 1u) * 4u, NULL, dyn);
     }
     s->buf[B_LINKS] = make_buffer(s, links_bytes, t->link_blocks, 0);
     s->buf[B_PAIRS] = make_buffer(s, pairs_n * 8u, pairs, 0);
@@ -627,12 +664,25 @@ glow_result glow_gl_system_update(glow_gl_system *s, const glow_update_desc *des
         LOG_ERR(s, GLOW_ERROR_INVALID_ARGUMENT, "glow_gl_system_update: unknown flags 0x%x", flags);
         return GLOW_ERROR_INVALID_ARGUMENT;
     }
-    if (desc && (desc->max_caches || desc->budget_ms != 0.0f || desc->converged_epsilon != 0.0f || desc->focus_count)) {
-        /* issue 17, item 4: the GL backend gets the budgets later; refused rather than ignored */
+    if (desc && (desc->budget_ms != 0.0f || desc->converged_epsilon != 0.0f)) {
+        /* issue 17, item 4: max_caches and focus run on the GPU; these two need the GPU's timings and
+         * per-group deltas read back, not built yet: refused rather than ignored */
         LOG_ERR(s, GLOW_ERROR_UNSUPPORTED,
-                "glow_gl_system_update: budgets (max_caches, budget_ms, converged_epsilon, focus) are CPU-only so far");
+                "glow_gl_system_update: budget_ms and converged_epsilon are CPU-only so far (max_caches and focus run)");
         return GLOW_ERROR_UNSUPPORTED;
     }
+    if (desc && (!(desc->focus_radius >= 0.0f) || !isfinite(desc->focus_radius) || (desc->focus_count && !desc->focus))) {
+        LOG_ERR(s, GLOW_ERROR_INVALID_ARGUMENT,
+                "glow_gl_system_update: focus_radius %g must be finite and >= 0, and focus_count %u needs focus points",
+                (double)desc->focus_radius, desc->focus_count);
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    for (uint32_t i = 0; desc && i < 3 * desc->focus_count; ++i)
+        if (!isfinite(desc->focus[i])) {
+            LOG_ERR(s, GLOW_ERROR_INVALID_ARGUMENT, "glow_gl_system_update: focus point %u is not finite", i / 3);
+            return GLOW_ERROR_INVALID_ARGUMENT;
+        }
+    const bool budgeted = desc && desc->max_caches;
     glow_glfns *gl = &s->gl;
     glow_system_params prm;
     glow_system_get_params(s->sys, &prm);
@@ -744,8 +794,22 @@ glow_result glow_gl_system_update(glow_gl_system *s, const glow_update_desc *des
             }
             if (any) gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
         }
-        /* 5. cache lighting: one workgroup per cache */
+        /* 5. cache lighting: one workgroup per cache, all or the budget's (chosen once per update, as the
+         * CPU solver chooses: glow_budget_choose) */
+        if (budgeted && it == 0) {
+            const float r = desc->focus_radius > 0.0f ? desc->focus_radius : 0.1f * t->scene_diag; /* as on the CPU */
+            const uint32_t kmax = (desc->max_caches + GLOW_BUDGET_GROUP - 1u) / GLOW_BUDGET_GROUP;
+            const uint32_t k = glow_budget_choose(s->grp_centre, s->grp_age, NULL, s->groups, desc->focus, desc->focus_count,
+                                                  r, kmax, s->grp_pack, s->grp_sel);
+            s->list_count = 0;
+            for (uint32_t i = 0; i < k; ++i)
+                for (uint32_t c = s->grp_sel[i] * GLOW_BUDGET_GROUP; c < s->C && c < (s->grp_sel[i] + 1u) * GLOW_BUDGET_GROUP; ++c)
+                    s->list[s->list_count++] = c;
+            if (s->list_count) gl->NamedBufferSubData(s->buf[B_LIST], 0, (GLsizeiptr)((size_t)s->list_count * 4u), s->list);
+        }
         gl->UseProgram(s->prog[K_CACHE]);
+        gl->Uniform1ui(s->list_loc, budgeted ? s->list_count : 0u);
+        if (budgeted) bind(s, GLOW_BINDING_CACHE_LIST, B_LIST);
         bind(s, GLOW_BINDING_LINKS, B_LINKS);
         bind(s, GLOW_BINDING_FLUX, B_FLUX);
         bind(s, GLOW_BINDING_CACHE_SH, B_CACHE);
@@ -753,9 +817,11 @@ glow_result glow_gl_system_update(glow_gl_system *s, const glow_update_desc *des
             bind(s, GLOW_BINDING_LINK_SUBSETS, B_SUBSETS);
             bind(s, GLOW_BINDING_NODES, B_NODES);
         }
-        dispatch(s, s->C);
+        if (!budgeted) dispatch(s, s->C);
+        else if (s->list_count) dispatch(s, s->list_count);
         gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     }
+    s->caches_gathered = budgeted ? s->list_count : s->C;
     stamp(s, T_CACHE);
     /* 5. outputs (seam/gutter texels are pairs too) */
     if (t->grid_used + t->lightmap_used) {
@@ -815,6 +881,7 @@ glow_result glow_gl_system_get_stats(glow_gl_system *s, glow_gl_stats *out) {
                      st.nonfinite, st.first_bad);
     }
     out->pull_dispatches = s->pull_dispatches;
+    out->caches_gathered = s->caches_gathered;
     out->updates = s->updates;
     out->gpu_memory_bytes = s->gpu_bytes;
     snprintf(out->renderer, sizeof out->renderer, "%s", s->renderer);

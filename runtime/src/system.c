@@ -119,6 +119,7 @@ struct glow_system {
     float *grp_centre;     /* [groups][3] mean cache position */
     uint64_t *grp_pack;    /* scratch: candidates as (~priority bits) << 32 | group: ascending = best first */
     uint32_t *grp_sel;     /* scratch: the selection, in group order */
+    uint8_t *grp_skip;     /* scratch: converged groups this update */
     uint32_t sel_count;
     float *rad_prev;       /* [N] node luma at the last update, for the drift */
     float *rad_out;        /* [N][4] the node radiance the outputs were last written with (budgeted updates
@@ -464,7 +465,7 @@ static void free_system(glow_system *s) {
                     s->cache_sh, s->grid_sh, s->lm_sh, s->grid_map, s->lm_map, s->mat_emis_scale,
                     s->mat_albedo_scale, s->batch_status, s->batch_negative, s->out_index, s->out_cache,
                     s->xblocks, s->slots, s->sub_ratio, s->sub_nodes, s->grp_age, s->grp_delta, s->grp_drift_at, s->grp_centre,
-                    s->grp_pack, s->grp_sel, s->rad_prev, s->uv0, s->det_out, s->rad_out, s->dep_max_node};
+                    s->grp_pack, s->grp_sel, s->grp_skip, s->rad_prev, s->uv0, s->det_out, s->rad_out, s->dep_max_node};
     for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; ++i) glow__ctx_free(ctx, bufs[i]);
     glow__ctx_free(ctx, s);
 }
@@ -649,6 +650,7 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     s->grp_centre = alloc_array(s, G, 3 * sizeof(float), &ok);
     s->grp_pack = alloc_array(s, G, sizeof(uint64_t), &ok);
     s->grp_sel = alloc_array(s, G, sizeof(uint32_t), &ok);
+    s->grp_skip = alloc_array(s, G, 1, &ok);
     s->rad_prev = alloc_array(s, N + s->P ? N + s->P : 1u, sizeof(float), &ok);
     if (s->deps) s->dep_max_node = alloc_array(s, s->deps, sizeof(uint32_t), &ok);
     s->rad_out = alloc_array(s, N ? N : 1u, 4 * sizeof(float), &ok);
@@ -1108,6 +1110,35 @@ static int cmp_u32(const void *a, const void *b) {
     return (x > y) - (x < y);
 }
 
+uint32_t glow_budget_choose(const float *centre, uint32_t *age, const uint8_t *skip, uint32_t groups, const float *focus,
+                            uint32_t focus_count, float focus_radius, uint32_t max_groups, uint64_t *scratch,
+                            uint32_t *out_sel) {
+    if (!centre || !age || !scratch || !out_sel || (focus_count && !focus)) return 0;
+    const float inv_r2 = focus_radius > 0.0f ? 1.0f / (focus_radius * focus_radius) : 0.0f;
+    uint32_t n = 0;
+    for (uint32_t g = 0; g < groups; ++g) {
+        if (skip && skip[g]) continue;
+        float f = 0.0f;
+        for (uint32_t p = 0; p < focus_count; ++p) {
+            const float *c = centre + 3 * (size_t)g, *q = focus + 3 * (size_t)p;
+            const float dx = c[0] - q[0], dy = c[1] - q[1], dz = c[2] - q[2];
+            const float w = 1.0f / (1.0f + (dx * dx + dy * dy + dz * dz) * inv_r2);
+            if (w > f) f = w;
+        }
+        const float key = ((float)age[g] + 1.0f) * (1.0f + 4.0f * f); /* >= 1: its bits order as it does */
+        uint32_t bits;
+        memcpy(&bits, &key, sizeof bits);
+        scratch[n++] = ((uint64_t)(0xFFFFFFFFu - bits) << 32) | g; /* highest priority, then lowest index, first */
+    }
+    const uint32_t k = max_groups < n ? max_groups : n;
+    if (k < n) qsort(scratch, n, sizeof *scratch, cmp_u64);
+    for (uint32_t i = 0; i < k; ++i) out_sel[i] = (uint32_t)(scratch[i] & 0xFFFFFFFFu);
+    qsort(out_sel, k, sizeof *out_sel, cmp_u32); /* memory order for the gather */
+    for (uint32_t g = 0; g < groups; ++g) age[g]++;
+    for (uint32_t i = 0; i < k; ++i) age[out_sel[i]] = 0;
+    return k;
+}
+
 /* Chooses the groups this update gathers (s->grp_sel[0..sel_count), in index order). No allocation. */
 static void schedule(glow_system *s, const glow_update_desc *d, glow_update_stats *st) {
     const uint32_t G = s->groups;
@@ -1122,24 +1153,10 @@ static void schedule(glow_system *s, const glow_update_desc *d, glow_update_stat
     s->drift += dv > 0.0 ? dn / dv : (dn > 0.0 ? 1.0 : 0.0);
     const double eps = d->converged_epsilon;
     const float r = d->focus_radius > 0.0f ? d->focus_radius : 0.1f * s->scene_diag;
-    const float inv_r2 = r > 0.0f ? 1.0f / (r * r) : 0.0f;
-    uint32_t n = 0, converged = 0;
+    uint32_t n = 0;
     for (uint32_t g = 0; g < G; ++g) {
-        if (eps > 0.0 && s->grp_delta[g] < eps && s->drift - s->grp_drift_at[g] < eps) {
-            converged++;
-            continue;
-        }
-        float f = 0.0f;
-        for (uint32_t p = 0; p < d->focus_count; ++p) {
-            const float *c = s->grp_centre + 3 * (size_t)g, *q = d->focus + 3 * (size_t)p;
-            const float dx = c[0] - q[0], dy = c[1] - q[1], dz = c[2] - q[2];
-            const float w = 1.0f / (1.0f + (dx * dx + dy * dy + dz * dz) * inv_r2);
-            if (w > f) f = w;
-        }
-        const float key = ((float)s->grp_age[g] + 1.0f) * (1.0f + 4.0f * f); /* >= 1: its bits order as it does */
-        uint32_t bits;
-        memcpy(&bits, &key, sizeof bits);
-        s->grp_pack[n++] = ((uint64_t)(0xFFFFFFFFu - bits) << 32) | g; /* highest priority, then lowest index, first */
+        s->grp_skip[g] = eps > 0.0 && s->grp_delta[g] < eps && s->drift - s->grp_drift_at[g] < eps; /* converged */
+        n += !s->grp_skip[g];
     }
     uint32_t k = n;
     if (d->max_caches) {
@@ -1153,15 +1170,10 @@ static void schedule(glow_system *s, const glow_update_desc *d, glow_update_stat
         if (kt < 1.0) kt = 1.0; /* always some progress */
         if (kt < (double)k) k = (uint32_t)kt;
     }
-    if (k < n) qsort(s->grp_pack, n, sizeof *s->grp_pack, cmp_u64);
-    for (uint32_t i = 0; i < k; ++i) s->grp_sel[i] = (uint32_t)(s->grp_pack[i] & 0xFFFFFFFFu);
-    qsort(s->grp_sel, k, sizeof *s->grp_sel, cmp_u32); /* memory order for the gather */
+    k = glow_budget_choose(s->grp_centre, s->grp_age, s->grp_skip, G, d->focus, d->focus_count, r, k, s->grp_pack,
+                           s->grp_sel);
     s->sel_count = k;
-    for (uint32_t g = 0; g < G; ++g) s->grp_age[g]++;
-    for (uint32_t i = 0; i < k; ++i) {
-        s->grp_age[s->grp_sel[i]] = 0;
-        s->grp_drift_at[s->grp_sel[i]] = s->drift;
-    }
+    for (uint32_t i = 0; i < k; ++i) s->grp_drift_at[s->grp_sel[i]] = s->drift;
     uint32_t gathered = 0;
     for (uint32_t i = 0; i < k; ++i) {
         const uint32_t first = s->grp_sel[i] * GLOW_BUDGET_GROUP;
@@ -1173,7 +1185,6 @@ static void schedule(glow_system *s, const glow_update_desc *d, glow_update_stat
             const uint32_t first = g * GLOW_BUDGET_GROUP;
             conv_caches += s->C - first < GLOW_BUDGET_GROUP ? s->C - first : GLOW_BUDGET_GROUP;
         }
-    (void)converged;
     st->caches_gathered = gathered;
     st->caches_skipped_converged = conv_caches;
     st->caches_skipped_budget = s->C - gathered - conv_caches;
@@ -1333,6 +1344,7 @@ glow_result glow_system_get_solver_tables(const glow_system *s, glow_solver_tabl
                               .proxy_count = s->P,
                               .dependency_count = s->deps,
                               .proxy_pairs = (const uint32_t *)(const void *)s->proxies, /* {dependency, node}: 8 bytes */
+                              .scene_diag = s->scene_diag,
                               .level_count = s->levels,
                               .cache_count = s->C,
                               .material_count = s->M,

@@ -50,6 +50,8 @@ typedef struct glow_vec4 { float x, y, z, w; } glow_vec4;
 #define GLOW_BINDING_DETAIL_LINKS 1  /* detail only: uvec2[links] (leaf surfel, floatBits(weight)) */
 #define GLOW_BINDING_PROXY_SRC 5    /* proxy_fill only: vec4[]: a neighbouring system's FLUX */
 #define GLOW_BINDING_PROXY_MAP 7    /* proxy_fill only: uvec2[]: (neighbour node, own proxy node N + p) */
+#define GLOW_BINDING_CACHE_LIST 2   /* cache_light only: uint[]: the caches a budget gathers (uniform
+                                       glow_cache_list_count > 0), else every cache */
 #define GLOW_BINDING_HOST_FIRST 8   /* first SSBO/UBO binding the host hook may use */
 /* UBO binding of glow_gl_params */
 #define GLOW_BINDING_PARAMS 0

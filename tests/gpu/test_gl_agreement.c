@@ -256,6 +256,45 @@ static void agree_scene(const char *scene, uint32_t luma, uint32_t chroma) {
     free_fixture(&f);
 }
 
+/* A budget on the GPU (max_caches, focus): the GL backend chooses the same cache groups as the CPU
+ * solver (glow_budget_choose) and gathers only those, so budgeted updates agree as unbudgeted ones do;
+ * the first one from zero lights only the chosen groups (at most max_caches rounded up to groups). */
+static void test_budget(void **state) {
+    (void)state;
+    fixture f;
+    if (make_fixture(&f, "builtin:cornell", NULL, 3, 3, 0) != 0) fail_msg("fixture");
+    const glow_cache_outputs *o = glow_system_outputs(f.cpu);
+    const uint32_t C = o->cache_count, budget = C / 4;
+    const float focus[3] = {-0.5f, 0.2f, 0.3f};
+    const glow_update_desc d = {.max_caches = budget, .focus = focus, .focus_count = 1};
+    printf("builtin:cornell, max_caches %u of %u, a focus point:\n", budget, C);
+    push_light(&f, 1.0f);
+    assert_int_equal(glow_system_update(f.cpu, &d), GLOW_OK);
+    assert_int_equal(glow_gl_system_update(f.gpu, &d), GLOW_OK);
+    const size_t n = (size_t)C * o->coeff_count;
+    float *g = malloc(n * sizeof *g);
+    assert_int_equal(glow_gl_system_read_cache_sh(f.gpu, g, n), GLOW_OK);
+    uint32_t lit = 0;
+    for (uint32_t c = 0; c < C; ++c) {
+        int any = 0;
+        for (uint32_t k = 0; k < o->coeff_count; ++k) any |= g[(size_t)c * o->coeff_count + k] != 0.0f;
+        lit += any;
+    }
+    free(g);
+    glow_gl_stats gs;
+    assert_int_equal(glow_gl_system_get_stats(f.gpu, &gs), GLOW_OK);
+    assert_int_equal(gs.caches_gathered, lit);
+    printf("  first budgeted update: %u caches lit on the GPU (budget %u)\n", lit, budget);
+    assert_true(lit > 0 && lit <= (budget + GLOW_BUDGET_GROUP - 1u) / GLOW_BUDGET_GROUP * GLOW_BUDGET_GROUP);
+    assert_true(compare(&f, "after 1 budgeted update") <= 1.0);
+    for (int u = 0; u < 7; ++u) {
+        assert_int_equal(glow_system_update(f.cpu, &d), GLOW_OK);
+        assert_int_equal(glow_gl_system_update(f.gpu, &d), GLOW_OK);
+    }
+    assert_true(compare(&f, "after 8 budgeted updates") <= 1.0);
+    free_fixture(&f);
+}
+
 static void test_cornell(void **state) {
     (void)state;
     agree_scene("builtin:cornell", 3, 3);
@@ -316,8 +355,14 @@ static void test_bad_hooks(void **state) {
     gd.hook_glsl = nan_hook;
     glow_gl_system *g = NULL;
     assert_int_equal(glow_gl_system_create(&gd, &g), GLOW_OK);
-    /* budgets are CPU-only so far: refused, not ignored */
-    assert_int_equal(glow_gl_system_update(g, &(glow_update_desc){.max_caches = 16}), GLOW_ERROR_UNSUPPORTED);
+    /* budget_ms and converged_epsilon are CPU-only so far: refused, not ignored (max_caches and focus run:
+     * test_budget) */
+    assert_int_equal(glow_gl_system_update(g, &(glow_update_desc){.budget_ms = 2.0f}), GLOW_ERROR_UNSUPPORTED);
+    assert_int_equal(glow_gl_system_update(g, &(glow_update_desc){.converged_epsilon = 0.01f}), GLOW_ERROR_UNSUPPORTED);
+    assert_int_equal(glow_gl_system_update(g, &(glow_update_desc){.max_caches = 16, .focus_radius = NAN}),
+                     GLOW_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(glow_gl_system_update(g, &(glow_update_desc){.max_caches = 16, .focus_count = 1}),
+                     GLOW_ERROR_INVALID_ARGUMENT);
     assert_int_equal(glow_gl_system_update(g, NULL), GLOW_OK);
     glow_gl_stats st;
     assert_int_equal(glow_gl_system_get_stats(g, &st), GLOW_OK);
@@ -502,6 +547,7 @@ int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_cornell), cmocka_unit_test(test_two_rooms), cmocka_unit_test(test_bands),
         cmocka_unit_test(test_hook), cmocka_unit_test(test_bad_hooks), cmocka_unit_test(test_world_systems),
+        cmocka_unit_test(test_budget),
     };
     int rc = cmocka_run_group_tests(tests, NULL, NULL);
     glow_glctx_destroy(g_gl);

@@ -77,10 +77,23 @@ typedef struct glow_solver_tables {
      * proxy_pairs[2p] (< dependency_count; glow_system_set_neighbour) */
     uint32_t dependency_count;
     const uint32_t *proxy_pairs;
+    /* \since 0.2: the bake's bounds diagonal (m): a budget's default focus radius is 0.1 of it */
+    float scene_diag;
 } glow_solver_tables;
 /** Fills `out_tables`. \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT for NULL. \threadsafety Between
  * updates; the views change only through the setters and updates. \since 0.1 */
 GLOW_API glow_result glow_system_get_solver_tables(const glow_system *system, glow_solver_tables *out_tables);
+
+/** The budget's choice of cache groups (glow_update_desc: max_caches, focus), for backends that gather
+ * on their own; the CPU solver makes its choice with it. Groups are GLOW_BUDGET_GROUP caches in cache
+ * order, `centre` [groups][3] their mean positions, `age` [groups] the updates since each was last
+ * gathered (updated: +1, and 0 for the chosen), `skip` [groups] (or NULL) groups not to gather (the CPU
+ * solver's converged ones). Priority (age + 1)(1 + 4 f), f = max over the focus points of
+ * 1 / (1 + d² / focus_radius²); ties to the lower index. The best min(max_groups, candidates) go to
+ * out_sel in index order; scratch holds `groups` uint64s. No allocation. \returns how many. \since 0.2 */
+GLOW_API uint32_t glow_budget_choose(const float *centre, uint32_t *age, const uint8_t *skip, uint32_t groups,
+                                     const float *focus, uint32_t focus_count, float focus_radius, uint32_t max_groups,
+                                     uint64_t *scratch, uint32_t *out_sel);
 
 #ifdef __cplusplus
 }

@@ -123,6 +123,7 @@ typedef struct glow_gl_stats {
     uint64_t updates;
     uint64_t gpu_memory_bytes; /* buffers and textures Glow allocated */
     char renderer[96];         /* GL_RENDERER */
+    uint32_t caches_gathered;  /* caches the last update gathered (all, or a budget's) \since 0.2 */
 } glow_gl_stats;
 
 /** Compiles the kernels for the system's band counts (and the hook), uploads the solver tables,
@@ -141,7 +142,10 @@ GLOW_API glow_result glow_gl_system_set_neighbour(glow_gl_system *system, uint32
                                                   glow_gl_system *neighbour);
 /** One frame on the GPU (flags: GLOW_UPDATE_FLAG_RESET_BOUNCE, GLOW_UPDATE_FLAG_KEEP_LIGHTING), x the CPU
  * system's bounce_iterations. Allocates nothing; does not wait for the GPU (unless CHECK_HOOK).
- * The desc's budgets (max_caches, budget_ms, focus, converged_epsilon) are CPU-only so far:
+ * A budget of caches (desc->max_caches, with desc->focus / focus_count / focus_radius: \since 0.2)
+ * gathers the cache groups glow_system_update would choose (the same priority, the same function),
+ * the others keep their last values; GLOW_ERROR_INVALID_ARGUMENT for a bad focus. budget_ms and
+ * converged_epsilon are CPU-only so far (they need the GPU's timings and per-group changes read back):
  * GLOW_ERROR_UNSUPPORTED. */
 GLOW_API glow_result glow_gl_system_update(glow_gl_system *system, const glow_update_desc *desc);
 /** Waits for the last update's queries and fills `out`. */
