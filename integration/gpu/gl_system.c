@@ -56,6 +56,9 @@ struct glow_gl_system {
     uint32_t *grp_sel;   /* [groups] */
     uint32_t *list;      /* [C] the chosen caches */
     uint32_t list_count, caches_gathered;
+    uint32_t sel_groups;         /* groups the last budgeted update gathered */
+    int timed_budget;            /* the last update was budgeted: its timings may teach the budget */
+    double ema_other_ms, ema_cache_ms_per_group; /* budget_ms: GPU times of earlier updates (0 = none yet) */
     /* light across systems: proxy node N + p reads a neighbour's flux (proxy_fill.comp); PROXY_MAP holds
      * (neighbour node, N + p) sorted by dependency, dependency d's entries at [dep_first[d], dep_first[d+1]) */
     uint32_t P, deps, dep_first[MAX_DEPS + 1];
@@ -655,6 +658,35 @@ static void stamp(glow_gl_system *s, int q) {
     }
 }
 
+/* budget_ms: learns from the last budgeted update's GPU times once they are there (never waits: a
+ * timestamp not yet available is skipped), as the CPU solver learns from its own: the stages other than
+ * cache lighting, and cache lighting per group from selections large enough to amortise the dispatch.
+ * The GPU's time, not the CPU's: a host budgets the GPU frame. */
+static void learn_budget(glow_gl_system *s) {
+    if (!s->timed_budget || !s->sel_groups) return;
+    double t_begin, t_pull, t_cache, t_out;
+    if (s->flags & GLOW_GL_FLAG_FINISH_TIMERS) {
+        t_begin = s->cpu_ts[T_BEGIN], t_pull = s->cpu_ts[T_PULL], t_cache = s->cpu_ts[T_CACHE], t_out = s->cpu_ts[T_OUTPUT];
+    } else if (s->queries[0] && s->queries_pending) {
+        GLint ready = 0;
+        s->gl.GetQueryObjectiv(s->queries[T_OUTPUT], GL_QUERY_RESULT_AVAILABLE, &ready);
+        if (!ready) return;
+        GLuint64 ts[T_COUNT];
+        for (int q = 0; q < T_COUNT; ++q) s->gl.GetQueryObjectui64v(s->queries[q], GL_QUERY_RESULT, &ts[q]);
+        t_begin = 0.0, t_pull = (double)(ts[T_PULL] - ts[T_BEGIN]) * 1e-6, t_cache = (double)(ts[T_CACHE] - ts[T_BEGIN]) * 1e-6,
+        t_out = (double)(ts[T_OUTPUT] - ts[T_BEGIN]) * 1e-6;
+    } else {
+        return;
+    }
+    s->timed_budget = 0;
+    const double cache = t_cache - t_pull, other = (t_out - t_begin) - cache, per = cache / s->sel_groups;
+    if (s->updates > 1)
+        s->ema_other_ms = s->ema_other_ms > 0.0 ? 0.8 * s->ema_other_ms + 0.2 * fmin(other, 2.0 * s->ema_other_ms) : other;
+    const uint32_t enough = s->groups / 8u > 32u ? s->groups / 8u : (s->groups < 32u ? s->groups : 32u);
+    if (per > 0.0 && s->sel_groups >= enough)
+        s->ema_cache_ms_per_group = s->ema_cache_ms_per_group > 0.0 ? 0.8 * s->ema_cache_ms_per_group + 0.2 * per : per;
+}
+
 static void bind(glow_gl_system *s, int binding, int b) { s->gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, (GLuint)binding, s->buf[b]); }
 
 glow_result glow_gl_system_update(glow_gl_system *s, const glow_update_desc *desc) {
@@ -664,17 +696,19 @@ glow_result glow_gl_system_update(glow_gl_system *s, const glow_update_desc *des
         LOG_ERR(s, GLOW_ERROR_INVALID_ARGUMENT, "glow_gl_system_update: unknown flags 0x%x", flags);
         return GLOW_ERROR_INVALID_ARGUMENT;
     }
-    if (desc && (desc->budget_ms != 0.0f || desc->converged_epsilon != 0.0f)) {
-        /* issue 17, item 4: max_caches and focus run on the GPU; these two need the GPU's timings and
-         * per-group deltas read back, not built yet: refused rather than ignored */
+    if (desc && desc->converged_epsilon != 0.0f) {
+        /* issue 17, item 4: max_caches, budget_ms and focus run on the GPU; convergence needs each
+         * group's change read back, not built yet: refused rather than ignored */
         LOG_ERR(s, GLOW_ERROR_UNSUPPORTED,
-                "glow_gl_system_update: budget_ms and converged_epsilon are CPU-only so far (max_caches and focus run)");
+                "glow_gl_system_update: converged_epsilon is CPU-only so far (max_caches, budget_ms and focus run)");
         return GLOW_ERROR_UNSUPPORTED;
     }
-    if (desc && (!(desc->focus_radius >= 0.0f) || !isfinite(desc->focus_radius) || (desc->focus_count && !desc->focus))) {
+    if (desc && (!(desc->focus_radius >= 0.0f) || !isfinite(desc->focus_radius) || (desc->focus_count && !desc->focus) ||
+                 !(desc->budget_ms >= 0.0f) || !isfinite(desc->budget_ms))) {
         LOG_ERR(s, GLOW_ERROR_INVALID_ARGUMENT,
-                "glow_gl_system_update: focus_radius %g must be finite and >= 0, and focus_count %u needs focus points",
-                (double)desc->focus_radius, desc->focus_count);
+                "glow_gl_system_update: budget_ms %g and focus_radius %g must be finite and >= 0, and focus_count %u "
+                "needs focus points",
+                (double)desc->budget_ms, (double)desc->focus_radius, desc->focus_count);
         return GLOW_ERROR_INVALID_ARGUMENT;
     }
     for (uint32_t i = 0; desc && i < 3 * desc->focus_count; ++i)
@@ -682,7 +716,8 @@ glow_result glow_gl_system_update(glow_gl_system *s, const glow_update_desc *des
             LOG_ERR(s, GLOW_ERROR_INVALID_ARGUMENT, "glow_gl_system_update: focus point %u is not finite", i / 3);
             return GLOW_ERROR_INVALID_ARGUMENT;
         }
-    const bool budgeted = desc && desc->max_caches;
+    const bool budgeted = desc && (desc->max_caches || desc->budget_ms > 0.0f);
+    if (budgeted) learn_budget(s);
     glow_glfns *gl = &s->gl;
     glow_system_params prm;
     glow_system_get_params(s->sys, &prm);
@@ -798,9 +833,16 @@ glow_result glow_gl_system_update(glow_gl_system *s, const glow_update_desc *des
          * CPU solver chooses: glow_budget_choose) */
         if (budgeted && it == 0) {
             const float r = desc->focus_radius > 0.0f ? desc->focus_radius : 0.1f * t->scene_diag; /* as on the CPU */
-            const uint32_t kmax = (desc->max_caches + GLOW_BUDGET_GROUP - 1u) / GLOW_BUDGET_GROUP;
+            uint32_t kmax = desc->max_caches ? (desc->max_caches + GLOW_BUDGET_GROUP - 1u) / GLOW_BUDGET_GROUP : s->groups;
+            if (desc->budget_ms > 0.0f && s->ema_cache_ms_per_group > 0.0) { /* as the CPU solver */
+                const double left = (double)desc->budget_ms - s->ema_other_ms;
+                double kt = left > 0.0 ? floor(left / (s->ema_cache_ms_per_group * iters)) : 0.0;
+                if (kt < 1.0) kt = 1.0; /* always some progress */
+                if (kt < (double)kmax) kmax = (uint32_t)kt;
+            }
             const uint32_t k = glow_budget_choose(s->grp_centre, s->grp_age, NULL, s->groups, desc->focus, desc->focus_count,
                                                   r, kmax, s->grp_pack, s->grp_sel);
+            s->sel_groups = k;
             s->list_count = 0;
             for (uint32_t i = 0; i < k; ++i)
                 for (uint32_t c = s->grp_sel[i] * GLOW_BUDGET_GROUP; c < s->C && c < (s->grp_sel[i] + 1u) * GLOW_BUDGET_GROUP; ++c)
@@ -847,6 +889,7 @@ glow_result glow_gl_system_update(glow_gl_system *s, const glow_update_desc *des
     stamp(s, T_OUTPUT);
     gl->UseProgram(0);
     s->queries_pending = s->queries[0] != 0;
+    s->timed_budget = budgeted;
     s->updates++;
     s->out.update_index = s->updates;
     return GLOW_OK;

@@ -293,6 +293,28 @@ static void test_budget(void **state) {
     }
     assert_true(compare(&f, "after 8 budgeted updates") <= 1.0);
     free_fixture(&f);
+    /* budget_ms: GPU times (here with GLOW_GL_FLAG_FINISH_TIMERS, so that every update's are there at
+     * the next): nothing learned yet, the first update gathers every cache; then a budget far below one
+     * group's time gathers one group (always some progress), a budget far above it every cache */
+    if (make_fixture(&f, "builtin:cornell", NULL, 3, 3, GLOW_GL_FLAG_FINISH_TIMERS) != 0) fail_msg("fixture");
+    push_light(&f, 1.0f);
+    glow_gl_stats gs2;
+    const glow_update_desc tiny = {.budget_ms = 1e-6f}, huge = {.budget_ms = 1e6f};
+    uint32_t gathered[4];
+    for (int u = 0; u < 4; ++u) {
+        assert_int_equal(glow_gl_system_update(f.gpu, u < 3 ? &tiny : &huge), GLOW_OK);
+        assert_int_equal(glow_gl_system_get_stats(f.gpu, &gs2), GLOW_OK);
+        gathered[u] = gs2.caches_gathered;
+    }
+    printf("  budget_ms 1e-6: %u, %u, %u caches gathered; then 1e6: %u (of %u)\n", gathered[0], gathered[1], gathered[2],
+           gathered[3], C);
+    assert_int_equal(gathered[0], C);
+    assert_int_equal(gathered[1], GLOW_BUDGET_GROUP);
+    assert_int_equal(gathered[2], GLOW_BUDGET_GROUP);
+    assert_int_equal(gathered[3], C);
+    assert_int_equal(glow_gl_system_update(f.gpu, &(glow_update_desc){.budget_ms = -1.0f}), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(glow_gl_system_update(f.gpu, &(glow_update_desc){.budget_ms = INFINITY}), GLOW_ERROR_INVALID_ARGUMENT);
+    free_fixture(&f);
 }
 
 static void test_cornell(void **state) {
@@ -355,9 +377,8 @@ static void test_bad_hooks(void **state) {
     gd.hook_glsl = nan_hook;
     glow_gl_system *g = NULL;
     assert_int_equal(glow_gl_system_create(&gd, &g), GLOW_OK);
-    /* budget_ms and converged_epsilon are CPU-only so far: refused, not ignored (max_caches and focus run:
+    /* converged_epsilon is CPU-only so far: refused, not ignored (max_caches, budget_ms and focus run:
      * test_budget) */
-    assert_int_equal(glow_gl_system_update(g, &(glow_update_desc){.budget_ms = 2.0f}), GLOW_ERROR_UNSUPPORTED);
     assert_int_equal(glow_gl_system_update(g, &(glow_update_desc){.converged_epsilon = 0.01f}), GLOW_ERROR_UNSUPPORTED);
     assert_int_equal(glow_gl_system_update(g, &(glow_update_desc){.max_caches = 16, .focus_radius = NAN}),
                      GLOW_ERROR_INVALID_ARGUMENT);

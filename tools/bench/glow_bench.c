@@ -195,8 +195,8 @@ static int parse_args(int argc, char **argv, options *o) {
         return 0;
     }
     if (o->gl && (o->budget_ms > 0.0f || o->budget_caches || o->converge > 0.0f)) {
-        fprintf(stderr, "glow-bench: --backend gl measures unbudgeted updates only (the GL backend takes max_caches and "
-                        "focus, tests/gpu/test_gl_agreement; budget_ms and converged_epsilon are CPU-only)\n");
+        fprintf(stderr, "glow-bench: --backend gl measures unbudgeted updates only (the GL backend takes max_caches, "
+                        "budget_ms and focus, tests/gpu/test_gl_agreement; converged_epsilon is CPU-only)\n");
         return 0;
     }
 #ifndef GLOW_BENCH_HAVE_GL

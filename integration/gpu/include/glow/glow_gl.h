@@ -142,11 +142,13 @@ GLOW_API glow_result glow_gl_system_set_neighbour(glow_gl_system *system, uint32
                                                   glow_gl_system *neighbour);
 /** One frame on the GPU (flags: GLOW_UPDATE_FLAG_RESET_BOUNCE, GLOW_UPDATE_FLAG_KEEP_LIGHTING), x the CPU
  * system's bounce_iterations. Allocates nothing; does not wait for the GPU (unless CHECK_HOOK).
- * A budget of caches (desc->max_caches, with desc->focus / focus_count / focus_radius: \since 0.2)
- * gathers the cache groups glow_system_update would choose (the same priority, the same function),
- * the others keep their last values; GLOW_ERROR_INVALID_ARGUMENT for a bad focus. budget_ms and
- * converged_epsilon are CPU-only so far (they need the GPU's timings and per-group changes read back):
- * GLOW_ERROR_UNSUPPORTED. */
+ * Budgets (\since 0.2): desc->max_caches and desc->budget_ms, with desc->focus / focus_count /
+ * focus_radius, gather the cache groups glow_system_update would choose (the same priority, the same
+ * function, glow_budget_choose), the others keep their last values. budget_ms is GPU time, learnt from
+ * earlier budgeted updates' timer queries once they are available (never waited for; with
+ * GLOW_GL_FLAG_FINISH_TIMERS, the CPU clock around glFinish): until then every group is gathered.
+ * GLOW_ERROR_INVALID_ARGUMENT for a bad focus or budget_ms; converged_epsilon is CPU-only so far (it
+ * needs each group's change read back): GLOW_ERROR_UNSUPPORTED. */
 GLOW_API glow_result glow_gl_system_update(glow_gl_system *system, const glow_update_desc *desc);
 /** Waits for the last update's queries and fills `out`. */
 GLOW_API glow_result glow_gl_system_get_stats(glow_gl_system *system, glow_gl_stats *out);
