@@ -14,15 +14,28 @@ layout(std430, binding = GLOW_BINDING_OUTPUT_PAIRS) readonly buffer GlowPairs { 
 layout(std430, binding = GLOW_BINDING_CACHE_SH) readonly buffer GlowCacheSh { float glow_cache_sh[]; };
 layout(rgba32f, binding = GLOW_IMAGE_GRID) uniform writeonly image3D glow_grid;
 layout(rgba32f, binding = GLOW_IMAGE_LIGHTMAP) uniform writeonly image2DArray glow_lightmap;
+/* a refined grid's brick atlas: corner (x, y, z) of brick b, plane p, at
+ * (S (b % ax) + x, S (b / ax) + y, z + S p), S = refine + 1, ax = fine_atlas_x */
+layout(rgba32f, binding = GLOW_IMAGE_GRID_FINE) uniform writeonly image3D glow_grid_fine;
 
 float glow_coeff(uint base, uint k) { return k < glow_p.coeff_count ? glow_cache_sh[base + k] : 0.0; }
 
 void main() {
     uint i = glow_global_index(GLOW_OUTPUT_GROUP);
-    if (i >= glow_p.grid_used + glow_p.lightmap_used) return;
+    if (i >= glow_p.grid_used + glow_p.lightmap_used + glow_p.fine_used) return;
     uvec2 pr = glow_pairs[i];
     uint base = pr.y * glow_p.coeff_count;
     bool grid = i < glow_p.grid_used;
+    if (i >= glow_p.grid_used + glow_p.lightmap_used) { /* pr.x = brick * S³ + corner */
+        uint S = glow_p.grid_refine + 1u, S3 = S * S * S, b = pr.x / S3, k = pr.x % S3;
+        ivec3 at = ivec3(S * (b % glow_p.fine_atlas_x) + k % S, S * (b / glow_p.fine_atlas_x) + (k / S) % S, k / (S * S));
+        for (uint p = 0u; p < glow_p.planes; ++p) {
+            vec4 v = vec4(glow_coeff(base, 4u * p), glow_coeff(base, 4u * p + 1u), glow_coeff(base, 4u * p + 2u),
+                          glow_coeff(base, 4u * p + 3u));
+            imageStore(glow_grid_fine, at + ivec3(0, 0, int(p * S)), v);
+        }
+        return;
+    }
     uint dx = glow_p.grid_dx, dxy = glow_p.grid_dx * glow_p.grid_dy, W = glow_p.lightmap_width;
     ivec3 cell = ivec3(pr.x % dx, (pr.x / dx) % glow_p.grid_dy, pr.x / dxy);
     ivec2 texel = ivec2(pr.x % max(W, 1u), pr.x / max(W, 1u));

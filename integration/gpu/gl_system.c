@@ -67,6 +67,8 @@ struct glow_gl_system {
     uint32_t tail_level; /* levels [tail_level, levels) run in one pull_tail dispatch */
     GLuint buf[B_COUNT];
     GLuint grid_tex, grid_mask_tex, lm_tex, lm_valid_tex, det_tex;
+    GLuint brick_tex, fine_tex, fine_mask_tex; /* a refined grid (GFIN) */
+    uint32_t fine_used, fine_ax;
     int own_grid, own_lm;
     GLuint queries[T_COUNT];
     double cpu_ts[T_COUNT]; /* GLOW_GL_FLAG_FINISH_TIMERS */
@@ -221,6 +223,8 @@ static void free_system(glow_gl_system *s) {
         GLuint tex[5] = {s->own_grid ? s->grid_tex : 0u, s->grid_mask_tex, s->own_lm ? s->lm_tex : 0u, s->lm_valid_tex,
                          s->det_tex};
         gl->DeleteTextures(5, tex);
+        GLuint ftex[3] = {s->brick_tex, s->fine_tex, s->fine_mask_tex};
+        gl->DeleteTextures(3, ftex);
     }
     if (gl->DeleteQueries && s->queries[0]) gl->DeleteQueries(T_COUNT, s->queries);
     free(s->mat_staging);
@@ -231,6 +235,13 @@ static void free_system(glow_gl_system *s) {
     free(s->grp_sel);
     free(s->list);
     free(s);
+}
+
+/* A cell's RG32UI mask texel: byte o (x: octants 0-3, y: 4-7) = the corners visible from octant o
+ * (vis8, the bake's GVIS bytes, NULL = all) that hold a cache (filled). */
+static void pack_mask(const uint8_t *vis8, uint32_t filled, uint32_t out[2]) {
+    out[0] = out[1] = 0;
+    for (uint32_t o = 0; o < 8; ++o) out[o >> 2] |= ((vis8 ? vis8[o] : 0xFFu) & filled) << (8u * (o & 3u));
 }
 
 /* Lookups use texelFetch; NEAREST also makes the integer textures complete (an integer texture with a
@@ -364,7 +375,11 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
     s->direct_staging = malloc((size_t)(s->S ? s->S : 1u) * 4u * sizeof(float));
     void *geom = malloc((size_t)(s->S ? s->S : 1u) * sizeof(glow_gl_surfel_geom));
     uint32_t *nodes = malloc((size_t)(s->N ? s->N : 1u) * 4u * sizeof(uint32_t));
-    const size_t pairs_n = (size_t)t->grid_used + t->lightmap_used;
+    /* a refined grid's brick corners that hold a cache follow the grid cells and lightmap texels */
+    const uint32_t R = co->grid_refine >= 2 && co->grid_bricks ? co->grid_refine : 0u, S3 = (R + 1u) * (R + 1u) * (R + 1u);
+    s->fine_used = 0;
+    for (size_t i = 0; R && i < (size_t)co->grid_brick_count * S3; ++i) s->fine_used += co->grid_bricks[i] != MAP_EMPTY;
+    const size_t pairs_n = (size_t)t->grid_used + t->lightmap_used + s->fine_used;
     uint32_t *pairs = malloc((pairs_n ? pairs_n : 1u) * 2u * sizeof(uint32_t));
     if (!s->mat_staging || !s->direct_staging || !geom || !nodes || !pairs) {
         free(geom), free(nodes), free(pairs);
@@ -387,10 +402,16 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
         memcpy(&nodes[4 * n + 2], &t->node_inv_pi_area[n], 4);
         nodes[4 * n + 3] = 0u;
     }
-    for (size_t i = 0; i < pairs_n; ++i) {
+    for (size_t i = 0; i < (size_t)t->grid_used + t->lightmap_used; ++i) {
         pairs[2 * i] = t->output_index[i];
         pairs[2 * i + 1] = t->output_cache[i];
     }
+    for (size_t i = 0, k = (size_t)t->grid_used + t->lightmap_used; R && i < (size_t)co->grid_brick_count * S3; ++i)
+        if (co->grid_bricks[i] != MAP_EMPTY) {
+            pairs[2 * k] = (uint32_t)i; /* brick * S³ + corner */
+            pairs[2 * k + 1] = co->grid_bricks[i];
+            k++;
+        }
     fill_mat(s, 1.0f);
     const GLbitfield dyn = GL_DYNAMIC_STORAGE_BIT;
     s->buf[B_GEOM] = make_buffer(s, (size_t)s->S * sizeof(glow_gl_surfel_geom), geom, 0);
@@ -522,13 +543,7 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
                         const uint32_t cx = (c & 1) ? x1 : x, cy = (c & 2) ? y1 : y, cz = (c & 4) ? z1 : z;
                         if (co->grid_map[((size_t)cz * dy + cy) * dx + cx] != MAP_EMPTY) filled |= 1u << c;
                     }
-                    uint32_t m[2] = {0, 0};
-                    for (uint32_t o = 0; o < 8; ++o) {
-                        const uint32_t vis = co->grid_visibility ? co->grid_visibility[cell * 8u + o] : 0xFFu;
-                        m[o >> 2] |= (vis & filled) << (8u * (o & 3u));
-                    }
-                    mask[2 * cell] = m[0];
-                    mask[2 * cell + 1] = m[1];
+                    pack_mask(co->grid_visibility ? co->grid_visibility + cell * 8u : NULL, filled, mask + 2 * cell);
                 }
         gl->CreateTextures(GL_TEXTURE_3D, 1, &s->grid_mask_tex);
         gl->TextureStorage3D(s->grid_mask_tex, 1, GL_RG32UI, (GLsizei)dx, (GLsizei)dy, (GLsizei)dz);
@@ -540,6 +555,49 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
         if (s->own_grid) nearest(s, s->grid_tex);
         s->out.grid_texture = s->grid_tex;
         s->out.grid_mask_texture = s->grid_mask_tex;
+        if (R) { /* the refined grid: brick index, brick atlas, fine masks (GVIS and filled corners) */
+            const uint32_t nb = co->grid_brick_count, S = R + 1u, ax = nb < 128u ? nb : 128u, ay = (nb + ax - 1u) / ax;
+            s->fine_ax = ax;
+            uint32_t *bi = malloc(cells * sizeof *bi), *fm = malloc((size_t)ax * ay * R * R * R * 2u * sizeof *fm);
+            if (!bi || !fm) {
+                free(bi), free(fm);
+                free_system(s);
+                return GLOW_ERROR_OUT_OF_MEMORY;
+            }
+            for (size_t c = 0; c < cells; ++c) bi[c] = co->grid_brick_of_cell[c];
+            memset(fm, 0, (size_t)ax * ay * R * R * R * 2u * sizeof *fm);
+            for (uint32_t b = 0; b < nb; ++b)
+                for (uint32_t l = 0; l < R * R * R; ++l) {
+                    const uint32_t lx = l % R, ly = (l / R) % R, lz = l / (R * R);
+                    uint32_t filled = 0;
+                    for (uint32_t c = 0; c < 8; ++c) {
+                        const uint32_t k = ((lz + (c >> 2)) * S + ly + ((c >> 1) & 1u)) * S + lx + (c & 1u);
+                        if (co->grid_bricks[(size_t)b * S3 + k] != MAP_EMPTY) filled |= 1u << c;
+                    }
+                    const size_t at = ((size_t)lz * ay * R + (size_t)(b / ax) * R + ly) * ax * R + (size_t)(b % ax) * R + lx;
+                    pack_mask(co->grid_brick_visibility ? co->grid_brick_visibility + ((size_t)b * R * R * R + l) * 8u : NULL,
+                              filled, fm + 2 * at);
+                }
+            gl->CreateTextures(GL_TEXTURE_3D, 1, &s->brick_tex);
+            gl->TextureStorage3D(s->brick_tex, 1, GL_R32UI, (GLsizei)dx, (GLsizei)dy, (GLsizei)dz);
+            gl->TextureSubImage3D(s->brick_tex, 0, 0, 0, 0, (GLsizei)dx, (GLsizei)dy, (GLsizei)dz, GL_RED_INTEGER,
+                                  GL_UNSIGNED_INT, bi);
+            gl->CreateTextures(GL_TEXTURE_3D, 1, &s->fine_mask_tex);
+            gl->TextureStorage3D(s->fine_mask_tex, 1, GL_RG32UI, (GLsizei)(ax * R), (GLsizei)(ay * R), (GLsizei)R);
+            gl->TextureSubImage3D(s->fine_mask_tex, 0, 0, 0, 0, (GLsizei)(ax * R), (GLsizei)(ay * R), (GLsizei)R,
+                                  GL_RG_INTEGER, GL_UNSIGNED_INT, fm);
+            gl->CreateTextures(GL_TEXTURE_3D, 1, &s->fine_tex);
+            gl->TextureStorage3D(s->fine_tex, 1, GL_RGBA32F, (GLsizei)(ax * S), (GLsizei)(ay * S), (GLsizei)(S * s->planes));
+            gl->ClearTexImage(s->fine_tex, 0, GL_RGBA, GL_FLOAT, zero4);
+            free(bi), free(fm);
+            nearest(s, s->brick_tex), nearest(s, s->fine_mask_tex), nearest(s, s->fine_tex);
+            s->gpu_bytes += cells * 4u + (size_t)ax * ay * R * R * R * 8u + (size_t)ax * ay * S * S * S * s->planes * 16u;
+            s->out.grid_refine = R;
+            s->out.grid_fine_atlas_x = ax;
+            s->out.grid_brick_texture = s->brick_tex;
+            s->out.grid_fine_texture = s->fine_tex;
+            s->out.grid_fine_mask_texture = s->fine_mask_tex;
+        }
     }
     if (co->lightmap_map) {
         const uint32_t W = co->lightmap_width, H = co->lightmap_height;
@@ -610,7 +668,10 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
                                  .lightmap_height = co->lightmap_height,
                                  .detail_texels = t->detail_texels,
                                  .detail_width = t->detail_width,
-                                 .surfel_area = t->surfel_area};
+                                 .surfel_area = t->surfel_area,
+                                 .fine_used = s->fine_used,
+                                 .grid_refine = R,
+                                 .fine_atlas_x = s->fine_ax};
     *out = s;
     return GLOW_OK;
 }
@@ -866,13 +927,14 @@ glow_result glow_gl_system_update(glow_gl_system *s, const glow_update_desc *des
     s->caches_gathered = budgeted ? s->list_count : s->C;
     stamp(s, T_CACHE);
     /* 5. outputs (seam/gutter texels are pairs too) */
-    if (t->grid_used + t->lightmap_used) {
+    if (t->grid_used + t->lightmap_used + s->fine_used) {
         gl->UseProgram(s->prog[K_OUTPUT]);
+        if (s->fine_tex) gl->BindImageTexture(GLOW_IMAGE_GRID_FINE, s->fine_tex, 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
         bind(s, GLOW_BINDING_OUTPUT_PAIRS, B_PAIRS);
         bind(s, GLOW_BINDING_CACHE_SH, B_CACHE);
         if (s->grid_tex) gl->BindImageTexture(GLOW_IMAGE_GRID, s->grid_tex, 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
         if (s->lm_tex) gl->BindImageTexture(GLOW_IMAGE_LIGHTMAP, s->lm_tex, 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-        dispatch(s, (t->grid_used + t->lightmap_used + GLOW_OUTPUT_GROUP - 1u) / GLOW_OUTPUT_GROUP);
+        dispatch(s, (t->grid_used + t->lightmap_used + s->fine_used + GLOW_OUTPUT_GROUP - 1u) / GLOW_OUTPUT_GROUP);
         gl->MemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT |
                           GL_TEXTURE_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
     }

@@ -11,6 +11,7 @@
  *             of it, byte o (x: octants 0-3, y: 4-7) has bit k set when corner k may be blended (it holds a
  *             cache and, with the bake's GVIS, is visible from that octant's centre)
  *   lightmap  sampler2DArray, layer p = plane p; lightmap valid: usampler2D R8UI, 1 where a texel holds a cache
+ *   a refined grid's bricks (glow_gl_outputs grid_brick/fine/fine_mask_texture): glow_sample_grid_refined
  * Lookups use texelFetch and weight empty/hidden neighbours 0 (renormalising the rest). glow_gl creates the
  * textures with NEAREST filtering; do not sample the integer mask/valid textures through a sampler object with
  * a LINEAR filter (an integer texture is then incomplete and every fetch returns 0).
@@ -74,11 +75,11 @@ vec3 glow_shade_sh(vec4 sh[GLOW_SH_PLANES], vec3 axis, float exponent) {
 const float GLOW_GRID_NORMAL_BIAS = 0.25;
 const float GLOW_GRID_BACKFACE_FLOOR = 0.2;
 
-/* The lookup of glow_sample_grid (oriented = false) and glow_sample_grid_oriented (unit n). */
-bool glow__grid_lookup(sampler3D grid, usampler3D grid_mask, vec3 origin, float spacing, ivec3 dims, vec3 p0,
+/* The lookup of glow_sample_grid (oriented = false) and glow_sample_grid_oriented (unit n): the cell
+ * of the moved point p (p0 moved along n), backface weights about p0. */
+bool glow__grid_lookup(sampler3D grid, usampler3D grid_mask, vec3 origin, float spacing, ivec3 dims, vec3 p, vec3 p0,
                        bool oriented, vec3 n, out vec4 sh[GLOW_SH_PLANES]) {
     for (int q = 0; q < GLOW_SH_PLANES; ++q) sh[q] = vec4(0.0);
-    vec3 p = oriented ? p0 + GLOW_GRID_NORMAL_BIAS * spacing * n : p0;
     vec3 f = clamp((p - origin) / spacing, vec3(0.0), vec3(dims - 1));
     vec3 fl = floor(f);
     ivec3 i0 = ivec3(fl), i1 = min(i0 + 1, dims - 1);
@@ -111,7 +112,7 @@ bool glow__grid_lookup(sampler3D grid, usampler3D grid_mask, vec3 origin, float 
  * \returns false (sh zeroed) when no corner may be blended. */
 bool glow_sample_grid(sampler3D grid, usampler3D grid_mask, vec3 origin, float spacing, ivec3 dims, vec3 p,
                       out vec4 sh[GLOW_SH_PLANES]) {
-    return glow__grid_lookup(grid, grid_mask, origin, spacing, dims, p, false, vec3(0.0), sh);
+    return glow__grid_lookup(grid, grid_mask, origin, spacing, dims, p, p, false, vec3(0.0), sh);
 }
 
 /** The grid's light for a surface point p with normal n (any length > 0), as glow.h's
@@ -120,7 +121,63 @@ bool glow_sample_grid(sampler3D grid, usampler3D grid_mask, vec3 origin, float s
  * objects. \returns as glow_sample_grid. */
 bool glow_sample_grid_oriented(sampler3D grid, usampler3D grid_mask, vec3 origin, float spacing, ivec3 dims, vec3 p,
                                vec3 n, out vec4 sh[GLOW_SH_PLANES]) {
-    return glow__grid_lookup(grid, grid_mask, origin, spacing, dims, p, true, normalize(n), sh);
+    vec3 u = normalize(n);
+    return glow__grid_lookup(grid, grid_mask, origin, spacing, dims, p + GLOW_GRID_NORMAL_BIAS * spacing * u, p, true, u, sh);
+}
+
+/** A refined grid's lookup (glow_gl_outputs: grid_refine R > 1, its brick, fine and fine mask textures, atlas_x
+ * bricks a row), as glow.h's glow_sample_grid (oriented = false) or glow_sample_grid_oriented (oriented,
+ * normal n): a point inside a brick blends its fine cell's corners, else (or when none of them may be
+ * blended) the coarse cell's; the oriented lookup moves a quarter of the fine spacing along n.
+ * \returns false (sh zeroed) when no corner may be blended. */
+bool glow_sample_grid_refined(sampler3D grid, usampler3D grid_mask, usampler3D bricks, sampler3D fine,
+                              usampler3D fine_mask, int refine, int atlas_x, vec3 origin, float spacing, ivec3 dims,
+                              vec3 p0, bool oriented, vec3 n, out vec4 sh[GLOW_SH_PLANES]) {
+    vec3 u = oriented ? normalize(n) : vec3(0.0);
+    float h = spacing / float(refine);
+    vec3 p = oriented ? p0 + GLOW_GRID_NORMAL_BIAS * h * u : p0;
+    vec3 f = (p - origin) / spacing;
+    if (all(greaterThanEqual(f, vec3(0.0))) && all(lessThanEqual(f, vec3(dims - 1)))) {
+        ivec3 i0 = ivec3(floor(f));
+        ivec3 c0 = ivec3(i0.x + 1 < dims.x ? i0.x : i0.x - 1, i0.y + 1 < dims.y ? i0.y : i0.y - 1,
+                         i0.z + 1 < dims.z ? i0.z : i0.z - 1); /* the last point: the cell below */
+        uint b = texelFetch(bricks, c0, 0).x;
+        if (b != 0xFFFFFFFFu) {
+            int R = refine, S = refine + 1;
+            vec3 uf = clamp((f - vec3(c0)) * float(R), vec3(0.0), vec3(float(R)));
+            vec3 fl = min(floor(uf), vec3(float(R - 1)));
+            vec3 t = uf - fl;
+            ivec3 l = ivec3(fl);
+            ivec2 bo = ivec2(int(b % uint(atlas_x)), int(b / uint(atlas_x)));
+            uint oct = (t.x >= 0.5 ? 1u : 0u) | (t.y >= 0.5 ? 2u : 0u) | (t.z >= 0.5 ? 4u : 0u);
+            uvec2 m2 = texelFetch(fine_mask, ivec3(bo * R, 0) + l, 0).xy;
+            uint mask = ((oct < 4u ? m2.x : m2.y) >> (8u * (oct & 3u))) & 0xFFu;
+            vec3 bor = origin + spacing * vec3(c0); /* the brick's lattice origin */
+            vec4 acc[GLOW_SH_PLANES];
+            for (int q = 0; q < GLOW_SH_PLANES; ++q) acc[q] = vec4(0.0);
+            float wsum = 0.0;
+            for (int c = 0; c < 8; ++c) {
+                if (((mask >> uint(c)) & 1u) == 0u) continue;
+                ivec3 k = l + ivec3(c & 1, (c >> 1) & 1, (c >> 2) & 1);
+                float w = ((c & 1) != 0 ? t.x : 1.0 - t.x) * ((c & 2) != 0 ? t.y : 1.0 - t.y) * ((c & 4) != 0 ? t.z : 1.0 - t.z);
+                if (!(w > 0.0)) continue;
+                if (oriented) {
+                    vec3 d = bor + h * vec3(k) - p0;
+                    float len = length(d);
+                    float hw = len > 0.0 ? 0.5 * (1.0 + dot(d, u) / len) : 1.0;
+                    w *= hw * hw + GLOW_GRID_BACKFACE_FLOOR;
+                }
+                wsum += w;
+                ivec3 at = ivec3(bo * S, 0) + k;
+                for (int q = 0; q < GLOW_SH_PLANES; ++q) acc[q] += w * texelFetch(fine, at + ivec3(0, 0, q * S), 0);
+            }
+            if (wsum > 0.0) {
+                for (int q = 0; q < GLOW_SH_PLANES; ++q) sh[q] = acc[q] / wsum;
+                return true;
+            }
+        }
+    }
+    return glow__grid_lookup(grid, grid_mask, origin, spacing, dims, p, p0, oriented, u, sh);
 }
 
 /** Bilinear lookup of the lightmap at uv in [0,1]² (texel centres at (i + 0.5)/size, v = 0 is row 0),

@@ -59,6 +59,7 @@ typedef struct glow_vec4 { float x, y, z, w; } glow_vec4;
 #define GLOW_IMAGE_GRID 0     /* image3D rgba32f: plane p of cell (x,y,z) at (x, y, z + p * dz) */
 #define GLOW_IMAGE_LIGHTMAP 1 /* image2DArray rgba32f: plane p of texel (x,y) at layer p */
 #define GLOW_IMAGE_DETAIL 2   /* detail.comp: image2D rgba32f, the lightmap detail (RGB correction, coverage) */
+#define GLOW_IMAGE_GRID_FINE 3 /* image3D rgba32f: a refined grid's brick atlas, see glow_gl.h grid_fine_texture */
 
 /* workgroup sizes (the kernels #error without them; the backend defines them from here) */
 #define GLOW_SURFEL_GROUP 64
@@ -100,6 +101,7 @@ GLOW_STRUCT(glow_gl_params) {
     glow_uint grid_dx, grid_dy, grid_dz, lightmap_width;
     glow_uint lightmap_height, detail_texels, detail_width, reserved2;
     glow_float surfel_area, bounce_intensity, reserved3, reserved4;
+    glow_uint fine_used, grid_refine, fine_atlas_x, reserved5; /* a refined grid's brick atlas (outputs.comp) */
 };
 
 #endif /* GLOW_SHARED_H */

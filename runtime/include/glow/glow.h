@@ -556,8 +556,8 @@ typedef struct glow_cache_outputs {
      * be a brick of R³ fine cells of spacing grid_spacing / R. glow_sample_grid and
      * glow_sample_grid_oriented look a point up in its brick's fine cell when it has one (and fall back
      * to the coarse cell when none of the fine corners they may blend holds a cache). The fine caches
-     * are grid caches (rows of cache_sh) with no cell in grid_sh; the GL backend's grid texture holds
-     * the coarse lattice only (docs/gpu.md). */
+     * are grid caches (rows of cache_sh) with no cell in grid_sh; on the GPU they are in the GL
+     * backend's brick atlas, read by glow_sample_grid_refined (glow_shading.glsl, docs/gpu.md). */
     uint32_t grid_refine;        /* R (0: not refined) */
     uint32_t grid_brick_count;
     const uint32_t *grid_brick_of_cell; /* [dz][dy][dx]: brick of the cell, 0xFFFFFFFF = none */

@@ -110,6 +110,14 @@ typedef struct glow_gl_outputs {
      * (glow_shading.glsl glow_sample_lightmap_detail) */
     uint32_t lightmap_detail_texture;
     uint32_t detail_width, detail_height;
+    /* \since 0.2, bakes with a refined grid (glow_cache_outputs.grid_refine = R; 0 otherwise), for
+     * glow_shading.glsl glow_sample_grid_refined: grid_brick_texture GL_TEXTURE_3D R32UI (dx, dy, dz),
+     * each cell's brick or 0xFFFFFFFF; grid_fine_texture GL_TEXTURE_3D RGBA32F (S ax, S ay, S planes),
+     * S = R + 1, ax = grid_fine_atlas_x: corner (x, y, z) of brick b, plane p, at (S (b % ax) + x,
+     * S (b / ax) + y, z + S p); grid_fine_mask_texture GL_TEXTURE_3D RG32UI (R ax, R ay, R): per fine
+     * cell and octant the corners a lookup blends (visible and holding a cache), as grid_mask_texture */
+    uint32_t grid_refine, grid_fine_atlas_x;
+    uint32_t grid_brick_texture, grid_fine_texture, grid_fine_mask_texture;
 } glow_gl_outputs;
 
 /* GPU time of the last update, per stage, from GL timer queries (ms). */
