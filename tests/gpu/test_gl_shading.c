@@ -115,36 +115,42 @@ static void test_basis_and_lobes(void **state) {
     gl.DeleteProgram(p);
 }
 
-static void test_sampling(void **state) {
-    (void)state;
+/* Bakes builtin:cornell with `st`, loads it into a CPU system with `luma`/`chroma` bands (0: the bake's)
+ * lit by a position-dependent colour (so the SH vary), and a GL system on it updated 3 times. */
+static void lit_cornell(const glow_pc_settings *st, uint32_t luma, uint32_t chroma, glow_context **ctx, glow_bake **bake,
+                        glow_system **sys, glow_gl_system **gs) {
     char path[256];
     snprintf(path, sizeof path, "/tmp/glow_gl_shading_%d.glow", (int)getpid());
-    glow_pc_settings st = {.quality = GLOW_PC_QUALITY_LOW, .surfels = 4096, .links = 96, .bands = 3, .threads = 2, .seed = 1};
     glow_pc_stats stats;
-    assert_int_equal(glow_pc_bake("builtin:cornell", path, &st, &stats), GLOW_OK);
-    glow_context *ctx;
-    glow_bake *bake;
-    glow_system *sys;
-    glow_gl_system *gs;
-    assert_int_equal(glow_context_create(&(glow_context_desc){.api_version = GLOW_VERSION}, &ctx), GLOW_OK);
-    assert_int_equal(glow_bake_load_file(ctx, path, &bake), GLOW_OK);
+    assert_int_equal(glow_pc_bake("builtin:cornell", path, st, &stats), GLOW_OK);
+    assert_int_equal(glow_context_create(&(glow_context_desc){.api_version = GLOW_VERSION}, ctx), GLOW_OK);
+    assert_int_equal(glow_bake_load_file(*ctx, path, bake), GLOW_OK);
     remove(path);
-    assert_int_equal(glow_system_create(ctx, &(glow_system_desc){.bake = bake, .sh_bands_luma = 3, .sh_bands_chroma = 2}, &sys),
+    assert_int_equal(glow_system_create(*ctx, &(glow_system_desc){.bake = *bake, .sh_bands_luma = luma, .sh_bands_chroma = chroma}, sys),
                      GLOW_OK);
-    /* light: every surfel facing down gets a colour depending on its position (so the SH vary) */
     glow_surfel_view v;
-    glow_system_get_surfels(sys, &v);
+    glow_system_get_surfels(*sys, &v);
     float *e = malloc((size_t)v.count * 3 * sizeof *e);
     for (uint32_t i = 0; i < v.count; ++i) {
         const float *p = v.positions + 4 * (size_t)i;
         e[3 * i] = 4.0f + 3.0f * p[0], e[3 * i + 1] = 2.0f + p[1], e[3 * i + 2] = 3.0f - 2.0f * p[2];
         for (int c = 0; c < 3; ++c) e[3 * i + c] = fmaxf(e[3 * i + c], 0.0f);
     }
-    assert_int_equal(glow_system_set_surfel_irradiance(sys, 0, v.count, e), GLOW_OK);
+    assert_int_equal(glow_system_set_surfel_irradiance(*sys, 0, v.count, e), GLOW_OK);
     free(e);
-    assert_int_equal(glow_gl_system_create(&(glow_gl_desc){.system = sys, .get_proc_address = glow_glctx_get_proc_address(g_ctx)}, &gs),
+    assert_int_equal(glow_gl_system_create(&(glow_gl_desc){.system = *sys, .get_proc_address = glow_glctx_get_proc_address(g_ctx)}, gs),
                      GLOW_OK);
-    for (int u = 0; u < 3; ++u) assert_int_equal(glow_gl_system_update(gs, NULL), GLOW_OK);
+    for (int u = 0; u < 3; ++u) assert_int_equal(glow_gl_system_update(*gs, NULL), GLOW_OK);
+}
+
+static void test_sampling(void **state) {
+    (void)state;
+    glow_context *ctx;
+    glow_bake *bake;
+    glow_system *sys;
+    glow_gl_system *gs;
+    const glow_pc_settings st = {.quality = GLOW_PC_QUALITY_LOW, .surfels = 4096, .links = 96, .bands = 3, .threads = 2, .seed = 1};
+    lit_cornell(&st, 3, 2, &ctx, &bake, &sys, &gs);
     const glow_gl_outputs *go = glow_gl_system_outputs(gs);
     /* the C reference on the GPU's caches */
     glow_cache_outputs co = *glow_system_outputs(sys);
@@ -342,32 +348,13 @@ static void test_sampling(void **state) {
  * lookups must land in a brick (the fine cells differ from the coarse ones there, checked below). */
 static void test_refined(void **state) {
     (void)state;
-    char path[256];
-    snprintf(path, sizeof path, "/tmp/glow_gl_refined_%d.glow", (int)getpid());
-    glow_pc_settings st = {.quality = GLOW_PC_QUALITY_LOW, .surfels = 2048, .links = 32, .bands = 3, .threads = 2, .seed = 1,
-                           .grid_spacing = 0.2f, .grid_refine = 2};
-    glow_pc_stats stats;
-    assert_int_equal(glow_pc_bake("builtin:cornell", path, &st, &stats), GLOW_OK);
     glow_context *ctx;
     glow_bake *bake;
     glow_system *sys;
     glow_gl_system *gs;
-    assert_int_equal(glow_context_create(&(glow_context_desc){.api_version = GLOW_VERSION}, &ctx), GLOW_OK);
-    assert_int_equal(glow_bake_load_file(ctx, path, &bake), GLOW_OK);
-    remove(path);
-    assert_int_equal(glow_system_create(ctx, &(glow_system_desc){.bake = bake}, &sys), GLOW_OK);
-    glow_surfel_view v;
-    glow_system_get_surfels(sys, &v);
-    float *e = malloc((size_t)v.count * 3 * sizeof *e);
-    for (uint32_t i = 0; i < v.count; ++i) {
-        const float *p = v.positions + 4 * (size_t)i;
-        e[3 * i] = fmaxf(4.0f + 3.0f * p[0], 0.0f), e[3 * i + 1] = fmaxf(2.0f + p[1], 0.0f), e[3 * i + 2] = fmaxf(3.0f - 2.0f * p[2], 0.0f);
-    }
-    assert_int_equal(glow_system_set_surfel_irradiance(sys, 0, v.count, e), GLOW_OK);
-    free(e);
-    assert_int_equal(glow_gl_system_create(&(glow_gl_desc){.system = sys, .get_proc_address = glow_glctx_get_proc_address(g_ctx)}, &gs),
-                     GLOW_OK);
-    for (int u = 0; u < 3; ++u) assert_int_equal(glow_gl_system_update(gs, NULL), GLOW_OK);
+    const glow_pc_settings st = {.quality = GLOW_PC_QUALITY_LOW, .surfels = 2048, .links = 32, .bands = 3, .threads = 2, .seed = 1,
+                                 .grid_spacing = 0.2f, .grid_refine = 2};
+    lit_cornell(&st, 0, 0, &ctx, &bake, &sys, &gs);
     const glow_gl_outputs *go = glow_gl_system_outputs(gs);
     glow_cache_outputs co = *glow_system_outputs(sys);
     assert_int_equal(co.grid_refine, 2);
