@@ -78,6 +78,18 @@ expect 2 "bench: --walk without a budget" "$BIN/glow-bench" "$T/cornell.glow" "$
 expect 0 "render: Glow's indirect only" "$BIN/glow-render" "$SCENE" --glow "$T/cornell.glow" --out "$T/gi" "${R[@]}" --bounces 64 --indirect-only
 cmp -s "$T/glow_indirect.exr" "$T/gi_indirect.exr" && pass "  indirect-only gives the same indirect image" || fail "  indirect images differ"
 cmp -s "$T/glow_direct.exr" "$T/ref_direct.exr" && pass "  Glow's direct image is the reference's" || fail "  direct images differ"
+# the texel image (Glow's view with a lightmap) and glow-compare's blotches
+[ -s "$T/glow_texel.exr" ] && pass "  Glow's view wrote its texel image" || fail "  no glow_texel.exr"
+[ ! -e "$T/ref_texel.exr" ] && pass "  the reference writes none" || fail "  the reference wrote a texel image"
+cmp -s "$T/glow_texel.exr" "$T/gi_texel.exr" && pass "  indirect-only gives the same texels" || fail "  texel images differ"
+expect 0 "compare: --texels" "$BIN/glow-compare" "$T/glow_indirect.exr" "$T/ref_indirect.exr" --texels "$T/glow_texel.exr" --blotch-min-pixels 4 --json --no-flip
+python3 -c "import json,sys; b=json.load(open(sys.argv[1]))['blotches']; assert b['texels'] > 4 and 0 < b['judged'] <= b['texels'] and b['bad'] <= b['judged'] and b['min_pixels'] == 4, b" "$T/out" \
+  && pass "  texels grouped and judged" || fail "  blotch JSON: $(head -c 400 "$T/out")"
+expect 0 "compare: --texels, an image against itself" "$BIN/glow-compare" "$T/glow_indirect.exr" "$T/glow_indirect.exr" --texels "$T/glow_texel.exr" --blotch-min-pixels 1 --json --no-flip
+python3 -c "import json,sys; b=json.load(open(sys.argv[1]))['blotches']; assert b['bad'] == 0 and b['blotches'] == 0 and b['worst_rel'] == 0, b" "$T/out" \
+  && pass "  no blotch in an exact image" || fail "  blotch JSON: $(head -c 400 "$T/out")"
+expect 2 "compare: --blotch-threshold without --texels" "$BIN/glow-compare" "$T/glow.exr" "$T/ref.exr" --blotch-threshold 0.3; err_has "texels"
+expect 1 "compare: --texels of a missing file" "$BIN/glow-compare" "$T/glow.exr" "$T/ref.exr" --texels "$T/none.exr" --no-flip; err_has "none.exr"
 
 # --- glow-compare
 expect 2 "compare: one file" "$BIN/glow-compare" "$T/ref.exr"
@@ -228,6 +240,17 @@ expect 0 "stability: audit" "$BIN/glow-stability" audit "$T/cornell.glow" "$SCEN
 python3 -c "import json,sys; r=json.load(open(sys.argv[1])); c=r['converged']; sys.exit(0 if 0.85 < c['mean_ratio'] < 1.15 and c['caches_rated'] > 0 and sum(r['visible_solid_angle_hist_2pi_eighths']) == 64 else 1)" "$T/out" \
   && pass "  audit: converged caches within 15 % of the reference on average, histogram of 64 caches" || fail "  audit JSON wrong"
 [ "$(wc -l < "$T/audit.csv")" = 65 ] && pass "  audit CSV: header + 64 caches" || fail "  audit CSV"
+C2=$(python3 -c "import csv,sys; r=list(csv.DictReader(open(sys.argv[1]))); print(r[3]['cache'] + ',' + r[1]['cache'])" "$T/audit.csv")
+expect 0 "stability: audit --caches $C2" "$BIN/glow-stability" audit "$T/cornell.glow" "$SCENE" --samples 64 --caches "$C2" --csv "$T/audit2.csv"
+python3 - "$T/audit.csv" "$T/audit2.csv" <<'PY' && pass "  audit --caches: those two caches, in that order, at the same points" || fail "  audit --caches CSV"
+import csv, sys
+a = list(csv.DictReader(open(sys.argv[1]))); b = list(csv.DictReader(open(sys.argv[2])))
+assert [r['cache'] for r in b] == [a[3]['cache'], a[1]['cache']], b
+assert [r['x'] for r in b] == [a[3]['x'], a[1]['x']] and [r['glow'] for r in b] == [a[3]['glow'], a[1]['glow']], (a[:4], b)
+PY
+expect 1 "stability: audit --caches beyond the bake" "$BIN/glow-stability" audit "$T/cornell.glow" "$SCENE" --caches 4000000000; err_has "not a lightmap cache"
+expect 2 "stability: --caches with junk" "$BIN/glow-stability" audit "$T/cornell.glow" "$SCENE" --caches 3,x; err_has "'x'"
+expect 2 "stability: --caches outside audit" "$BIN/glow-stability" jumps "$T/cornell.glow" "$SCENE" --caches 3; err_has "audit option"
 
 # --- the cut's share of the gather error: surfel radiance from glow-stability, audit in glow-bake
 expect 0 "stability: audit writes the surfels' radiance" "$BIN/glow-stability" audit "$T/cornell.glow" "$SCN/cornell-builtin-point.json" \

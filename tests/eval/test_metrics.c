@@ -463,6 +463,104 @@ static void test_block_error_edge_cases(void **state) {
 
 /* ---- masks ---- */
 
+/* Blotches (glow_eval_blotches): a 12 x 4 image of twelve 2 x 2 texels in a 6 x 2 layout, grey 1
+ * everywhere in the reference. Texel (i, j) covers pixels [2i, 2i+1] x [2j, 2j+1], id (i + 1, j + 1).
+ * and cache 100 + 6 j + i. Errors: texel (0,0) +0.6 alone; (2,0) and (3,0) +0.8 and +0.7 side by side (one blotch of 2);
+ * (2,1) -0.9 under (2,0) (opposite sign: its own set); (5,1) +0.4 (under the threshold). */
+static void set_texel(glow_eval_image *img, uint32_t i, uint32_t j, float v, int channel_id) {
+    for (uint32_t y = 2 * j; y < 2 * j + 2; y++)
+        for (uint32_t x = 2 * i; x < 2 * i + 2; x++) {
+            float *p = img->rgb + 3 * ((size_t)y * img->width + x);
+            if (channel_id) {
+                p[0] = (float)(i + 1);
+                p[1] = (float)(j + 1);
+                p[2] = (float)(100 + 6 * j + i + 1); /* cache 100 + 6 j + i */
+            } else
+                p[0] = p[1] = p[2] = v;
+        }
+}
+
+static void test_blotches_hand(void **state) {
+    (void)state;
+    glow_eval_image ref = make_image(12, 4), test = make_image(12, 4), tex = make_image(12, 4);
+    fill_grey(&ref, 1.0f);
+    fill_grey(&test, 1.0f);
+    for (uint32_t j = 0; j < 2; j++)
+        for (uint32_t i = 0; i < 6; i++) set_texel(&tex, i, j, 0.0f, 1);
+    set_texel(&test, 0, 0, 1.6f, 0);
+    set_texel(&test, 2, 0, 1.8f, 0);
+    set_texel(&test, 3, 0, 1.7f, 0);
+    set_texel(&test, 2, 1, 0.1f, 0);
+    set_texel(&test, 5, 1, 1.4f, 0);
+    glow_eval_blotch_result b;
+    char msg[256];
+    const glow_eval_blotch_params p4 = {.threshold = 0.5, .min_pixels = 4};
+    assert_int_equal(glow_eval_blotches(&test, &ref, &tex, &p4, &b, msg, sizeof msg), GLOW_OK);
+    assert_int_equal(b.texels, 12);
+    assert_int_equal(b.judged, 12);
+    assert_int_equal(b.bad, 4);
+    assert_int_equal(b.blotches, 1);
+    assert_int_equal(b.judged_pixels, 48);
+    assert_int_equal(b.bad_pixels, 16);
+    assert_int_equal(b.blotch_pixels, 8);
+    assert_int_equal(b.largest_texels, 2);
+    assert_int_equal(b.largest_pixels, 8);
+    assert_near(b.largest_rel, 0.75, 1e-6);
+    assert_int_equal(b.largest_box[0], 4);
+    assert_int_equal(b.largest_box[1], 0);
+    assert_int_equal(b.largest_box[2], 7);
+    assert_int_equal(b.largest_box[3], 1);
+    assert_near(b.worst_rel, -0.9, 1e-6);
+    assert_int_equal(b.largest_cache_count, 2);
+    assert_int_equal(b.largest_caches[0], 102); /* ties in pixels: the lower texel first */
+    assert_int_equal(b.largest_caches[1], 103);
+    /* A lower threshold takes in (5,1) (alone: no new blotch); a higher one leaves (0,0) and (3,0) out, so
+     * no set has two texels. */
+    glow_eval_blotch_params p = {.threshold = 0.3, .min_pixels = 4};
+    assert_int_equal(glow_eval_blotches(&test, &ref, &tex, &p, &b, msg, sizeof msg), GLOW_OK);
+    assert_int_equal(b.bad, 5);
+    assert_int_equal(b.blotches, 1);
+    p.threshold = 0.75;
+    assert_int_equal(glow_eval_blotches(&test, &ref, &tex, &p, &b, msg, sizeof msg), GLOW_OK);
+    assert_int_equal(b.bad, 2);
+    assert_int_equal(b.blotches, 0);
+    assert_int_equal(b.largest_texels, 1);
+    /* Texels seen by fewer pixels than min_pixels are not judged (default 16 > 4 here). */
+    assert_int_equal(glow_eval_blotches(&test, &ref, &tex, NULL, &b, msg, sizeof msg), GLOW_OK);
+    assert_int_equal(b.texels, 12);
+    assert_int_equal(b.judged, 0);
+    assert_int_equal(b.bad, 0);
+    assert_int_equal(b.largest_texels, 0);
+    /* (3,0) made negative: it no longer joins (2,0). */
+    set_texel(&test, 3, 0, 0.3f, 0);
+    assert_int_equal(glow_eval_blotches(&test, &ref, &tex, &p4, &b, msg, sizeof msg), GLOW_OK);
+    assert_int_equal(b.blotches, 0);
+    assert_int_equal(b.bad, 4);
+    /* The same texel id on two places of the screen is one texel: (3,0)'s pixels get (2,0)'s id, so
+     * (2,0) now has 8 pixels at +0.8 and +(-0.7): +0.05, not bad. */
+    set_texel(&tex, 3, 0, 0.0f, 1);
+    for (uint32_t y = 0; y < 2; y++)
+        for (uint32_t x = 6; x < 8; x++) tex.rgb[3 * ((size_t)y * 12 + x)] = 3.0f;
+    assert_int_equal(glow_eval_blotches(&test, &ref, &tex, &p4, &b, msg, sizeof msg), GLOW_OK);
+    assert_int_equal(b.texels, 11);
+    assert_int_equal(b.bad, 2);
+    /* Pixels with no texel (id 0) are left out; a non-finite pixel or a size mismatch is an error. */
+    fill_grey(&tex, 0.0f);
+    assert_int_equal(glow_eval_blotches(&test, &ref, &tex, &p4, &b, msg, sizeof msg), GLOW_OK);
+    assert_int_equal(b.texels, 0);
+    assert_int_equal(b.bad, 0);
+    test.rgb[5] = NAN;
+    assert_int_equal(glow_eval_blotches(&test, &ref, &tex, &p4, &b, msg, sizeof msg), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_non_null(strstr(msg, "test image pixel (1, 0)"));
+    glow_eval_image small = make_image(2, 2);
+    assert_int_equal(glow_eval_blotches(&small, &ref, &tex, &p4, &b, msg, sizeof msg), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(glow_eval_blotches(&test, &ref, NULL, &p4, &b, msg, sizeof msg), GLOW_ERROR_INVALID_ARGUMENT);
+    glow_eval_image_free(&small);
+    glow_eval_image_free(&ref);
+    glow_eval_image_free(&test);
+    glow_eval_image_free(&tex);
+}
+
 static void test_mask_excludes_pixels(void **state) {
     (void)state;
     const uint32_t W = 40, H = 24;
@@ -612,6 +710,7 @@ int main(void) {
         cmocka_unit_test(test_block_error_offset_scale_noise),
         cmocka_unit_test(test_block_error_brute_force),
         cmocka_unit_test(test_block_error_edge_cases),
+        cmocka_unit_test(test_blotches_hand),
         cmocka_unit_test(test_mask_excludes_pixels),
         cmocka_unit_test(test_compare_consistent),
         cmocka_unit_test(test_invalid_arguments),

@@ -2,7 +2,7 @@
  *
  *   glow-compare TEST REF [--exposure E] [--add IMAGE] [--ref-add IMAGE] [--ref-sub IMAGE] [--block N] [--ppd P]
  *                [--flip-map OUT.exr] [--no-flip] [--panels OUT.png [--panel-exposure E]] [--blocks-csv OUT.csv]
- *                [--json]
+ *                [--texels TEXEL.exr [--blotch-threshold T] [--blotch-min-pixels N]] [--json]
  *
  * TEST, REF and the added images may each be OpenEXR or PFM (chosen by the file's magic bytes;
  * PFM is what the independent referee, shared/referee/, writes).
@@ -23,7 +23,10 @@
  * encoding, both images' mean radiance, the block error of N x N block means (default 8) and the
  * mean ratio, and mean HDR-FLIP (exposure range from REF, --ppd pixels per degree, default 67;
  * 20-30 ms per exposure at 320 x 180, --no-flip skips it); --flip-map writes its per-pixel map
- * as a grey EXR (definitions in tools/eval/glow_eval.h and docs/results.md). Exit status: 0
+ * as a grey EXR (definitions in tools/eval/glow_eval.h and docs/results.md).
+ * --texels TEXEL.exr (glow-render --glow's PREFIX_texel.exr) also finds blotches: texels of the
+ * lightmap whose error is beyond ±T (default 0.5) and that touch a texel with an error of the same
+ * sign (glow_eval_blotches). Exit status: 0
  * success, 1 an image cannot be read or written or the sizes differ (the message names the file),
  * 2 bad command line. */
 #include <math.h>
@@ -37,7 +40,8 @@
 
 static int usage(FILE *f) {
     fprintf(f, "usage: glow-compare TEST REF [--exposure E] [--add IMAGE] [--ref-add IMAGE] [--ref-sub IMAGE] [--block N] [--ppd P]\n"
-               "                    [--flip-map OUT.exr] [--no-flip] [--panels OUT.png [--panel-exposure E]] [--blocks-csv OUT.csv] [--json]\n"
+               "                    [--flip-map OUT.exr] [--no-flip] [--panels OUT.png [--panel-exposure E]] [--blocks-csv OUT.csv]\n"
+               "                    [--texels TEXEL.exr [--blotch-threshold T] [--blotch-min-pixels N]] [--json]\n"
                "Compares TEST with the reference REF (each OpenEXR or PFM): relative RMSE of the HDR\n"
                "values, RMSE and PSNR of the display images (x * exposure, clamped, sRGB-encoded) and their\n"
                "mean SSIM, the block error (relative RMS error of N x N block means, default 8), the mean\n"
@@ -49,6 +53,10 @@ static int usage(FILE *f) {
                "--ref-sub IMAGE subtracts IMAGE from REF (e.g. glow-render --near-split's PREFIX_indirect_near.exr\n"
                "  from PREFIX_indirect.exr: the light of surfaces farther than the split).\n"
                "--blocks-csv OUT.csv writes the N x N block means of TEST and REF (luma and RGB), one row a block.\n"
+               "--texels TEXEL.exr (glow-render --glow's PREFIX_texel.exr: the lightmap texel of each pixel)\n"
+               "  groups pixels by texel and reports blotches: touching texels whose luma error has one sign\n"
+               "  and exceeds --blotch-threshold T (default 0.5) of the reference, in texels seen by at least\n"
+               "  --blotch-min-pixels N pixels (default 16). A blotch is two or more such texels.\n"
                "--panels OUT.png writes TEST | REF | error side by side (3W x H): TEST and REF at exposure\n"
                "  --panel-exposure E (default: --exposure) and sRGB; the error map of the N x N blocks'\n"
                "  mean luma, (T - R) / max(R, 1e-3 mean luma of REF) clamped to [-1, 1], red where TEST\n"
@@ -181,7 +189,9 @@ static glow_result write_panels(const glow_eval_image *test, const glow_eval_ima
 
 int main(int argc, char **argv) {
     const char *paths[2] = {NULL, NULL}, *add = NULL, *ref_add = NULL, *flip_map = NULL, *panels = NULL,
-               *blocks_csv = NULL, *ref_sub = NULL;
+               *blocks_csv = NULL, *ref_sub = NULL, *texels = NULL;
+    glow_eval_blotch_params bp = {0};
+    int blotch_opts = 0;
     int np = 0, json = 0, flip = 1;
     float exposure = 1.0f, panel_exposure = 0.0f; /* 0: --exposure */
     unsigned long block = GLOW_EVAL_BLOCK_SIZE;
@@ -203,6 +213,23 @@ int main(int argc, char **argv) {
         } else if (!strcmp(a, "--ref-sub")) {
             if (i + 1 >= argc) return usage(stderr);
             ref_sub = argv[++i];
+        } else if (!strcmp(a, "--texels")) {
+            if (i + 1 >= argc) return usage(stderr);
+            texels = argv[++i];
+        } else if (!strcmp(a, "--blotch-threshold")) {
+            if (i + 1 >= argc) return usage(stderr);
+            if (!glow_cli_double(argv[++i], &bp.threshold) || !(bp.threshold > 0.0) || bp.threshold > 1e6) {
+                fprintf(stderr, "glow-compare: --blotch-threshold needs a positive number, got '%s'\n", argv[i]);
+                return 2;
+            }
+            blotch_opts = 1;
+        } else if (!strcmp(a, "--blotch-min-pixels")) {
+            if (i + 1 >= argc) return usage(stderr);
+            if (!glow_cli_u32(argv[++i], 1, 1u << 30, &bp.min_pixels)) {
+                fprintf(stderr, "glow-compare: --blotch-min-pixels needs a whole number >= 1, got '%s'\n", argv[i]);
+                return 2;
+            }
+            blotch_opts = 1;
         } else if (!strcmp(a, "--blocks-csv")) {
             if (i + 1 >= argc) return usage(stderr);
             blocks_csv = argv[++i];
@@ -255,6 +282,10 @@ int main(int argc, char **argv) {
         fprintf(stderr, "glow-compare: --panel-exposure needs --panels\n");
         return 2;
     }
+    if (blotch_opts && !texels) {
+        fprintf(stderr, "glow-compare: --blotch-threshold and --blotch-min-pixels need --texels\n");
+        return 2;
+    }
     if (panel_exposure <= 0.0f) panel_exposure = exposure;
     glow_eval_image img[2] = {{0}, {0}};
     char msg[512];
@@ -290,6 +321,19 @@ int main(int argc, char **argv) {
         glow_eval_image_free(&img[0]);
         glow_eval_image_free(&img[1]);
         return 1;
+    }
+    glow_eval_blotch_result br = {0};
+    if (r == GLOW_OK && texels) {
+        glow_eval_image tx = {0};
+        if (glow_eval_read_image(texels, &tx, msg, sizeof msg) != GLOW_OK ||
+            glow_eval_blotches(&img[0], &img[1], &tx, &bp, &br, msg, sizeof msg) != GLOW_OK) {
+            fprintf(stderr, "glow-compare: %s: %s\n", texels, msg);
+            glow_eval_image_free(&tx);
+            glow_eval_image_free(&img[0]);
+            glow_eval_image_free(&img[1]);
+            return 1;
+        }
+        glow_eval_image_free(&tx);
     }
     if (r == GLOW_OK && flip) {
         float *fm = NULL;
@@ -336,6 +380,26 @@ int main(int argc, char **argv) {
             glow_json_num(o, "flip_stop_exposure", fr.stop_exposure);
             cJSON_AddNumberToObject(o, "flip_exposures", fr.num_exposures);
         }
+        if (texels) {
+            cJSON *b = cJSON_AddObjectToObject(o, "blotches");
+            cJSON_AddNumberToObject(b, "threshold", bp.threshold > 0.0 ? bp.threshold : 0.5);
+            cJSON_AddNumberToObject(b, "min_pixels", bp.min_pixels ? bp.min_pixels : 16);
+            cJSON_AddNumberToObject(b, "texels", br.texels);
+            cJSON_AddNumberToObject(b, "judged", br.judged);
+            cJSON_AddNumberToObject(b, "bad", br.bad);
+            cJSON_AddNumberToObject(b, "blotches", br.blotches);
+            cJSON_AddNumberToObject(b, "judged_pixels", (double)br.judged_pixels);
+            cJSON_AddNumberToObject(b, "bad_pixels", (double)br.bad_pixels);
+            cJSON_AddNumberToObject(b, "blotch_pixels", (double)br.blotch_pixels);
+            cJSON_AddNumberToObject(b, "largest_texels", br.largest_texels);
+            cJSON_AddNumberToObject(b, "largest_pixels", (double)br.largest_pixels);
+            glow_json_num(b, "largest_rel", br.largest_rel);
+            cJSON *box = cJSON_AddArrayToObject(b, "largest_box");
+            for (int k = 0; k < 4; k++) cJSON_AddItemToArray(box, cJSON_CreateNumber(br.largest_box[k]));
+            glow_json_num(b, "worst_rel", br.worst_rel);
+            cJSON *lc = cJSON_AddArrayToObject(b, "largest_caches");
+            for (uint32_t k = 0; k < br.largest_cache_count; k++) cJSON_AddItemToArray(lc, cJSON_CreateNumber(br.largest_caches[k]));
+        }
         glow_json_num(o, "exposure", exposure);
         cJSON_AddNumberToObject(o, "pixels", (double)m.pixels);
         glow_json_array3(o, "mean_test", m.mean_test);
@@ -352,6 +416,25 @@ int main(int argc, char **argv) {
         char label[48];
         snprintf(label, sizeof label, "block error (%ux%u)", (unsigned)m.block_size, (unsigned)m.block_size);
         printf("  %-21s%.4f\n  mean ratio           %.4f\n", label, m.block_error, m.mean_ratio);
+        if (texels) {
+            const double jp = br.judged_pixels ? (double)br.judged_pixels : 1.0;
+            printf("  blotches (> %.2g)     %u larger than a texel (%.1f %% of judged pixels); %u bad of %u judged "
+                   "texels (%.1f %%), %u seen\n",
+                   bp.threshold > 0.0 ? bp.threshold : 0.5, br.blotches, 100.0 * (double)br.blotch_pixels / jp, br.bad,
+                   br.judged, 100.0 * (double)br.bad_pixels / jp, br.texels);
+            if (br.largest_texels)
+                printf("  largest bad set      %u texel%s, %llu pixels, error %+.2f, pixels (%u, %u)-(%u, %u); worst "
+                       "texel %+.2f\n",
+                       br.largest_texels, br.largest_texels == 1 ? "" : "s", (unsigned long long)br.largest_pixels,
+                       br.largest_rel, br.largest_box[0], br.largest_box[1], br.largest_box[2], br.largest_box[3],
+                       br.worst_rel);
+            if (br.largest_cache_count) {
+                printf("  its caches           ");
+                for (uint32_t k = 0; k < br.largest_cache_count; k++)
+                    printf("%s%u", k ? "," : "", br.largest_caches[k]);
+                printf(" (glow-stability audit BAKE SCENE --caches ...)\n");
+            }
+        }
         if (flip)
             printf("  HDR-FLIP (mean)      %.4f (%d exposures %.2f .. %.2f, %.1f pixels/degree)\n", fr.mean,
                    fr.num_exposures, fr.start_exposure, fr.stop_exposure, fr.ppd);

@@ -159,6 +159,41 @@ double glow_eval_block_error(const glow_eval_image *test, const glow_eval_image 
                              uint32_t block_size);
 double glow_eval_mean_ratio(const glow_eval_image *test, const glow_eval_image *ref, const uint8_t *mask);
 
+/* ---- Blotches: errors that span more than one lightmap texel ----
+ * A lightmap cache stands for its texel; an error confined to one texel is the texel's resolution, one
+ * that spans neighbouring texels is a blotch (issue 13: "no blotch larger than a texel"). `texels` is
+ * glow-render's PREFIX_texel.exr (glow_render_result.texel): per pixel R = texel x + 1, G = y + 1 (0 =
+ * no lightmap texel: sky, grid, back faces). Pixels are grouped by texel; a texel region with at least
+ * min_pixels pixels is judged: rel = (Σ T − Σ R) / max(Σ R, n · 1e-3 · the mean reference luma over
+ * the image), luma 0.2126 R + 0.7152 G + 0.0722 B, as the --panels error map. It is bad when |rel| >
+ * threshold. Bad texels of the same sign whose pixels touch (4-neighbours) join one set; a set of two
+ * or more texels is a blotch larger than a texel. */
+typedef struct glow_eval_blotch_params {
+    double threshold;    /* 0 = 0.5 (an error an artist sees as a patch: half again, or half gone) */
+    uint32_t min_pixels; /* 0 = 16: texels seen by fewer pixels are too small on screen to judge */
+} glow_eval_blotch_params;
+
+typedef struct glow_eval_blotch_result {
+    uint32_t texels, judged, bad;  /* texel regions seen; with min_pixels; judged and |rel| > threshold */
+    uint32_t blotches;             /* sets of >= 2 bad texels: blotches larger than a texel */
+    uint64_t judged_pixels, bad_pixels, blotch_pixels;
+    /* the largest set by pixels (a single texel when no blotch; all 0 when nothing is bad) */
+    uint32_t largest_texels;
+    uint64_t largest_pixels;
+    double largest_rel;            /* (Σ T − Σ R) / Σ R over its pixels' luma */
+    uint32_t largest_box[4];       /* x0, y0, x1, y1 of its pixels, inclusive */
+    uint32_t largest_caches[8];    /* the caches of its texels with the most pixels (the texel image's B
+                                      channel - 1; glow-stability audit --caches takes them), most first */
+    uint32_t largest_cache_count;  /* up to 8; texels whose B is 0 are left out */
+    double worst_rel;              /* the judged texel with the largest |rel|: its rel (0 when none) */
+} glow_eval_blotch_result;
+
+/* Fills *out (see above). GLOW_ERROR_INVALID_ARGUMENT on NULL, sizes that differ or a non-finite
+ * pixel (message names it); GLOW_ERROR_OUT_OF_MEMORY. params may be NULL (defaults). */
+glow_result glow_eval_blotches(const glow_eval_image *test, const glow_eval_image *ref, const glow_eval_image *texels,
+                               const glow_eval_blotch_params *params, glow_eval_blotch_result *out, char *message,
+                               size_t message_size);
+
 /* ---- FLIP (see FLIP above) ---- */
 
 typedef struct glow_eval_flip_params {

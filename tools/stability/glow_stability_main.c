@@ -66,7 +66,9 @@ static int usage(FILE *f) {
                "                              [--csv FILE]\n"
                "       glow-stability jumps   BAKE SCENE.json [--pairs P] [--samples S] [--csv FILE]\n"
                "       glow-stability audit   BAKE SCENE.json [--probes P] [--samples S] [--csv FILE] [--json]\n"
-               "                              [--radiance-out FILE]\n"
+               "                              [--radiance-out FILE] [--caches I,J,...]\n"
+               "  audit --caches: only these lightmap caches (output cache indices, e.g. glow-compare\n"
+               "  --texels' blotch report or the B channel of glow-render's PREFIX_texel.exr minus 1)\n"
                "Share of negative radiance in Glow's converged caches for SH bands 2..L, with and without\n"
                "the Lanczos window (glow_sh_window_factor); see docs/results.md.\n");
     return f == stdout ? 0 : 2;
@@ -556,7 +558,7 @@ static int cmp_ratio(const void *a, const void *b) {
  * and the camera. Also each cache's visible solid angle (Σ over its links, from the bake) as a
  * histogram: what the cut covers. */
 static int audit(const char *bake_path, const char *scene_path, uint32_t nprobes, uint32_t samples, const char *csv_path,
-                 const char *radiance_out, int json) {
+                 const char *radiance_out, const uint32_t *only, uint32_t only_count, int json) {
     cJSON *jroot = NULL; /* --json: built as the figures come, printed at the end */
     session s;
     int rc = 1;
@@ -567,6 +569,13 @@ static int audit(const char *bake_path, const char *scene_path, uint32_t nprobes
     if (!session_open(&s, bake_path, scene_path, 64, false)) goto done;
     const uint32_t lm = s.info.lightmap_cache_count, first = s.info.grid_cache_count;
     if (nprobes > lm) nprobes = lm;
+    for (uint32_t i = 0; i < only_count; ++i)
+        if (only[i] < first || only[i] - first >= lm) {
+            fprintf(stderr, "glow-stability: %s: --caches: %u is not a lightmap cache (those are %u..%u)\n", bake_path,
+                    only[i], first, first + lm - 1);
+            goto done;
+        }
+    if (only_count) nprobes = only_count;
     if (nprobes == 0) {
         fprintf(stderr, "glow-stability: %s: the bake has no lightmap caches to audit\n", bake_path);
         goto done;
@@ -584,7 +593,7 @@ static int audit(const char *bake_path, const char *scene_path, uint32_t nprobes
     sgc = malloc(sizeof(float) * 3 * (np + 1));
     if (!pts || !er1 || !erc || !eg1 || !egc || !ratio || !pick || !sg1 || !sgc) goto done;
     for (uint32_t i = 0; i < nprobes; ++i) {
-        pick[i] = first + (uint32_t)((uint64_t)i * lm / nprobes);
+        pick[i] = only_count ? only[i] : first + (uint32_t)((uint64_t)i * lm / nprobes);
         cache_point(&s, pick[i], pts + 6 * i);
     }
     /* Glow converged (session_open ran 3 x 64 feedback iterations), then single bounce: no feedback */
@@ -791,6 +800,7 @@ int main(int argc, char **argv) {
              budget_caches = 0;
     const char *csv = NULL, *radiance_out = NULL;
     int json = 0;
+    uint32_t only[4096], only_count = 0; /* audit --caches */
     for (int i = 4; i < argc; ++i) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         uint32_t *dst = !strcmp(a, "--bands-max") ? &lmax : !strcmp(a, "--dirs") ? &ndirs : !strcmp(a, "--frames") ? &frames
@@ -801,6 +811,23 @@ int main(int argc, char **argv) {
             json = 1;
         } else if (!strcmp(a, "--csv") && v) {
             csv = v;
+            ++i;
+        } else if (!strcmp(a, "--caches") && v) {
+            for (const char *q = v; *q;) {
+                char item[32];
+                size_t len = strcspn(q, ",");
+                if (len == 0 || len >= sizeof item || only_count == 4096) {
+                    fprintf(stderr, "glow-stability: --caches needs 1 to 4096 cache indices separated by commas, not '%s'\n", v);
+                    return 2;
+                }
+                memcpy(item, q, len);
+                item[len] = 0;
+                if (!glow_cli_u32(item, 0, UINT32_MAX - 1, &only[only_count++])) {
+                    fprintf(stderr, "glow-stability: --caches: '%s' is not a cache index\n", item);
+                    return 2;
+                }
+                q += len + (q[len] == ',');
+            }
             ++i;
         } else if (!strcmp(a, "--radiance-out") && v) {
             radiance_out = v;
@@ -820,8 +847,12 @@ int main(int argc, char **argv) {
         fprintf(stderr, "glow-stability: --bands-max must be 2..8, --dirs 8..65536, --iterations 1..64\n");
         return 2;
     }
+    if (only_count && strcmp(argv[1], "audit")) {
+        fprintf(stderr, "glow-stability: --caches is an audit option\n");
+        return 2;
+    }
     if (!strcmp(argv[1], "ringing")) return ringing(argv[2], argv[3], lmax, ndirs, json);
-    if (!strcmp(argv[1], "audit")) return audit(argv[2], argv[3], probes, samples, csv, radiance_out, json);
+    if (!strcmp(argv[1], "audit")) return audit(argv[2], argv[3], probes, samples, csv, radiance_out, only, only_count, json);
     if (!strcmp(argv[1], "flicker")) return flicker(argv[2], argv[3], frames, iterations, probes, samples, csv, budget_caches);
     return jumps(argv[2], argv[3], pairs, samples, csv);
 }

@@ -114,6 +114,11 @@ typedef struct glow_render_glow_settings {
 typedef struct glow_render_result {
     glow_eval_image final, direct, indirect;
     glow_eval_image indirect_near; /* reference with settings->near_split > 0 only (else empty): part of indirect */
+    glow_eval_image texel;         /* glow view with a lightmap (not grid_only; else empty): per pixel, the
+                                      lightmap texel its first sample that read the lightmap looked up, the
+                                      one whose square holds the lookup's UV: R = x + 1, G = y + 1, B = that
+                                      texel's cache + 1 (exact in float up to 2^24); 0 0 0 = none (sky, grid,
+                                      back faces). glow-compare --texels groups pixels by it (blotches) */
     uint32_t width, height, spp, threads;
     double seconds;           /* the rendering itself (glow: not the solve) */
     uint64_t rays;            /* Embree queries: camera, bounce and shadow rays */

@@ -146,6 +146,7 @@ void glow_render_result_free(glow_render_result *r) {
     glow_eval_image_free(&r->direct);
     glow_eval_image_free(&r->indirect);
     glow_eval_image_free(&r->indirect_near);
+    glow_eval_image_free(&r->texel);
     memset(r, 0, sizeof *r);
 }
 
@@ -157,11 +158,19 @@ glow_result glow_render_write(const glow_render_result *res, const char *prefix,
     if (!isfinite(exposure) || exposure < 0.0f)
         return glow__render_fail(message, message_size, GLOW_ERROR_INVALID_ARGUMENT,
                                  "glow_render_write: exposure %g must be finite and >= 0", (double)exposure);
-    /* the near part of the indirect light (glow_render_settings.near_split) only when it was rendered */
-    const int N = res->indirect_near.rgb ? 5 : 4;
-    static const char *suffix[5] = {".exr", "_direct.exr", "_indirect.exr", ".png", "_indirect_near.exr"};
-    const glow_eval_image *img[5] = {&res->final, &res->direct, &res->indirect, &res->final, &res->indirect_near};
-    char path[5][1024], part[5][1040];
+    /* the near part of the indirect light (glow_render_settings.near_split) and the texel image (glow
+     * view with a lightmap) only when they were rendered */
+    static const char *all_suffix[6] = {".exr", "_direct.exr", "_indirect.exr", ".png", "_indirect_near.exr", "_texel.exr"};
+    const glow_eval_image *all_img[6] = {&res->final, &res->direct, &res->indirect, &res->final, &res->indirect_near, &res->texel};
+    const char *suffix[6];
+    const glow_eval_image *img[6];
+    int N = 0;
+    for (int i = 0; i < 6; ++i)
+        if (i < 4 || all_img[i]->rgb) {
+            suffix[N] = all_suffix[i];
+            img[N++] = all_img[i];
+        }
+    char path[6][1024], part[6][1040];
     for (int i = 0; i < N; ++i) {
         int n = snprintf(path[i], sizeof path[i], "%s%s", prefix, suffix[i]);
         int n2 = snprintf(part[i], sizeof part[i], "%s%s.part", prefix, suffix[i]);

@@ -121,6 +121,7 @@ typedef struct render_ctx {
     /* accumulators: per pixel RGB */
     float *direct, *indirect;
     float *indirect_near; /* NULL unless settings->near_split > 0 (reference only) */
+    float *texel;         /* glow view with a lightmap: glow_render_result.texel's pixels, else NULL */
     float near_split;
     /* scheduling */
     atomic_uint rows_done;
@@ -293,8 +294,11 @@ static void emitter_nee(const render_ctx *c, rng *rp, const surf *s, float out[3
     for (int k = 0; k < 3; ++k) out[k] = s->rho[k] * le[k] * g;
 }
 
-/* Glow's indirect light at the first hit: ρ · (cosine-lobe mean incident radiance of the caches). */
-static void glow_indirect(const render_ctx *c, const surf *s, float *coeffs, worker_stats *ws, float out[3]) {
+/* Glow's indirect light at the first hit: ρ · (cosine-lobe mean incident radiance of the caches).
+ * When it read the lightmap, texel[] gets the texel whose square holds the lookup (x + 1, y + 1) and
+ * that texel's cache + 1 (glow_render_result.texel); otherwise texel[] is left alone. */
+static void glow_indirect(const render_ctx *c, const surf *s, float *coeffs, worker_stats *ws, float out[3],
+                          float texel[3]) {
     out[0] = out[1] = out[2] = 0.0f;
     float det[3] = {0.0f, 0.0f, 0.0f}; /* the lightmap detail's correction (bakes with LDET) */
     const glow_cache_outputs *o = c->gv->out;
@@ -305,7 +309,17 @@ static void glow_indirect(const render_ctx *c, const surf *s, float *coeffs, wor
         float u = b0 * uv[0] + s->b1 * uv[2] + s->b2 * uv[4];
         float v = b0 * uv[1] + s->b1 * uv[3] + s->b2 * uv[5];
         ok = glow_sample_lightmap(o, u, v, coeffs) == GLOW_OK;
-        if (ok) ws->lm++;
+        if (ok) {
+            ws->lm++;
+            const uint32_t W = o->lightmap_width, H = o->lightmap_height;
+            const float fx = u * (float)W, fy = v * (float)H; /* the texel square holding (u, v), clamped */
+            const uint32_t tx = fx > 0.0f ? (fx < (float)W ? (uint32_t)fx : W - 1u) : 0u;
+            const uint32_t ty = fy > 0.0f ? (fy < (float)H ? (uint32_t)fy : H - 1u) : 0u;
+            const uint32_t cache = o->lightmap_map[(size_t)ty * W + tx];
+            texel[0] = (float)(tx + 1u);
+            texel[1] = (float)(ty + 1u);
+            texel[2] = cache == UINT32_MAX ? 0.0f : (float)cache + 1.0f;
+        }
         if (ok && o->lightmap_detail && !c->gv->no_detail) glow_sample_lightmap_detail(o, u, v, det);
     }
     if (!ok && o->grid_sh) { /* as a dynamic object's surface (with grid_only: 0.1 % of the diagonal off it) */
@@ -375,9 +389,9 @@ static void continue_path(const render_ctx *c, rng *rp, glow__hit h, const float
     }
 }
 
-/* One sample of pixel (x, y): adds to direct[3] and indirect[3]. */
+/* One sample of pixel (x, y): adds to direct[3] and indirect[3]; texel[] as glow_indirect's. */
 static void sample(const render_ctx *c, uint32_t x, uint32_t y, rng *rd, rng *rp, float *coeffs, worker_stats *ws,
-                   float direct[3], float indirect[3], float near[3]) {
+                   float direct[3], float indirect[3], float near[3], float texel[3]) {
     const glow_render_scene *sc = c->sc;
     /* ---- camera ray (stream rd) */
     float jx = rnd(rd), jy = rnd(rd);
@@ -399,7 +413,7 @@ static void sample(const render_ctx *c, uint32_t x, uint32_t y, rng *rd, rng *rp
         (void)rnd(rd);
         (void)rnd(rd);
         float g[3];
-        glow_indirect(c, &s, coeffs, ws, g);
+        glow_indirect(c, &s, coeffs, ws, g, texel);
         for (int k = 0; k < 3; ++k) indirect[k] += g[k];
         return;
     }
@@ -425,7 +439,7 @@ static void sample(const render_ctx *c, uint32_t x, uint32_t y, rng *rd, rng *rp
     /* ---- Glow's view: the caches at the first hit */
     if (c->gv) {
         float g[3];
-        glow_indirect(c, &s, coeffs, ws, g);
+        glow_indirect(c, &s, coeffs, ws, g, texel);
         for (int k = 0; k < 3; ++k) indirect[k] += g[k];
         return;
     }
@@ -458,9 +472,11 @@ static void render_rows(void *ctx, uint32_t begin, uint32_t end, uint32_t worker
             rng_init(&rd, c->seed, pixel, 0);
             rng_init(&rp, c->seed, pixel, 1);
             double sd[3] = {0, 0, 0}, si[3] = {0, 0, 0}, sn[3] = {0, 0, 0};
+            float tex[3] = {0, 0, 0}; /* the first sample's lightmap texel that has one */
             for (uint32_t n = 0; n < c->spp; ++n) {
-                float d[3] = {0, 0, 0}, ind[3] = {0, 0, 0}, nr[3] = {0, 0, 0};
-                sample(c, x, y, &rd, &rp, coeffs, ws, d, ind, nr);
+                float d[3] = {0, 0, 0}, ind[3] = {0, 0, 0}, nr[3] = {0, 0, 0}, tl[3] = {0, 0, 0};
+                sample(c, x, y, &rd, &rp, coeffs, ws, d, ind, nr, tl);
+                if (tex[0] == 0.0f) memcpy(tex, tl, sizeof tex);
                 if (!(isfinite(d[0]) && isfinite(d[1]) && isfinite(d[2]) && isfinite(ind[0]) && isfinite(ind[1]) &&
                       isfinite(ind[2]))) { /* a bug upstream: counted and reported, kept out of the pixel */
                     ws->nonfinite++;
@@ -476,6 +492,7 @@ static void render_rows(void *ctx, uint32_t begin, uint32_t end, uint32_t worker
                 c->direct[3 * pixel + k] = (float)(sd[k] / c->spp);
                 c->indirect[3 * pixel + k] = (float)(si[k] / c->spp);
                 if (c->indirect_near) c->indirect_near[3 * pixel + k] = (float)(sn[k] / c->spp);
+                if (c->texel) c->texel[3 * pixel + k] = tex[k];
             }
         }
         unsigned done = atomic_fetch_add(&c->rows_done, 1u) + 1u;
@@ -587,13 +604,15 @@ static glow_result render(const glow_render_scene *sc, const glow_render_setting
     if ((r = glow_eval_image_alloc(&out->direct, c.w, c.h)) != GLOW_OK ||
         (r = glow_eval_image_alloc(&out->indirect, c.w, c.h)) != GLOW_OK ||
         (r = glow_eval_image_alloc(&out->final, c.w, c.h)) != GLOW_OK ||
-        (!gv && st->near_split > 0.0f && (r = glow_eval_image_alloc(&out->indirect_near, c.w, c.h)) != GLOW_OK)) {
+        (!gv && st->near_split > 0.0f && (r = glow_eval_image_alloc(&out->indirect_near, c.w, c.h)) != GLOW_OK) ||
+        (gv && gv->lm_uv && !gv->grid_only && (r = glow_eval_image_alloc(&out->texel, c.w, c.h)) != GLOW_OK)) {
         r = glow__render_fail(message, message_size, r, "%s: cannot allocate %u x %u images", sc->path, c.w, c.h);
         goto done;
     }
     c.direct = out->direct.rgb;
     c.indirect = out->indirect.rgb;
     c.indirect_near = out->indirect_near.rgb; /* NULL unless allocated above */
+    c.texel = out->texel.rgb;                 /* likewise */
     c.near_split = c.indirect_near ? st->near_split : 0.0f;
     atomic_init(&c.rows_done, 0u);
     pthread_mutex_init(&c.progress_lock, NULL);
