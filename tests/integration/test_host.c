@@ -118,14 +118,19 @@ static int teardown(void **state) {
     return 0;
 }
 
-static glow_host *make_host(const glow_bake *b, glow_host_kind kind, const glow_scene_light *lights, uint32_t count,
-                            const float env[3]) {
-    glow_host_desc d = {.kind = kind, .bake = b, .lights = lights, .light_count = count};
+static glow_host *make_host_k(const glow_bake *b, glow_host_kind kind, const glow_scene_light *lights, uint32_t count,
+                              const float env[3], uint32_t surfel_samples) {
+    glow_host_desc d = {.kind = kind, .bake = b, .lights = lights, .light_count = count, .surfel_samples = surfel_samples};
     if (env) memcpy(d.environment, env, sizeof d.environment);
     glow_host *h = NULL;
     assert_int_equal(glow_host_create(&d, &h), GLOW_OK);
     assert_non_null(h);
     return h;
+}
+
+static glow_host *make_host(const glow_bake *b, glow_host_kind kind, const glow_scene_light *lights, uint32_t count,
+                            const float env[3]) {
+    return make_host_k(b, kind, lights, count, env, 0);
 }
 
 static void irr(const glow_host *h, double px, double py, double pz, double nx, double ny, double nz, float out[3]) {
@@ -429,7 +434,8 @@ static void test_hook_matches_scalar(void **state) {
     surfels s = get_surfels(fx->cornell);
     float *out = malloc(sizeof(float) * 3 * s.n);
     for (int kind = GLOW_HOST_KIND_EXACT; kind <= GLOW_HOST_KIND_SHADOW_MAP; ++kind) {
-        glow_host *h = make_host(fx->cornell, (glow_host_kind)kind, l, 3, NULL);
+        /* one ray from the centre: glow_host_irradiance's (footprints: test_footprints) */
+        glow_host *h = make_host_k(fx->cornell, (glow_host_kind)kind, l, 3, NULL, 1);
         run_hook(h, &s, out);
         uint32_t nonzero = 0, dark = 0;
         for (uint32_t i = 0; i < s.n; ++i) {
@@ -451,6 +457,114 @@ static void test_hook_matches_scalar(void **state) {
     glow_lighting_hooks none = glow_host_hooks(NULL);
     assert_null(none.light_surfels);
     free(out);
+    free_surfels(&s);
+}
+
+static uint64_t rays_of(const glow_host *h) {
+    glow_host_stats st;
+    assert_int_equal(glow_host_get_stats(h, &st), GLOW_OK);
+    return st.shadow_rays;
+}
+
+/* Footprints (glow_host_desc.surfel_samples, glow_host.h FOOTPRINTS) on the open scene under a tilted
+ * sun, which casts shadow edges across surfels: with one ray a surfel is lit or not; with 8 points
+ * some are partly lit, the total stays that of the centres within a few per cent; a still light
+ * costs no rays after the first call, a moved one one ray per surfel per call, and K calls after a
+ * move the result is that of a host made at the new place; packets and single rays agree. */
+static void test_footprints(void **state) {
+    fixture *fx = *state;
+    glow_scene_light sun = {.type = GLOW_SCENE_LIGHT_SUN, .direction = {0.5f, -1.0f, 0.3f}, .irradiance = {3, 3, 3}};
+    surfels s = get_surfels(fx->open);
+    const size_t bytes = sizeof(float) * 3 * s.n;
+    float *one = malloc(bytes), *eight = malloc(bytes), *again = malloc(bytes), *fresh = malloc(bytes);
+    assert_true(one && eight && again && fresh);
+    glow_host *h1 = make_host_k(fx->open, GLOW_HOST_KIND_EXACT, &sun, 1, NULL, 1);
+    glow_host *h8 = make_host_k(fx->open, GLOW_HOST_KIND_EXACT, &sun, 1, NULL, 0); /* the default: 8 */
+    glow_host_stats st;
+    assert_int_equal(glow_host_get_stats(h8, &st), GLOW_OK);
+    assert_int_equal(st.surfel_samples, GLOW_HOST_SURFEL_SAMPLES_DEFAULT);
+    assert_int_equal(st.shadow_rays, 0);
+    run_hook(h1, &s, one);
+    run_hook(h8, &s, eight);
+    float l[3] = {-0.5f, 1.0f, -0.3f};
+    const float ll = sqrtf(l[0] * l[0] + l[1] * l[1] + l[2] * l[2]);
+    uint32_t facing = 0, partial = 0, binary = 0;
+    double sum1 = 0.0, sum8 = 0.0;
+    for (uint32_t i = 0; i < s.n; ++i) {
+        const float *n = s.nor + 4 * i;
+        const float f = 3.0f * (n[0] * l[0] + n[1] * l[1] + n[2] * l[2]) / ll; /* unshadowed E */
+        if (!(f > 1e-3f)) continue;
+        facing++;
+        const float r1 = one[3 * i] / f, r8 = eight[3 * i] / f;
+        binary += fabsf(r1) < 1e-4f || fabsf(r1 - 1.0f) < 1e-4f;
+        partial += r8 > 0.06f && r8 < 0.94f;
+        /* a fraction k / 8 of the unshadowed value */
+        assert_true(fabsf(r8 * 8.0f - roundf(r8 * 8.0f)) < 1e-3f);
+        sum1 += one[3 * i];
+        sum8 += eight[3 * i];
+    }
+    print_message("footprints: %u surfels facing the sun, %u partly lit with 8 points; sum of E %.4g with one ray, %.4g with "
+                  "8 points; rays %llu / %llu\n", facing, partial, sum1, sum8, (unsigned long long)rays_of(h1),
+                  (unsigned long long)rays_of(h8));
+    assert_int_equal(binary, facing); /* one ray: lit or not */
+    assert_true(partial > facing / 100); /* shadow edges cross 1.6 % of them */
+    assert_true(fabs(sum8 - sum1) < 0.05 * sum1);
+    assert_int_equal(rays_of(h1), facing);
+    assert_int_equal(rays_of(h8), 8u * facing);
+    /* a still light: no rays, the same light */
+    run_hook(h8, &s, again);
+    assert_int_equal(rays_of(h8), 8u * facing);
+    assert_memory_equal(again, eight, bytes);
+    /* a brighter light at the same place: no rays, E scales */
+    glow_scene_light bright = sun;
+    bright.irradiance[0] = bright.irradiance[1] = bright.irradiance[2] = 6.0f;
+    assert_int_equal(glow_host_set_light(h8, 0, &bright), GLOW_OK);
+    run_hook(h8, &s, again);
+    assert_int_equal(rays_of(h8), 8u * facing);
+    for (size_t k = 0; k < 3 * (size_t)s.n; ++k) assert_true(fabsf(again[k] - 2.0f * eight[k]) <= 1e-5f * again[k]);
+    /* moved: one ray per facing surfel per call, and after 8 calls a fresh host's result */
+    glow_scene_light moved = sun;
+    moved.direction[0] = 0.3f;
+    moved.direction[2] = 0.5f;
+    assert_int_equal(glow_host_set_light(h8, 0, &moved), GLOW_OK);
+    glow_host *hf = make_host_k(fx->open, GLOW_HOST_KIND_EXACT, &moved, 1, NULL, 8);
+    run_hook(hf, &s, fresh);
+    uint64_t before = rays_of(h8);
+    run_hook(h8, &s, again);
+    const uint64_t per_call = rays_of(h8) - before;
+    uint32_t facing_moved = 0;
+    for (uint32_t i = 0; i < s.n; ++i) facing_moved += fresh[3 * i] > 0.0f || again[3 * i] > 0.0f;
+    assert_true(per_call > 0 && per_call <= s.n);
+    assert_true(memcmp(again, fresh, bytes) != 0); /* still partly the old place's */
+    for (int call = 1; call < 8; ++call) run_hook(h8, &s, again);
+    assert_memory_equal(again, fresh, bytes);
+    before = rays_of(h8);
+    run_hook(h8, &s, again);
+    assert_int_equal(rays_of(h8), before); /* fresh again: no rays */
+    /* single rays (GLOW_HOST_PACKETS=0) trace the same points */
+    setenv("GLOW_HOST_PACKETS", "0", 1);
+    glow_host *hs = make_host_k(fx->open, GLOW_HOST_KIND_EXACT, &moved, 1, NULL, 8);
+    unsetenv("GLOW_HOST_PACKETS");
+    run_hook(hs, &s, again);
+    assert_memory_equal(again, fresh, bytes);
+    assert_int_equal(rays_of(hs), rays_of(hf));
+    /* out of range; the shadow-map kind has no footprints */
+    glow_host_desc bad = {.kind = GLOW_HOST_KIND_EXACT, .bake = fx->open, .surfel_samples = 9};
+    glow_host *none = NULL;
+    assert_int_equal(glow_host_create(&bad, &none), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_null(none);
+    glow_host *hm = make_host_k(fx->open, GLOW_HOST_KIND_SHADOW_MAP, &sun, 1, NULL, 8);
+    assert_int_equal(glow_host_get_stats(hm, &st), GLOW_OK);
+    assert_int_equal(st.surfel_samples, 1);
+    glow_host_destroy(hm);
+    glow_host_destroy(hs);
+    glow_host_destroy(hf);
+    glow_host_destroy(h8);
+    glow_host_destroy(h1);
+    free(one);
+    free(eight);
+    free(again);
+    free(fresh);
     free_surfels(&s);
 }
 
@@ -762,7 +876,7 @@ int main(void) {
         cmocka_unit_test(test_sun_tilted),       cmocka_unit_test(test_blocked),
         cmocka_unit_test(test_environment),      cmocka_unit_test(test_hook_matches_scalar),
         cmocka_unit_test(test_shadow_map_vs_exact), cmocka_unit_test(test_set_light_and_errors),
-        cmocka_unit_test(test_runtime_update),
+        cmocka_unit_test(test_runtime_update), cmocka_unit_test(test_footprints),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

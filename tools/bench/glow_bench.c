@@ -36,6 +36,7 @@ typedef struct options {
     const char *bake, *scene;
     uint32_t frames, warmup, threads, luma, chroma, iterations;
     glow_host_kind host;
+    uint32_t surfel_samples; /* the exact host's footprint points (glow_host_desc); 0 = its default */
     glow_link_mode link_mode;
     int json, quiet, no_probe_machine, gl, gl_finish;
     uint32_t probe_count;
@@ -54,7 +55,7 @@ static const char *link_mode_name(uint32_t mode) {
 static void usage(FILE *f) {
     fprintf(f,
             "usage: glow-bench BAKE SCENE [--frames N] [--warmup N] [--threads N] [--luma L] [--chroma C]\n"
-            "                  [--iterations K] [--host exact|shadow-map] [--link-mode compact|expanded|sh]\n"
+            "                  [--iterations K] [--host exact|shadow-map] [--surfel-samples K] [--link-mode compact|expanded|sh]\n"
             "                  [--probe X,Y,Z]... [--no-machine] [--backend cpu|gl]\n"
             "                  [--budget-ms MS] [--budget-caches N] [--converge EPS] [--focus X,Y,Z] [--still [--keep-lighting]]\n"
             "                  [--json] [-q]\n"
@@ -65,6 +66,8 @@ static void usage(FILE *f) {
             "  --luma/--chroma SH bands (default: the bake's; chroma = luma)\n"
             "  --iterations K  bounce iterations per update (default 1)\n"
             "  --host          surfel lighting: exact Embree rays (default) or software shadow maps\n"
+            "  --surfel-samples K  the exact host's shadow-ray points per surfel footprint, 1..8 (default 8;\n"
+            "                  a moving light costs one ray per surfel per update, a still one none)\n"
             "  --link-mode     links projected every update (compact, default), expanded at create (more memory),\n"
             "                  or the bake's full-SH links (sh: needs glow-bake --sh-links)\n"
             "  --probe X,Y,Z   print the indirect light at this point (repeatable; default: 3 points)\n"
@@ -107,6 +110,13 @@ static int parse_args(int argc, char **argv, options *o) {
         else if (!strcmp(a, "--luma")) NEED_U32(luma);
         else if (!strcmp(a, "--chroma")) NEED_U32(chroma);
         else if (!strcmp(a, "--iterations")) NEED_U32(iterations);
+        else if (!strcmp(a, "--surfel-samples")) {
+            if (!v || !glow_cli_u32(v, 1, GLOW_HOST_SURFEL_SAMPLES_MAX, &o->surfel_samples)) {
+                fprintf(stderr, "glow-bench: --surfel-samples needs a number in 1..%u\n", GLOW_HOST_SURFEL_SAMPLES_MAX);
+                return 0;
+            }
+            ++i;
+        }
         else if (!strcmp(a, "--host")) {
             if (!v || (strcmp(v, "exact") && strcmp(v, "shadow-map"))) {
                 fprintf(stderr, "glow-bench: --host must be exact or shadow-map\n");
@@ -278,7 +288,7 @@ static void walk_ends(const float lo[3], const float hi[3], const glow_scene_des
 typedef struct world_set {
     uint32_t n;
     glow_bake *bake[WORLD_MAX];
-    glow_host *host[WORLD_MAX];
+    glow_host *host[WORLD_MAX], *twin_host[WORLD_MAX]; /* the twins' own hosts: footprint samples roll per host */
     glow_system *sys[WORLD_MAX], *twin[WORLD_MAX];
     glow_cache_info *cinfo[WORLD_MAX];
 } world_set;
@@ -376,13 +386,16 @@ static int run_world(options *o, glow_scene_desc *scene, glow_logger logger) {
         hd.logger = logger;
         hd.occluders = occ;
         hd.occluder_count = nocc;
+        hd.surfel_samples = o->surfel_samples;
         if ((r = glow_host_create(&hd, &ws->host[i])) != GLOW_OK) goto done;
+        if (budget && (r = glow_host_create(&hd, &ws->twin_host[i])) != GLOW_OK) goto done;
         const cJSON *file = cJSON_GetObjectItemCaseSensitive(cJSON_GetArrayItem(systems, (int)i), "file");
         glow_system_desc sd = {.bake = ws->bake[i], .lighting = glow_host_hooks(ws->host[i]), .sh_bands_luma = o->luma,
                                .sh_bands_chroma = o->chroma, .label = file->valuestring, .link_mode = o->link_mode};
         if ((r = glow_system_create(ctx, &sd, &ws->sys[i])) != GLOW_OK ||
             (r = glow_system_set_params(ws->sys[i], &params)) != GLOW_OK)
             goto done;
+        sd.lighting = budget ? glow_host_hooks(ws->twin_host[i]) : sd.lighting;
         if (budget && ((r = glow_system_create(ctx, &sd, &ws->twin[i])) != GLOW_OK ||
                        (r = glow_system_set_params(ws->twin[i], &params)) != GLOW_OK))
             goto done;
@@ -427,7 +440,9 @@ static int run_world(options *o, glow_scene_desc *scene, glow_logger logger) {
             glow_scene_light l;
             animate(&scene->lights[0], &l, fr, total, 0.05f * diag);
             for (uint32_t i = 0; i < ws->n; ++i)
-                if ((r = glow_host_set_light(ws->host[i], 0, &l)) != GLOW_OK) goto done;
+                if ((r = glow_host_set_light(ws->host[i], 0, &l)) != GLOW_OK ||
+                    (ws->twin_host[i] && (r = glow_host_set_light(ws->twin_host[i], 0, &l)) != GLOW_OK))
+                    goto done;
         }
         glow_update_desc u = ud; /* --keep-lighting (with --still): the hosts are not called after the first */
         if (o->keep_lighting && fr > 0) u.flags |= GLOW_UPDATE_FLAG_KEEP_LIGHTING;
@@ -525,6 +540,7 @@ done:
         glow_system_destroy(ws->twin[i]);
         glow_system_destroy(ws->sys[i]);
         glow_host_destroy(ws->host[i]);
+        glow_host_destroy(ws->twin_host[i]);
         free(ws->cinfo[i]);
     }
     for (uint32_t i = 0; ws && i < ws->n; ++i) glow_bake_destroy(ws->bake[i]);
@@ -562,7 +578,7 @@ int main(int argc, char **argv) {
     }
     glow_context *ctx = NULL;
     glow_bake *bake = NULL;
-    glow_host *host = NULL;
+    glow_host *host = NULL, *twin_host = NULL;
     glow_system *sys = NULL, *twin = NULL; /* twin: unbudgeted, the reference of a budgeted run */
     double *v_err = NULL, *v_gath = NULL, *v_errn = NULL;
     glow_cache_info *cinfo = NULL; /* --walk: cache positions */
@@ -586,6 +602,7 @@ int main(int argc, char **argv) {
     glow_bake_get_info(bake, &info);
     glow_host_desc hd = glow_host_desc_from_scene(&scene, bake, o.host);
     hd.logger = logger;
+    hd.surfel_samples = o.surfel_samples;
     if (!o.gl && (r = glow_host_create(&hd, &host)) != GLOW_OK) goto done;
     glow_system_desc sd = {.bake = bake, .lighting = o.gl ? (glow_lighting_hooks){0} : glow_host_hooks(host), .sh_bands_luma = o.luma,
                            .sh_bands_chroma = o.chroma, .label = o.bake, .link_mode = o.link_mode};
@@ -599,6 +616,10 @@ int main(int argc, char **argv) {
     glow_update_desc ud = {0};
     if (budget) {
         sd.label = "twin";
+        if (!o.gl) { /* its own host: footprint samples roll per host, once per update */
+            if ((r = glow_host_create(&hd, &twin_host)) != GLOW_OK) goto done;
+            sd.lighting = glow_host_hooks(twin_host);
+        }
         if ((r = glow_system_create(ctx, &sd, &twin)) != GLOW_OK) goto done;
         if ((r = glow_system_set_params(twin, &(glow_system_params){.bounce_intensity = 1.0f,
                                                                      .emission_scale = scene.emission_scale,
@@ -691,7 +712,9 @@ int main(int argc, char **argv) {
                 if ((r = glow_gl_lights_set(gll, lights, scene.light_count, scene.environment)) != GLOW_OK) goto done;
             } else
 #endif
-            if ((r = glow_host_set_light(host, 0, &l)) != GLOW_OK) goto done;
+            if ((r = glow_host_set_light(host, 0, &l)) != GLOW_OK ||
+                (twin_host && (r = glow_host_set_light(twin_host, 0, &l)) != GLOW_OK))
+                goto done;
         } else {
             float pulse = scene.emission_scale * (0.75f + 0.25f * (float)cos(6.283185307 * f / total));
             glow_system_set_params(sys, &(glow_system_params){1.0f, pulse, o.iterations});
@@ -950,6 +973,7 @@ done:
     free(v_errn);
     free(cinfo);
     glow_host_destroy(host);
+    glow_host_destroy(twin_host);
     glow_bake_destroy(bake);
     glow_context_destroy(ctx);
     glow_scene_free(&scene);

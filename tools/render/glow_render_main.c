@@ -21,7 +21,7 @@ static void usage(FILE *f) {
     fprintf(f,
             "usage: glow-render SCENE.json --out PREFIX [--spp N] [--seed S] [--threads N] [--width W --height H]\n"
             "                   [--exposure E] [--max-depth D] [--albedo-scale A] [--near-split R]\n"
-            "                   [--glow BAKE [--bounces K] [--sky-rays R] [--luma L] [--chroma C]\n"
+            "                   [--glow BAKE [--bounces K] [--sky-rays R] [--surfel-samples K] [--luma L] [--chroma C]\n"
             "                   [--link-mode compact|expanded|sh] [--indirect-only] [--no-detail] [--grid-only]] [--progress | -q]\n"
             "  SCENE.json       scene description (docs/scene-format.md): mesh, camera, lights, environment\n"
             "  --out PREFIX     writes PREFIX.exr (final), PREFIX_direct.exr, PREFIX_indirect.exr, PREFIX.png;\n"
@@ -41,6 +41,8 @@ static void usage(FILE *f) {
             "                   from BAKE's caches (lightmap on static surfaces, else the grid)\n"
             "  --bounces K      Glow's feedback iterations in all, run as updates of up to 64 (default 192)\n"
             "  --sky-rays R     the host's rays per surfel for sky visibility (default: glow_host's 128)\n"
+            "  --surfel-samples K  the host's shadow-ray points per surfel footprint, 1..8 (default: glow_host's 8;\n"
+            "                   1 = one ray from the centre)\n"
             "  --luma L         SH bands of Glow's luma (default: the bake's); --chroma C of its chroma (default L)\n"
             "  --link-mode M    compact (runtime projection, default), expanded, or sh (the bake's full-SH links,\n"
             "                   glow-bake --sh-links)\n"
@@ -121,6 +123,7 @@ static int parse_args(int argc, char **argv, options *o) {
         else if (!strcmp(a, "--max-depth")) NEED_U(1, 1u << 16, o->rs.max_depth, "a depth in 1..65536");
         else if (!strcmp(a, "--bounces")) NEED_U(1, 100000, o->gs.bounce_iterations, "a number of iterations in 1..100000");
         else if (!strcmp(a, "--sky-rays")) NEED_U(1, 65536, o->gs.sky_rays, "a number of rays in 1..65536");
+        else if (!strcmp(a, "--surfel-samples")) NEED_U(1, 8, o->gs.surfel_samples, "a number of points in 1..8");
         else if (!strcmp(a, "--luma")) NEED_U(1, GLOW_MAX_SH_BANDS, o->gs.sh_bands_luma, "a band count in 1..8");
         else if (!strcmp(a, "--chroma")) NEED_U(1, GLOW_MAX_SH_BANDS, o->gs.sh_bands_chroma, "a band count in 1..8");
         else if (!strcmp(a, "--indirect-only")) o->gs.indirect_only = true;
@@ -175,9 +178,9 @@ static int parse_args(int argc, char **argv, options *o) {
         fprintf(stderr, "glow-render: --near-split splits the reference's light; it does not go with --glow\n");
         return 0;
     }
-    if (!o->bake && (o->gs.bounce_iterations || o->gs.sky_rays || o->gs.sh_bands_luma || o->gs.sh_bands_chroma ||
+    if (!o->bake && (o->gs.bounce_iterations || o->gs.sky_rays || o->gs.surfel_samples || o->gs.sh_bands_luma || o->gs.sh_bands_chroma ||
                      o->gs.link_mode || o->gs.indirect_only || o->gs.no_detail || o->gs.grid_only)) {
-        fprintf(stderr, "glow-render: --bounces, --sky-rays, --luma, --chroma, --link-mode, --indirect-only, "
+        fprintf(stderr, "glow-render: --bounces, --sky-rays, --surfel-samples, --luma, --chroma, --link-mode, --indirect-only, "
                         "--no-detail and --grid-only go with --glow BAKE\n");
         return 0;
     }

@@ -59,6 +59,8 @@
 
 #define PI_D 3.14159265358979323846
 
+static uint32_t g_surfel_samples; /* --surfel-samples: the exact host's footprint points (0 = its default) */
+
 static int usage(FILE *f) {
     fprintf(f, "usage: glow-stability ringing BAKE SCENE.json [--bands-max L] [--dirs N] [--json]\n"
                "       glow-stability flicker BAKE SCENE.json [--frames N] [--iterations K] [--probes P] [--samples S]\n"
@@ -67,6 +69,7 @@ static int usage(FILE *f) {
                "       glow-stability jumps   BAKE SCENE.json [--pairs P] [--samples S] [--csv FILE]\n"
                "       glow-stability audit   BAKE SCENE.json [--probes P] [--samples S] [--csv FILE] [--json]\n"
                "                              [--radiance-out FILE] [--caches I,J,...]\n"
+               "  every command: [--surfel-samples K] the exact host's shadow-ray points per surfel, 1..8 (default 8)\n"
                "  audit --caches: only these lightmap caches (output cache indices, e.g. glow-compare\n"
                "  --texels' blotch report or the B channel of glow-render's PREFIX_texel.exr minus 1)\n"
                "Share of negative radiance in Glow's converged caches for SH bands 2..L, with and without\n"
@@ -125,6 +128,7 @@ static int ringing(const char *bake_path, const char *scene_path, uint32_t lmax,
     glow_bake_get_info(bake, &info);
     glow_host_desc hd = glow_host_desc_from_scene(&scene, bake, GLOW_HOST_KIND_EXACT);
     hd.logger = lg;
+    hd.surfel_samples = g_surfel_samples;
     if (glow_host_create(&hd, &host) != GLOW_OK) {
         fprintf(stderr, "glow-stability: %s: cannot create the host\n", bake_path);
         goto done;
@@ -280,6 +284,7 @@ static int session_open(session *s, const char *bake_path, const char *scene_pat
     if (!s->caches || glow_bake_get_caches(s->bake, 0, s->info.cache_count, s->caches) != GLOW_OK) return 0;
     glow_host_desc hd = glow_host_desc_from_scene(&s->scene, s->bake, GLOW_HOST_KIND_EXACT);
     hd.logger = lg;
+    hd.surfel_samples = g_surfel_samples;
     if (glow_host_create(&hd, &s->host) != GLOW_OK) {
         fprintf(stderr, "glow-stability: %s: cannot create the host\n", bake_path);
         return 0;
@@ -811,6 +816,13 @@ int main(int argc, char **argv) {
             json = 1;
         } else if (!strcmp(a, "--csv") && v) {
             csv = v;
+            ++i;
+        } else if (!strcmp(a, "--surfel-samples") && v) {
+            if (!glow_cli_u32(v, 1, GLOW_HOST_SURFEL_SAMPLES_MAX, &g_surfel_samples)) {
+                fprintf(stderr, "glow-stability: --surfel-samples needs a number in 1..%u, not '%s'\n",
+                        GLOW_HOST_SURFEL_SAMPLES_MAX, v);
+                return 2;
+            }
             ++i;
         } else if (!strcmp(a, "--caches") && v) {
             for (const char *q = v; *q;) {

@@ -98,6 +98,7 @@ typedef struct glow_render_settings {
 typedef struct glow_render_glow_settings {
     uint32_t bounce_iterations; /* runtime feedback iterations in all (updates of up to 64); 0 = 192 */
     uint32_t sky_rays;          /* the host's rays per surfel for the sky visibility; 0 = its default */
+    uint32_t surfel_samples;    /* the host's footprint points per surfel (glow_host_desc); 0 = its default */
     uint32_t sh_bands_luma;     /* glow_system_desc's: 0 = the bake's bands */
     uint32_t sh_bands_chroma;   /* 0 = luma */
     glow_link_mode link_mode;   /* 0 = compact (runtime projection) */

@@ -736,6 +736,7 @@ static glow_result glow_view_create(const glow_render_scene *sc, const char *bak
     }
     glow_host_desc hd = glow_host_desc_from_scene(&sc->desc, gv->bake, GLOW_HOST_KIND_EXACT);
     hd.sky_rays = gs->sky_rays;
+    hd.surfel_samples = gs->surfel_samples;
     hd.logger = logger;
     if ((r = glow_host_create(&hd, &gv->host)) != GLOW_OK)
         FAIL(r, "%s: cannot create the host: %s%s%s", bake_path, glow_result_string(r), cl->first_error[0] ? ": " : "",
@@ -792,6 +793,9 @@ glow_result glow_render_glow(const glow_render_scene *sc, const char *bake_path,
     if (g.bounce_iterations > 100000)
         return glow__render_fail(message, message_size, GLOW_ERROR_INVALID_ARGUMENT,
                                  "glow_render: %u bounce iterations is above 100000", g.bounce_iterations);
+    if (g.surfel_samples > GLOW_HOST_SURFEL_SAMPLES_MAX)
+        return glow__render_fail(message, message_size, GLOW_ERROR_INVALID_ARGUMENT,
+                                 "glow_render: surfel_samples %u is above %u", g.surfel_samples, GLOW_HOST_SURFEL_SAMPLES_MAX);
     if (g.sky_rays > 65536)
         return glow__render_fail(message, message_size, GLOW_ERROR_INVALID_ARGUMENT, "glow_render: sky_rays %u is above 65536",
                                  g.sky_rays);

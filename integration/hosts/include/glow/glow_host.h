@@ -47,6 +47,23 @@
  * depth - bias with bias = texel · (depth_bias + slope_bias · tan θ) (θ between n and the light,
  * tan clamped to 10, texel = the map's texel footprint at p), and averages pcf_size² texels.
  *
+ * FOOTPRINTS (exact kind): a surfel stands for a patch of surface (its area, the fourth float of its
+ * position), and a shadow edge that crosses the patch lights part of it. One ray from its centre
+ * lights all of it or none; over a sunlit patch a few surfels wide that is the patch's area give or
+ * take a surfel (Sponza's sun under the arcades: the indirect block error of surfel seeds 0-3 spread
+ * 0.085-0.107 with one ray, 0.090-0.094 with 8 points; docs/results.md). So V of a light is the
+ * fraction of K = surfel_samples points of the surfel's disk (radius sqrt(area / pi); K points on a
+ * Fibonacci spiral at radii sqrt((k + 1/2) / K), turned by a hash of the surfel's index) that the
+ * light reaches. A point that the centre cannot see along the surface (the disk crossing into a wall
+ * at a crease) is replaced by the centre, checked once per surfel. The K results are kept per surfel
+ * and light, and each hook call re-traces one of them (round robin): a light that keeps still costs
+ * no rays once its K points are traced at its place, a moving light one ray per surfel per call, as
+ * with K = 1, and its penumbrae follow it over K calls (a box filter over the last K calls; a light
+ * switched on, off or recoloured changes at once: the samples hold visibility only). The first call
+ * after glow_host_create or glow_host_set_lights traces all K. A host with K > 1 lights the surfels
+ * of one system per update (its samples roll per call). glow_host_irradiance (any point) traces one
+ * ray from the point.
+ *
  * SKY (both kinds): with GLOW_HOST_SKY_TRACED the per-surfel S is traced with Embree on first use (in
  * the hook, by whichever worker lights that surfel first) and cached for the host's life, unless the
  * desc supplies it (sky_visibility). GLOW_HOST_SKY_UNSHADOWED uses S = 1 (no occlusion).
@@ -71,9 +88,12 @@ extern "C" {
 
 typedef struct glow_host glow_host;
 
+#define GLOW_HOST_SURFEL_SAMPLES_DEFAULT 8u /* glow_host_desc.surfel_samples 0 */
+#define GLOW_HOST_SURFEL_SAMPLES_MAX 8u
+
 typedef enum glow_host_kind {
     GLOW_HOST_KIND_DEFAULT = 0, /* = EXACT */
-    GLOW_HOST_KIND_EXACT,       /* one Embree shadow ray per surfel and light: the reference */
+    GLOW_HOST_KIND_EXACT,       /* Embree shadow rays over each surfel's footprint: the reference */
     GLOW_HOST_KIND_SHADOW_MAP,  /* software shadow maps, bias, PCF: what an engine computes */
     GLOW_HOST_KIND_FORCE_U32 = 0x7FFFFFFF
 } glow_host_kind;
@@ -105,6 +125,9 @@ typedef struct glow_host_desc {
     float slope_bias;               /* texels per unit of tan θ; 0 = 2.0 */
     float normal_offset;            /* texels along the normal; 0 = 1.0 */
     uint32_t pcf_size;              /* PCF kernel width in texels: odd, 1..9; 0 = 3 */
+    /* \since 0.2, exact kind: points of each surfel's footprint whose shadow rays it averages, 1..8;
+     * 0 = GLOW_HOST_SURFEL_SAMPLES_DEFAULT. See FOOTPRINTS above; 1 = one ray from the surfel's centre */
+    uint32_t surfel_samples;
     glow_logger logger;             /* zero = silent; must be reentrant */
     /* \since 0.2: other bakes whose geometry also casts shadows here (borrowed, must outlive the host):
      * for a system of a world (glow-bake --system-area), its neighbours, so that the buildings of the
@@ -207,6 +230,8 @@ typedef struct glow_host_stats {
     uint64_t shadow_map_bytes;
     double shadow_map_ms;          /* wall time of the last map rendering (create / set_light / set_lights) */
     uint32_t sky_cached;           /* surfels whose S is cached (traced or supplied) */
+    uint32_t surfel_samples;       /* \since 0.2: footprint points per surfel (exact kind; 1 otherwise) */
+    uint64_t shadow_rays;          /* \since 0.2: shadow rays the hook traced for lights (exact kind), in all */
 } glow_host_stats;
 
 /** Fills `out_stats`. \returns GLOW_ERROR_INVALID_ARGUMENT for NULL. \threadsafety As glow_host_irradiance.
