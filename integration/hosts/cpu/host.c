@@ -568,7 +568,7 @@ static uint64_t light_packet(const glow_host *h, const glow_surfel_batch *batch,
         const float *pw = power_of(&hl->l);
         if (pw[0] == 0.0f && pw[1] == 0.0f && pw[2] == 0.0f) continue;
         struct RTCRay16 ray;
-        int valid[PACKET];
+        RTC_ALIGN(64) int valid[PACKET]; /* Embree reads the mask as one vector: 64-byte aligned */
         float f[PACKET];
         bool any = false;
         for (uint32_t k = 0; k < PACKET; ++k) {
@@ -657,7 +657,7 @@ static uint64_t light_packet_foot(glow_host *h, const glow_surfel_batch *batch, 
         for (uint32_t k = 0; k < count; ++k) unfilled |= f[k] > 0.0f && !st[k]->filled;
         for (uint32_t r = 0; r < (unfilled ? h->samples : 1u); ++r) {
             struct RTCRay16 ray;
-            int valid[PACKET];
+            RTC_ALIGN(64) int valid[PACKET]; /* Embree reads the mask as one vector: 64-byte aligned */
             uint32_t pick[PACKET];
             bool any = false, picked = false;
             for (uint32_t k = 0; k < PACKET; ++k) {
