@@ -20,7 +20,7 @@ layout(local_size_x = GLOW_CACHE_GROUP) in;
 
 layout(std430, binding = GLOW_BINDING_LINKS) readonly buffer GlowLinks { uint glow_links[]; };
 layout(std430, binding = GLOW_BINDING_FLUX) readonly buffer GlowFlux { vec4 glow_flux[]; };
-layout(std430, binding = GLOW_BINDING_CACHE_SH) writeonly buffer GlowCacheSh { float glow_cache_sh[]; };
+layout(std430, binding = GLOW_BINDING_CACHE_SH) buffer GlowCacheSh { float glow_cache_sh[]; }; /* read: the old DC */
 #ifdef GLOW_LINK_SUBSETS
 /* link subsets (bake_format.h, LSUB): a link reads R[node] times the weighted luma ratio of the node's
  * four slots, as the CPU kernel does (it rounds the ratios to IEEE halves) */
@@ -60,9 +60,13 @@ shared float glow_red[GLOW_REDUCE_CHUNK][GLOW_CACHE_GROUP + 1];
 /* a budget's caches (glow_budget_choose): workgroup i gathers cache glow_cache_list[i]; 0 = every cache */
 uniform uint glow_cache_list_count;
 layout(std430, binding = GLOW_BINDING_CACHE_LIST) readonly buffer GlowCacheList { uint glow_cache_list[]; };
+/* converged_epsilon: workgroup i also writes (|new - old|, |new|) of its cache's luma DC to glow_cache_delta_out[i]
+ * (runtime/src/system.c task_caches_sel's measure of a gather's change) */
+uniform uint glow_cache_delta;
+layout(std430, binding = GLOW_BINDING_CACHE_DELTA) writeonly buffer GlowCacheDelta { vec2 glow_cache_delta_out[]; };
 
 void main() {
-    uint c = glow_group_index();
+    uint c = glow_group_index(), slot = c;
     if (glow_cache_list_count != 0u) {
         if (c >= glow_cache_list_count) return; /* whole workgroup: uniform */
         c = glow_cache_list[c];
@@ -116,7 +120,10 @@ void main() {
         if (lid < uint(GLOW_REDUCE_CHUNK) && base + int(lid) < GLOW_NCO) {
             float s = 0.0;
             for (int t = 0; t < GLOW_CACHE_GROUP; ++t) s += glow_red[lid][t];
-            glow_cache_sh[c * glow_p.coeff_count + uint(base) + lid] = s;
+            uint at = c * glow_p.coeff_count + uint(base) + lid;
+            if (glow_cache_delta != 0u && base == 0 && lid == 0u)
+                glow_cache_delta_out[slot] = vec2(abs(s - glow_cache_sh[at]), abs(s));
+            glow_cache_sh[at] = s;
         }
         barrier();
     }

@@ -29,11 +29,11 @@
 extern const char glow__shading_glsl[];
 extern const struct { const char *name, *source; } glow__kernels[];
 
-enum { K_DIRECT, K_FLUX, K_PULL, K_PULL_TAIL, K_CACHE, K_OUTPUT, K_DETAIL, K_PROXY, K_COUNT };
+enum { K_DIRECT, K_FLUX, K_PULL, K_PULL_TAIL, K_CACHE, K_OUTPUT, K_DETAIL, K_PROXY, K_DRIFT, K_COUNT };
 static const char *const kernel_names[K_COUNT] = {"surfel_direct", "surfel_flux", "pull", "pull_tail", "cache_light",
-                                                  "outputs", "detail", "proxy_fill"};
+                                                  "outputs", "detail", "proxy_fill", "drift"};
 enum { B_GEOM, B_MAT, B_DIRECT, B_FBW, B_CACHE, B_NODES, B_FLUX, B_LINKS, B_PAIRS, B_STATUS, B_PARAMS, B_LEVELS, B_SUBSETS,
-       B_DET_TEXELS, B_DET_LINKS, B_PROXY_MAP, B_LIST, B_COUNT };
+       B_DET_TEXELS, B_DET_LINKS, B_PROXY_MAP, B_LIST, B_RAD_PREV, B_DRIFT, B_DELTA, B_COUNT };
 #define MAX_DEPS 64u /* GLOW_BAKE_MAX_DEPENDENCIES */
 enum { T_BEGIN, T_DIRECT, T_FLUX, T_PULL, T_CACHE, T_OUTPUT, T_COUNT };
 
@@ -46,7 +46,7 @@ struct glow_gl_system {
     glow_solver_tables t;
     uint32_t S, N, C, levels, planes;
     GLuint prog[K_COUNT];
-    GLint level_loc, tail_loc, proxy_loc, list_loc;
+    GLint level_loc, tail_loc, proxy_loc, list_loc, delta_loc, drift_loc;
     /* a budget (glow_update_desc max_caches, focus): groups of GLOW_BUDGET_GROUP caches chosen by
      * glow_budget_choose, as the CPU solver chooses; LIST holds their caches for the cache kernel */
     uint32_t groups;
@@ -57,6 +57,18 @@ struct glow_gl_system {
     uint32_t *list;      /* [C] the chosen caches */
     uint32_t list_count, caches_gathered;
     uint32_t sel_groups;         /* groups the last budgeted update gathered */
+    /* converged_epsilon, as the CPU solver (runtime/src/system.c schedule): each group's change at its last
+     * gather (cache_light writes (|new - old|, |new|) of each listed cache's luma DC to DELTA; read back at
+     * the next budgeted update, when the GPU has long finished it) and the drift of the node luma
+     * (drift.comp, read back at once: the one wait of a converging update) */
+    float *grp_delta;            /* [groups] INFINITY: never gathered under a budget, or reset */
+    double *grp_drift_at;        /* [groups] */
+    uint8_t *grp_skip;           /* [groups] */
+    double drift;
+    float *delta_read;           /* [C][2] */
+    float *drift_read;           /* [drift groups][2] */
+    uint32_t drift_groups, caches_converged;
+    int delta_pending;           /* DELTA holds the last budgeted update's changes, not yet read */
     int timed_budget;            /* the last update was budgeted: its timings may teach the budget */
     double ema_other_ms, ema_cache_ms_per_group; /* budget_ms: GPU times of earlier updates (0 = none yet) */
     /* light across systems: proxy node N + p reads a neighbour's flux (proxy_fill.comp); PROXY_MAP holds
@@ -234,6 +246,11 @@ static void free_system(glow_gl_system *s) {
     free(s->grp_pack);
     free(s->grp_sel);
     free(s->list);
+    free(s->grp_delta);
+    free(s->grp_drift_at);
+    free(s->grp_skip);
+    free(s->delta_read);
+    free(s->drift_read);
     free(s);
 }
 
@@ -365,6 +382,8 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
     s->tail_loc = gl->GetUniformLocation(s->prog[K_PULL_TAIL], "glow_tail");
     if (s->prog[K_PROXY]) s->proxy_loc = gl->GetUniformLocation(s->prog[K_PROXY], "glow_proxy_range");
     s->list_loc = gl->GetUniformLocation(s->prog[K_CACHE], "glow_cache_list_count");
+    s->delta_loc = gl->GetUniformLocation(s->prog[K_CACHE], "glow_cache_delta");
+    s->drift_loc = gl->GetUniformLocation(s->prog[K_DRIFT], "glow_drift_count");
     /* the narrow top: the lowest level from which every level up has at most GLOW_PULL_TAIL_MAX nodes */
     s->tail_level = s->levels;
     while (s->tail_level > 1 && t->level_starts[s->tail_level] - t->level_starts[s->tail_level - 1] <= GLOW_PULL_TAIL_MAX)
@@ -449,7 +468,14 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
         s->grp_pack = malloc(((size_t)s->groups + 1u) * sizeof *s->grp_pack);
         s->grp_sel = malloc(((size_t)s->groups + 1u) * sizeof *s->grp_sel);
         s->list = malloc(((size_t)s->C + 1u) * sizeof *s->list);
-        if (!s->grp_centre || !s->grp_age || !s->grp_pack || !s->grp_sel || !s->list) {
+        s->grp_delta = malloc(((size_t)s->groups + 1u) * sizeof *s->grp_delta);
+        s->grp_drift_at = calloc((size_t)s->groups + 1u, sizeof *s->grp_drift_at);
+        s->grp_skip = calloc((size_t)s->groups + 1u, sizeof *s->grp_skip);
+        s->delta_read = malloc(((size_t)s->C + 1u) * 2u * sizeof *s->delta_read);
+        s->drift_groups = (s->N + s->P + GLOW_DRIFT_GROUP - 1u) / GLOW_DRIFT_GROUP;
+        s->drift_read = malloc(((size_t)s->drift_groups + 1u) * 2u * sizeof *s->drift_read);
+        if (!s->grp_centre || !s->grp_age || !s->grp_pack || !s->grp_sel || !s->list || !s->grp_delta || !s->grp_drift_at ||
+            !s->grp_skip || !s->delta_read || !s->drift_read) {
             free(geom), free(nodes), free(pairs);
             LOG_ERR(s, GLOW_ERROR_OUT_OF_MEMORY, "out of host memory (%u cache groups)", s->groups);
             free_system(s);
@@ -463,6 +489,12 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
             for (int k = 0; k < 3; ++k) s->grp_centre[3 * (size_t)q + (size_t)k] = (float)(c[k] / (double)(end - first));
         }
         s->buf[B_LIST] = make_buffer(s, ((size_t)s->C + 1u) * 4u, NULL, dyn);
+        for (uint32_t q = 0; q < s->groups; ++q) s->grp_delta[q] = INFINITY;
+        s->buf[B_DELTA] = make_buffer(s, ((size_t)s->C + 1u) * 8u, NULL, 0);
+        s->buf[B_DRIFT] = make_buffer(s, ((size_t)s->drift_groups + 1u) * 8u, NULL, 0);
+        s->buf[B_RAD_PREV] = make_buffer(s, ((size_t)s->N + s->P + 1u) * 4u, NULL, 0);
+        const float zero = 0.0f; /* as the CPU's rad_prev: the first drift is 1 */
+        gl->ClearNamedBufferData(s->buf[B_RAD_PREV], GL_R32F, GL_RED, GL_FLOAT, &zero);
     }
     s->buf[B_LINKS] = make_buffer(s, links_bytes, t->link_blocks, 0);
     s->buf[B_PAIRS] = make_buffer(s, pairs_n * 8u, pairs, 0);
@@ -757,19 +789,13 @@ glow_result glow_gl_system_update(glow_gl_system *s, const glow_update_desc *des
         LOG_ERR(s, GLOW_ERROR_INVALID_ARGUMENT, "glow_gl_system_update: unknown flags 0x%x", flags);
         return GLOW_ERROR_INVALID_ARGUMENT;
     }
-    if (desc && desc->converged_epsilon != 0.0f) {
-        /* issue 17, item 4: max_caches, budget_ms and focus run on the GPU; convergence needs each
-         * group's change read back, not built yet: refused rather than ignored */
-        LOG_ERR(s, GLOW_ERROR_UNSUPPORTED,
-                "glow_gl_system_update: converged_epsilon is CPU-only so far (max_caches, budget_ms and focus run)");
-        return GLOW_ERROR_UNSUPPORTED;
-    }
     if (desc && (!(desc->focus_radius >= 0.0f) || !isfinite(desc->focus_radius) || (desc->focus_count && !desc->focus) ||
-                 !(desc->budget_ms >= 0.0f) || !isfinite(desc->budget_ms))) {
+                 !(desc->budget_ms >= 0.0f) || !isfinite(desc->budget_ms) || !(desc->converged_epsilon >= 0.0f) ||
+                 !isfinite(desc->converged_epsilon))) {
         LOG_ERR(s, GLOW_ERROR_INVALID_ARGUMENT,
-                "glow_gl_system_update: budget_ms %g and focus_radius %g must be finite and >= 0, and focus_count %u "
-                "needs focus points",
-                (double)desc->budget_ms, (double)desc->focus_radius, desc->focus_count);
+                "glow_gl_system_update: budget_ms %g, focus_radius %g and converged_epsilon %g must be finite and >= 0, "
+                "and focus_count %u needs focus points",
+                (double)desc->budget_ms, (double)desc->focus_radius, (double)desc->converged_epsilon, desc->focus_count);
         return GLOW_ERROR_INVALID_ARGUMENT;
     }
     for (uint32_t i = 0; desc && i < 3 * desc->focus_count; ++i)
@@ -777,7 +803,8 @@ glow_result glow_gl_system_update(glow_gl_system *s, const glow_update_desc *des
             LOG_ERR(s, GLOW_ERROR_INVALID_ARGUMENT, "glow_gl_system_update: focus point %u is not finite", i / 3);
             return GLOW_ERROR_INVALID_ARGUMENT;
         }
-    const bool budgeted = desc && (desc->max_caches || desc->budget_ms > 0.0f);
+    const bool budgeted = desc && (desc->max_caches || desc->budget_ms > 0.0f || desc->converged_epsilon > 0.0f);
+    const double eps = desc ? (double)desc->converged_epsilon : 0.0;
     if (budgeted) learn_budget(s);
     glow_glfns *gl = &s->gl;
     glow_system_params prm;
@@ -837,6 +864,8 @@ glow_result glow_gl_system_update(glow_gl_system *s, const glow_update_desc *des
     if (flags & GLOW_UPDATE_FLAG_RESET_BOUNCE) {
         const float zero = 0.0f;
         gl->ClearNamedBufferData(s->buf[B_CACHE], GL_R32F, GL_RED, GL_FLOAT, &zero);
+        for (uint32_t g = 0; g < s->groups; ++g) s->grp_delta[g] = INFINITY; /* nothing is converged now */
+        s->delta_pending = 0;
     }
     stamp(s, T_DIRECT);
     const uint32_t iters = prm.bounce_iterations ? prm.bounce_iterations : 1u;
@@ -901,9 +930,53 @@ glow_result glow_gl_system_update(glow_gl_system *s, const glow_update_desc *des
                 if (kt < 1.0) kt = 1.0; /* always some progress */
                 if (kt < (double)kmax) kmax = (uint32_t)kt;
             }
-            const uint32_t k = glow_budget_choose(s->grp_centre, s->grp_age, NULL, s->groups, desc->focus, desc->focus_count,
-                                                  r, kmax, s->grp_pack, s->grp_sel);
+            if (s->delta_pending) { /* the last budgeted gather's change per group (long finished: no wait) */
+                gl->MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+                gl->GetNamedBufferSubData(s->buf[B_DELTA], 0, (GLsizeiptr)((size_t)s->list_count * 8u), s->delta_read);
+                for (uint32_t i = 0, at = 0; i < s->sel_groups; ++i) { /* the list: its groups' caches in order */
+                    const uint32_t g = s->grp_sel[i], first = g * GLOW_BUDGET_GROUP;
+                    const uint32_t count = s->C - first < GLOW_BUDGET_GROUP ? s->C - first : GLOW_BUDGET_GROUP;
+                    double d = 0.0, v = 0.0;
+                    for (uint32_t c = 0; c < count; ++c, ++at) {
+                        d += (double)s->delta_read[2 * (size_t)at];
+                        v += (double)s->delta_read[2 * (size_t)at + 1];
+                    }
+                    s->grp_delta[g] = v > 0.0 ? (float)(d / v) : (d > 0.0 ? INFINITY : 0.0f);
+                }
+                s->delta_pending = 0;
+            }
+            if (eps > 0.0) { /* the drift of the light the caches read: this update's, so a moved light is seen now */
+                gl->UseProgram(s->prog[K_DRIFT]);
+                bind(s, GLOW_BINDING_FLUX, B_FLUX);
+                bind(s, GLOW_BINDING_RAD_PREV, B_RAD_PREV);
+                bind(s, GLOW_BINDING_DRIFT_PARTIAL, B_DRIFT);
+                gl->Uniform1ui(s->drift_loc, s->N + s->P);
+                dispatch(s, s->drift_groups);
+                gl->MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+                gl->GetNamedBufferSubData(s->buf[B_DRIFT], 0, (GLsizeiptr)((size_t)s->drift_groups * 8u), s->drift_read);
+                double dn = 0.0, dv = 0.0;
+                for (uint32_t q = 0; q < s->drift_groups; ++q) {
+                    dn += (double)s->drift_read[2 * (size_t)q];
+                    dv += (double)s->drift_read[2 * (size_t)q + 1];
+                }
+                s->drift += dv > 0.0 ? dn / dv : (dn > 0.0 ? 1.0 : 0.0);
+            }
+            uint32_t live = 0;
+            for (uint32_t g = 0; g < s->groups; ++g) {
+                s->grp_skip[g] = eps > 0.0 && s->grp_delta[g] < eps && s->drift - s->grp_drift_at[g] < eps;
+                live += !s->grp_skip[g];
+            }
+            if (live < kmax) kmax = live;
+            const uint32_t k = glow_budget_choose(s->grp_centre, s->grp_age, eps > 0.0 ? s->grp_skip : NULL, s->groups,
+                                                  desc->focus, desc->focus_count, r, kmax, s->grp_pack, s->grp_sel);
             s->sel_groups = k;
+            for (uint32_t i = 0; i < k; ++i) s->grp_drift_at[s->grp_sel[i]] = s->drift;
+            s->caches_converged = 0;
+            for (uint32_t g = 0; g < s->groups && eps > 0.0; ++g)
+                if (s->grp_delta[g] < eps && s->drift - s->grp_drift_at[g] < eps && s->grp_age[g] > 0) {
+                    const uint32_t first = g * GLOW_BUDGET_GROUP;
+                    s->caches_converged += s->C - first < GLOW_BUDGET_GROUP ? s->C - first : GLOW_BUDGET_GROUP;
+                }
             s->list_count = 0;
             for (uint32_t i = 0; i < k; ++i)
                 for (uint32_t c = s->grp_sel[i] * GLOW_BUDGET_GROUP; c < s->C && c < (s->grp_sel[i] + 1u) * GLOW_BUDGET_GROUP; ++c)
@@ -912,7 +985,11 @@ glow_result glow_gl_system_update(glow_gl_system *s, const glow_update_desc *des
         }
         gl->UseProgram(s->prog[K_CACHE]);
         gl->Uniform1ui(s->list_loc, budgeted ? s->list_count : 0u);
-        if (budgeted) bind(s, GLOW_BINDING_CACHE_LIST, B_LIST);
+        gl->Uniform1ui(s->delta_loc, budgeted ? 1u : 0u);
+        if (budgeted) {
+            bind(s, GLOW_BINDING_CACHE_LIST, B_LIST);
+            bind(s, GLOW_BINDING_CACHE_DELTA, B_DELTA);
+        }
         bind(s, GLOW_BINDING_LINKS, B_LINKS);
         bind(s, GLOW_BINDING_FLUX, B_FLUX);
         bind(s, GLOW_BINDING_CACHE_SH, B_CACHE);
@@ -925,6 +1002,8 @@ glow_result glow_gl_system_update(glow_gl_system *s, const glow_update_desc *des
         gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     }
     s->caches_gathered = budgeted ? s->list_count : s->C;
+    if (!budgeted) s->caches_converged = 0;
+    if (budgeted) s->delta_pending = s->list_count > 0; /* an unbudgeted update writes no changes: they wait */
     stamp(s, T_CACHE);
     /* 5. outputs (seam/gutter texels are pairs too) */
     if (t->grid_used + t->lightmap_used + s->fine_used) {
@@ -987,6 +1066,7 @@ glow_result glow_gl_system_get_stats(glow_gl_system *s, glow_gl_stats *out) {
     }
     out->pull_dispatches = s->pull_dispatches;
     out->caches_gathered = s->caches_gathered;
+    out->caches_skipped_converged = s->caches_converged;
     out->updates = s->updates;
     out->gpu_memory_bytes = s->gpu_bytes;
     snprintf(out->renderer, sizeof out->renderer, "%s", s->renderer);

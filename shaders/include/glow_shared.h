@@ -16,6 +16,8 @@
  *   outputs           OUTPUT_PAIRS, CACHE_SH; images 0 grid, 1 lightmap          params
  *   detail            DETAIL_TEXELS, DETAIL_LINKS, FLUX; image 2 detail           params
  *   proxy_fill        PROXY_SRC (a neighbour's FLUX), PROXY_MAP, FLUX (w)    uniform uvec2 glow_proxy_range
+ *   drift             FLUX, RAD_PREV (rw), DRIFT_PARTIAL (w)                 uniform uint glow_drift_count
+ *   cache_light with converged_epsilon also CACHE_DELTA (w), CACHE_SH read too   uniform uint glow_cache_delta
  */
 #ifndef GLOW_SHARED_H
 #define GLOW_SHARED_H
@@ -52,6 +54,10 @@ typedef struct glow_vec4 { float x, y, z, w; } glow_vec4;
 #define GLOW_BINDING_PROXY_MAP 7    /* proxy_fill only: uvec2[]: (neighbour node, own proxy node N + p) */
 #define GLOW_BINDING_CACHE_LIST 2   /* cache_light only: uint[]: the caches a budget gathers (uniform
                                        glow_cache_list_count > 0), else every cache */
+#define GLOW_BINDING_RAD_PREV 0      /* drift only: float[N + P]: each node's radiance luma at the last drift */
+#define GLOW_BINDING_DRIFT_PARTIAL 1 /* drift only: vec2[groups]: per workgroup (Σ |y - y_prev|, Σ |y|) */
+#define GLOW_BINDING_CACHE_DELTA 1   /* cache_light only (uniform glow_cache_delta != 0): vec2[list]: per listed
+                                        cache (|new DC - old DC|, |new DC|) of its luma, for the convergence test */
 #define GLOW_BINDING_HOST_FIRST 8   /* first SSBO/UBO binding the host hook may use */
 /* UBO binding of glow_gl_params */
 #define GLOW_BINDING_PARAMS 0
@@ -69,6 +75,7 @@ typedef struct glow_vec4 { float x, y, z, w; } glow_vec4;
 #define GLOW_OUTPUT_GROUP 64
 #define GLOW_DETAIL_GROUP 64
 #define GLOW_PROXY_GROUP 64
+#define GLOW_DRIFT_GROUP 256  /* a power of two (drift.comp's reduction) */
 #define GLOW_REDUCE_CHUNK 32  /* coefficients reduced per shared-memory pass */
 #define GLOW_MAX_GROUPS_X 65535u /* dispatches wider than this use y (index = y * 65535 + x) */
 

@@ -317,6 +317,55 @@ static void test_budget(void **state) {
     free_fixture(&f);
 }
 
+/* converged_epsilon on the GPU skips the groups the CPU solver skips: under a still light both gather
+ * every group while the bounces settle, then fewer, then none, with the same counts update by update;
+ * the caches agree; a brighter light (the drift of the node luma) brings every group back on both. */
+static void test_converged(void **state) {
+    (void)state;
+    fixture f;
+    if (make_fixture(&f, "builtin:cornell", NULL, 3, 3, 0) != 0) fail_msg("fixture");
+    const uint32_t C = glow_system_outputs(f.cpu)->cache_count;
+    const glow_update_desc d = {.converged_epsilon = 1e-3f};
+    push_light(&f, 1.0f);
+    enum { U = 40 };
+    uint32_t cg[U], gg[U], differ = 0, first_none = U;
+    glow_update_stats cs;
+    glow_gl_stats gs;
+    for (int u = 0; u < U; ++u) {
+        assert_int_equal(glow_system_update(f.cpu, &d), GLOW_OK);
+        assert_int_equal(glow_gl_system_update(f.gpu, &d), GLOW_OK);
+        assert_int_equal(glow_system_get_stats(f.cpu, &cs), GLOW_OK);
+        assert_int_equal(glow_gl_system_get_stats(f.gpu, &gs), GLOW_OK);
+        cg[u] = cs.caches_gathered;
+        gg[u] = gs.caches_gathered;
+        differ += cg[u] != gg[u];
+        if (gg[u] == 0 && first_none == U) first_none = (uint32_t)u;
+    }
+    printf("builtin:cornell, converged_epsilon 1e-3, still light: caches gathered CPU / GPU per update:");
+    for (int u = 0; u < U; ++u) printf(" %u/%u", cg[u], gg[u]);
+    printf("\n  %u of %d updates differ; none gathered from update %u; skipped as converged %u (CPU %u)\n", differ, U,
+           first_none, gs.caches_skipped_converged, cs.caches_skipped_converged);
+    assert_int_equal(cg[0], C);
+    assert_int_equal(gg[0], C);
+    assert_true(first_none < U - 5);        /* converged: it stops costing */
+    assert_int_equal(cg[U - 1], 0);
+    assert_int_equal(gs.caches_skipped_converged, C);
+    assert_int_equal(cs.caches_skipped_converged, C);
+    assert_true(differ <= U / 10);          /* the same decisions (a group at the threshold may tip either way) */
+    assert_true(compare(&f, "converged") <= 1.0);
+    push_light(&f, 2.0f); /* the light changed: every group again, on both */
+    assert_int_equal(glow_system_update(f.cpu, &d), GLOW_OK);
+    assert_int_equal(glow_gl_system_update(f.gpu, &d), GLOW_OK);
+    assert_int_equal(glow_system_get_stats(f.cpu, &cs), GLOW_OK);
+    assert_int_equal(glow_gl_system_get_stats(f.gpu, &gs), GLOW_OK);
+    printf("  brighter light: CPU %u, GPU %u caches gathered\n", cs.caches_gathered, gs.caches_gathered);
+    assert_int_equal(cs.caches_gathered, C);
+    assert_int_equal(gs.caches_gathered, C);
+    assert_int_equal(glow_gl_system_update(f.gpu, &(glow_update_desc){.converged_epsilon = -1.0f}), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(glow_gl_system_update(f.gpu, &(glow_update_desc){.converged_epsilon = NAN}), GLOW_ERROR_INVALID_ARGUMENT);
+    free_fixture(&f);
+}
+
 static void test_cornell(void **state) {
     (void)state;
     agree_scene("builtin:cornell", 3, 3);
@@ -377,9 +426,8 @@ static void test_bad_hooks(void **state) {
     gd.hook_glsl = nan_hook;
     glow_gl_system *g = NULL;
     assert_int_equal(glow_gl_system_create(&gd, &g), GLOW_OK);
-    /* converged_epsilon is CPU-only so far: refused, not ignored (max_caches, budget_ms and focus run:
-     * test_budget) */
-    assert_int_equal(glow_gl_system_update(g, &(glow_update_desc){.converged_epsilon = 0.01f}), GLOW_ERROR_UNSUPPORTED);
+    /* bad budgets (test_budget and test_converged run the good ones) */
+    assert_int_equal(glow_gl_system_update(g, &(glow_update_desc){.converged_epsilon = INFINITY}), GLOW_ERROR_INVALID_ARGUMENT);
     assert_int_equal(glow_gl_system_update(g, &(glow_update_desc){.max_caches = 16, .focus_radius = NAN}),
                      GLOW_ERROR_INVALID_ARGUMENT);
     assert_int_equal(glow_gl_system_update(g, &(glow_update_desc){.max_caches = 16, .focus_count = 1}),
@@ -568,7 +616,7 @@ int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_cornell), cmocka_unit_test(test_two_rooms), cmocka_unit_test(test_bands),
         cmocka_unit_test(test_hook), cmocka_unit_test(test_bad_hooks), cmocka_unit_test(test_world_systems),
-        cmocka_unit_test(test_budget),
+        cmocka_unit_test(test_budget), cmocka_unit_test(test_converged),
     };
     int rc = cmocka_run_group_tests(tests, NULL, NULL);
     glow_glctx_destroy(g_gl);

@@ -132,6 +132,7 @@ typedef struct glow_gl_stats {
     uint64_t gpu_memory_bytes; /* buffers and textures Glow allocated */
     char renderer[96];         /* GL_RENDERER */
     uint32_t caches_gathered;  /* caches the last update gathered (all, or a budget's) \since 0.2 */
+    uint32_t caches_skipped_converged; /* ... left as converged (converged_epsilon) \since 0.2 */
 } glow_gl_stats;
 
 /** Compiles the kernels for the system's band counts (and the hook), uploads the solver tables,
@@ -155,8 +156,10 @@ GLOW_API glow_result glow_gl_system_set_neighbour(glow_gl_system *system, uint32
  * function, glow_budget_choose), the others keep their last values. budget_ms is GPU time, learnt from
  * earlier budgeted updates' timer queries once they are available (never waited for; with
  * GLOW_GL_FLAG_FINISH_TIMERS, the CPU clock around glFinish): until then every group is gathered.
- * GLOW_ERROR_INVALID_ARGUMENT for a bad focus or budget_ms; converged_epsilon is CPU-only so far (it
- * needs each group's change read back): GLOW_ERROR_UNSUPPORTED. */
+ * desc->converged_epsilon skips the groups the CPU solver would (each group's change at its last gather,
+ * read back at the next budgeted update, and the drift of the node luma, computed on the GPU and read
+ * back at once: the update then waits for its pull to finish, its one wait).
+ * GLOW_ERROR_INVALID_ARGUMENT for a bad focus, budget_ms or converged_epsilon. */
 GLOW_API glow_result glow_gl_system_update(glow_gl_system *system, const glow_update_desc *desc);
 /** Waits for the last update's queries and fills `out`. */
 GLOW_API glow_result glow_gl_system_get_stats(glow_gl_system *system, glow_gl_stats *out);
