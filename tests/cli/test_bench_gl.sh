@@ -18,8 +18,14 @@ fi
 [ $rc -eq 0 ] && pass "glow-bench --backend gl runs" || { fail "glow-bench --backend gl: exit $rc"; cat "$T/gl.err"; }
 expect 0 "glow-bench cpu (shadow-map host)" "$BIN/glow-bench" "$T/c.glow" "$SCENE" --host shadow-map --frames 4 --warmup 1 --json --no-machine
 cp "$T/out" "$T/cpu.json"
-expect 2 "glow-bench --backend gl --budget-ms: CPU-only so far" "$BIN/glow-bench" "$T/c.glow" "$SCENE" --backend gl --budget-ms 5
-grep -q "CPU-only" "$T/err" && pass "  says so" || fail "  no reason given"
+# budgets on the GPU: a caches cap with an unbudgeted GL twin (the report gives its error), and a still
+# light under converged_epsilon gathers nothing once converged
+expect 0 "glow-bench --backend gl --budget-caches 64" "$BIN/glow-bench" "$T/c.glow" "$SCENE" --backend gl --frames 4 --warmup 1 --json --budget-caches 64
+python3 -c "import json,sys; b=json.load(open(sys.argv[1]))['budget']; assert 64 <= b['median_caches_gathered'] <= 79 and 0 < b['luma_error_max'] < 1, b" "$T/out" \
+  && pass "  64 caches (4 groups) gathered on the GPU, error against the GL twin reported" || fail "  GL budget JSON: $(head -c 300 "$T/out")"
+expect 0 "glow-bench --backend gl --still --converge" "$BIN/glow-bench" "$T/c.glow" "$SCENE" --backend gl --frames 4 --warmup 40 --json --still --converge 0.01
+python3 -c "import json,sys; b=json.load(open(sys.argv[1]))['budget']; assert b['median_caches_gathered'] == 0 and b['luma_error_max'] < 0.05, b" "$T/out" \
+  && pass "  still light on the GPU: converged caches cost nothing" || fail "  GL converge JSON: $(head -c 300 "$T/out")"
 python3 - "$T/gl.json" "$T/cpu.json" <<'PY' && pass "stages timed, probes agree with the CPU solver" || fail "GL bench output"
 import json, sys
 g = json.load(open(sys.argv[1])); c = json.load(open(sys.argv[2]))

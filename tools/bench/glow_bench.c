@@ -204,11 +204,6 @@ static int parse_args(int argc, char **argv, options *o) {
         fprintf(stderr, "glow-bench: --walk measures a budget: give --budget-ms, --budget-caches or --converge\n");
         return 0;
     }
-    if (o->gl && (o->budget_ms > 0.0f || o->budget_caches || o->converge > 0.0f)) {
-        fprintf(stderr, "glow-bench: --backend gl measures unbudgeted updates only (the GL backend takes max_caches, "
-                        "budget_ms and focus, tests/gpu/test_gl_agreement; converged_epsilon is CPU-only)\n");
-        return 0;
-    }
 #ifndef GLOW_BENCH_HAVE_GL
     if (o->gl) {
         fprintf(stderr, "glow-bench: --backend gl: this build has no GL backend (GLOW_WITH_GL=OFF)\n");
@@ -586,11 +581,12 @@ int main(int argc, char **argv) {
 #ifdef GLOW_BENCH_HAVE_GL
     glow_glctx *glc = NULL;
     glow_gl_lights *gll = NULL;
-    glow_gl_system *gls = NULL;
+    glow_gl_system *gls = NULL, *glt = NULL; /* glt: the unbudgeted GL twin of a budgeted GL run */
     glow_scene_light *lights = NULL;
     char gl_renderer[96] = "";
 #endif
     float *gpu_sh = NULL;
+    float *sh_a = NULL, *sh_b = NULL; /* GL budgets: both GL systems' caches read back, for the error */
     glow_cache_outputs gpu_out;
     double *v_host = NULL, *v_light = NULL, *v_pull = NULL, *v_cache = NULL, *v_out = NULL, *v_total = NULL, *v_move = NULL;
     int rc = 1;
@@ -616,15 +612,15 @@ int main(int argc, char **argv) {
     glow_update_desc ud = {0};
     if (budget) {
         sd.label = "twin";
-        if (!o.gl) { /* its own host: footprint samples roll per host, once per update */
+        if (!o.gl) { /* its own host: footprint samples roll per host, once per update; GL: a GL twin below */
             if ((r = glow_host_create(&hd, &twin_host)) != GLOW_OK) goto done;
             sd.lighting = glow_host_hooks(twin_host);
+            if ((r = glow_system_create(ctx, &sd, &twin)) != GLOW_OK) goto done;
+            if ((r = glow_system_set_params(twin, &(glow_system_params){.bounce_intensity = 1.0f,
+                                                                         .emission_scale = scene.emission_scale,
+                                                                         .bounce_iterations = o.iterations})) != GLOW_OK)
+                goto done;
         }
-        if ((r = glow_system_create(ctx, &sd, &twin)) != GLOW_OK) goto done;
-        if ((r = glow_system_set_params(twin, &(glow_system_params){.bounce_intensity = 1.0f,
-                                                                     .emission_scale = scene.emission_scale,
-                                                                     .bounce_iterations = o.iterations})) != GLOW_OK)
-            goto done;
         if (!o.has_focus && scene.has_camera) {
             memcpy(o.focus, scene.camera.position, sizeof o.focus);
             o.has_focus = 1;
@@ -662,6 +658,14 @@ int main(int argc, char **argv) {
                            .hook_glsl = glow_gl_lights_hook_source(gll), .label = o.bake, .logger = logger,
                            .flags = o.gl_finish ? GLOW_GL_FLAG_FINISH_TIMERS : 0u};
         if ((r = glow_gl_system_create(&gd, &gls)) != GLOW_OK) goto done;
+        if (budget) { /* the unbudgeted reference: a second GL system on the same tables and lights */
+            gd.label = "twin";
+            if ((r = glow_gl_system_create(&gd, &glt)) != GLOW_OK) goto done;
+            const size_t ncs = (size_t)out->cache_count * out->coeff_count;
+            sh_a = malloc((ncs + 1) * sizeof *sh_a);
+            sh_b = malloc((ncs + 1) * sizeof *sh_b);
+            if (!sh_a || !sh_b) goto done;
+        }
         lights = calloc(scene.light_count ? scene.light_count : 1u, sizeof *lights);
         if (!lights) goto done;
         if (scene.light_count) memcpy(lights, scene.lights, scene.light_count * sizeof *lights);
@@ -684,7 +688,11 @@ int main(int argc, char **argv) {
     v_gath = calloc(n, sizeof(double));
     v_errn = calloc(n, sizeof(double));
     if (!v_host || !v_light || !v_pull || !v_cache || !v_out || !v_total || !v_move || !v_err || !v_gath || !v_errn) goto done;
-    const bool walk = o.walk && twin;
+    bool has_twin = twin != NULL;
+#ifdef GLOW_BENCH_HAVE_GL
+    has_twin = has_twin || glt != NULL;
+#endif
+    const bool walk = o.walk && has_twin;
     const float near_r = 0.1f * diag;
     if (walk) { /* from 5 % in at one end of the longest horizontal extent to 5 % in at the other */
         cinfo = malloc(((size_t)info.cache_count + 1) * sizeof *cinfo);
@@ -725,9 +733,20 @@ int main(int argc, char **argv) {
 #ifdef GLOW_BENCH_HAVE_GL
         if (o.gl) {
             glow_gl_lights_bind(gll);
-            if ((r = glow_gl_system_update(gls, NULL)) != GLOW_OK) goto done;
+            glow_update_desc u = budget ? ud : (glow_update_desc){0};
+            if (o.keep_lighting && f > 0) u.flags |= GLOW_UPDATE_FLAG_KEEP_LIGHTING;
+            if ((r = glow_gl_system_update(gls, &u)) != GLOW_OK) goto done;
             glow_gl_stats gs;
             glow_gl_system_get_stats(gls, &gs); /* waits for this update's timer queries */
+            st.caches_gathered = gs.caches_gathered;
+            if (glt) { /* untimed reference, then both read back for the budget's error below */
+                glow_gl_lights_bind(gll);
+                if ((r = glow_gl_system_update(glt, NULL)) != GLOW_OK) goto done;
+                const size_t ncs = (size_t)out->cache_count * out->coeff_count;
+                if (f >= o.warmup && ((r = glow_gl_system_read_cache_sh(gls, sh_a, ncs)) != GLOW_OK ||
+                                      (r = glow_gl_system_read_cache_sh(glt, sh_b, ncs)) != GLOW_OK))
+                    goto done;
+            }
             st.host_ms = gs.host_ms;
             st.surfel_lighting_ms = gs.surfel_lighting_ms;
             st.pull_ms = gs.pull_ms;
@@ -754,11 +773,13 @@ int main(int argc, char **argv) {
             v_out[i] = st.output_ms;
             v_total[i] = st.total_ms;
             v_gath[i] = st.caches_gathered;
-            if (twin) { /* the budget's cost this frame: the caches' luma (DC) against the unbudgeted twin */
-                const glow_cache_outputs *a = glow_system_outputs(sys), *b = glow_system_outputs(twin);
+            if (has_twin) { /* the budget's cost this frame: the caches' luma (DC) against the unbudgeted twin */
+                const uint32_t cc = out->coeff_count;
+                const float *A = twin ? glow_system_outputs(sys)->cache_sh : sh_a;
+                const float *B = twin ? glow_system_outputs(twin)->cache_sh : sh_b;
                 double num = 0.0, den = 0.0, numn = 0.0, denn = 0.0;
-                for (uint32_t c = 0; c < a->cache_count; ++c) {
-                    const double x = a->cache_sh[(size_t)c * a->coeff_count], y = b->cache_sh[(size_t)c * b->coeff_count];
+                for (uint32_t c = 0; c < out->cache_count; ++c) {
+                    const double x = A[(size_t)c * cc], y = B[(size_t)c * cc];
                     num += fabs(x - y);
                     den += fabs(y);
                     if (walk) {
@@ -959,8 +980,11 @@ int main(int argc, char **argv) {
 done:
     if (rc != 0 && r != GLOW_OK) fprintf(stderr, "glow-bench: failed: %s\n", glow_result_string(r));
     free(gpu_sh);
+    free(sh_a);
+    free(sh_b);
 #ifdef GLOW_BENCH_HAVE_GL
     free(lights);
+    glow_gl_system_destroy(glt);
     glow_gl_system_destroy(gls);
     glow_gl_lights_destroy(gll);
     glow_glctx_destroy(glc);
