@@ -1229,7 +1229,10 @@ static uint64_t world_key(const glow_pc_settings *s, const glow__scene *w) {
     return h;
 }
 
-/* A system's key: the world's part, its cell, its triangles and the occluders it traces. */
+/* A system's key: the world's part, its cell, its triangles and the occluders it traces. Not the
+ * triangles' indices in the file (tri_source): only GEOM's `source` fields follow from those, so a
+ * system whose triangles merely moved in the file keeps its key, and its file is patched, not baked
+ * (patch_sources; the file's name adds a hash of the indices, sources_key). */
 static uint64_t system_key(uint64_t world, const sys_part *part, const glow__scene *sub, const float *occ, uint32_t nocc) {
     uint64_t h = world;
     HASH_VAL(h, part->depth);
@@ -1240,9 +1243,95 @@ static uint64_t system_key(uint64_t world, const sys_part *part, const glow__sce
     if (sub->uv0) h = fnv64(h, sub->uv0, n * 3 * sizeof *sub->uv0);
     if (sub->uv1) h = fnv64(h, sub->uv1, n * 3 * sizeof *sub->uv1);
     h = fnv64(h, sub->tri_material, n * sizeof *sub->tri_material);
-    h = fnv64(h, sub->tri_source, n * sizeof *sub->tri_source);
     HASH_VAL(h, nocc);
     return fnv64(h, occ, (size_t)nocc * 9 * sizeof *occ);
+}
+
+static void beside(const char *out_path, const char *file, char *buf, size_t n);
+
+/* The hash of a system's triangles' indices in the imported file: with the content key, its file key. */
+static uint64_t sources_key(const glow__scene *sub) {
+    return fnv64(FNV_INIT ^ 0x736f7572636573ull, sub->tri_source, (size_t)sub->tri_count * sizeof *sub->tri_source);
+}
+
+/* An incremental re-bake where a system's content is unchanged but its triangles' indices in the file
+ * moved (triangles added or removed before them): the previous file `from` is copied to `to` with
+ * GEOM's `source` fields from sub->tri_source (the same triangles in the same order) and its CRCs
+ * redone. Nothing else in a system's bytes follows from the indices, so the result is what a bake
+ * would write. Written under TO.tmp and renamed; GLOW_ERROR_IO / CORRUPT_DATA (the old file is not
+ * the bake its manifest entry says: the caller bakes instead) / OUT_OF_MEMORY. */
+static glow_result patch_sources(const char *from, const char *to, const glow__scene *sub) {
+    FILE *f = fopen(from, "rb");
+    if (!f) return GLOW_ERROR_IO;
+    long len = -1;
+    if (fseek(f, 0, SEEK_END) == 0) len = ftell(f);
+    unsigned char *img = len > (long)sizeof(glow_bake_header) && fseek(f, 0, SEEK_SET) == 0 ? malloc((size_t)len) : NULL;
+    const bool read = img && fread(img, 1, (size_t)len, f) == (size_t)len;
+    fclose(f);
+    if (!read) {
+        free(img);
+        return img || len <= (long)sizeof(glow_bake_header) ? GLOW_ERROR_IO : GLOW_ERROR_OUT_OF_MEMORY;
+    }
+    glow_bake_header h;
+    memcpy(&h, img, sizeof h);
+    const uint64_t table_end = sizeof h + (uint64_t)h.section_count * sizeof(glow_bake_section);
+    glow_result r = GLOW_ERROR_CORRUPT_DATA;
+    if (memcmp(h.magic, "GLOW", 4) != 0 || h.file_size != (uint64_t)len || table_end > (uint64_t)len) goto out;
+    for (uint32_t i = 0; i < h.section_count; ++i) {
+        glow_bake_section sec;
+        memcpy(&sec, img + sizeof h + (size_t)i * sizeof sec, sizeof sec);
+        if (sec.fourcc != GLOW_SECTION_GEOM) continue;
+        if (sec.size != (uint64_t)sub->tri_count * sizeof(glow_bake_triangle) || sec.offset > (uint64_t)len ||
+            sec.size > (uint64_t)len - sec.offset)
+            goto out;
+        unsigned char *tri = img + sec.offset;
+        for (uint32_t t = 0; t < sub->tri_count; ++t)
+            memcpy(tri + (size_t)t * sizeof(glow_bake_triangle) + offsetof(glow_bake_triangle, source), &sub->tri_source[t],
+                   sizeof(uint32_t));
+        sec.crc32 = glow__crc32(0, tri, (size_t)sec.size);
+        memcpy(img + sizeof h + (size_t)i * sizeof sec, &sec, sizeof sec);
+        h.table_crc32 = glow__crc32(0, img + sizeof h, (size_t)h.section_count * sizeof sec);
+        h.header_crc32 = 0;
+        h.header_crc32 = glow__crc32(0, &h, sizeof h);
+        memcpy(img, &h, sizeof h);
+        char tmp[4300];
+        snprintf(tmp, sizeof tmp, "%s.tmp", to);
+        FILE *o = fopen(tmp, "wb");
+        bool ok = o && fwrite(img, 1, (size_t)len, o) == (size_t)len;
+        if (o && fclose(o) != 0) ok = false;
+        if (!ok || rename(tmp, to) != 0) {
+            remove(tmp);
+            r = GLOW_ERROR_IO;
+        } else {
+            r = GLOW_OK;
+        }
+        break;
+    }
+out:
+    free(img);
+    return r;
+}
+
+/* The previous manifest's entry with this content key (the file key less the triangles' indices) whose
+ * file is still there at the size it recorded, or NULL; *old_path gets that file's path. */
+static const cJSON *previous_content(const cJSON *prev, const char *content, const char *out_path, char *old_path,
+                                     size_t n) {
+    const cJSON *e;
+    cJSON_ArrayForEach(e, cJSON_GetObjectItem(prev, "systems")) {
+        const cJSON *ce = cJSON_GetObjectItem(e, "content_key"), *fe = cJSON_GetObjectItem(e, "file"),
+                    *be = cJSON_GetObjectItem(e, "bytes");
+        if (!cJSON_IsString(ce) || strcmp(ce->valuestring, content) != 0 || !cJSON_IsString(fe) || !cJSON_IsNumber(be) ||
+            strchr(fe->valuestring, '/'))
+            continue;
+        beside(out_path, fe->valuestring, old_path, n);
+        FILE *f = fopen(old_path, "rb");
+        if (!f) continue;
+        long len = -1;
+        if (fseek(f, 0, SEEK_END) == 0) len = ftell(f);
+        fclose(f);
+        if (len >= 0 && (double)len == be->valuedouble) return e;
+    }
+    return NULL;
 }
 
 /* The previous manifest at out_path, when it is one of ours (else NULL: everything is baked). */
@@ -1712,7 +1801,7 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
     glow_result res = GLOW_OK;
     uint32_t nmade = 0, largest = 0, reused = 0;
     uint64_t nf_total = 0, dep_total = 0;
-    uint64_t *own_key = NULL, *full_key = NULL, *tree_key = NULL;
+    uint64_t *own_key = NULL, *full_key = NULL, *tree_key = NULL, *src_key = NULL;
     uint32_t *dep_count = NULL, *deps = NULL, *occ_count = NULL, *sys_of = NULL, *last_use = NULL;
     sys_base *bases = NULL;
     if (!tri_area_v || !cent || !sp.order || !sp.tmp || !foreign || !root) {
@@ -1775,13 +1864,14 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
     own_key = calloc(sp.n + 1, sizeof *own_key);
     full_key = calloc(sp.n + 1, sizeof *full_key);
     tree_key = calloc(sp.n + 1, sizeof *tree_key);
+    src_key = calloc(sp.n + 1, sizeof *src_key);
     dep_count = calloc(sp.n + 1, sizeof *dep_count);
     deps = malloc(((size_t)sp.n * dep_cap + 1) * sizeof *deps);
     occ_count = calloc(sp.n + 1, sizeof *occ_count);
     sys_of = malloc(((size_t)n + 1) * sizeof *sys_of);
     bases = calloc(sp.n + 1, sizeof *bases);
     last_use = calloc(sp.n + 1, sizeof *last_use);
-    if (!own_key || !full_key || !tree_key || !dep_count || !deps || !occ_count || !sys_of || !bases || !last_use) {
+    if (!own_key || !full_key || !tree_key || !src_key || !dep_count || !deps || !occ_count || !sys_of || !bases || !last_use) {
         glow__errorf(log, "%s: out of memory for the systems", world->source);
         res = GLOW_ERROR_OUT_OF_MEMORY;
         goto done;
@@ -1798,6 +1888,7 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
             res = GLOW_ERROR_OUT_OF_MEMORY;
         } else {
             own_key[s] = system_key(wkey, &sp.parts[s], &sub, foreign, nf);
+            src_key[s] = sources_key(&sub);
             nf_total += nf;
             /* The key of its surfels and tree (what its dependents' proxies index): every ray that
              * places and clusters them stays within its bounds grown by the concavity rays' reach (4
@@ -1856,10 +1947,13 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
     for (uint32_t s = 0; s < sp.n && res == GLOW_OK; ++s) {
         const sys_part *part = &sp.parts[s];
         const uint32_t *d = deps + (size_t)s * dep_cap, nd = dep_count[s];
-        const uint64_t key = full_key[s];
+        /* the file key: its content (full_key) and its triangles' indices in the file */
+        uint64_t key = full_key[s];
+        HASH_VAL(key, src_key[s]);
         /* STEM.sDEPTH-PATH-KEY.glow beside the manifest, STEM: out_path less a ".json" or ".glow" ending */
-        char path[4200], keyhex[20], ownhex[20];
+        char path[4200], keyhex[20], ownhex[20], contenthex[20];
         snprintf(keyhex, sizeof keyhex, "%016llx", (unsigned long long)key);
+        snprintf(contenthex, sizeof contenthex, "%016llx", (unsigned long long)full_key[s]);
         snprintf(ownhex, sizeof ownhex, "%016llx", (unsigned long long)tree_key[s]);
         {
             size_t len = strlen(out_path), st = 0;
@@ -1882,16 +1976,48 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
         base = base ? base + 1 : path;
         const cJSON *old = prev ? previous_entry(prev, base, path) : NULL;
         cJSON *o = NULL;
-        if (old) { /* unchanged: keep the file and what the manifest said of it */
+        bool patched = false;
+        if (!old && prev) { /* the same content, its triangles elsewhere in the file: the old file, re-indexed */
+            char old_path[4200];
+            const cJSON *same = previous_content(prev, contenthex, out_path, old_path, sizeof old_path);
+            if (same) {
+                glow__scene sub;
+                uint32_t nf = 0;
+                float olo[3], ohi[3];
+                glow_result pr = GLOW_ERROR_OUT_OF_MEMORY;
+                if (sys_prepare(&W, s, &sub, &nf, olo, ohi, NULL, NULL)) {
+                    pr = writer ? patch_sources(old_path, path, &sub) : GLOW_OK;
+                    sys_scene_free(&sub);
+                }
+                if (pr == GLOW_OK && writer && !(made[nmade++] = strdup(path))) pr = GLOW_ERROR_OUT_OF_MEMORY;
+                if (pr == GLOW_OK) {
+                    old = same;
+                    patched = true;
+                    stats->systems_patched++;
+                } else if (pr == GLOW_ERROR_OUT_OF_MEMORY) {
+                    glow__errorf(log, "%s: out of memory re-indexing system %u", world->source, s);
+                    res = pr;
+                } else {
+                    glow__warnf(log, "system %u: %s could not be re-indexed (%s): baking it", s, old_path, glow_result_string(pr));
+                }
+            }
+        }
+        if (res != GLOW_OK) {
+        } else if (old) { /* unchanged: keep the file (re-indexed: patched) and what the manifest said of it */
             o = cJSON_Duplicate(old, 1);
             cJSON_ReplaceItemInObject(o, "index", cJSON_CreateNumber(s));
+            if (patched) {
+                cJSON_ReplaceItemInObject(o, "file", cJSON_CreateString(base));
+                cJSON_ReplaceItemInObject(o, "key", cJSON_CreateString(keyhex));
+            }
             reused++;
             stats->surfels += (uint32_t)json_num(old, "surfels");
             stats->caches += (uint32_t)json_num(old, "caches");
             stats->grid_caches += (uint32_t)json_num(old, "grid_caches");
             stats->lightmap_caches += (uint32_t)json_num(old, "lightmap_caches");
             stats->file_size += (uint64_t)json_num(old, "bytes");
-            glow__infof(log, "system %u: unchanged (key %s) -> %s", s, keyhex, path);
+            glow__infof(log, "system %u: unchanged%s (key %s) -> %s", s,
+                        patched ? " but for its triangles' indices in the file (re-indexed)" : "", keyhex, path);
         } else {
             const bool other = dist && (to_bake++ % dist->ranks) != dist->rank;
             glow__scene sub;
@@ -1962,6 +2088,7 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
                     cJSON_AddStringToObject(o, "name", nm);
                 }
                 cJSON_AddStringToObject(o, "system_key", ownhex);
+                cJSON_AddStringToObject(o, "content_key", contenthex);
                 char inhex[20];
                 snprintf(inhex, sizeof inhex, "%016llx", (unsigned long long)own_key[s]);
                 cJSON_AddStringToObject(o, "inputs_key", inhex);
@@ -2029,9 +2156,10 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
     stats->systems = sp.n;
     stats->systems_reused = reused;
     if (res == GLOW_OK)
-        glow__infof(log, "systems: %u baked, %u unchanged; %.1f other systems' triangles per system traced as occluders "
-                    "(within %.0f %% of its diagonal), whose %.1f systems on average its caches link (light across "
-                    "systems)", sp.n - reused, reused, sp.n ? (double)nf_total / sp.n : 0.0, 100.0 * W.reach,
+        glow__infof(log, "systems: %u baked, %u unchanged (%u of them re-indexed); %.1f other systems' triangles per "
+                    "system traced as occluders (within %.0f %% of its diagonal), whose %.1f systems on average its caches "
+                    "link (light across systems)", sp.n - reused, reused, stats->systems_patched,
+                    sp.n ? (double)nf_total / sp.n : 0.0, 100.0 * W.reach,
                     sp.n ? (double)dep_total / sp.n : 0.0);
     for (uint32_t i = 0; i < stats->section_count && i < 16; ++i)
         if (stats->section_fourcc[i] == GLOW_SECTION_LINK && stats->links)
@@ -2076,6 +2204,7 @@ done:
     free(own_key);
     free(full_key);
     free(tree_key);
+    free(src_key);
     free(dep_count);
     free(deps);
     free(occ_count);

@@ -305,9 +305,10 @@ static void print_summary(const char *scene, const char *out, const glow_pc_stat
     }
     printf("glow-bake: %s -> %s\n", scene, out);
     if (s->systems > 1)
-        printf("  systems   %u, %u of them baked and %u unchanged from the previous bake (the world manifest %s names "
-               "their bakes; the figures below are sums over the baked ones, the settings the largest's)\n",
-               s->systems, s->systems - s->systems_reused, s->systems_reused, out);
+        printf("  systems   %u, %u of them baked and %u unchanged (%u re-indexed: only their triangles' places in "
+               "the file moved) from the previous bake (the world manifest %s names their bakes; the figures below are "
+               "sums over the baked ones, the settings the largest's)\n",
+               s->systems, s->systems - s->systems_reused, s->systems_reused, s->systems_patched, out);
     printf("  scene     %u triangles kept of %u (skipped: %u degenerate [%u repeated corners, %u collinear], "
            "%u duplicate, %u non-finite), "
            "%u materials, %u textures (%u missing), area %.6g\n",

@@ -210,6 +210,8 @@ typedef struct glow_pc_stats {
     uint32_t systems;
     uint32_t systems_reused;  /* ... of which an incremental re-bake kept unchanged (their figures above
                                  are only those the manifest records: surfels, caches, bytes) */
+    uint32_t systems_patched; /* \since 0.2: ... of those, unchanged but for their triangles' indices in the
+                                 file (triangles added or removed before them): the old file re-indexed */
     /* light across systems: the systems whose trees the caches link (summed over the systems baked) and
      * the proxy nodes those links read (bake format 1.4, XREF) */
     uint32_t dependencies;
