@@ -29,6 +29,9 @@
  * machine): create 24 ms (exact: the BVH) / 86 ms (shadow map: BVH for the sky + one 1024² map, 67 ms);
  * first hook pass 380 ms (S traced, 128 rays per surfel, cached); every later pass 1.9 ms (exact) /
  * 3.3 ms (shadow map). A 2048² sun map renders in 216 ms, 4096² in 814 ms.
+ * Footprints (exact kind, 8 points, 2026-11-29, 2 threads): the first pass also traces 8 shadow rays
+ * per surfel and light and each footprint's reach; later passes with a moving sun cost about 0.25 ms
+ * more than one ray per surfel (the bookkeeping), with a still sun about 0.5 ms less (no rays).
  *
  * USAGE
  *   glow_host_desc hd = glow_host_desc_from_scene(&scene, bake, GLOW_HOST_KIND_SHADOW_MAP);
