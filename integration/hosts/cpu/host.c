@@ -555,6 +555,19 @@ glow_result glow_host_sky_visibility(glow_host *h, const glow_surfel_view *v, fl
  * irradiance_at would trace (same origin, direction, tfar), so the result is the same V; the sky
  * term then goes through irradiance_at's cached path. */
 #define PACKET 16
+
+/* Lane k of a packet as an idle ray (the packet paths fill the lanes they trace over it). */
+static void ray_lane_idle(struct RTCRay16 *ray, uint32_t k) {
+    ray->org_x[k] = ray->org_y[k] = ray->org_z[k] = 0.0f;
+    ray->dir_x[k] = ray->dir_y[k] = 0.0f;
+    ray->dir_z[k] = 1.0f;
+    ray->tnear[k] = 0.0f;
+    ray->tfar[k] = 0.0f;
+    ray->time[k] = 0.0f;
+    ray->mask[k] = 0xFFFFFFFFu;
+    ray->id[k] = k;
+    ray->flags[k] = 0;
+}
 static uint64_t light_packet(const glow_host *h, const glow_surfel_batch *batch, uint32_t i0, uint32_t count, float *out) {
     uint64_t traced = 0;
     float o[PACKET][3];
@@ -574,15 +587,7 @@ static uint64_t light_packet(const glow_host *h, const glow_surfel_batch *batch,
         for (uint32_t k = 0; k < PACKET; ++k) {
             valid[k] = 0;
             f[k] = 0.0f;
-            ray.org_x[k] = ray.org_y[k] = ray.org_z[k] = 0.0f;
-            ray.dir_x[k] = ray.dir_y[k] = 0.0f;
-            ray.dir_z[k] = 1.0f;
-            ray.tnear[k] = 0.0f;
-            ray.tfar[k] = 0.0f;
-            ray.time[k] = 0.0f;
-            ray.mask[k] = 0xFFFFFFFFu;
-            ray.id[k] = k;
-            ray.flags[k] = 0;
+            ray_lane_idle(&ray, k);
             if (k >= count) continue;
             const float *p = batch->positions + 4 * (size_t)(i0 + k), *n = batch->normals + 4 * (size_t)(i0 + k);
             float l[3], dist;
@@ -663,15 +668,7 @@ static uint64_t light_packet_foot(glow_host *h, const glow_surfel_batch *batch, 
             for (uint32_t k = 0; k < PACKET; ++k) {
                 valid[k] = 0;
                 pick[k] = UINT32_MAX;
-                ray.org_x[k] = ray.org_y[k] = ray.org_z[k] = 0.0f;
-                ray.dir_x[k] = ray.dir_y[k] = 0.0f;
-                ray.dir_z[k] = 1.0f;
-                ray.tnear[k] = 0.0f;
-                ray.tfar[k] = 0.0f;
-                ray.time[k] = 0.0f;
-                ray.mask[k] = 0xFFFFFFFFu;
-                ray.id[k] = k;
-                ray.flags[k] = 0;
+                ray_lane_idle(&ray, k);
                 if (k >= count || !(f[k] > 0.0f)) continue;
                 pick[k] = foot_pick(h, st[k], r);
                 if (pick[k] == UINT32_MAX) continue;
