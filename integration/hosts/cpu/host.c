@@ -556,6 +556,17 @@ glow_result glow_host_sky_visibility(glow_host *h, const glow_surfel_view *v, fl
  * term then goes through irradiance_at's cached path. */
 #define PACKET 16
 
+/* Adds the sky term of surfels [i0, i0 + count) of the batch to out (irradiance_at without lights). */
+static void add_sky(const glow_host *h, const glow_surfel_batch *batch, uint32_t i0, uint32_t count, float *out) {
+    if (!sky_on(h)) return;
+    for (uint32_t k = 0; k < count; ++k) {
+        const float *p = batch->positions + 4 * (size_t)(i0 + k), *n = batch->normals + 4 * (size_t)(i0 + k);
+        float e[3];
+        irradiance_sky(h, p, n, batch->first + i0 + k, e);
+        for (int c = 0; c < 3; ++c) out[3 * (size_t)(i0 + k) + c] += e[c];
+    }
+}
+
 /* Lane k of a packet as an idle ray (the packet paths fill the lanes they trace over it). */
 static void ray_lane_idle(struct RTCRay16 *ray, uint32_t k) {
     ray->org_x[k] = ray->org_y[k] = ray->org_z[k] = 0.0f;
@@ -624,13 +635,7 @@ static uint64_t light_packet(const glow_host *h, const glow_surfel_batch *batch,
             for (int c = 0; c < 3; ++c) out[3 * (size_t)(i0 + k) + c] += f[k] * pw[c];
         }
     }
-    if (!sky_on(h)) return traced;
-    for (uint32_t k = 0; k < count; ++k) { /* the sky alone: irradiance_at without lights */
-        const float *p = batch->positions + 4 * (size_t)(i0 + k), *n = batch->normals + 4 * (size_t)(i0 + k);
-        float e[3];
-        irradiance_sky(h, p, n, batch->first + i0 + k, e);
-        for (int c = 0; c < 3; ++c) out[3 * (size_t)(i0 + k) + c] += e[c];
-    }
+    add_sky(h, batch, i0, count, out);
     return traced;
 }
 
@@ -715,13 +720,7 @@ static uint64_t light_packet_foot(glow_host *h, const glow_surfel_batch *batch, 
             for (int c = 0; c < 3; ++c) out[3 * (size_t)(i0 + k) + c] += v * pw[c];
         }
     }
-    if (!sky_on(h)) return traced;
-    for (uint32_t k = 0; k < count; ++k) { /* the sky alone: irradiance_at without lights */
-        const float *p = batch->positions + 4 * (size_t)(i0 + k), *n = batch->normals + 4 * (size_t)(i0 + k);
-        float e[3];
-        irradiance_sky(h, p, n, batch->first + i0 + k, e);
-        for (int c = 0; c < 3; ++c) out[3 * (size_t)(i0 + k) + c] += e[c];
-    }
+    add_sky(h, batch, i0, count, out);
     return traced;
 }
 
