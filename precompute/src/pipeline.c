@@ -1249,6 +1249,16 @@ static uint64_t system_key(uint64_t world, const sys_part *part, const glow__sce
 
 static void beside(const char *out_path, const char *file, char *buf, size_t n);
 
+/* Whether the file at `path` is there with `bytes` bytes (what a manifest recorded of it). */
+static bool file_has_size(const char *path, double bytes) {
+    FILE *f = fopen(path, "rb");
+    if (!f) return false;
+    long len = -1;
+    if (fseek(f, 0, SEEK_END) == 0) len = ftell(f);
+    fclose(f);
+    return len >= 0 && (double)len == bytes;
+}
+
 /* The hash of a system's triangles' indices in the imported file: with the content key, its file key. */
 static uint64_t sources_key(const glow__scene *sub) {
     return fnv64(FNV_INIT ^ 0x736f7572636573ull, sub->tri_source, (size_t)sub->tri_count * sizeof *sub->tri_source);
@@ -1324,12 +1334,7 @@ static const cJSON *previous_content(const cJSON *prev, const char *content, con
             strchr(fe->valuestring, '/'))
             continue;
         beside(out_path, fe->valuestring, old_path, n);
-        FILE *f = fopen(old_path, "rb");
-        if (!f) continue;
-        long len = -1;
-        if (fseek(f, 0, SEEK_END) == 0) len = ftell(f);
-        fclose(f);
-        if (len >= 0 && (double)len == be->valuedouble) return e;
+        if (file_has_size(old_path, be->valuedouble)) return e;
     }
     return NULL;
 }
@@ -1364,12 +1369,7 @@ static const cJSON *previous_entry(const cJSON *prev, const char *file, const ch
     cJSON_ArrayForEach(e, cJSON_GetObjectItem(prev, "systems")) {
         const cJSON *fe = cJSON_GetObjectItem(e, "file"), *be = cJSON_GetObjectItem(e, "bytes");
         if (!cJSON_IsString(fe) || strcmp(fe->valuestring, file) != 0 || !cJSON_IsNumber(be)) continue;
-        FILE *f = fopen(path, "rb");
-        if (!f) return NULL;
-        long len = -1;
-        if (fseek(f, 0, SEEK_END) == 0) len = ftell(f);
-        fclose(f);
-        return len >= 0 && (double)len == be->valuedouble ? e : NULL;
+        return file_has_size(path, be->valuedouble) ? e : NULL;
     }
     return NULL;
 }
