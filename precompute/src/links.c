@@ -89,6 +89,10 @@ typedef struct link_job {
     const glow__link_settings *settings;
     glow__links *out;
     uint32_t *leaf_first, *leaf_end; /* per node: its leaves are [first, end) (DFS leaf order) */
+    double *leaf_area;               /* [leaf_count + 1]: area of leaves [0, i), so leaves [a, b) hold
+                                      * leaf_area[b] - leaf_area[a]; a node's radiance is its flux over
+                                      * its area, so each leaf weighs by its area, not 1/n (adaptive
+                                      * surfel density: areas 0.1-3.4x the nominal) */
     float ray_eps;                   /* scene-scale offset for ray starts and ends */
     float near_radius;               /* NEAR_RADII surfel radii */
     glow__kdtree *surfel_tree;       /* over surfel positions, for the near-field credit */
@@ -383,7 +387,8 @@ static void node_vals(const link_job *job, cl_runs *r, uint32_t v, float *omega,
     }
     for (uint32_t j = j0; j < j1; j = (j == j0 && j1 - 1 > j0) ? j1 - 1 : j1) {
         const uint32_t lo = r->a[j] > a ? r->a[j] : a, hi = r->b[j] < b ? r->b[j] : b;
-        const double f = (double)(hi - lo) / (r->b[j] - r->a[j]);
+        const double *A = job->leaf_area;
+        const double f = (A[hi] - A[lo]) / (A[r->b[j]] - A[r->a[j]]);
         w += f * r->w[j];
         k += f * r->k[j];
         for (int q = 0; q < 3; ++q) d[q] += f * r->d[3 * j + q];
@@ -393,19 +398,21 @@ static void node_vals(const link_job *job, cl_runs *r, uint32_t v, float *omega,
     for (int q = 0; q < 3; ++q) dirsum[3 * v + q] = (float)d[q];
 }
 
-/* The total variation of cut_priority over the runs: leaves of a run share its solid angle evenly,
- * leaves in no run have none. */
-static double runs_tv(const link_job *job, const cl_runs *r, uint32_t v, double om) {
+/* The total variation of cut_priority over the runs: leaves of a run share its solid angle by their
+ * areas, leaves in no run have none. */
+static double runs_tv(const link_job *job, const cl_runs *r, uint32_t v, double om, bool resp_k) {
+    const float *rw = resp_k ? r->k : r->w;
     const uint32_t a = job->leaf_first[v], b = job->leaf_end[v];
-    const double inv_om = 1.0 / om, inv_n = 1.0 / (double)(b - a);
+    const double *A = job->leaf_area;
+    const double inv_om = 1.0 / om, inv_area = 1.0 / (A[b] - A[a]);
     double tv = 0.0, covered = 0.0;
     for (uint32_t j = runs_end_after(r, a); j < r->count && r->a[j] < b; ++j) {
         const uint32_t lo = r->a[j] > a ? r->a[j] : a, hi = r->b[j] < b ? r->b[j] : b;
-        const double len = (double)(hi - lo);
-        tv += fabs(r->w[j] * len / (r->b[j] - r->a[j]) * inv_om - len * inv_n);
-        covered += len;
+        const double part = A[hi] - A[lo];
+        tv += fabs(rw[j] * part / (A[r->b[j]] - A[r->a[j]]) * inv_om - part * inv_area);
+        covered += part;
     }
-    tv += ((double)(b - a) - covered) * inv_n;
+    tv += ((A[b] - A[a]) - covered) * inv_area;
     return 0.5 * tv;
 }
 
@@ -427,32 +434,53 @@ static uint32_t cut_descend(const link_job *job, cl_runs *r, float *omega, float
 }
 
 /* Split priority of a cut node v: a bound on the error its link can make, in units of
- * (visible solid angle x radiosity contrast). The link applies the node's mean radiosity, i.e. weight
- * 1/n to each of its n leaves, where the exact gather weights leaf i by ω_i/ω_v (hidden leaves by 0).
- * The gather error is Σ_i (ω_i/ω_v − 1/n) B_i, at most ω_v · D_v · (B_max − B_min) with D_v the total
- * variation distance ½ Σ_i |ω_i/ω_v − 1/n| between the two weightings: D_v is at least the node's
+ * (visible solid angle x radiosity contrast). The link applies the node's mean radiosity (its flux
+ * over its area), i.e. weight a_i = A_i/A_v to each leaf, where the exact gather weights leaf i by
+ * ω_i/ω_v (hidden leaves by 0). The gather error is Σ_i (ω_i/ω_v − a_i) B_i, at most
+ * ω_v · D_v · (B_max − B_min) with D_v the total variation distance ½ Σ_i |ω_i/ω_v − a_i| between the
+ * two weightings (a_i = 1/n before surfel areas varied, docs/linker.md): D_v is at least the node's
  * hidden fraction (the cause of the energy loss and of contact leaks, docs/linker.md) and also counts
  * visible leaves seen at very different solid angles. A node that is fully and evenly visible still
  * errs in direction (one cone for a spread of directions): its spread 1 − |Σ ω_i d_i| / ω_v, which is
  * (1 − cos α)/2 for a cap of half-angle α, so for such nodes the order is that of the solid angle, the
- * published priority (PIC 4.5). */
-static float cut_priority(const link_job *job, const cl_runs *r, const float *omega, const float *dirsum, uint32_t v) {
-    const float om = omega[v];
+ * published priority (PIC 4.5).
+ * Lightmap caches (kappa non-NULL) gather each leaf by its diffuse response κ_i = ω_i K_L(d_i · n), not
+ * its solid angle, so both the scale and D_v are taken in κ: a node seen at grazing incidence (the
+ * ceiling above a wall texel) has a large ω but adds little to the texel's light, and splitting it
+ * spent links the nodes the texel does gather from needed (CornellBox-Sphere under a point light near
+ * its ceiling: block error 0.119 → 0.099 over surfel seeds 0-3, Sponza 0.0919 → 0.0909,
+ * docs/linker.md "The cut and its audit"). Grid caches keep ω (they gather the whole sphere). */
+static float cut_priority(const link_job *job, const cl_runs *r, const float *omega, const float *dirsum,
+                          const float *kappa, uint32_t v) {
     if (job->settings->join && job->settings->join[v]) return INFINITY; /* joins trees: never a link */
-    if (!job->settings->cut_error || !(om > 0.0f)) return om; /* the published priority (PIC 4.5) */
+    if (!job->settings->cut_error || !(omega[v] > 0.0f)) return omega[v]; /* the published priority (PIC 4.5) */
     const float *ds = &dirsum[3 * v];
-    float spread = 1.0f - sqrtf(glow__dot(ds, ds)) / om;
+    float spread = 1.0f - sqrtf(glow__dot(ds, ds)) / omega[v];
     spread = spread < 0.0f ? 0.0f : spread;
+    const bool resp_k = kappa != NULL;
+    const float *resp = resp_k ? kappa : omega;
+    const float om = resp[v];
+    if (!(om > 0.0f)) return 0.0f;
     const uint32_t a = job->leaf_first[v], b = job->leaf_end[v];
     double tv = 0.0;
     if (r->active) {
-        if (b - a > 1) tv = runs_tv(job, r, v, om);
+        if (b - a > 1) tv = runs_tv(job, r, v, om, resp_k);
     } else if (b - a > 1) {
-        const double inv_om = 1.0 / om, inv_n = 1.0 / (double)(b - a);
-        for (uint32_t i = a; i < b; ++i) tv += fabs(omega[i] * inv_om - inv_n);
+        const double *A = job->leaf_area;
+        const double inv_om = 1.0 / om, inv_area = 1.0 / (A[b] - A[a]);
+        for (uint32_t i = a; i < b; ++i) tv += fabs(resp[i] * inv_om - (A[i + 1] - A[i]) * inv_area);
         tv *= 0.5;
     }
     return om * (float)(tv + spread);
+}
+
+/* Node v's radiance as the runtime pulls it: its leaves' flux over its area (B: one radiance per leaf) */
+static double leaf_mean(const link_job *job, const float *B, uint32_t v) {
+    const uint32_t a = job->leaf_first[v], b = job->leaf_end[v];
+    const double *A = job->leaf_area;
+    double sum = 0.0;
+    for (uint32_t i = a; i < b; ++i) sum += (A[i + 1] - A[i]) * B[i];
+    return sum / (A[b] - A[a]);
 }
 
 /* Audit: the gather of one link if it read, instead of its node's mean, the means of the node's
@@ -468,10 +496,7 @@ static double audit_descendants(const link_job *job, const float *wt, const floa
         const uint32_t u = stack[sp], dd = depth[sp];
         const glow__node *nu = &job->h->nodes[u];
         if (nu->child[0] == GLOW_NODE_NONE || dd == levels) {
-            const uint32_t a = job->leaf_first[u], b = job->leaf_end[u];
-            double sum = 0.0;
-            for (uint32_t i = a; i < b; ++i) sum += B[i];
-            g += wt[u] * sum / (b - a);
+            g += wt[u] * leaf_mean(job, B, u);
             continue;
         }
         for (int c = 0; c < 2; ++c)
@@ -905,11 +930,12 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
     uint32_t hn = 0, leaves_in_cut = 0;
     uint32_t root = h->node_count - 1;
     float *prio = job->prio[worker];
+    const float *prio_k = hemi && !set->cut_error_omega ? kappa : NULL; /* cut_priority: the response the cache gathers */
     node_vals(job, cr, root, omega, dirsum, kappa);
     if (omega[root] > 0.0f) {
         root = cut_descend(job, cr, omega, dirsum, kappa, root);
         node_vals(job, cr, root, omega, dirsum, kappa);
-        prio[root] = cut_priority(job, cr, omega, dirsum, root);
+        prio[root] = cut_priority(job, cr, omega, dirsum, prio_k, root);
         heap_push(heap, &hn, prio, root);
     }
     /* Leaves cannot be split: they move from the heap to `leafcut`. The heap never holds more
@@ -927,7 +953,7 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
             if (omega[nd->child[c]] > 0.0f) {
                 uint32_t u = cut_descend(job, cr, omega, dirsum, kappa, nd->child[c]);
                 node_vals(job, cr, u, omega, dirsum, kappa);
-                prio[u] = cut_priority(job, cr, omega, dirsum, u);
+                prio[u] = cut_priority(job, cr, omega, dirsum, prio_k, u);
                 heap_push(heap, &hn, prio, u);
             }
         }
@@ -974,17 +1000,18 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
         for (uint32_t i = 0; i < n; ++i) exact += (double)wt[i] * B[i];
         for (uint32_t j = 0; j < cut_n; ++j) {
             const uint32_t v = cut[j], a = job->leaf_first[v], b = job->leaf_end[v];
-            double sum = 0.0, sum_vis = 0.0, w_vis = 0.0, n_vis = 0.0, sum_uvis = 0.0;
+            double sum_vis = 0.0, w_vis = 0.0, n_vis = 0.0, sum_uvis = 0.0;
+            const double mean = leaf_mean(job, B, v);
             for (uint32_t i = a; i < b; ++i) {
-                sum += B[i];
                 if (omega[i] > 0.0f) {
+                    const double ai = job->leaf_area[i + 1] - job->leaf_area[i];
                     sum_vis += (double)omega[i] * B[i];
-                    sum_uvis += B[i];
+                    sum_uvis += ai * B[i];
                     w_vis += omega[i];
-                    n_vis += 1.0;
+                    n_vis += ai;
                 }
             }
-            linked += wt[v] * sum / (b - a);
+            linked += wt[v] * mean;
             linked_vis += w_vis > 0.0 ? wt[v] * sum_vis / w_vis : 0.0;
             linked_uvis += n_vis > 0.0 ? wt[v] * sum_uvis / n_vis : 0.0;
             linked_d1 += audit_descendants(job, wt, omega, B, v, 1);
@@ -996,17 +1023,15 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
                 link_slots(h, v, slot);
                 double num = 0.0, den = 0.0;
                 for (int k = 0; k < 4; ++k) {
-                    const uint32_t qk = (q >> (4 * k)) & 15u, sa = job->leaf_first[slot[k]], sb = job->leaf_end[slot[k]];
-                    double ms = 0.0;
-                    for (uint32_t i = sa; i < sb; ++i) ms += B[i];
-                    num += qk * ms / (sb - sa);
+                    const uint32_t qk = (q >> (4 * k)) & 15u;
+                    num += qk * leaf_mean(job, B, slot[k]);
                     den += qk;
                 }
                 linked_sub += wt[v] * num / den;
             } else {
-                linked_sub += wt[v] * sum / (b - a);
+                linked_sub += wt[v] * mean;
             }
-            fvis += omega[v] * n_vis / (b - a);
+            fvis += omega[v] * n_vis / (job->leaf_area[b] - job->leaf_area[a]);
             om += omega[v];
         }
         float *row = job->out->audit + (size_t)ci * GLOW__AUDIT_FIELDS;
@@ -1578,10 +1603,11 @@ glow_result glow__links_build(const glow__scene *scene, const glow__rt *rt, cons
     job.norm_clamped = calloc((size_t)caches->count + 1, 1);
     job.leaf_first = malloc((size_t)h->node_count * sizeof(uint32_t));
     job.leaf_end = malloc((size_t)h->node_count * sizeof(uint32_t));
+    job.leaf_area = malloc(((size_t)h->leaf_count + 1) * sizeof(double));
     bool ok = out->links && (!settings->full_sh || out->sh) && (!settings->audit_radiance || out->audit) && job.omega && job.dirsum && job.kappa && job.prio && job.heap &&
               job.runs && job.radius && job.cone && job.nsum && job.emissive &&
               (settings->cluster_tau <= 0.0f || job.trav) &&
-              job.visible_total && job.norm_scale && job.norm_clamped && job.leaf_first && job.leaf_end;
+              job.visible_total && job.norm_scale && job.norm_clamped && job.leaf_first && job.leaf_end && job.leaf_area;
     for (uint32_t w = 0; ok && w < job.workers; ++w) {
         job.omega[w] = malloc((size_t)h->node_count * sizeof(float));
         job.dirsum[w] = malloc((size_t)h->node_count * 3 * sizeof(float));
@@ -1612,6 +1638,8 @@ glow_result glow__links_build(const glow__scene *scene, const glow__rt *rt, cons
         goto done;
     }
     /* leaf ranges: leaves are in DFS order, so every subtree owns a contiguous range */
+    job.leaf_area[0] = 0.0;
+    for (uint32_t i = 0; i < h->leaf_count; ++i) job.leaf_area[i + 1] = job.leaf_area[i] + surfels->s[i].area;
     for (uint32_t v = 0; v < h->node_count; ++v) {
         if (v < h->leaf_count) {
             job.leaf_first[v] = v;
@@ -1847,6 +1875,7 @@ done:
     free(job.norm_clamped);
     free(job.leaf_first);
     free(job.leaf_end);
+    free(job.leaf_area);
     if (res != GLOW_OK) glow__links_free(out);
     return res;
 }

@@ -218,6 +218,8 @@ typedef struct glow__link_settings {
     bool no_cone_fit;          /* keep lightmap links' solid angles (tests of the raw cut); default: fit */
     bool cut_error;            /* false: split by visible solid angle (PIC 4.5, --cut solid-angle); true:
                                   links.c cut_priority and cut_descend (--cut error, the pipeline's default) */
+    bool cut_error_omega;      /* with cut_error: rate lightmap caches' nodes by solid angle as grid caches
+                                  (before 2026-11-29; tests and A/B), not by the diffuse response */
     const float *audit_radiance; /* optional [surfel count]: a radiance per surfel (any lighting); the
                                     links then also fill glow__links.audit (links.c, "Audit") */
     bool link_subsets;         /* fill glow__link.subsets (LSUB, bake_format.h) */
