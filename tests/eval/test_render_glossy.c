@@ -1,10 +1,12 @@
 /* test_render_glossy.c — glow-render's GGX layer (tools/render/lib/render_bsdf.h, docs/glossy.md):
  *   (a) sampling against evaluation: the mean of f cos / pdf over stratified samples is the directional
- *       albedo kd ρ + F0 A + B, A and B from the runtime's deterministic quadrature
- *       (glow_ggx_specular_albedo); and the sampled directions' histogram over (cos θ, φ) bins matches
- *       the pdf that glow__render_lobe_eval returns, integrated over each bin;
- *   (b) reciprocity f(o, i) = f(i, o), non-negativity, and the GGX lobe alone (F0 = 1, no diffuse)
- *       reflecting at most what arrives (Smith G loses energy, never adds);
+ *       albedo ρ (1 - E(cos θ_o)) + F0 A + B, A and B from the runtime's deterministic quadrature
+ *       (glow_ggx_specular_albedo) at cos θ_o, E the layer's table; and the sampled directions'
+ *       histogram over (cos θ, φ) bins matches the pdf that glow__render_lobe_eval returns, integrated
+ *       over each bin;
+ *   (b) reciprocity f(o, i) = f(i, o), non-negativity; the white furnace: a surface with ρ = 1 reflects
+ *       all it receives (mean f cos / pdf = 1) at every view and roughness, the GGX lobe alone at most
+ *       all (Smith G loses energy, never adds);
  *   (c) a glossy floor under a large emitting ceiling (OBJ + MTL written here, roughness 0.5, F0 0.5):
  *       the reference's indirect and specular images at a pixel seen at 22.6° elevation against the
  *       reflection integral ∫ L_e f cos θ_i cos θ_l / d² dA over the ceiling by a midpoint rule;
@@ -41,7 +43,8 @@ static void lobe_at(glow__render_lobe *s, const glow__render_ggx *g, float mu, c
 }
 
 static glow__render_ggx ggx_of(float r, float f0) {
-    glow__render_ggx g = {.roughness = r, .alpha = r * r, .f0 = {f0, f0, f0}, .kd = 1.0f - f0};
+    glow__render_ggx g;
+    glow__render_ggx_init(&g, r, (const float[3]){f0, f0, f0});
     return g;
 }
 
@@ -76,7 +79,7 @@ static void test_sampling_matches_eval(void **state) {
             glow_ggx_specular_albedo(mus[im], rs[ir], ab);
             const double n = (double)N * N, se = sqrt(fmax(sum2 / n - (sum[0] / n) * (sum[0] / n), 0.0) / n);
             for (int k = 0; k < 3; ++k) {
-                const double want = g.kd * rho[k] + 0.04 * ab[0] + ab[1], got = sum[k] / n;
+                const double want = rho[k] * (1.0 - s.e_o[k]) + 0.04 * ab[0] + ab[1], got = sum[k] / n;
                 if (fabs(got - want) > 5.0 * se + 2e-3 * want)
                     fail_msg("r=%g mu=%g channel %d: E[f cos/pdf] %.5f, albedo %.5f (se %.5f)", (double)rs[ir],
                              (double)mus[im], k, got, want, se);
@@ -108,6 +111,8 @@ static void test_sampling_matches_eval(void **state) {
 static void test_reciprocity_and_energy(void **state) {
     (void)state;
     const float rho[3] = {0.9f, 0.6f, 0.3f};
+    static glow__render_ggx mats[8]; /* roughness 0.1 .. 1, F0 0.02 .. 0.9 */
+    for (int m = 0; m < 8; ++m) mats[m] = ggx_of(0.1f + 0.9f * (float)m / 7.0f, 0.02f + 0.88f * (float)((m * 5) % 8) / 7.0f);
     uint32_t x = 12345u;
     for (int t = 0; t < 2000; ++t) {
         float u[4];
@@ -119,10 +124,10 @@ static void test_reciprocity_and_energy(void **state) {
         const float a[3] = {sqrtf(1 - ca * ca) * cosf(pa), sqrtf(1 - ca * ca) * sinf(pa), ca};
         const float b[3] = {sqrtf(1 - cb * cb) * cosf(pb), sqrtf(1 - cb * cb) * sinf(pb), cb};
         const float ns[3] = {0, 0, 1};
-        glow__render_ggx g = ggx_of(0.1f + 0.9f * u[t & 3], 0.04f + 0.5f * u[(t + 1) & 3]);
+        const glow__render_ggx *g = &mats[t & 7];
         glow__render_lobe la, lb;
-        glow__render_lobe_setup(&la, &g, ns, ns, a, rho);
-        glow__render_lobe_setup(&lb, &g, ns, ns, b, rho);
+        glow__render_lobe_setup(&la, g, ns, ns, a, rho);
+        glow__render_lobe_setup(&lb, g, ns, ns, b, rho);
         float fda[3], fsa[3], fdb[3], fsb[3];
         glow__render_lobe_eval(&la, b, fda, fsa);
         glow__render_lobe_eval(&lb, a, fdb, fsb);
@@ -132,6 +137,42 @@ static void test_reciprocity_and_energy(void **state) {
             if (fabsf(fab - fba) > 1e-4f * fmaxf(fab, fba) + 1e-7f)
                 fail_msg("f(o, i) %.7g != f(i, o) %.7g (cos %g, %g)", (double)fab, (double)fba, (double)ca, (double)cb);
         }
+    }
+    /* the white furnace: ρ = 1 reflects everything at every view (the diffuse layer takes what the GGX
+     * layer leaves); the glossy floor of scenes/cornell-builtin-glossy.json (ρ 0.725, F0 0.04) printed */
+    const float fr[] = {0.1f, 0.3f, 0.7f, 1.0f}, fm[] = {1.0f, 0.5f, 0.2f, 0.1f, 0.03f};
+    for (int j = 0; j < 4; ++j) {
+        const glow__render_ggx g = ggx_of(fr[j], 0.04f);
+        printf("albedo, r %.1f, cos θ_o 1 / 0.5 / 0.2 / 0.1 / 0.03: ρ = 1:", (double)fr[j]);
+        double floor_alb[5];
+        for (int i = 0; i < 5; ++i) {
+            for (int pass = 0; pass < 2; ++pass) {
+                const float rho1[3] = {1.0f, 1.0f, 1.0f}, rhof[3] = {0.725f, 0.725f, 0.725f};
+                glow__render_lobe s;
+                lobe_at(&s, &g, fm[i], pass ? rhof : rho1);
+                enum { M = 256 };
+                double sum = 0.0, sum2 = 0.0;
+                for (int a = 0; a < M; ++a)
+                    for (int b = 0; b < M; ++b) {
+                        float wi[3], w[3], ws[3], pdf;
+                        if (!glow__render_lobe_sample(&s, ((float)a + 0.5f) / M, ((float)b + 0.5f) / M, wi, w, ws, &pdf)) continue;
+                        sum += w[0];
+                        sum2 += (double)w[0] * w[0];
+                    }
+                const double mean = sum / (M * M), se = sqrt(fmax(sum2 / (M * M) - mean * mean, 0.0) / (M * M));
+                if (pass) {
+                    floor_alb[i] = mean;
+                    assert_true(mean <= 1.0 + 5.0 * se);
+                } else {
+                    printf(" %.4f", mean);
+                    if (fabs(mean - 1.0) > 5.0 * se + 3e-3)
+                        fail_msg("white furnace r=%g cos=%g: albedo %.5f (se %.5f)", (double)fr[j], (double)fm[i], mean, se);
+                }
+            }
+        }
+        printf("; ρ = 0.725:");
+        for (int i = 0; i < 5; ++i) printf(" %.4f", floor_alb[i]);
+        printf("\n");
     }
     /* the GGX lobe alone (F0 = 1, kd = 0) reflects at most what arrives */
     const float mus[] = {0.05f, 0.3f, 1.0f}, rs[] = {0.05f, 0.3f, 0.7f, 1.0f};

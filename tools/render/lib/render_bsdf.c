@@ -2,6 +2,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "glow/glow.h"
 #include "render_bsdf.h"
 
 #define PI_F 3.14159265358979323846f
@@ -44,6 +45,36 @@ static inline float ggx_d(float a2, float ch) {
 }
 static inline float ggx_g1(float a2, float c) { return c > 0.0f ? 2.0f * c / (c + sqrtf(a2 + (1.0f - a2) * c * c)) : 0.0f; }
 
+void glow__render_ggx_init(glow__render_ggx *g, float roughness, const float f0[3]) {
+    memset(g, 0, sizeof *g);
+    g->roughness = roughness;
+    g->alpha = roughness * roughness;
+    memcpy(g->f0, f0, sizeof g->f0);
+    for (int j = 0; j < GLOW__RENDER_GGX_TABLE; ++j) {
+        const float x = (float)j / (GLOW__RENDER_GGX_TABLE - 1);
+        glow_ggx_specular_albedo(x * x, roughness, g->ab[j]);
+    }
+    /* Ē = 2 ∫ E(μ) μ dμ of the piecewise-linear table (midpoint rule, 64 steps a segment: exact to 1e-6) */
+    double e[3] = {0, 0, 0};
+    const int n = 64 * (GLOW__RENDER_GGX_TABLE - 1);
+    for (int i = 0; i < n; ++i) {
+        const float mu = ((float)i + 0.5f) / (float)n;
+        float v[3];
+        glow__render_ggx_albedo(g, mu, v);
+        for (int k = 0; k < 3; ++k) e[k] += 2.0 * v[k] * mu / n;
+    }
+    for (int k = 0; k < 3; ++k) g->e_mean[k] = (float)e[k];
+}
+
+void glow__render_ggx_albedo(const glow__render_ggx *g, float c, float out[3]) {
+    const float x = sqrtf(fminf(fmaxf(c, 0.0f), 1.0f)) * (float)(GLOW__RENDER_GGX_TABLE - 1);
+    const int i0 = x < (float)(GLOW__RENDER_GGX_TABLE - 1) ? (int)x : GLOW__RENDER_GGX_TABLE - 2;
+    const float t = x - (float)i0;
+    const float a = g->ab[i0][0] + t * (g->ab[i0 + 1][0] - g->ab[i0][0]);
+    const float b = g->ab[i0][1] + t * (g->ab[i0 + 1][1] - g->ab[i0][1]);
+    for (int k = 0; k < 3; ++k) out[k] = g->f0[k] * a + b;
+}
+
 void glow__render_lobe_setup(glow__render_lobe *s, const glow__render_ggx *g, const float ns[3], const float ng[3],
                              const float wo[3], const float rho[3]) {
     memset(s, 0, sizeof *s);
@@ -54,13 +85,13 @@ void glow__render_lobe_setup(glow__render_lobe *s, const glow__render_ggx *g, co
     s->cos_o = dot3(ns, wo);
     if (!g || !(g->alpha > 0.0f) || !(s->cos_o > 1e-6f)) return;
     s->g = g;
-    /* pick the lobes by their share at this view: Schlick's F for the GGX lobe, kd ρ for the diffuse
-     * one, kept within [0.25, 0.9] so that neither lobe's weight f cos / pdf can exceed 4 */
-    const float x = 1.0f - s->cos_o, x5 = x * x * x * x * x;
+    glow__render_ggx_albedo(g, s->cos_o, s->e_o);
+    /* pick the lobes by their albedo at this view, E for the GGX lobe, ρ (1 - E) for the diffuse one,
+     * kept within [0.25, 0.9] so that neither lobe's weight f cos / pdf can exceed 4 */
     float fs = 0.0f, fd = 0.0f;
     for (int k = 0; k < 3; ++k) {
-        fs = fmaxf(fs, g->f0[k] + (1.0f - g->f0[k]) * x5);
-        fd = fmaxf(fd, g->kd * rho[k]);
+        fs = fmaxf(fs, s->e_o[k]);
+        fd = fmaxf(fd, rho[k] * (1.0f - s->e_o[k]));
     }
     s->p_spec = fminf(fmaxf(fs + fd > 0.0f ? fs / (fs + fd) : 0.5f, 0.25f), 0.9f);
 }
@@ -83,7 +114,10 @@ float glow__render_lobe_eval(const glow__render_lobe *s, const float wi[3], floa
             pdf_s = d * g1o / (4.0f * co); /* visible normals: D_o(h) / (4 o·h), D_o(h) = G1(o) (o·h) D(h) / cos_o */
         }
     }
-    for (int k = 0; k < 3; ++k) fd[k] = g->kd * s->rho[k] * INV_PI_F * ci;
+    float e_i[3];
+    glow__render_ggx_albedo(g, ci, e_i);
+    for (int k = 0; k < 3; ++k)
+        fd[k] = s->rho[k] * INV_PI_F * ci * (1.0f - s->e_o[k]) * (1.0f - e_i[k]) / fmaxf(1.0f - g->e_mean[k], 1e-6f);
     return s->p_spec * pdf_s + (1.0f - s->p_spec) * ci * INV_PI_F;
 }
 

@@ -1,7 +1,10 @@
 /* render_bsdf.h — glow-render's surface model with a GGX layer (scene "materials", docs/glossy.md):
- *   f(o, i) = kd ρ/π + D(h) G1(o) G1(i) F(o·h) / (4 cos θ_o cos θ_i),
- * the conventions of runtime/src/ggx.c: α = roughness² (glTF), D = GGX (Trowbridge-Reitz), separable
- * Smith G, Schlick F with F0 = the scene's "specular", kd = 1 - max F0. Symmetric in o and i
+ *   f(o, i) = ρ/π (1 - E(cos θ_o)) (1 - E(cos θ_i)) / (1 - Ē) + D(h) G1(o) G1(i) F(o·h) / (4 cos θ_o cos θ_i),
+ * per channel, with the conventions of runtime/src/ggx.c: α = roughness² (glTF), D = GGX
+ * (Trowbridge-Reitz), separable Smith G, Schlick F with F0 = the scene's "specular"; E(μ) = F0 A(μ) + B(μ)
+ * the GGX layer's directional albedo (glow_ggx_specular_albedo) and Ē = 2 ∫ E(μ) μ dμ its cosine-weighted
+ * mean. The diffuse layer gets the energy the GGX layer leaves (Kelemen & Szirmay-Kalos 2001): its albedo
+ * at cos θ_o is exactly ρ (1 - E(cos θ_o)), so the total is ρ + (1 - ρ) E <= 1. Symmetric in o and i
  * (reciprocal) and non-negative. Sampled as a mixture of the GGX visible normals (Heitz 2018) and the
  * cosine lobe. Not installed; tests/eval/test_render_glossy.c checks it. */
 #ifndef GLOW_RENDER_BSDF_H
@@ -9,13 +12,22 @@
 
 #include <stdbool.h>
 
+#define GLOW__RENDER_GGX_TABLE 33 /* A, B at sqrt(cos θ) = 0, 1/32, ..., 1 (dense at grazing, where E
+                                     changes fastest), linear in sqrt(cos θ) in between */
+
 /* A material's GGX layer. */
 typedef struct glow__render_ggx {
     float roughness;  /* perceptual (scene file), (0, 1]; 0 = no layer */
     float alpha;      /* roughness² */
     float f0[3];      /* Schlick's F0 (the scene's "specular") */
-    float kd;         /* 1 - max(f0): the diffuse layer's weight */
+    float ab[GLOW__RENDER_GGX_TABLE][2]; /* glow_ggx_specular_albedo(cos θ, roughness) */
+    float e_mean[3];  /* Ē per channel, of the interpolated table */
 } glow__render_ggx;
+
+/* Fills g from roughness and F0 (the tables: about 2 M evaluations). */
+void glow__render_ggx_init(glow__render_ggx *g, float roughness, const float f0[3]);
+/* E(cos θ) = F0 A + B per channel, from the table. */
+void glow__render_ggx_albedo(const glow__render_ggx *g, float cos_theta, float out[3]);
 
 /* A surface point with a GGX layer, seen from wo. */
 typedef struct glow__render_lobe {
@@ -24,6 +36,7 @@ typedef struct glow__render_lobe {
     float wo[3];               /* unit, towards the viewer */
     float rho[3];              /* diffuse albedo */
     float cos_o;               /* ns·wo > 0 */
+    float e_o[3];              /* E(cos_o) */
     float p_spec;              /* the probability that glow__render_lobe_sample picks the GGX lobe */
 } glow__render_lobe;
 

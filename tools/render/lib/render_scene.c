@@ -76,11 +76,7 @@ glow_result glow_render_scene_load(const char *path, glow_render_scene **out, ch
                 if (strcmp(m->materials[j].name, sm->name) != 0) continue;
                 hits++;
                 if (!sm->ggx) continue;
-                glow__render_ggx *g = &s->ggx[j];
-                g->roughness = sm->roughness;
-                g->alpha = sm->roughness * sm->roughness;
-                memcpy(g->f0, sm->specular, sizeof g->f0);
-                g->kd = 1.0f - fmaxf(g->f0[0], fmaxf(g->f0[1], g->f0[2]));
+                glow__render_ggx_init(&s->ggx[j], sm->roughness, sm->specular);
             }
             if (!hits) {
                 char names[256] = "";

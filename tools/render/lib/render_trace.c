@@ -70,12 +70,10 @@ typedef struct render_light {
     float cos_outer, cos_inner;
 } render_light;
 
-#define GGX_TABLE 65 /* cos θ_o = 0, 1/64, ..., 1: the split sum's albedo, linear in between */
 typedef struct glow_view_ggx { /* per material with a GGX layer */
     bool ok;
     float zh[GLOW_MAX_SH_BANDS];    /* glow_sh_ggx_lobe_factors */
     float phong[GLOW_MAX_SH_BANDS]; /* glow_sh_lobe_factor of the Phong exponent standing in for it */
-    float ab[GGX_TABLE][2];         /* glow_ggx_specular_albedo */
 } glow_view_ggx;
 
 typedef struct glow_view {
@@ -316,7 +314,7 @@ static void emitter_nee(const render_ctx *c, rng *rp, const surf *s, float out[3
 }
 
 /* Glow's indirect light at the first hit: ρ · (cosine-lobe mean incident radiance of the caches);
- * with a GGX layer kd ρ · that + the GGX lobe's (glow_view.glossy), which also goes to spec[].
+ * with a GGX layer ρ (1 - E(cos θ_o)) · that + the GGX lobe's (glow_view.glossy), which also goes to spec[].
  * When it read the lightmap, texel[] gets the texel whose square holds the lookup (x + 1, y + 1) and
  * that texel's cache + 1 (glow_render_result.texel); otherwise texel[] is left alone. */
 static void glow_indirect(const render_ctx *c, const surf *s, float *coeffs, worker_stats *ws, float out[3],
@@ -361,12 +359,14 @@ static void glow_indirect(const render_ctx *c, const surf *s, float *coeffs, wor
         for (int k = 0; k < 3; ++k) out[k] = s->rho[k] * fmaxf(e[k] + det[k], 0.0f);
         return;
     }
-    for (int k = 0; k < 3; ++k) out[k] = s->lobe.g->kd * s->rho[k] * fmaxf(e[k] + det[k], 0.0f);
+    /* the diffuse layer: ρ (1 - E(cos θ_o)) · its mean over the cosine lobe, the weight (1 - E(cos θ_i)) /
+     * (1 - Ē) of each incident direction taken as its mean, 1 (exact for uniform light) */
+    for (int k = 0; k < 3; ++k) out[k] = s->rho[k] * (1.0f - s->lobe.e_o[k]) * fmaxf(e[k] + det[k], 0.0f);
     const glow_view_ggx *vg = &c->gv->ggx[s->lobe.g - c->sc->ggx];
     if (c->gv->glossy == GLOW_RENDER_GLOSSY_NONE || !vg->ok) return;
     /* the split sum: (F0 A + B)(cos θ_o) × the lobe's mean of the caches' radiance about the reflection
      * vector (docs/glossy.md) */
-    float r[3], l[3], ab[2];
+    float r[3], l[3];
     for (int k = 0; k < 3; ++k) r[k] = 2.0f * s->lobe.cos_o * s->ns[k] - s->lobe.wo[k];
     if (c->gv->glossy == GLOW_RENDER_GLOSSY_ZH_GGX_DOMINANT) {
         /* Lagarde & de Rousiers 2014 (Frostbite), listing 22: the lobe's dominant direction leans from
@@ -377,12 +377,8 @@ static void glow_indirect(const render_ctx *c, const surf *s, float *coeffs, wor
     v_norm(r);
     glow_shade_sh_factors(coeffs, o->sh_bands_luma, o->sh_bands_chroma, r,
                           c->gv->glossy == GLOW_RENDER_GLOSSY_PHONG ? vg->phong : vg->zh, l);
-    const float x = s->lobe.cos_o * (float)(GGX_TABLE - 1);
-    const uint32_t i0 = x < (float)(GGX_TABLE - 1) ? (uint32_t)x : GGX_TABLE - 2u;
-    const float t = fminf(x - (float)i0, 1.0f);
-    for (int j = 0; j < 2; ++j) ab[j] = vg->ab[i0][j] + t * (vg->ab[i0 + 1][j] - vg->ab[i0][j]);
     for (int k = 0; k < 3; ++k) {
-        const float sp = (s->lobe.g->f0[k] * ab[0] + ab[1]) * fmaxf(l[k], 0.0f);
+        const float sp = s->lobe.e_o[k] * fmaxf(l[k], 0.0f); /* E = F0 A + B at cos θ_o */
         out[k] += sp;
         spec[k] += sp;
     }
@@ -844,10 +840,13 @@ static glow_result glow_view_create(const glow_render_scene *sc, const char *bak
              cl->first_error);
     const float as = st->albedo_scale > 0.0f ? st->albedo_scale : 1.0f;
     for (uint32_t i = 0; i < info.material_count; ++i) {
-        /* a GGX layer's surfels reflect its diffuse layer only (kd ρ): PIC's surfels are Lambertian */
-        const float k = as * (sc->ggx && sc->ggx[i].alpha > 0.0f ? sc->ggx[i].kd : 1.0f);
-        if (k != 1.0f && (r = glow_system_set_material(gv->sys, i, NULL, (float[3]){k, k, k})) != GLOW_OK)
-            FAIL(r, "%s: albedo scale %g: %s", bake_path, (double)k, cl->first_error);
+        /* a GGX layer's surfels reflect its diffuse layer only, whose albedo under uniform light is
+         * ρ (1 - Ē) (docs/glossy.md): PIC's surfels are Lambertian */
+        float k[3] = {as, as, as};
+        if (sc->ggx && sc->ggx[i].alpha > 0.0f)
+            for (int c = 0; c < 3; ++c) k[c] *= 1.0f - sc->ggx[i].e_mean[c];
+        if ((k[0] != 1.0f || k[1] != 1.0f || k[2] != 1.0f) && (r = glow_system_set_material(gv->sys, i, NULL, k)) != GLOW_OK)
+            FAIL(r, "%s: albedo scale %g %g %g: %s", bake_path, (double)k[0], (double)k[1], (double)k[2], cl->first_error);
     }
     if (sc->ggx) { /* per GGX material: its ZH lobe, the Phong lobe standing in for it, the split sum's table */
         if (!(gv->ggx = calloc(m->material_count, sizeof *gv->ggx))) FAIL(GLOW_ERROR_OUT_OF_MEMORY, "%s: out of memory", bake_path);
@@ -858,7 +857,6 @@ static glow_result glow_view_create(const glow_render_scene *sc, const char *bak
             glow_sh_ggx_lobe_factors(g->roughness, GLOW_MAX_SH_BANDS, vg->zh);
             const float n = glow_render_phong_exponent(g->roughness);
             for (uint32_t l = 0; l < GLOW_MAX_SH_BANDS; ++l) vg->phong[l] = glow_sh_lobe_factor(l, n);
-            for (uint32_t j = 0; j < GGX_TABLE; ++j) glow_ggx_specular_albedo((float)j / (GGX_TABLE - 1), g->roughness, vg->ab[j]);
             vg->ok = true;
         }
     }
