@@ -204,6 +204,17 @@ static void test_shade_factors(void **state) {
 /* Printed for docs/glossy.md: how much of the (normalised) lobe l bands hold. */
 static void test_print_truncation(void **state) {
     (void)state;
+    printf("ZH-GGX lobe factors s_0..s_7 (glow_sh_ggx_lobe_factors) and the Phong exponent glow-render maps r to:\n");
+    for (size_t k = 0; k < NR; ++k) {
+        float s[NB];
+        glow_sh_ggx_lobe_factors(roughness[k], NB, s);
+        const double a = (double)roughness[k] * roughness[k];
+        printf("  r %.2f:", (double)roughness[k]);
+        for (int l = 0; l < (int)NB; ++l) printf(" %7.4f", (double)s[l]);
+        printf("   Phong n %.1f:", fmax(1.0, 0.25 * (2.0 / (a * a) - 2.0)));
+        for (int l = 0; l < (int)NB; ++l) printf(" %7.4f", (double)glow_sh_lobe_factor((uint32_t)l, (float)fmax(1.0, 0.25 * (2.0 / (a * a) - 2.0))));
+        printf("\n");
+    }
     printf("GGX lobe (normal incidence) in l bands: relative L2 error | band-limited peak / true peak\n");
     printf("roughness  alpha  ");
     for (int l = 2; l <= (int)NB; ++l) printf("     l=%d      ", l);
