@@ -4,7 +4,8 @@
  * target glow_render), not part of the runtime. Full documentation: docs/render.md.
  *
  * THE LIGHT MODEL is the runtime's and the host's (glow_host.h "THE CONTRACT", docs/scene-format.md):
- *   - materials are Lambertian: albedo ρ = material albedo × albedo texture (glow__texture_sample at
+ *   - materials are Lambertian, or diffuse under a GGX layer where the scene's "materials" key gives one
+ *     (render_bsdf.h, docs/glossy.md): albedo ρ = material albedo × albedo texture (glow__texture_sample at
  *     the interpolated uv0, finest mip level), times settings.albedo_scale, clamped to [0, 0.999] (the
  *     runtime's clamp); emission L_e = material emission × the scene's emission_scale, W/(m²·sr),
  *     emitted by the FRONT face only (counter-clockwise winding, geometric normal (p1-p0)×(p2-p0));
@@ -30,10 +31,13 @@
  * Glow's view (glow_render_glow): the same camera rays, random numbers and direct term (same seed and
  * size: a bit-identical direct image); indirect = ρ · glow_shade_sh(SH, n, 1) at the first hit, the SH
  * from the lightmap (bilinear at the hit's lightmap UV, when a texel with a cache is among the four;
- * front-face hits only) else from the grid (trilinear at the hit position), clamped at 0 per channel.
+ * front-face hits only) else from the grid (trilinear at the hit position), clamped at 0 per channel;
+ * with a GGX layer ρ (1 - E(cos θ_o)) · that + E(cos θ_o) · the caches convolved with the GGX lobe's
+ * zonal harmonics (glow_render_glow_settings.glossy; E = F0 A + B, the split sum; docs/glossy.md).
  * The difference between the two final images is Glow's error alone.
  *
- * PATH TRACING (reference): cosine-weighted sampling of the Lambertian lobe; next-event estimation of
+ * PATH TRACING (reference): cosine-weighted sampling of the Lambertian lobe (GGX layers: a mixture of
+ * visible-normal and cosine sampling, render_bsdf.h); next-event estimation of
  * every delta light at every vertex; emissive triangles sampled by area × luminance (a CDF) and
  * combined with BSDF-sampled emitter hits by multiple importance sampling (power heuristic);
  * Russian roulette from the third vertex on (survival min(0.95, max channel of throughput × ρ)); no
