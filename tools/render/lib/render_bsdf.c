@@ -87,7 +87,8 @@ void glow__render_lobe_setup(glow__render_lobe *s, const glow__render_ggx *g, co
     s->g = g;
     glow__render_ggx_albedo(g, s->cos_o, s->e_o);
     /* pick the lobes by their albedo at this view, E for the GGX lobe, ρ (1 - E) for the diffuse one,
-     * kept within [0.25, 0.9] so that neither lobe's weight f cos / pdf can exceed 4 */
+     * kept within [0.25, 0.9] so that f cos / pdf stays bounded (f_s cos / pdf_s = F G1(i) <= 1 and
+     * f_d cos / pdf_d <= ρ / (1 - Ē), each divided by its share >= 0.25) */
     float fs = 0.0f, fd = 0.0f;
     for (int k = 0; k < 3; ++k) {
         fs = fmaxf(fs, s->e_o[k]);

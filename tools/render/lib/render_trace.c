@@ -369,8 +369,9 @@ static void glow_indirect(const render_ctx *c, const surf *s, float *coeffs, wor
     float r[3], l[3];
     for (int k = 0; k < 3; ++k) r[k] = 2.0f * s->lobe.cos_o * s->ns[k] - s->lobe.wo[k];
     if (c->gv->glossy == GLOW_RENDER_GLOSSY_ZH_GGX_DOMINANT) {
-        /* Lagarde & de Rousiers 2014 (Frostbite), listing 22: the lobe's dominant direction leans from
-         * the reflection vector towards the normal as it widens (the off-specular peak) */
+        /* Lagarde & de Rousiers 2014 ("Moving Frostbite to PBR", getSpecularDominantDir): the lobe's
+         * dominant direction leans from the reflection vector towards the normal as it widens (the
+         * off-specular peak) */
         const float a = s->lobe.g->alpha, sm = 1.0f - a, t = sm * (sqrtf(sm) + a);
         for (int k = 0; k < 3; ++k) r[k] = s->ns[k] + t * (r[k] - s->ns[k]);
     }
