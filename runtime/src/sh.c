@@ -67,17 +67,17 @@ void glow_ycocg_to_rgb(const float ycocg[3], float out[3]) {
     out[2] = y - co - cg;
 }
 
-void glow_shade_sh(const float *coeffs, uint32_t luma, uint32_t chroma, const float axis[3], float exponent,
-                   float out_rgb[3]) {
+void glow_shade_sh_factors(const float *coeffs, uint32_t luma, uint32_t chroma, const float axis[3],
+                           const float *factors, float out_rgb[3]) {
     if (!out_rgb) return;
     out_rgb[0] = out_rgb[1] = out_rgb[2] = 0.0f;
-    if (!coeffs || !axis || luma == 0 || luma > GLOW__MAX_BANDS || chroma > luma) return;
+    if (!coeffs || !axis || !factors || luma == 0 || luma > GLOW__MAX_BANDS || chroma > luma) return;
     float y[GLOW__MAX_BANDS * GLOW__MAX_BANDS];
     glow_sh_eval(luma, axis, y);
     const float *co = coeffs + luma * luma, *cg = co + chroma * chroma;
     float ycc[3] = {0, 0, 0};
     for (uint32_t l = 0; l < luma; ++l) {
-        float s = glow_sh_lobe_factor(l, exponent);
+        const float s = factors[l];
         float sy = 0.0f, sco = 0.0f, scg = 0.0f;
         for (uint32_t k = l * l; k < (l + 1) * (l + 1); ++k) {
             sy += coeffs[k] * y[k];
@@ -91,6 +91,14 @@ void glow_shade_sh(const float *coeffs, uint32_t luma, uint32_t chroma, const fl
         ycc[2] += s * scg;
     }
     glow_ycocg_to_rgb(ycc, out_rgb);
+}
+
+void glow_shade_sh(const float *coeffs, uint32_t luma, uint32_t chroma, const float axis[3], float exponent,
+                   float out_rgb[3]) {
+    float s[GLOW__MAX_BANDS];
+    const uint32_t n = luma < GLOW__MAX_BANDS ? luma : GLOW__MAX_BANDS;
+    for (uint32_t l = 0; l < n; ++l) s[l] = glow_sh_lobe_factor(l, exponent);
+    glow_shade_sh_factors(coeffs, luma, chroma, axis, s, out_rgb);
 }
 
 /* Weighted sum of cache rows; empty entries get weight 0 and the rest are renormalised. */

@@ -24,7 +24,8 @@
  *   if (glow_sample_lightmap(lm, lm_valid, uv, sh))
  *       color += albedo * max(glow_shade_sh(sh, n, 1.0) + glow_sample_lightmap_detail(detail, uv), 0.0);
  * glow_shade_sh(sh, n, 1) is the cosine-weighted mean incident radiance E/π, so a Lambertian surface of
- * albedo ρ reflects ρ · glow_shade_sh(...); for a glossy lobe pass the reflection vector and its exponent.
+ * albedo ρ reflects ρ · glow_shade_sh(...); for a glossy lobe pass the reflection vector and its exponent,
+ * or glow_shade_sh_factors with a GGX lobe's zonal factors (docs/glossy.md).
  * The lightmap detail (bakes with one: glow_gl_outputs.lightmap_detail_texture) adds the light of
  * surfaces beside the texel that the lightmap is too coarse for; leave it out for glossy lobes.
  */
@@ -50,14 +51,15 @@
 /** Coefficient k of a cache held in planes. */
 float glow_sh_coeff(vec4 sh[GLOW_SH_PLANES], int k) { return sh[k >> 2][k & 3]; }
 
-/** Lobe-weighted mean incident radiance (RGB, W/(m²·sr)) around unit `axis` for the normalised Phong
- * lobe of `exponent` (1 = diffuse: E/π). */
-vec3 glow_shade_sh(vec4 sh[GLOW_SH_PLANES], vec3 axis, float exponent) {
+/** glow_shade_sh with any zonal lobe (glow.h glow_shade_sh_factors): s[l] multiplies band l. For a GGX
+ * layer pass the reflection vector and the factors of glow_sh_ggx_lobe_factors(roughness) (computed on
+ * the host, per material, e.g. as a uniform array), then scale by F0·A + B from
+ * glow_ggx_specular_albedo (a 2D table over cos θ_o and roughness); docs/glossy.md. */
+vec3 glow_shade_sh_factors(vec4 sh[GLOW_SH_PLANES], vec3 axis, float s[GLOW_SH_BANDS_LUMA]) {
     float y[GLOW_SH_MAX_BANDS * GLOW_SH_MAX_BANDS];
     glow_sh_eval(GLOW_SH_BANDS_LUMA, axis, y);
     vec3 ycc = vec3(0.0);
     for (int l = 0; l < GLOW_SH_BANDS_LUMA; ++l) {
-        float s = glow_sh_lobe_factor(l, exponent);
         vec3 acc = vec3(0.0);
         for (int k = l * l; k < (l + 1) * (l + 1); ++k) {
             acc.x += glow_sh_coeff(sh, k) * y[k];
@@ -66,9 +68,17 @@ vec3 glow_shade_sh(vec4 sh[GLOW_SH_PLANES], vec3 axis, float exponent) {
                 acc.z += glow_sh_coeff(sh, GLOW_SH_L2 + GLOW_SH_C2 + k) * y[k];
             }
         }
-        ycc += s * acc;
+        ycc += s[l] * acc;
     }
     return glow_ycocg_to_rgb(ycc);
+}
+
+/** Lobe-weighted mean incident radiance (RGB, W/(m²·sr)) around unit `axis` for the normalised Phong
+ * lobe of `exponent` (1 = diffuse: E/π). */
+vec3 glow_shade_sh(vec4 sh[GLOW_SH_PLANES], vec3 axis, float exponent) {
+    float s[GLOW_SH_BANDS_LUMA];
+    for (int l = 0; l < GLOW_SH_BANDS_LUMA; ++l) s[l] = glow_sh_lobe_factor(l, exponent);
+    return glow_shade_sh_factors(sh, axis, s);
 }
 
 /* glow_sample_grid_oriented's constants: glow.h's GLOW_GRID_NORMAL_BIAS and GLOW_GRID_BACKFACE_FLOOR */

@@ -254,6 +254,31 @@ static const bad_case bad_cases[] = {
     {"{\"mesh\": \"a\", \"emission_scale\": -1}", GLOW_ERROR_INVALID_ARGUMENT, "emission_scale (-1) is negative"},
     {"{\"mesh\": \"a\", \"emission_scale\": [1]}", GLOW_ERROR_INVALID_ARGUMENT,
      "emission_scale must be a number, not an array"},
+    {"{\"mesh\": \"a\", \"materials\": []}", GLOW_ERROR_INVALID_ARGUMENT,
+     "materials must be an object (material name -> override), not an array"},
+    {"{\"mesh\": \"a\", \"materials\": {\"floor\": 1}}", GLOW_ERROR_INVALID_ARGUMENT,
+     "materials.floor must be an object, not a number"},
+    {"{\"mesh\": \"a\", \"materials\": {\"floor\": {\"ggx\": {}}}}", GLOW_ERROR_INVALID_ARGUMENT,
+     "materials.floor.ggx.roughness is required but missing"},
+    {"{\"mesh\": \"a\", \"materials\": {\"floor\": {\"ggx\": {\"roughness\": 0}}}}", GLOW_ERROR_INVALID_ARGUMENT,
+     "materials.floor.ggx.roughness (0) is outside (0, 1]"},
+    {"{\"mesh\": \"a\", \"materials\": {\"floor\": {\"ggx\": {\"roughness\": 1.5}}}}", GLOW_ERROR_INVALID_ARGUMENT,
+     "materials.floor.ggx.roughness (1.5) is outside (0, 1]"},
+    {"{\"mesh\": \"a\", \"materials\": {\"floor\": {\"ggx\": {\"roughness\": 1e999}}}}", GLOW_ERROR_INVALID_ARGUMENT,
+     "materials.floor.ggx.roughness is not a finite number (inf)"},
+    {"{\"mesh\": \"a\", \"materials\": {\"floor\": {\"ggx\": {\"roughness\": \"0.3\"}}}}", GLOW_ERROR_INVALID_ARGUMENT,
+     "materials.floor.ggx.roughness must be a number, not a string"},
+    {"{\"mesh\": \"a\", \"materials\": {\"floor\": {\"ggx\": {\"roughness\": 0.3, \"specular\": [0.04, 1.2, 0]}}}}",
+     GLOW_ERROR_INVALID_ARGUMENT, "materials.floor.ggx.specular[1] (1.2) is above 1"},
+    {"{\"mesh\": \"a\", \"materials\": {\"floor\": {\"ggx\": {\"roughness\": 0.3, \"specular\": [0.04, -1, 0]}}}}",
+     GLOW_ERROR_INVALID_ARGUMENT, "materials.floor.ggx.specular[1] (-1) is negative"},
+    {"{\"mesh\": \"a\", \"materials\": {\"floor\": {\"ggx\": {\"roughness\": 0.3, \"specular\": [0.04]}}}}",
+     GLOW_ERROR_INVALID_ARGUMENT, "materials.floor.ggx.specular must have 3 numbers, has 1"},
+    {"{\"mesh\": \"a\", \"materials\": {\"floor\": {\"ggx\": 0.3}}}", GLOW_ERROR_INVALID_ARGUMENT,
+     "materials.floor.ggx must be an object, not a number"},
+    {"{\"mesh\": \"a\", \"materials\": {\"floor\": {}, \"floor\": {}}}", GLOW_ERROR_INVALID_ARGUMENT,
+     "materials.floor appears twice"},
+    {"{\"mesh\": \"a\", \"materials\": {\"\": {}}}", GLOW_ERROR_INVALID_ARGUMENT, "materials has an empty material name"},
 };
 
 static void test_bad_input(void **state) {
@@ -276,6 +301,8 @@ static void test_bad_input(void **state) {
         assert_null(s.mesh);
         assert_null(s.lights);
         assert_int_equal(s.light_count, 0);
+        assert_null(s.materials);
+        assert_int_equal(s.material_count, 0);
     }
     /* a tiny message buffer truncates, a NULL one is fine */
     glow_scene_desc s;
@@ -288,6 +315,49 @@ static void test_bad_input(void **state) {
     assert_int_equal(glow_scene_parse("{}", 2, "t.json", NULL, NULL, NULL, msg, sizeof msg), GLOW_ERROR_INVALID_ARGUMENT);
     assert_int_equal(glow_scene_load(NULL, NULL, &s, msg, sizeof msg), GLOW_ERROR_INVALID_ARGUMENT);
     assert_int_equal(glow_scene_load("x.json", NULL, NULL, msg, sizeof msg), GLOW_ERROR_INVALID_ARGUMENT);
+}
+
+/* "materials": per-material GGX layers by name, optional; comments skipped; unknown keys warned. */
+static void test_materials(void **state) {
+    (void)state;
+    glow_scene_desc s;
+    char msg[512];
+    capture cap = {0};
+    glow_logger lg = {capture_log, &cap};
+    const char *json = "{\"mesh\": \"a\", \"materials\": {\"_c\": 1, \"floor\": {\"ggx\": {\"roughness\": 0.3}},"
+                       " \"metal\": {\"ggx\": {\"roughness\": 1, \"specular\": [0.9, 0.6, 0.2], \"ior\": 1.5}},"
+                       " \"plain\": {}}}";
+    assert_int_equal(glow_scene_parse(json, strlen(json), "t.json", NULL, &lg, &s, msg, sizeof msg), GLOW_OK);
+    assert_int_equal(s.material_count, 3);
+    assert_string_equal(s.materials[0].name, "floor");
+    assert_true(s.materials[0].ggx);
+    assert_true(s.materials[0].roughness == 0.3f);
+    assert_vec3(s.materials[0].specular, 0.04, 0.04, 0.04, 1e-7);
+    assert_string_equal(s.materials[1].name, "metal");
+    assert_vec3(s.materials[1].specular, 0.9, 0.6, 0.2, 1e-7);
+    assert_true(s.materials[1].roughness == 1.0f);
+    assert_string_equal(s.materials[2].name, "plain");
+    assert_false(s.materials[2].ggx);
+    assert_int_equal(s.warning_count, 1); /* "ior" */
+    assert_non_null(strstr(cap.last, "materials.metal.ggx.ior is not a known key"));
+    glow_scene_free(&s);
+    assert_null(s.materials);
+    /* without the key: none; an empty object: none */
+    assert_int_equal(parse("{\"mesh\": \"a\", \"materials\": {}}", &s, msg, sizeof msg), GLOW_OK);
+    assert_int_equal(s.material_count, 0);
+    assert_null(s.materials);
+    glow_scene_free(&s);
+    /* a name of 64 bytes does not fit */
+    char long_json[256];
+    snprintf(long_json, sizeof long_json, "{\"mesh\": \"a\", \"materials\": {\"%064d\": {}}}", 7);
+    assert_int_equal(parse(long_json, &s, msg, sizeof msg), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_non_null(strstr(msg, "the material name is longer than 63 bytes"));
+    /* the repository's glossy scene */
+    assert_int_equal(glow_scene_load(REPO_DIR "/scenes/cornell-builtin-glossy.json", NULL, &s, msg, sizeof msg), GLOW_OK);
+    assert_int_equal(s.material_count, 1);
+    assert_string_equal(s.materials[0].name, "floor");
+    assert_int_equal(s.warning_count, 0);
+    glow_scene_free(&s);
 }
 
 static void write_file(const char *path, const char *text) {
@@ -482,7 +552,7 @@ int main(void) {
         cmocka_unit_test(test_unknown_keys_warn), cmocka_unit_test(test_bad_input),
         cmocka_unit_test(test_files), cmocka_unit_test(test_shared_scenes),
         cmocka_unit_test(test_repo_scenes), cmocka_unit_test(test_doc_examples),
-        cmocka_unit_test(test_light_validate), cmocka_unit_test(test_camera_default),
+        cmocka_unit_test(test_light_validate), cmocka_unit_test(test_camera_default), cmocka_unit_test(test_materials),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -22,11 +22,14 @@ static void usage(FILE *f) {
             "usage: glow-render SCENE.json --out PREFIX [--spp N] [--seed S] [--threads N] [--width W --height H]\n"
             "                   [--exposure E] [--max-depth D] [--albedo-scale A] [--near-split R]\n"
             "                   [--glow BAKE [--bounces K] [--sky-rays R] [--surfel-samples K] [--luma L] [--chroma C]\n"
-            "                   [--link-mode compact|expanded|sh] [--indirect-only] [--no-detail] [--grid-only]] [--progress | -q]\n"
+            "                   [--link-mode compact|expanded|sh] [--indirect-only] [--no-detail] [--grid-only]\n"
+            "                   [--glossy zh-ggx|zh-ggx-dominant|phong|none]] [--progress | -q]\n"
             "  SCENE.json       scene description (docs/scene-format.md): mesh, camera, lights, environment\n"
             "  --out PREFIX     writes PREFIX.exr (final), PREFIX_direct.exr, PREFIX_indirect.exr, PREFIX.png;\n"
             "                   Glow's view of a bake with a lightmap also PREFIX_texel.exr, each pixel's texel\n"
-            "                   (x + 1, y + 1, cache + 1) for glow-compare --texels\n"
+            "                   (x + 1, y + 1, cache + 1) for glow-compare --texels; a scene with a GGX material\n"
+            "                   (\"materials\", docs/glossy.md) also PREFIX_specular.exr, the indirect light its\n"
+            "                   first hit's GGX lobe reflects (part of PREFIX_indirect.exr)\n"
             "  --spp N          samples per pixel (default 64)\n"
             "  --seed S         random seed (default 1); same seed and size: same image for any --threads\n"
             "  --threads N      worker threads (default: one per online CPU)\n"
@@ -49,6 +52,10 @@ static void usage(FILE *f) {
             "  --indirect-only  Glow's view without the direct term (only camera rays and cache lookups): its\n"
             "                   direct image equals the reference's for the same seed, size and spp\n"
             "  --no-detail      Glow's view without the bake's lightmap detail (glow-bake --lightmap-detail)\n"
+            "  --glossy LOBE    Glow's view of GGX materials: zh-ggx (default: the GGX lobe's zonal harmonics and\n"
+            "                   the split sum, about the reflection vector), zh-ggx-dominant (the same about the\n"
+            "                   lobe's dominant direction, leant towards the normal), phong (the Phong lobe of\n"
+            "                   the same width, same split sum), none (no specular from the caches); docs/glossy.md\n"
             "  --grid-only      Glow's view with every surface shaded from the grid, as a dynamic object\n"
             "                   there (0.1 %% of the scene's diagonal off the surface): the grid's accuracy\n"
             "  --progress       progress bar on stderr even when it is not a terminal; -q: none, no summary\n");
@@ -87,7 +94,7 @@ static int parse_args(int argc, char **argv, options *o) {
     o->exposure = 1.0f;
     o->rs.seed = 1;
     o->rs.spp = 64;
-    int have_w = 0, have_h = 0;
+    int have_w = 0, have_h = 0, have_glossy = 0;
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i];
         const char *v = i + 1 < argc ? argv[i + 1] : NULL;
@@ -129,6 +136,18 @@ static int parse_args(int argc, char **argv, options *o) {
         else if (!strcmp(a, "--indirect-only")) o->gs.indirect_only = true;
         else if (!strcmp(a, "--no-detail")) o->gs.no_detail = true;
         else if (!strcmp(a, "--grid-only")) o->gs.grid_only = true;
+        else if (!strcmp(a, "--glossy")) {
+            if (!v || (strcmp(v, "zh-ggx") && strcmp(v, "zh-ggx-dominant") && strcmp(v, "phong") && strcmp(v, "none"))) {
+                fprintf(stderr, "glow-render: --glossy needs zh-ggx, zh-ggx-dominant, phong or none\n");
+                return 0;
+            }
+            o->gs.glossy = !strcmp(v, "phong")             ? GLOW_RENDER_GLOSSY_PHONG
+                           : !strcmp(v, "none")            ? GLOW_RENDER_GLOSSY_NONE
+                           : !strcmp(v, "zh-ggx-dominant") ? GLOW_RENDER_GLOSSY_ZH_GGX_DOMINANT
+                                                           : GLOW_RENDER_GLOSSY_ZH_GGX;
+            have_glossy = 1;
+            ++i;
+        }
         else if (!strcmp(a, "--link-mode")) {
             if (!v || (strcmp(v, "compact") && strcmp(v, "expanded") && strcmp(v, "sh"))) {
                 fprintf(stderr, "glow-render: --link-mode must be compact, expanded or sh, not \"%s\"\n", v ? v : "nothing");
@@ -179,9 +198,9 @@ static int parse_args(int argc, char **argv, options *o) {
         return 0;
     }
     if (!o->bake && (o->gs.bounce_iterations || o->gs.sky_rays || o->gs.surfel_samples || o->gs.sh_bands_luma || o->gs.sh_bands_chroma ||
-                     o->gs.link_mode || o->gs.indirect_only || o->gs.no_detail || o->gs.grid_only)) {
+                     o->gs.link_mode || o->gs.indirect_only || o->gs.no_detail || o->gs.grid_only || have_glossy)) {
         fprintf(stderr, "glow-render: --bounces, --sky-rays, --surfel-samples, --luma, --chroma, --link-mode, --indirect-only, "
-                        "--no-detail and --grid-only go with --glow BAKE\n");
+                        "--no-detail, --grid-only and --glossy go with --glow BAKE\n");
         return 0;
     }
     return 1;
@@ -259,8 +278,12 @@ int main(int argc, char **argv) {
                    (double)o.rs.near_split, res.mean_indirect_near[0], res.mean_indirect_near[1], res.mean_indirect_near[2],
                    li > 0.0 ? 100.0 * ln / li : 0.0);
         }
+        if (res.specular.rgb)
+            printf("  specular (GGX lobes' indirect light, part of indirect): %.5g %.5g %.5g\n", res.mean_specular[0],
+                   res.mean_specular[1], res.mean_specular[2]);
         printf("  wrote %s.exr %s_direct.exr %s_indirect.exr %s.png%s%s%s\n", o.out, o.out, o.out, o.out,
                res.indirect_near.rgb ? " " : "", res.indirect_near.rgb ? o.out : "", res.indirect_near.rgb ? "_indirect_near.exr" : "");
+        if (res.specular.rgb) printf("  wrote %s_specular.exr\n", o.out);
     }
     glow_render_result_free(&res);
     glow_render_scene_destroy(scene);

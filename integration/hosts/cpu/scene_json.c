@@ -15,6 +15,7 @@
 
 #define SCENE_MAX_FILE_SIZE (64u << 20)
 #define SCENE_MAX_LIGHTS 65536u
+#define SCENE_MAX_MATERIALS 65536u
 
 typedef struct ctx {
     const char *name;
@@ -354,6 +355,7 @@ void glow_scene_free(glow_scene_desc *scene) {
     if (!scene) return;
     free(scene->mesh);
     free(scene->lights);
+    free(scene->materials);
     memset(scene, 0, sizeof *scene);
 }
 
@@ -386,10 +388,53 @@ static void line_col(const char *text, size_t off, unsigned *line, unsigned *col
     }
 }
 
+/* ---------------------------------------------------------------------------- materials */
+
+/* "materials": {"NAME": {"ggx": {"roughness": r, "specular": [r, g, b]}}, ...} */
+static glow_result read_material(ctx *c, const cJSON *v, glow_scene_material *out) {
+    const char *name = v->string ? v->string : "";
+    char where[96], path[128];
+    snprintf(where, sizeof where, "materials.%.64s", name);
+    if (!name[0]) return fail(c, GLOW_ERROR_INVALID_ARGUMENT, "materials has an empty material name");
+    if (strlen(name) >= sizeof out->name)
+        return fail(c, GLOW_ERROR_INVALID_ARGUMENT, "%s...: the material name is longer than %zu bytes", where,
+                    sizeof out->name - 1);
+    if (!cJSON_IsObject(v))
+        return fail(c, GLOW_ERROR_INVALID_ARGUMENT, "%s must be an object, not %s", where, json_type_name(v));
+    static const char *const keys[] = {"ggx", NULL};
+    glow_result r = check_keys(c, v, where, keys);
+    if (r != GLOW_OK) return r;
+    snprintf(out->name, sizeof out->name, "%s", name);
+    const cJSON *g = get(v, "ggx");
+    if (!g) return GLOW_OK;
+    snprintf(path, sizeof path, "%s.ggx", where);
+    if (!cJSON_IsObject(g))
+        return fail(c, GLOW_ERROR_INVALID_ARGUMENT, "%s must be an object, not %s", path, json_type_name(g));
+    static const char *const ggx_keys[] = {"roughness", "specular", NULL};
+    if ((r = check_keys(c, g, path, ggx_keys)) != GLOW_OK) return r;
+    const cJSON *e;
+    if ((r = require(c, g, path, "roughness", &e)) != GLOW_OK) return r;
+    char p2[160];
+    snprintf(p2, sizeof p2, "%s.roughness", path);
+    if ((r = read_number(c, e, p2, &out->roughness)) != GLOW_OK) return r;
+    if (!(out->roughness > 0.0f && out->roughness <= 1.0f))
+        return fail(c, GLOW_ERROR_INVALID_ARGUMENT, "%s (%g) is outside (0, 1]", p2, (double)out->roughness);
+    out->specular[0] = out->specular[1] = out->specular[2] = 0.04f;
+    if ((e = get(g, "specular")) != NULL) {
+        snprintf(p2, sizeof p2, "%s.specular", path);
+        if ((r = read_nonneg_vec3(c, e, p2, out->specular)) != GLOW_OK) return r;
+        for (int i = 0; i < 3; ++i)
+            if (out->specular[i] > 1.0f)
+                return fail(c, GLOW_ERROR_INVALID_ARGUMENT, "%s[%d] (%g) is above 1", p2, i, (double)out->specular[i]);
+    }
+    out->ggx = true;
+    return GLOW_OK;
+}
+
 static glow_result parse_root(ctx *c, const cJSON *root, const char *base_dir, glow_scene_desc *s) {
     if (!cJSON_IsObject(root))
         return fail(c, GLOW_ERROR_CORRUPT_DATA, "the document must be a JSON object, not %s", json_type_name(root));
-    static const char *const keys[] = {"mesh", "camera", "lights", "environment", "emission_scale", NULL};
+    static const char *const keys[] = {"mesh", "camera", "lights", "environment", "emission_scale", "materials", NULL};
     glow_result r = check_keys(c, root, "", keys);
     if (r != GLOW_OK) return r;
     const cJSON *e;
@@ -428,6 +473,29 @@ static glow_result parse_root(ctx *c, const cJSON *root, const char *base_dir, g
         if ((r = read_number(c, e, "emission_scale", &s->emission_scale)) != GLOW_OK) return r;
         if (s->emission_scale < 0.0f)
             return fail(c, GLOW_ERROR_INVALID_ARGUMENT, "emission_scale (%g) is negative", (double)s->emission_scale);
+    }
+    if ((e = get(root, "materials")) != NULL) {
+        if (!cJSON_IsObject(e))
+            return fail(c, GLOW_ERROR_INVALID_ARGUMENT, "materials must be an object (material name -> override), not %s",
+                        json_type_name(e));
+        uint32_t n = 0;
+        for (const cJSON *m = e->child; m; m = m->next) n += !(m->string && m->string[0] == '_');
+        if (n > SCENE_MAX_MATERIALS)
+            return fail(c, GLOW_ERROR_INVALID_ARGUMENT, "materials has %u entries (at most %u)", n, SCENE_MAX_MATERIALS);
+        if (n > 0) {
+            for (const cJSON *m = e->child; m; m = m->next) /* names are free; only duplicates are errors */
+                for (const cJSON *prev = e->child; prev != m; prev = prev->next)
+                    if (m->string && prev->string && strcmp(prev->string, m->string) == 0)
+                        return fail(c, GLOW_ERROR_INVALID_ARGUMENT, "materials.%.64s appears twice", m->string);
+            s->materials = calloc(n, sizeof *s->materials);
+            if (!s->materials) return fail(c, GLOW_ERROR_OUT_OF_MEMORY, "out of memory for %u materials", n);
+            uint32_t i = 0;
+            for (const cJSON *m = e->child; m; m = m->next) {
+                if (m->string && m->string[0] == '_') continue;
+                if ((r = read_material(c, m, &s->materials[i++])) != GLOW_OK) return r;
+            }
+            s->material_count = n;
+        }
     }
     return GLOW_OK;
 }

@@ -661,6 +661,26 @@ GLOW_API void glow_ycocg_to_rgb(const float ycocg[3], float out_rgb[3]);
 GLOW_API void glow_shade_sh(const float *coeffs, uint32_t sh_bands_luma, uint32_t sh_bands_chroma,
                             const float axis[3], float exponent, float out_rgb[3]);
 
+/** glow_shade_sh with any zonal lobe: factors[l] (l < sh_bands_luma) multiplies band l, the lobe's
+ * Funk-Hecke factor 2π ∫ p(θ) P_l(cos θ) sin θ dθ for a lobe p normalised to ∫ p = 1 (factors[0] = 1),
+ * e.g. glow_sh_ggx_lobe_factors. glow_shade_sh(.., exponent, ..) is this with glow_sh_lobe_factor(l,
+ * exponent). \since 0.2 */
+GLOW_API void glow_shade_sh_factors(const float *coeffs, uint32_t sh_bands_luma, uint32_t sh_bands_chroma,
+                                    const float axis[3], const float *factors, float out_rgb[3]);
+/** Zonal-harmonic lobe factors of a GGX specular lobe about the reflection vector (DDISH-GI App. A,
+ * derived in docs/glossy.md): out[l] for l < bands (1..GLOW_MAX_SH_BANDS), the band factors of
+ * f_s(o, i) cos θ_i at normal incidence (o = n, G = Smith G1(o) G1(i), no Fresnel), normalised so that
+ * out[0] = 1. `roughness` is glTF's perceptual roughness in (0, 1], α = roughness² (clamped to
+ * [10⁻³, 1]). Deterministic quadrature (16-node Gauss-Legendre panels), about 3 µs for 8 bands:
+ * compute it per material. The specular radiance of a GGX surface is then ≈ (F0·A + B) ·
+ * glow_shade_sh_factors(SH, reflect(-o, n), out) with A, B from glow_ggx_specular_albedo (the split sum).
+ * \since 0.2 */
+GLOW_API void glow_sh_ggx_lobe_factors(float roughness, uint32_t bands, float *out);
+/** Directional albedo of the GGX specular lobe above, split for Schlick's Fresnel:
+ * ∫ f_s cos θ_i dω_i = F0 · out_ab[0] + out_ab[1] at cos θ_o = cos_view (0 at or below 0). Deterministic
+ * quadrature over the half vector (about 0.4 ms a call: tabulate it over cos_view). \since 0.2 */
+GLOW_API void glow_ggx_specular_albedo(float cos_view, float roughness, float out_ab[2]);
+
 /** Trilinear sample of the grid at `position` (m) into out_coeffs[coeff_count]. Cells without a
  * cache get weight 0, and so do corners that outputs->grid_visibility marks as hidden from the
  * lookup's octant of the cell; the rest are renormalised. Outside the grid the position is clamped.

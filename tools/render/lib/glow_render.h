@@ -4,7 +4,8 @@
  * target glow_render), not part of the runtime. Full documentation: docs/render.md.
  *
  * THE LIGHT MODEL is the runtime's and the host's (glow_host.h "THE CONTRACT", docs/scene-format.md):
- *   - materials are Lambertian: albedo ρ = material albedo × albedo texture (glow__texture_sample at
+ *   - materials are Lambertian, or diffuse under a GGX layer where the scene's "materials" key gives one
+ *     (render_bsdf.h, docs/glossy.md): albedo ρ = material albedo × albedo texture (glow__texture_sample at
  *     the interpolated uv0, finest mip level), times settings.albedo_scale, clamped to [0, 0.999] (the
  *     runtime's clamp); emission L_e = material emission × the scene's emission_scale, W/(m²·sr),
  *     emitted by the FRONT face only (counter-clockwise winding, geometric normal (p1-p0)×(p2-p0));
@@ -30,10 +31,13 @@
  * Glow's view (glow_render_glow): the same camera rays, random numbers and direct term (same seed and
  * size: a bit-identical direct image); indirect = ρ · glow_shade_sh(SH, n, 1) at the first hit, the SH
  * from the lightmap (bilinear at the hit's lightmap UV, when a texel with a cache is among the four;
- * front-face hits only) else from the grid (trilinear at the hit position), clamped at 0 per channel.
+ * front-face hits only) else from the grid (trilinear at the hit position), clamped at 0 per channel;
+ * with a GGX layer ρ (1 - E(cos θ_o)) · that + E(cos θ_o) · the caches convolved with the GGX lobe's
+ * zonal harmonics (glow_render_glow_settings.glossy; E = F0 A + B, the split sum; docs/glossy.md).
  * The difference between the two final images is Glow's error alone.
  *
- * PATH TRACING (reference): cosine-weighted sampling of the Lambertian lobe; next-event estimation of
+ * PATH TRACING (reference): cosine-weighted sampling of the Lambertian lobe (GGX layers: a mixture of
+ * visible-normal and cosine sampling, render_bsdf.h); next-event estimation of
  * every delta light at every vertex; emissive triangles sampled by area × luminance (a CDF) and
  * combined with BSDF-sampled emitter hits by multiple importance sampling (power heuristic);
  * Russian roulette from the third vertex on (survival min(0.95, max channel of throughput × ρ)); no
@@ -95,6 +99,19 @@ typedef struct glow_render_settings {
     void *progress_user;
 } glow_render_settings;
 
+/* How Glow's view shades a GGX layer (scene "materials") from the caches (docs/glossy.md). */
+typedef enum glow_render_glossy {
+    GLOW_RENDER_GLOSSY_ZH_GGX = 0, /* the GGX lobe's zonal harmonics (glow_sh_ggx_lobe_factors) x the split sum */
+    GLOW_RENDER_GLOSSY_PHONG,      /* the Phong lobe of glow_render_phong_exponent(roughness) x the same split sum */
+    GLOW_RENDER_GLOSSY_NONE,       /* no specular from the caches (the diffuse layer only) */
+    GLOW_RENDER_GLOSSY_ZH_GGX_DOMINANT /* ZH-GGX about the lobe's dominant direction (Lagarde & de Rousiers
+                                          2014: the reflection vector leant towards the normal) */
+} glow_render_glossy;
+
+/* The Phong exponent standing in for GGX roughness r: Walter et al. 2007's Blinn-Phong exponent
+ * 2/α² - 2 (α = r²) about the half vector, divided by 4 about the reflection vector; at least 1. */
+float glow_render_phong_exponent(float roughness);
+
 typedef struct glow_render_glow_settings {
     uint32_t bounce_iterations; /* runtime feedback iterations in all (updates of up to 64); 0 = 192 */
     uint32_t sky_rays;          /* the host's rays per surfel for the sky visibility; 0 = its default */
@@ -107,6 +124,7 @@ typedef struct glow_render_glow_settings {
                                    for the same seed, size and spp, so final = reference direct + this
                                    indirect (glow-compare --add): the sweeps of glow-eval run this way */
     bool no_detail;             /* ignore the bake's lightmap detail (LDET): the lightmap alone */
+    glow_render_glossy glossy;  /* GGX layers: 0 = ZH-GGX */
     bool grid_only;             /* shade every surface from the grid, as a dynamic object there would be
                                    (glow_sample_grid 0.1 % of the scene's diagonal off the surface along
                                    its shading normal): measures the light dynamic objects receive */
@@ -120,12 +138,17 @@ typedef struct glow_render_result {
                                       one whose square holds the lookup's UV: R = x + 1, G = y + 1, B = that
                                       texel's cache + 1 (exact in float up to 2^24); 0 0 0 = none (sky, grid,
                                       back faces). glow-compare --texels groups pixels by it (blotches) */
+    glow_eval_image specular;      /* scenes with a GGX material only (else empty): part of indirect, the
+                                      indirect light the first hit's GGX lobe reflects (reference: the
+                                      specular share of its emitter NEE and first bounce; glow view: the
+                                      lobe convolved with the caches). docs/glossy.md */
     uint32_t width, height, spp, threads;
     double seconds;           /* the rendering itself (glow: not the solve) */
     uint64_t rays;            /* Embree queries: camera, bounce and shadow rays */
     double mrays_per_s;
     double mean_final[3], mean_direct[3], mean_indirect[3];
     double mean_indirect_near[3]; /* with indirect_near */
+    double mean_specular[3];      /* with specular */
     uint64_t nonfinite_samples; /* samples whose direct or indirect radiance was NaN or infinite: left out
                                    of their pixel (counted as 0) so that one cannot poison an image.
                                    0 unless something is wrong; glow-render warns when it is not */

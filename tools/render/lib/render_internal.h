@@ -6,6 +6,7 @@
 #include <stdbool.h>
 
 #include "glow_render.h"
+#include "render_bsdf.h"
 #include "glow/glow_pc_kit.h" /* the linker's scene kit: scene, rays, pool (not precompute/src) */
 
 struct glow_render_scene {
@@ -23,6 +24,9 @@ struct glow_render_scene {
     double *emitter_cdf;       /* [emitter_count], last = 1 */
     float *light_pdf_area;     /* [tri_count]: luminance / Σ(area x luminance), the area-measure pdf of
                                   next-event estimation on that triangle (0 for non-emitters) */
+    glow__render_ggx *ggx;     /* [material_count]: the material's GGX layer (roughness 0 = none), or NULL
+                                  when no material has one */
+    uint32_t glossy_count;     /* materials with a GGX layer */
     float eps;                 /* ray offset: 1e-4 x bounds diagonal (glow_host's) */
     float diag;
 };

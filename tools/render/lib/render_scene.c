@@ -29,6 +29,7 @@ void glow_render_scene_destroy(glow_render_scene *s) {
     free(s->emitter_tri);
     free(s->emitter_cdf);
     free(s->light_pdf_area);
+    free(s->ggx);
     free(s);
 }
 
@@ -65,6 +66,35 @@ glow_result glow_render_scene_load(const char *path, glow_render_scene **out, ch
             glow_render_scene_destroy(s);
             return GLOW_ERROR_CORRUPT_DATA;
         }
+    if (s->desc.material_count) { /* the scene's per-material overrides, by the mesh's material names */
+        s->ggx = calloc(m->material_count ? m->material_count : 1, sizeof *s->ggx);
+        if (!s->ggx) goto oom;
+        for (uint32_t i = 0; i < s->desc.material_count; ++i) {
+            const glow_scene_material *sm = &s->desc.materials[i];
+            uint32_t hits = 0;
+            for (uint32_t j = 0; j < m->material_count; ++j) {
+                if (strcmp(m->materials[j].name, sm->name) != 0) continue;
+                hits++;
+                if (!sm->ggx) continue;
+                glow__render_ggx_init(&s->ggx[j], sm->roughness, sm->specular);
+            }
+            if (!hits) {
+                char names[256] = "";
+                for (uint32_t j = 0; j < m->material_count && strlen(names) < 200; ++j)
+                    snprintf(names + strlen(names), sizeof names - strlen(names), "%s%s", j ? ", " : "", m->materials[j].name);
+                glow__render_fail(message, message_size, GLOW_ERROR_INVALID_ARGUMENT,
+                                  "%s: materials.%s: the mesh %s has no material of that name (it has: %s)", path, sm->name,
+                                  s->desc.mesh, names);
+                glow_render_scene_destroy(s);
+                return GLOW_ERROR_INVALID_ARGUMENT;
+            }
+        }
+        for (uint32_t j = 0; j < m->material_count; ++j) s->glossy_count += s->ggx[j].alpha > 0.0f;
+        if (!s->glossy_count) {
+            free(s->ggx);
+            s->ggx = NULL;
+        }
+    }
     r = glow__rt_create(m, &s->log, &s->rt);
     if (r != GLOW_OK) {
         glow__render_fail(message, message_size, r, "%s: %s", path, s->log.last_error[0] ? s->log.last_error : "embree failed");
@@ -147,6 +177,7 @@ void glow_render_result_free(glow_render_result *r) {
     glow_eval_image_free(&r->indirect);
     glow_eval_image_free(&r->indirect_near);
     glow_eval_image_free(&r->texel);
+    glow_eval_image_free(&r->specular);
     memset(r, 0, sizeof *r);
 }
 
@@ -160,17 +191,19 @@ glow_result glow_render_write(const glow_render_result *res, const char *prefix,
                                  "glow_render_write: exposure %g must be finite and >= 0", (double)exposure);
     /* the near part of the indirect light (glow_render_settings.near_split) and the texel image (glow
      * view with a lightmap) only when they were rendered */
-    static const char *all_suffix[6] = {".exr", "_direct.exr", "_indirect.exr", ".png", "_indirect_near.exr", "_texel.exr"};
-    const glow_eval_image *all_img[6] = {&res->final, &res->direct, &res->indirect, &res->final, &res->indirect_near, &res->texel};
-    const char *suffix[6];
-    const glow_eval_image *img[6];
+    static const char *all_suffix[7] = {".exr", "_direct.exr", "_indirect.exr", ".png", "_indirect_near.exr", "_texel.exr",
+                                        "_specular.exr"};
+    const glow_eval_image *all_img[7] = {&res->final, &res->direct, &res->indirect, &res->final, &res->indirect_near, &res->texel,
+                                         &res->specular};
+    const char *suffix[7];
+    const glow_eval_image *img[7];
     int N = 0;
-    for (int i = 0; i < 6; ++i)
+    for (int i = 0; i < 7; ++i)
         if (i < 4 || all_img[i]->rgb) {
             suffix[N] = all_suffix[i];
             img[N++] = all_img[i];
         }
-    char path[6][1024], part[6][1040];
+    char path[7][1024], part[7][1040];
     for (int i = 0; i < N; ++i) {
         int n = snprintf(path[i], sizeof path[i], "%s%s", prefix, suffix[i]);
         int n2 = snprintf(part[i], sizeof part[i], "%s%s.part", prefix, suffix[i]);

@@ -64,30 +64,17 @@ static inline float v_norm(float v[3]) {
         for (int k = 0; k < 3; ++k) v[k] /= l;
     return l;
 }
-/* Orthonormal basis around unit n (Duff et al. 2017). */
-static void onb(const float n[3], float t[3], float b[3]) {
-    float sign = copysignf(1.0f, n[2]);
-    float a = -1.0f / (sign + n[2]);
-    float c = n[0] * n[1] * a;
-    t[0] = 1.0f + sign * n[0] * n[0] * a; t[1] = sign * c; t[2] = -sign * n[0];
-    b[0] = c; b[1] = sign + n[1] * n[1] * a; b[2] = -n[1];
-}
-/* Cosine-weighted direction around unit n; returns cos θ (pdf = cos θ / π). */
-static float sample_cosine(const float n[3], float r1, float r2, float out[3]) {
-    float t[3], b[3];
-    onb(n, t, b);
-    float phi = 2.0f * PI_F * r1, sr = sqrtf(r2), z = sqrtf(fmaxf(0.0f, 1.0f - r2));
-    float x = sr * cosf(phi), y = sr * sinf(phi);
-    for (int k = 0; k < 3; ++k) out[k] = x * t[k] + y * b[k] + z * n[k];
-    v_norm(out);
-    return z;
-}
-
 /* ------------------------------------------------------------------------------------- setup */
 typedef struct render_light {
     glow_scene_light l;
     float cos_outer, cos_inner;
 } render_light;
+
+typedef struct glow_view_ggx { /* per material with a GGX layer */
+    bool ok;
+    float zh[GLOW_MAX_SH_BANDS];    /* glow_sh_ggx_lobe_factors */
+    float phong[GLOW_MAX_SH_BANDS]; /* glow_sh_lobe_factor of the Phong exponent standing in for it */
+} glow_view_ggx;
 
 typedef struct glow_view {
     glow_context *ctx;
@@ -98,6 +85,8 @@ typedef struct glow_view {
     bool indirect_only; /* glow_render_glow_settings.indirect_only */
     bool no_detail;     /* glow_render_glow_settings.no_detail */
     bool grid_only;     /* glow_render_glow_settings.grid_only */
+    glow_render_glossy glossy; /* glow_render_glow_settings.glossy */
+    glow_view_ggx *ggx; /* [material_count] with the scene's GGX layers, else NULL */
     float (*lm_uv)[6]; /* [tri] the bake's lightmap UV per corner, or NULL without a lightmap */
 } glow_view;
 
@@ -122,6 +111,7 @@ typedef struct render_ctx {
     float *direct, *indirect;
     float *indirect_near; /* NULL unless settings->near_split > 0 (reference only) */
     float *texel;         /* glow view with a lightmap: glow_render_result.texel's pixels, else NULL */
+    float *specular;      /* scenes with a GGX layer: glow_render_result.specular's pixels, else NULL */
     float near_split;
     /* scheduling */
     atomic_uint rows_done;
@@ -140,9 +130,10 @@ typedef struct surf {
     uint32_t tri;
     float b1, b2;   /* barycentrics of corners 1, 2 */
     bool back;      /* the ray arrived at the back face */
+    glow__render_lobe lobe; /* the GGX layer (scene "materials"; docs/glossy.md); lobe.g NULL: Lambertian */
 } surf;
 
-static void make_surf(const render_ctx *c, const glow__hit *h, surf *s) {
+static void make_surf(const render_ctx *c, const glow__hit *h, const float wdir[3], surf *s) {
     const glow__scene *m = &c->sc->mesh;
     const uint32_t t = h->tri;
     const float(*p)[3] = m->pos + 3 * (size_t)t;
@@ -173,6 +164,11 @@ static void make_surf(const render_ctx *c, const glow__hit *h, surf *s) {
         glow__texture_sample(&m->textures[mat->texture], u, v, 0.0f, tex);
     }
     for (int k = 0; k < 3; ++k) s->rho[k] = fminf(fmaxf(mat->albedo[k] * tex[k] * c->albedo_scale, 0.0f), 0.999f);
+    s->lobe.g = NULL;
+    if (c->sc->ggx && c->sc->ggx[m->tri_material[t]].alpha > 0.0f) {
+        float wo[3] = {-wdir[0], -wdir[1], -wdir[2]};
+        glow__render_lobe_setup(&s->lobe, &c->sc->ggx[m->tri_material[t]], s->ns, s->ng, wo, s->rho);
+    }
 }
 
 /* Emitted radiance of triangle t at barycentrics (b1, b2) towards a ray that hit it (front face only):
@@ -196,9 +192,11 @@ static bool emission_of(const render_ctx *c, uint32_t t, float b1, float b2, boo
     return true;
 }
 
-/* The host's lights at s (glow_host.h, THE CONTRACT), exact shadow rays: irradiance E, W/m². */
-static void delta_irradiance(const render_ctx *c, const surf *s, float E[3], uint64_t *rays) {
-    E[0] = E[1] = E[2] = 0.0f;
+/* The host's lights at s (glow_host.h, THE CONTRACT), exact shadow rays: the radiance s reflects
+ * back along the arriving ray, ρ/π · E for a Lambertian surface (E the irradiance, W/m²), Σ f(o, l) E_l with a GGX
+ * layer. */
+static void delta_light(const render_ctx *c, const surf *s, float out[3], uint64_t *rays) {
+    float E[3] = {0.0f, 0.0f, 0.0f};
     for (uint32_t i = 0; i < c->light_count; ++i) {
         const render_light *hl = &c->lights[i];
         const glow_scene_light *L = &hl->l;
@@ -241,8 +239,16 @@ static void delta_irradiance(const render_ctx *c, const surf *s, float E[3], uin
                 if (glow__rt_occluded(c->sc->rt, s->o, v, 0.0f, tfar)) continue;
             }
         }
-        for (int k = 0; k < 3; ++k) E[k] += f * pw[k];
+        if (s->lobe.g) { /* f = cos θ_l · geometry; bsdf_eval gives f(o, l) cos θ_l */
+            float fd[3], fs[3];
+            glow__render_lobe_eval(&s->lobe, l, fd, fs);
+            const float geom = f / glow__dot(s->ns, l);
+            for (int k = 0; k < 3; ++k) E[k] += geom * pw[k] * (fd[k] + fs[k]);
+        } else {
+            for (int k = 0; k < 3; ++k) E[k] += f * pw[k];
+        }
     }
+    for (int k = 0; k < 3; ++k) out[k] = s->lobe.g ? E[k] : s->rho[k] * INV_PI_F * E[k];
 }
 
 static inline float mis2(float a, float b) { /* power heuristic, weight of a */
@@ -251,9 +257,12 @@ static inline float mis2(float a, float b) { /* power heuristic, weight of a */
 }
 
 /* Next-event estimation of the emissive triangles at s: reflected radiance (before the path's
- * throughput), MIS-weighted against BSDF sampling. Always draws 3 numbers. */
-static void emitter_nee(const render_ctx *c, rng *rp, const surf *s, float out[3], float *out_dist, uint64_t *rays) {
+ * throughput), MIS-weighted against BSDF sampling; out_spec (optional) its GGX part. Always draws 3
+ * numbers. */
+static void emitter_nee(const render_ctx *c, rng *rp, const surf *s, float out[3], float out_spec[3], float *out_dist,
+                        uint64_t *rays) {
     out[0] = out[1] = out[2] = 0.0f;
+    if (out_spec) out_spec[0] = out_spec[1] = out_spec[2] = 0.0f;
     if (out_dist) *out_dist = INFINITY;
     const glow_render_scene *sc = c->sc;
     float u = rnd(rp), r1 = rnd(rp), r2 = rnd(rp);
@@ -288,17 +297,28 @@ static void emitter_nee(const render_ctx *c, rng *rp, const surf *s, float out[3
         ++*rays;
         if (glow__rt_occluded(sc->rt, s->o, v, 0.0f, tfar)) return;
     }
-    float pl = sc->light_pdf_area[t] * d2 / cos_l, pb = cos_s * INV_PI_F;
+    float pl = sc->light_pdf_area[t] * d2 / cos_l;
     if (!(pl > 0.0f) || !isfinite(pl)) return;
+    if (s->lobe.g) {
+        float fd[3], fs[3];
+        const float pb = glow__render_lobe_eval(&s->lobe, w, fd, fs), m = mis2(pl, pb) / pl;
+        for (int k = 0; k < 3; ++k) {
+            out[k] = le[k] * (fd[k] + fs[k]) * m;
+            if (out_spec) out_spec[k] = le[k] * fs[k] * m;
+        }
+        return;
+    }
+    float pb = cos_s * INV_PI_F;
     float g = mis2(pl, pb) * cos_s * INV_PI_F / pl;
     for (int k = 0; k < 3; ++k) out[k] = s->rho[k] * le[k] * g;
 }
 
-/* Glow's indirect light at the first hit: ρ · (cosine-lobe mean incident radiance of the caches).
+/* Glow's indirect light at the first hit: ρ · (cosine-lobe mean incident radiance of the caches);
+ * with a GGX layer ρ (1 - E(cos θ_o)) · that + the GGX lobe's (glow_view.glossy), which also goes to spec[].
  * When it read the lightmap, texel[] gets the texel whose square holds the lookup (x + 1, y + 1) and
  * that texel's cache + 1 (glow_render_result.texel); otherwise texel[] is left alone. */
 static void glow_indirect(const render_ctx *c, const surf *s, float *coeffs, worker_stats *ws, float out[3],
-                          float texel[3]) {
+                          float texel[3], float spec[3]) {
     out[0] = out[1] = out[2] = 0.0f;
     float det[3] = {0.0f, 0.0f, 0.0f}; /* the lightmap detail's correction (bakes with LDET) */
     const glow_cache_outputs *o = c->gv->out;
@@ -335,7 +355,34 @@ static void glow_indirect(const render_ctx *c, const surf *s, float *coeffs, wor
     }
     float e[3];
     glow_shade_sh(coeffs, o->sh_bands_luma, o->sh_bands_chroma, s->ns, 1.0f, e);
-    for (int k = 0; k < 3; ++k) out[k] = s->rho[k] * fmaxf(e[k] + det[k], 0.0f);
+    if (!s->lobe.g) {
+        for (int k = 0; k < 3; ++k) out[k] = s->rho[k] * fmaxf(e[k] + det[k], 0.0f);
+        return;
+    }
+    /* the diffuse layer: ρ (1 - E(cos θ_o)) · its mean over the cosine lobe, the weight (1 - E(cos θ_i)) /
+     * (1 - Ē) of each incident direction taken as its mean, 1 (exact for uniform light) */
+    for (int k = 0; k < 3; ++k) out[k] = s->rho[k] * (1.0f - s->lobe.e_o[k]) * fmaxf(e[k] + det[k], 0.0f);
+    const glow_view_ggx *vg = &c->gv->ggx[s->lobe.g - c->sc->ggx];
+    if (c->gv->glossy == GLOW_RENDER_GLOSSY_NONE || !vg->ok) return;
+    /* the split sum: (F0 A + B)(cos θ_o) × the lobe's mean of the caches' radiance about the reflection
+     * vector (docs/glossy.md) */
+    float r[3], l[3];
+    for (int k = 0; k < 3; ++k) r[k] = 2.0f * s->lobe.cos_o * s->ns[k] - s->lobe.wo[k];
+    if (c->gv->glossy == GLOW_RENDER_GLOSSY_ZH_GGX_DOMINANT) {
+        /* Lagarde & de Rousiers 2014 ("Moving Frostbite to PBR", getSpecularDominantDir): the lobe's
+         * dominant direction leans from the reflection vector towards the normal as it widens (the
+         * off-specular peak) */
+        const float a = s->lobe.g->alpha, sm = 1.0f - a, t = sm * (sqrtf(sm) + a);
+        for (int k = 0; k < 3; ++k) r[k] = s->ns[k] + t * (r[k] - s->ns[k]);
+    }
+    v_norm(r);
+    glow_shade_sh_factors(coeffs, o->sh_bands_luma, o->sh_bands_chroma, r,
+                          c->gv->glossy == GLOW_RENDER_GLOSSY_PHONG ? vg->phong : vg->zh, l);
+    for (int k = 0; k < 3; ++k) {
+        const float sp = s->lobe.e_o[k] * fmaxf(l[k], 0.0f); /* E = F0 A + B at cos θ_o */
+        out[k] += sp;
+        spec[k] += sp;
+    }
 }
 
 /* The rest of a path from hit h (its vertex 2 onwards), reached from prev_p along wdir with throughput
@@ -352,7 +399,7 @@ static void continue_path(const render_ctx *c, rng *rp, glow__hit h, const float
     memcpy(wdir, w_in, sizeof wdir);
     surf s;
     for (uint32_t depth = 2;; ++depth) {
-        make_surf(c, &h, &s);
+        make_surf(c, &h, wdir, &s);
         if (emission_of(c, s.tri, s.b1, s.b2, s.back, le)) { /* BSDF-sampled emitter hit, MIS against NEE */
             float wgt = 1.0f;
             if (pdf_prev > 0.0f) {
@@ -365,20 +412,33 @@ static void continue_path(const render_ctx *c, rng *rp, glow__hit h, const float
             for (int k = 0; k < 3; ++k) out[k] += beta[k] * le[k] * wgt;
         }
         if (depth >= c->max_depth) break;
-        delta_irradiance(c, &s, E, rays);
-        emitter_nee(c, rp, &s, nee, NULL, rays);
-        for (int k = 0; k < 3; ++k) out[k] += beta[k] * (s.rho[k] * INV_PI_F * E[k] + nee[k]);
+        delta_light(c, &s, E, rays);
+        emitter_nee(c, rp, &s, nee, NULL, NULL, rays);
+        for (int k = 0; k < 3; ++k) out[k] += beta[k] * (E[k] + nee[k]);
         float r = rnd(rp), a = rnd(rp), b = rnd(rp);
-        float nb[3] = {beta[0] * s.rho[0], beta[1] * s.rho[1], beta[2] * s.rho[2]};
-        if (depth >= RR_START) {
-            float q = fminf(0.95f, fmaxf(nb[0], fmaxf(nb[1], nb[2])));
-            if (!(r < q)) break;
-            for (int k = 0; k < 3; ++k) nb[k] /= q;
+        if (s.lobe.g) { /* GGX layer: sample first, then Russian roulette on the new throughput */
+            float w[3], wsp[3], pdf;
+            if (!glow__render_lobe_sample(&s.lobe, a, b, wdir, w, wsp, &pdf)) break;
+            float nb[3] = {beta[0] * w[0], beta[1] * w[1], beta[2] * w[2]};
+            if (depth >= RR_START) {
+                float q = fminf(0.95f, fmaxf(nb[0], fmaxf(nb[1], nb[2])));
+                if (!(r < q)) break;
+                for (int k = 0; k < 3; ++k) nb[k] /= q;
+            }
+            memcpy(beta, nb, sizeof beta);
+            pdf_prev = pdf;
+        } else {
+            float nb[3] = {beta[0] * s.rho[0], beta[1] * s.rho[1], beta[2] * s.rho[2]};
+            if (depth >= RR_START) {
+                float q = fminf(0.95f, fmaxf(nb[0], fmaxf(nb[1], nb[2])));
+                if (!(r < q)) break;
+                for (int k = 0; k < 3; ++k) nb[k] /= q;
+            }
+            float cw = glow__render_sample_cosine(s.ns, a, b, wdir);
+            if (!(cw > 0.0f) || glow__dot(wdir, s.ng) <= 0.0f) break;
+            memcpy(beta, nb, sizeof beta);
+            pdf_prev = cw * INV_PI_F;
         }
-        float cw = sample_cosine(s.ns, a, b, wdir);
-        if (!(cw > 0.0f) || glow__dot(wdir, s.ng) <= 0.0f) break;
-        memcpy(beta, nb, sizeof beta);
-        pdf_prev = cw * INV_PI_F;
         memcpy(prev_p, s.p, sizeof prev_p);
         ++*rays;
         h = glow__rt_intersect(sc->rt, s.o, wdir, 0.0f, INFINITY);
@@ -389,9 +449,10 @@ static void continue_path(const render_ctx *c, rng *rp, glow__hit h, const float
     }
 }
 
-/* One sample of pixel (x, y): adds to direct[3] and indirect[3]; texel[] as glow_indirect's. */
+/* One sample of pixel (x, y): adds to direct[3] and indirect[3]; texel[] as glow_indirect's; spec[3]
+ * (scenes with a GGX layer) the part of indirect that the first hit's GGX lobe reflects. */
 static void sample(const render_ctx *c, uint32_t x, uint32_t y, rng *rd, rng *rp, float *coeffs, worker_stats *ws,
-                   float direct[3], float indirect[3], float near[3], float texel[3]) {
+                   float direct[3], float indirect[3], float near[3], float texel[3], float spec[3]) {
     const glow_render_scene *sc = c->sc;
     /* ---- camera ray (stream rd) */
     float jx = rnd(rd), jy = rnd(rd);
@@ -408,12 +469,12 @@ static void sample(const render_ctx *c, uint32_t x, uint32_t y, rng *rd, rng *rp
         return;
     }
     surf s;
-    make_surf(c, &h, &s);
+    make_surf(c, &h, dir, &s);
     if (c->gv && c->gv->indirect_only) { /* the caches alone; stream rd advances as below */
         (void)rnd(rd);
         (void)rnd(rd);
         float g[3];
-        glow_indirect(c, &s, coeffs, ws, g, texel);
+        glow_indirect(c, &s, coeffs, ws, g, texel, spec);
         for (int k = 0; k < 3; ++k) indirect[k] += g[k];
         return;
     }
@@ -422,39 +483,57 @@ static void sample(const render_ctx *c, uint32_t x, uint32_t y, rng *rd, rng *rp
         for (int k = 0; k < 3; ++k) direct[k] += le[k];
     /* ---- the host's lights at the first hit */
     float E[3];
-    delta_irradiance(c, &s, E, &ws->rays);
-    for (int k = 0; k < 3; ++k) direct[k] += s.rho[k] * INV_PI_F * E[k];
+    delta_light(c, &s, E, &ws->rays);
+    for (int k = 0; k < 3; ++k) direct[k] += E[k];
     /* ---- the first bounce (stream rd): the environment it reaches is direct */
     float w1[3];
     float r1 = rnd(rd), r2 = rnd(rd);
-    float cos1 = sample_cosine(s.ns, r1, r2, w1);
-    bool valid = cos1 > 0.0f && glow__dot(w1, s.ng) > 0.0f;
+    float beta[3] = {s.rho[0], s.rho[1], s.rho[2]}, beta_s[3] = {0.0f, 0.0f, 0.0f}; /* f cos / pdf: ρ for cosine sampling */
+    float pdf1;
+    bool valid;
+    if (s.lobe.g) {
+        valid = glow__render_lobe_sample(&s.lobe, r1, r2, w1, beta, beta_s, &pdf1);
+    } else {
+        float cos1 = glow__render_sample_cosine(s.ns, r1, r2, w1);
+        valid = cos1 > 0.0f && glow__dot(w1, s.ng) > 0.0f;
+        pdf1 = cos1 * INV_PI_F;
+    }
     glow__hit h1 = {.t = INFINITY, .tri = UINT32_MAX};
     if (valid) {
         ws->rays++;
         h1 = glow__rt_intersect(sc->rt, s.o, w1, 0.0f, INFINITY);
         if (h1.tri == UINT32_MAX && c->env_on)
-            for (int k = 0; k < 3; ++k) direct[k] += s.rho[k] * c->env[k];
+            for (int k = 0; k < 3; ++k) direct[k] += beta[k] * c->env[k];
     }
     /* ---- Glow's view: the caches at the first hit */
     if (c->gv) {
         float g[3];
-        glow_indirect(c, &s, coeffs, ws, g, texel);
+        glow_indirect(c, &s, coeffs, ws, g, texel, spec);
         for (int k = 0; k < 3; ++k) indirect[k] += g[k];
         return;
     }
     /* ---- reference: the rest of the path (stream rp). With a near split, each part of the indirect
      * light also goes to near[] when the surface it last left before the first hit (the emitter point
      * of the NEE, the hit of the first bounce) is closer than c->near_split. */
-    float nee[3], nee_dist;
-    emitter_nee(c, rp, &s, nee, &nee_dist, &ws->rays);
+    float nee[3], nee_s[3], nee_dist;
+    emitter_nee(c, rp, &s, nee, nee_s, &nee_dist, &ws->rays);
     for (int k = 0; k < 3; ++k) indirect[k] += nee[k];
+    if (s.lobe.g)
+        for (int k = 0; k < 3; ++k) spec[k] += nee_s[k];
     if (nee_dist < c->near_split)
         for (int k = 0; k < 3; ++k) near[k] += nee[k];
     if (!valid || h1.tri == UINT32_MAX) return;
-    const float beta[3] = {s.rho[0], s.rho[1], s.rho[2]}; /* f cos / pdf = ρ for cosine sampling */
     float rest[3] = {0.0f, 0.0f, 0.0f};
-    continue_path(c, rp, h1, beta, s.p, w1, cos1 * INV_PI_F, rest, &ws->rays);
+    if (s.lobe.g) { /* the path after a unit throughput, then split by the lobes' weights */
+        const float one[3] = {1.0f, 1.0f, 1.0f};
+        continue_path(c, rp, h1, one, s.p, w1, pdf1, rest, &ws->rays);
+        for (int k = 0; k < 3; ++k) {
+            spec[k] += beta_s[k] * rest[k];
+            rest[k] *= beta[k];
+        }
+    } else {
+        continue_path(c, rp, h1, beta, s.p, w1, pdf1, rest, &ws->rays);
+    }
     for (int k = 0; k < 3; ++k) indirect[k] += rest[k];
     if (h1.t < c->near_split)
         for (int k = 0; k < 3; ++k) near[k] += rest[k];
@@ -471,11 +550,11 @@ static void render_rows(void *ctx, uint32_t begin, uint32_t end, uint32_t worker
             rng rd, rp;
             rng_init(&rd, c->seed, pixel, 0);
             rng_init(&rp, c->seed, pixel, 1);
-            double sd[3] = {0, 0, 0}, si[3] = {0, 0, 0}, sn[3] = {0, 0, 0};
+            double sd[3] = {0, 0, 0}, si[3] = {0, 0, 0}, sn[3] = {0, 0, 0}, ss[3] = {0, 0, 0};
             float tex[3] = {0, 0, 0}; /* the first sample's lightmap texel that has one */
             for (uint32_t n = 0; n < c->spp; ++n) {
-                float d[3] = {0, 0, 0}, ind[3] = {0, 0, 0}, nr[3] = {0, 0, 0}, tl[3] = {0, 0, 0};
-                sample(c, x, y, &rd, &rp, coeffs, ws, d, ind, nr, tl);
+                float d[3] = {0, 0, 0}, ind[3] = {0, 0, 0}, nr[3] = {0, 0, 0}, tl[3] = {0, 0, 0}, sp[3] = {0, 0, 0};
+                sample(c, x, y, &rd, &rp, coeffs, ws, d, ind, nr, tl, sp);
                 if (tex[0] == 0.0f) memcpy(tex, tl, sizeof tex);
                 if (!(isfinite(d[0]) && isfinite(d[1]) && isfinite(d[2]) && isfinite(ind[0]) && isfinite(ind[1]) &&
                       isfinite(ind[2]))) { /* a bug upstream: counted and reported, kept out of the pixel */
@@ -486,6 +565,7 @@ static void render_rows(void *ctx, uint32_t begin, uint32_t end, uint32_t worker
                     sd[k] += d[k];
                     si[k] += ind[k];
                     sn[k] += nr[k];
+                    ss[k] += sp[k];
                 }
             }
             for (int k = 0; k < 3; ++k) {
@@ -493,6 +573,7 @@ static void render_rows(void *ctx, uint32_t begin, uint32_t end, uint32_t worker
                 c->indirect[3 * pixel + k] = (float)(si[k] / c->spp);
                 if (c->indirect_near) c->indirect_near[3 * pixel + k] = (float)(sn[k] / c->spp);
                 if (c->texel) c->texel[3 * pixel + k] = tex[k];
+                if (c->specular) c->specular[3 * pixel + k] = (float)(ss[k] / c->spp);
             }
         }
         unsigned done = atomic_fetch_add(&c->rows_done, 1u) + 1u;
@@ -605,7 +686,8 @@ static glow_result render(const glow_render_scene *sc, const glow_render_setting
         (r = glow_eval_image_alloc(&out->indirect, c.w, c.h)) != GLOW_OK ||
         (r = glow_eval_image_alloc(&out->final, c.w, c.h)) != GLOW_OK ||
         (!gv && st->near_split > 0.0f && (r = glow_eval_image_alloc(&out->indirect_near, c.w, c.h)) != GLOW_OK) ||
-        (gv && gv->lm_uv && !gv->grid_only && (r = glow_eval_image_alloc(&out->texel, c.w, c.h)) != GLOW_OK)) {
+        (gv && gv->lm_uv && !gv->grid_only && (r = glow_eval_image_alloc(&out->texel, c.w, c.h)) != GLOW_OK) ||
+        (sc->ggx && (r = glow_eval_image_alloc(&out->specular, c.w, c.h)) != GLOW_OK)) {
         r = glow__render_fail(message, message_size, r, "%s: cannot allocate %u x %u images", sc->path, c.w, c.h);
         goto done;
     }
@@ -613,6 +695,7 @@ static glow_result render(const glow_render_scene *sc, const glow_render_setting
     c.indirect = out->indirect.rgb;
     c.indirect_near = out->indirect_near.rgb; /* NULL unless allocated above */
     c.texel = out->texel.rgb;                 /* likewise */
+    c.specular = out->specular.rgb;           /* likewise */
     c.near_split = c.indirect_near ? st->near_split : 0.0f;
     atomic_init(&c.rows_done, 0u);
     pthread_mutex_init(&c.progress_lock, NULL);
@@ -642,6 +725,7 @@ static glow_result render(const glow_render_scene *sc, const glow_render_setting
     image_mean(&out->direct, out->mean_direct);
     image_mean(&out->indirect, out->mean_indirect);
     if (c.indirect_near) image_mean(&out->indirect_near, out->mean_indirect_near);
+    if (c.specular) image_mean(&out->specular, out->mean_specular);
 done:
     free(c.lights);
     free(c.ws);
@@ -660,6 +744,11 @@ glow_result glow_render_reference(const glow_render_scene *sc, const glow_render
 }
 
 /* ------------------------------------------------------------------------------------- glow view */
+float glow_render_phong_exponent(float roughness) {
+    const float a = roughness * roughness, nb = 2.0f / (a * a) - 2.0f; /* Walter et al. 2007's Blinn-Phong */
+    return fmaxf(1.0f, 0.25f * nb); /* about the reflection vector θ_i = 2 θ_h: cos^(nb/4) θ_i ≈ cos^nb θ_h */
+}
+
 typedef struct capture_log {
     pthread_mutex_t lock;
     char first_error[512];
@@ -680,6 +769,7 @@ static void glow_view_free(glow_view *gv) {
     glow_bake_destroy(gv->bake);
     glow_context_destroy(gv->ctx);
     free(gv->lm_uv);
+    free(gv->ggx);
     memset(gv, 0, sizeof *gv);
 }
 
@@ -750,10 +840,27 @@ static glow_result glow_view_create(const glow_render_scene *sc, const char *bak
         FAIL(r, "%s: cannot create the system: %s%s%s", bake_path, glow_result_string(r), cl->first_error[0] ? ": " : "",
              cl->first_error);
     const float as = st->albedo_scale > 0.0f ? st->albedo_scale : 1.0f;
-    if (as != 1.0f)
-        for (uint32_t i = 0; i < info.material_count; ++i)
-            if ((r = glow_system_set_material(gv->sys, i, NULL, (float[3]){as, as, as})) != GLOW_OK)
-                FAIL(r, "%s: albedo scale %g: %s", bake_path, (double)as, cl->first_error);
+    for (uint32_t i = 0; i < info.material_count; ++i) {
+        /* a GGX layer's surfels reflect its diffuse layer only, whose albedo under uniform light is
+         * ρ (1 - Ē) (docs/glossy.md): PIC's surfels are Lambertian */
+        float k[3] = {as, as, as};
+        if (sc->ggx && sc->ggx[i].alpha > 0.0f)
+            for (int c = 0; c < 3; ++c) k[c] *= 1.0f - sc->ggx[i].e_mean[c];
+        if ((k[0] != 1.0f || k[1] != 1.0f || k[2] != 1.0f) && (r = glow_system_set_material(gv->sys, i, NULL, k)) != GLOW_OK)
+            FAIL(r, "%s: albedo scale %g %g %g: %s", bake_path, (double)k[0], (double)k[1], (double)k[2], cl->first_error);
+    }
+    if (sc->ggx) { /* per GGX material: its ZH lobe, the Phong lobe standing in for it, the split sum's table */
+        if (!(gv->ggx = calloc(m->material_count, sizeof *gv->ggx))) FAIL(GLOW_ERROR_OUT_OF_MEMORY, "%s: out of memory", bake_path);
+        for (uint32_t i = 0; i < m->material_count; ++i) {
+            const glow__render_ggx *g = &sc->ggx[i];
+            if (!(g->alpha > 0.0f)) continue;
+            glow_view_ggx *vg = &gv->ggx[i];
+            glow_sh_ggx_lobe_factors(g->roughness, GLOW_MAX_SH_BANDS, vg->zh);
+            const float n = glow_render_phong_exponent(g->roughness);
+            for (uint32_t l = 0; l < GLOW_MAX_SH_BANDS; ++l) vg->phong[l] = glow_sh_lobe_factor(l, n);
+            vg->ok = true;
+        }
+    }
     uint32_t left = gs->bounce_iterations ? gs->bounce_iterations : DEFAULT_BOUNCES;
     while (left > 0) {
         uint32_t it = left > 64 ? 64 : left;
@@ -796,6 +903,9 @@ glow_result glow_render_glow(const glow_render_scene *sc, const char *bake_path,
     if (g.surfel_samples > GLOW_HOST_SURFEL_SAMPLES_MAX)
         return glow__render_fail(message, message_size, GLOW_ERROR_INVALID_ARGUMENT,
                                  "glow_render: surfel_samples %u is above %u", g.surfel_samples, GLOW_HOST_SURFEL_SAMPLES_MAX);
+    if ((uint32_t)g.glossy > (uint32_t)GLOW_RENDER_GLOSSY_ZH_GGX_DOMINANT)
+        return glow__render_fail(message, message_size, GLOW_ERROR_INVALID_ARGUMENT, "glow_render: glossy lobe %u is unknown",
+                                 (unsigned)g.glossy);
     if (g.sky_rays > 65536)
         return glow__render_fail(message, message_size, GLOW_ERROR_INVALID_ARGUMENT, "glow_render: sky_rays %u is above 65536",
                                  g.sky_rays);
@@ -810,6 +920,7 @@ glow_result glow_render_glow(const glow_render_scene *sc, const char *bake_path,
         gv.indirect_only = g.indirect_only;
         gv.no_detail = g.no_detail;
         gv.grid_only = g.grid_only;
+        gv.glossy = g.glossy;
         r = render(sc, st, &gv, out, message, message_size);
         if (r == GLOW_OK) out->solve_seconds = t1 - t0;
         glow_view_free(&gv);
@@ -858,7 +969,7 @@ static void probe_range(void *ctx, uint32_t first, uint32_t end, uint32_t worker
         for (uint32_t s = 0; s < j->samples; ++s) {
             float w[3], L[3];
             float r1 = rnd(&rp), r2 = rnd(&rp);
-            if (!(sample_cosine(n, r1, r2, w) > 0.0f)) continue;
+            if (!(glow__render_sample_cosine(n, r1, r2, w) > 0.0f)) continue;
             trace_incoming(c, &rp, o, w, L, &rays);
             for (int k = 0; k < 3; ++k) acc[k] += L[k];
         }

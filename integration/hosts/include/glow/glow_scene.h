@@ -12,7 +12,10 @@
  *                   "outer_deg": 40, "inner_deg": 30 },                                  W/sr on the axis
  *                 { "type": "sun", "direction": [..], "irradiance": [r,g,b] } ],         W/m²
  *     "environment": [r,g,b],                          constant sky radiance W/(m²·sr)
- *     "emission_scale": 1 }                            multiplies material emission (Ke)
+ *     "emission_scale": 1,                             multiplies material emission (Ke)
+ *     "materials": { "floor": { "ggx": { "roughness": 0.3, "specular": [0.04,0.04,0.04] } } } }
+ *                                                      optional per-material overrides by the mesh's
+ *                                                      material name: a GGX specular layer (docs/glossy.md)
  *
  * WHAT IT DOES NOT DO: load the mesh (that is glow-bake / glow_pc_bake, which takes the resolved
  * `mesh` path as it is), or light anything (that is glow_host.h).
@@ -27,7 +30,7 @@
  *   if (!scene.has_camera) glow_scene_camera_default(info.bounds_min, info.bounds_max, &scene.camera);
  *   glow_scene_free(&scene);
  *
- * ON MEMORY: glow_scene_desc owns two heap blocks (mesh, lights), malloc'd by the loader and
+ * ON MEMORY: glow_scene_desc owns three heap blocks (mesh, lights, materials), malloc'd by the loader and
  * released by glow_scene_free. Nothing is kept after a failed load.
  *
  * ON ERRORS: the loaders return a glow_result and write one line naming the file and the problem
@@ -82,6 +85,16 @@ typedef struct glow_scene_camera {
     uint32_t width, height;       /* pixels, 1..16384; default 640 x 360 */
 } glow_scene_camera;
 
+/* A per-material override ("materials" key), matched by name against the mesh's materials by the tool
+ * that loads the mesh (glow-render); the loader does not open the mesh. Only a GGX specular layer
+ * exists: the surface is then diffuse × (1 - max(specular)) + GGX (docs/glossy.md). */
+typedef struct glow_scene_material {
+    char name[64];      /* the mesh's material name (MTL newmtl, glTF material name), 1..63 bytes */
+    bool ggx;           /* has a "ggx" object (false: the entry changes nothing) */
+    float roughness;    /* GGX perceptual roughness in (0, 1] (α = roughness², glTF); required in "ggx" */
+    float specular[3];  /* F0, Schlick's reflectance at normal incidence, each in [0, 1]; default 0.04 */
+} glow_scene_material;
+
 typedef struct glow_scene_desc {
     char *mesh;                 /* owned: "builtin:NAME" as written, else the JSON's "mesh" joined to the
                                    JSON file's folder (absolute stays absolute; relative to the cwd when
@@ -94,6 +107,8 @@ typedef struct glow_scene_desc {
     float environment[3];       /* constant sky radiance W/(m²·sr), default 0 */
     float emission_scale;       /* default 1; >= 0; pass to glow_system_set_params */
     uint32_t warning_count;     /* unknown keys that were ignored */
+    glow_scene_material *materials; /* owned, material_count entries (NULL when 0), in file order */
+    uint32_t material_count;
 } glow_scene_desc;
 
 /**
