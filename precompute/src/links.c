@@ -474,6 +474,39 @@ static float cut_priority(const link_job *job, const cl_runs *r, const float *om
     return om * (float)(tv + spread);
 }
 
+/* Audit: link v's gather if it read its node's mean radiance times 1 + γ·(p_B − c): c the node's area
+ * centroid, p_B its flux-weighted centroid (known at run time from the pull), γ = C⁻¹ (p_w − c) the
+ * area-weighted least-squares gradient of the cache's response per unit area across the node (C the
+ * leaves' position covariance, p_w the response-weighted centroid; fixed at bake time). Exact when the
+ * response per unit area is linear in position over the node. */
+static double audit_gradient(const link_job *job, const float *wt, const float *B, uint32_t v) {
+    const glow__surfels *S = job->surfels;
+    const uint32_t a = job->leaf_first[v], b = job->leaf_end[v];
+    double A = 0, W = 0, F = 0, c[3] = {0, 0, 0}, pw[3] = {0, 0, 0}, pb[3] = {0, 0, 0}, C[6] = {0, 0, 0, 0, 0, 0};
+    for (uint32_t i = a; i < b; ++i) {
+        const double ai = S->s[i].area, wi = wt[i] > 0.0f ? wt[i] : 0.0, fi = ai * B[i];
+        A += ai, W += wi, F += fi;
+        for (int k = 0; k < 3; ++k) c[k] += ai * S->s[i].pos[k], pw[k] += wi * S->s[i].pos[k], pb[k] += fi * S->s[i].pos[k];
+    }
+    if (!(A > 0.0) || !(W > 0.0) || !(F > 0.0)) return 0.0;
+    for (int k = 0; k < 3; ++k) c[k] /= A, pw[k] = pw[k] / W - c[k], pb[k] = pb[k] / F - c[k];
+    for (uint32_t i = a; i < b; ++i) {
+        const double ai = S->s[i].area / A, d[3] = {S->s[i].pos[0] - c[0], S->s[i].pos[1] - c[1], S->s[i].pos[2] - c[2]};
+        C[0] += ai * d[0] * d[0], C[1] += ai * d[0] * d[1], C[2] += ai * d[0] * d[2];
+        C[3] += ai * d[1] * d[1], C[4] += ai * d[1] * d[2], C[5] += ai * d[2] * d[2];
+    }
+    const double eps = 1e-3 * (C[0] + C[3] + C[5]) + 1e-30;
+    const double m00 = C[0] + eps, m01 = C[1], m02 = C[2], m11 = C[3] + eps, m12 = C[4], m22 = C[5] + eps;
+    const double i00 = m11 * m22 - m12 * m12, i01 = m02 * m12 - m01 * m22, i02 = m01 * m12 - m02 * m11;
+    const double i11 = m00 * m22 - m02 * m02, i12 = m01 * m02 - m00 * m12, i22 = m00 * m11 - m01 * m01;
+    const double det = m00 * i00 + m01 * i01 + m02 * i02;
+    if (!(fabs(det) > 0.0)) return W * F / A;
+    const double g[3] = {(i00 * pw[0] + i01 * pw[1] + i02 * pw[2]) / det, (i01 * pw[0] + i11 * pw[1] + i12 * pw[2]) / det,
+                         (i02 * pw[0] + i12 * pw[1] + i22 * pw[2]) / det};
+    const double sc = 1.0 + g[0] * pb[0] + g[1] * pb[1] + g[2] * pb[2];
+    return W * F / A * (sc > 0.0 ? sc : 0.0); /* a clamp at 2 or 4 above changed nothing measurable */
+}
+
 /* Node v's radiance as the runtime pulls it: its leaves' flux over its area (B: one radiance per leaf) */
 static double leaf_mean(const link_job *job, const float *B, uint32_t v) {
     const uint32_t a = job->leaf_first[v], b = job->leaf_end[v];
@@ -996,7 +1029,7 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
         const float *B = set->audit_radiance;
         const float *wt = hemi ? kappa : omega;
         double exact = 0.0, linked = 0.0, linked_vis = 0.0, fvis = 0.0, om = 0.0, linked_uvis = 0.0;
-        double linked_d1 = 0.0, linked_d2 = 0.0, linked_sub = 0.0;
+        double linked_d1 = 0.0, linked_d2 = 0.0, linked_sub = 0.0, linked_grad = 0.0;
         for (uint32_t i = 0; i < n; ++i) exact += (double)wt[i] * B[i];
         for (uint32_t j = 0; j < cut_n; ++j) {
             const uint32_t v = cut[j], a = job->leaf_first[v], b = job->leaf_end[v];
@@ -1016,6 +1049,7 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
             linked_uvis += n_vis > 0.0 ? wt[v] * sum_uvis / n_vis : 0.0;
             linked_d1 += audit_descendants(job, wt, omega, B, v, 1);
             linked_d2 += audit_descendants(job, wt, omega, B, v, 2);
+            linked_grad += audit_gradient(job, wt, B, v);
             /* what the runtime gathers: with LSUB weights, the weighted mean of the slots' means */
             const uint16_t q = set->link_subsets ? link_subsets(h, wt, v) : 0u;
             if (q) {
@@ -1044,6 +1078,7 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
         row[6] = (float)linked_d1;
         row[7] = (float)linked_d2;
         row[8] = (float)linked_sub;
+        row[9] = (float)linked_grad;
     }
     /* 4. links */
     const uint32_t bands = job->out->sh_bands;

@@ -271,7 +271,7 @@ typedef struct glow__links {
     double detail_dropped;    /* sum of |weight| left out by the detail_links cap, over all texels */
     double detail_kept;       /* sum of |weight| kept */
 } glow__links;
-enum { GLOW__AUDIT_FIELDS = 9 };
+enum { GLOW__AUDIT_FIELDS = 10 };
 
 typedef void (*glow__progress_fn)(void *user, double fraction);
 glow_result glow__links_build(const glow__scene *scene, const glow__rt *rt, const glow__surfels *surfels,

@@ -547,10 +547,11 @@ static void report_audit(const glow__caches *c, const glow__links *l, FILE *csv,
     }
     /* what a link could read instead of its node's mean (links.c): per variant the total, the relative
      * RMS error over caches and the per-cache ratio's p05 / p95 */
-    static const char *const variant[4] = {"its visible leaves' mean", "its visible children's means",
+    static const char *const variant[5] = {"its visible leaves' mean", "its visible children's means",
                                            "its visible grandchildren's means",
-                                           "its link subsets (what this bake's runtime reads)"};
-    char line[512];
+                                           "its link subsets (what this bake's runtime reads)",
+                                           "its node's mean moved by the response gradient to the flux centroid"};
+    char line[768];
     int len = snprintf(line, sizeof line, "link alternatives audit: if each link read, instead of its node's mean,");
     for (int f = 5; f < GLOW__AUDIT_FIELDS && ratio; ++f) {
         double t = 0.0, ee = 0.0, rr = 0.0;
@@ -573,13 +574,13 @@ static void report_audit(const glow__caches *c, const glow__links *l, FILE *csv,
     free(ratio);
     if (!csv) return;
     fprintf(csv, "cache,kind,x,y,z,nx,ny,nz,visible_solid_angle,visible_fraction,exact,link,link_visible_mean,"
-                 "link_visible_uniform_mean,link_children,link_grandchildren,link_subsets\n");
+                 "link_visible_uniform_mean,link_children,link_grandchildren,link_subsets,link_gradient\n");
     for (uint32_t i = 0; i < c->count; ++i) {
         const glow__cache *k = &c->caches[i];
         const float *a = l->audit + (size_t)i * GLOW__AUDIT_FIELDS;
-        fprintf(csv, "%u,%s,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g\n", i,
+        fprintf(csv, "%u,%s,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g,%g\n", i,
                 k->kind == GLOW_CACHE_KIND_LIGHTMAP ? "lightmap" : "grid", k->pos[0], k->pos[1], k->pos[2], k->nrm[0],
-                k->nrm[1], k->nrm[2], a[4], a[3], a[0], a[1], a[2], a[5], a[6], a[7], a[8]);
+                k->nrm[1], k->nrm[2], a[4], a[3], a[0], a[1], a[2], a[5], a[6], a[7], a[8], a[9]);
     }
     if (ferror(csv)) glow__warnf(log, "%s: writing the audit CSV failed", csv_path);
 }
