@@ -27,9 +27,7 @@
 #define RR_START 3u /* Russian roulette from this path vertex on (1 = the camera's hit) */
 
 /* ------------------------------------------------------------------------------------- random */
-typedef struct rng {
-    uint64_t state, inc;
-} rng;
+typedef glow__rng rng; /* render_internal.h: shared with render_ddish.c */
 
 static inline uint32_t pcg32(rng *r) {
     uint64_t old = r->state;
@@ -53,6 +51,9 @@ static void rng_init(rng *r, uint64_t seed, uint64_t pixel, uint32_t stream) {
     r->inc = (splitmix64(&x) << 1) | 1u;
     (void)pcg32(r);
 }
+
+void glow__rng_seed(glow__rng *r, uint64_t seed, uint64_t index, uint32_t stream) { rng_init(r, seed, index, stream); }
+float glow__rng_float(glow__rng *r) { return rnd(r); }
 
 /* ------------------------------------------------------------------------------------- vectors */
 static inline void v_madd(float o[3], const float a[3], float s, const float b[3]) {
@@ -89,17 +90,6 @@ typedef struct render_light {
     float cos_outer, cos_inner;
 } render_light;
 
-typedef struct glow_view {
-    glow_context *ctx;
-    glow_bake *bake;
-    glow_host *host;
-    glow_system *sys;
-    const glow_cache_outputs *out;
-    bool indirect_only; /* glow_render_glow_settings.indirect_only */
-    bool no_detail;     /* glow_render_glow_settings.no_detail */
-    bool grid_only;     /* glow_render_glow_settings.grid_only */
-    float (*lm_uv)[6]; /* [tri] the bake's lightmap UV per corner, or NULL without a lightmap */
-} glow_view;
 
 typedef struct worker_stats {
     uint64_t rays, lm, grid, missed, nonfinite;
@@ -660,10 +650,6 @@ glow_result glow_render_reference(const glow_render_scene *sc, const glow_render
 }
 
 /* ------------------------------------------------------------------------------------- glow view */
-typedef struct capture_log {
-    pthread_mutex_t lock;
-    char first_error[512];
-} capture_log;
 
 static void capture(void *user, glow_log_level level, glow_result code, const char *msg, const char *file, int line) {
     (void)code; (void)file; (void)line;
@@ -674,7 +660,7 @@ static void capture(void *user, glow_log_level level, glow_result code, const ch
     pthread_mutex_unlock(&cl->lock);
 }
 
-static void glow_view_free(glow_view *gv) {
+void glow__view_free(glow_view *gv) {
     glow_system_destroy(gv->sys);
     glow_host_destroy(gv->host);
     glow_bake_destroy(gv->bake);
@@ -683,9 +669,9 @@ static void glow_view_free(glow_view *gv) {
     memset(gv, 0, sizeof *gv);
 }
 
-static glow_result glow_view_create(const glow_render_scene *sc, const char *bake_path, const glow_render_settings *st,
-                                    const glow_render_glow_settings *gs, capture_log *cl, glow_view *gv, char *message,
-                                    size_t message_size) {
+glow_result glow__view_create(const glow_render_scene *sc, const char *bake_path, const glow_render_settings *st,
+                              const glow_render_glow_settings *gs, capture_log *cl, glow_view *gv, char *message,
+                              size_t message_size) {
     memset(gv, 0, sizeof *gv);
     glow_logger logger = {capture, cl};
     const uint32_t threads = resolve_threads(st->threads);
@@ -776,7 +762,7 @@ static glow_result glow_view_create(const glow_render_scene *sc, const char *bak
 #undef FAIL
     return GLOW_OK;
 fail:
-    glow_view_free(gv);
+    glow__view_free(gv);
     return r;
 }
 
@@ -804,7 +790,7 @@ glow_result glow_render_glow(const glow_render_scene *sc, const char *bake_path,
     pthread_mutex_init(&cl.lock, NULL);
     glow_view gv;
     double t0 = now_s();
-    r = glow_view_create(sc, bake_path, st, &g, &cl, &gv, message, message_size);
+    r = glow__view_create(sc, bake_path, st, &g, &cl, &gv, message, message_size);
     double t1 = now_s();
     if (r == GLOW_OK) {
         gv.indirect_only = g.indirect_only;
@@ -812,7 +798,7 @@ glow_result glow_render_glow(const glow_render_scene *sc, const char *bake_path,
         gv.grid_only = g.grid_only;
         r = render(sc, st, &gv, out, message, message_size);
         if (r == GLOW_OK) out->solve_seconds = t1 - t0;
-        glow_view_free(&gv);
+        glow__view_free(&gv);
     }
     pthread_mutex_destroy(&cl.lock);
     return r;
@@ -867,6 +853,37 @@ static void probe_range(void *ctx, uint32_t first, uint32_t end, uint32_t worker
     j->rays[worker % 256] += rays;
 }
 
+/* The render_ctx of probe queries (glow_render_irradiance, the DDISH tracer): lights (NULL = the
+ * scene's), settings; no camera, no images. c->lights is malloc'ed (free it). */
+static glow_result probe_ctx_init(render_ctx *c, const glow_render_scene *sc, const glow_scene_light *lights,
+                                  uint32_t light_count, const glow_render_settings *st, char *message,
+                                  size_t message_size) {
+    memset(c, 0, sizeof *c);
+    c->sc = sc;
+    c->max_depth = st->max_depth ? st->max_depth : DEFAULT_MAX_DEPTH;
+    c->threads = resolve_threads(st->threads);
+    c->seed = st->seed;
+    c->albedo_scale = st->albedo_scale > 0.0f ? st->albedo_scale : 1.0f;
+    c->emission_scale = sc->desc.emission_scale;
+    c->emitters_on = sc->emitter_count > 0 && c->emission_scale > 0.0f;
+    memcpy(c->env, sc->desc.environment, sizeof c->env);
+    if (!lights) {
+        lights = sc->desc.lights;
+        light_count = sc->desc.light_count;
+    }
+    c->lights = light_count ? calloc(light_count, sizeof *c->lights) : NULL;
+    if (light_count && !c->lights)
+        return glow__render_fail(message, message_size, GLOW_ERROR_OUT_OF_MEMORY, "%s: out of memory", sc->path);
+    for (uint32_t i = 0; i < light_count; ++i) {
+        c->lights[i].l = lights[i];
+        v_norm(c->lights[i].l.direction);
+        c->lights[i].cos_outer = cosf(c->lights[i].l.outer_deg * PI_F / 180.0f);
+        c->lights[i].cos_inner = cosf(c->lights[i].l.inner_deg * PI_F / 180.0f);
+    }
+    c->light_count = light_count;
+    return GLOW_OK;
+}
+
 glow_result glow_render_irradiance(const glow_render_scene *sc, const glow_scene_light *lights, uint32_t light_count,
                                    const glow_render_settings *st, const float *points, uint32_t count, uint32_t samples,
                                    uint32_t group, float *out_rgb, uint64_t *out_rays, char *message,
@@ -875,29 +892,8 @@ glow_result glow_render_irradiance(const glow_render_scene *sc, const glow_scene
     if (!sc || !st || (count && (!points || !out_rgb)) || (light_count && !lights) || samples == 0)
         return glow__render_fail(message, message_size, GLOW_ERROR_INVALID_ARGUMENT, "glow_render_irradiance: bad arguments");
     render_ctx c;
-    memset(&c, 0, sizeof c);
-    c.sc = sc;
-    c.max_depth = st->max_depth ? st->max_depth : DEFAULT_MAX_DEPTH;
-    c.threads = resolve_threads(st->threads);
-    c.seed = st->seed;
-    c.albedo_scale = st->albedo_scale > 0.0f ? st->albedo_scale : 1.0f;
-    c.emission_scale = sc->desc.emission_scale;
-    c.emitters_on = sc->emitter_count > 0 && c.emission_scale > 0.0f;
-    memcpy(c.env, sc->desc.environment, sizeof c.env);
-    if (!lights) {
-        lights = sc->desc.lights;
-        light_count = sc->desc.light_count;
-    }
-    c.lights = light_count ? calloc(light_count, sizeof *c.lights) : NULL;
-    if (light_count && !c.lights)
-        return glow__render_fail(message, message_size, GLOW_ERROR_OUT_OF_MEMORY, "%s: out of memory", sc->path);
-    for (uint32_t i = 0; i < light_count; ++i) {
-        c.lights[i].l = lights[i];
-        v_norm(c.lights[i].l.direction);
-        c.lights[i].cos_outer = cosf(c.lights[i].l.outer_deg * PI_F / 180.0f);
-        c.lights[i].cos_inner = cosf(c.lights[i].l.inner_deg * PI_F / 180.0f);
-    }
-    c.light_count = light_count;
+    glow_result r = probe_ctx_init(&c, sc, lights, light_count, st, message, message_size);
+    if (r != GLOW_OK) return r;
     probe_job j = {.c = &c, .points = points, .count = count, .samples = samples, .group = group, .out = out_rgb};
     glow__pool *pool = glow__pool_create(c.threads); /* NULL (no memory): glow__parallel_for runs serially */
     glow__parallel_for(pool, count, 1, probe_range, &j);
@@ -908,4 +904,61 @@ glow_result glow_render_irradiance(const glow_render_scene *sc, const glow_scene
     }
     free(c.lights);
     return GLOW_OK;
+}
+
+/* ------------------------------------------------------------------------ DDISH (render_ddish.c) */
+struct glow__tracer {
+    render_ctx c;
+};
+
+glow_result glow__tracer_create(const glow_render_scene *sc, const glow_scene_light *lights, uint32_t light_count,
+                                const glow_render_settings *st, uint32_t max_depth, glow__tracer **out, char *message,
+                                size_t message_size) {
+    *out = NULL;
+    glow__tracer *t = calloc(1, sizeof *t);
+    if (!t) return glow__render_fail(message, message_size, GLOW_ERROR_OUT_OF_MEMORY, "%s: out of memory", sc->path);
+    glow_result r = probe_ctx_init(&t->c, sc, lights, light_count, st, message, message_size);
+    if (r != GLOW_OK) {
+        free(t);
+        return r;
+    }
+    if (max_depth) t->c.max_depth = max_depth;
+    *out = t;
+    return GLOW_OK;
+}
+
+void glow__tracer_destroy(glow__tracer *t) {
+    if (!t) return;
+    free(t->c.lights);
+    free(t);
+}
+
+void glow__tracer_incoming(const glow__tracer *t, glow__rng *r, const float o[3], const float w[3], bool cull_back,
+                           float out[3], uint64_t *rays) {
+    const render_ctx *c = &t->c;
+    out[0] = out[1] = out[2] = 0.0f;
+    float tnear = 0.0f;
+    for (int passes = 0;; ++passes) {
+        ++*rays;
+        glow__hit h = glow__rt_intersect(c->sc->rt, o, w, tnear, INFINITY);
+        if (h.tri == UINT32_MAX) return;
+        if (cull_back && h.back_face) { /* culled: the ray goes on behind the face */
+            if (passes >= 64) return;
+            tnear = h.t + c->sc->eps;
+            continue;
+        }
+        const float one[3] = {1.0f, 1.0f, 1.0f};
+        continue_path(c, r, h, one, o, w, 0.0f, out, rays); /* pdf 0: no emitter NEE at the probe point */
+        return;
+    }
+}
+
+glow_result glow__view_render(const glow_render_scene *sc, const glow_render_settings *st, const glow_view *gv,
+                              glow_render_result *out, char *message, size_t message_size) {
+    if (message && message_size) message[0] = 0;
+    if (out) memset(out, 0, sizeof *out);
+    if (!out || !gv) return glow__render_fail(message, message_size, GLOW_ERROR_INVALID_ARGUMENT, "glow_render: NULL argument");
+    glow_result r = check_settings(sc, st, message, message_size);
+    if (r != GLOW_OK) return r;
+    return render(sc, st, gv, out, message, message_size);
 }
