@@ -23,6 +23,7 @@ expect 2 "1..65536" -- "$BIN/glow-render" "$S" --out "$T/x" --ddish b.glow --ddi
 expect 2 "one view at a time" -- "$BIN/glow-render" "$S" --out "$T/x" --ddish b.glow --glow b.glow
 expect 2 "goes with --ddish-move" -- "$BIN/glow-render" "$S" --out "$T/x" --ddish b.glow --ddish-move-frame 3
 expect 2 "needs --ddish-ref" -- "$BIN/glow-render" "$S" --out "$T/x" --ddish b.glow --ddish-ref-add a.exr
+expect 2 "go together" -- "$BIN/glow-render" "$S" --out "$T/x" --glow b.glow --glow-move "$S"
 expect 1 "$T/none.glow" -- "$BIN/glow-render" "$S" --out "$T/x" --ddish "$T/none.glow" -q
 expect 2 "1..65536" -- python3 "$ROOT/tools/glow-eval" ddish "$S" --out "$T/e" --bin "$BIN" --ddish-rays 0
 expect 2 "no such scene" -- python3 "$ROOT/tools/glow-eval" ddish "$S" --out "$T/e" --bin "$BIN" --move "$T/nope.json"

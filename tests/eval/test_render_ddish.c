@@ -7,6 +7,8 @@
  *   give 1 - 0.5³ = 0.875 (the blend inside the pipeline); more rays x frames make the error smaller
  *   (4x fewer in the error's square at 32x the samples, asserted as at least 2x smaller).
  * - Its direct image is the reference's, bit for bit (same camera rays and random numbers).
+ * - Glow's view after a light change (the lag's counterpart): the dimmed furnace after 1, 2 and 64
+ *   feedback iterations, against the fixed point iteration by hand.
  * - Bad input: a hysteresis of 1, a move after the last frame, a moved scene of another mesh. */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -164,6 +166,41 @@ static void test_direct_is_the_references(void **state) {
     glow_render_result_free(&dd);
 }
 
+/* Glow's view after its light changes (glow_render_glow_settings.moved): the furnace's walls emit half
+ * as much. The caches were converged at an incident radiance of 2; each feedback iteration after the
+ * change gives L = 0.5 + ρ L_previous = 0.5 + 0.5 L: 1.5 after one (indirect ρ L = 0.75), 1.25 after
+ * two (0.625), 1 when converged (0.5). */
+static void test_glow_after_a_light_change(void **state) {
+    fixture *f = *state;
+    char path[256], msg[512] = "";
+    snprintf(path, sizeof path, "%s/dim.json", f->dir);
+    assert_int_equal(write_file(path, "{\"mesh\": \"builtin:furnace\", \"emission_scale\": 0.5, \"camera\": "
+                                      "{\"position\": [0.3, 0.2, 0.5], \"target\": [-1, -0.3, -1], \"vfov_deg\": 90}}\n"),
+                     0);
+    glow_render_scene *dim = NULL;
+    assert_int_equal(glow_render_scene_load(path, &dim, msg, sizeof msg), GLOW_OK);
+    static const uint32_t its[] = {1, 2, 64};
+    static const double expected[] = {0.75, 0.625, 0.5};
+    for (int i = 0; i < 3; ++i) {
+        glow_render_settings st = {.width = 16, .height = 16, .spp = 1, .seed = 3, .threads = 2};
+        glow_render_glow_settings gs = {.indirect_only = true, .moved = dim, .moved_iterations = its[i]};
+        glow_render_result res;
+        if (glow_render_glow(f->furnace, f->bake, &st, &gs, &res, msg, sizeof msg) != GLOW_OK)
+            fail_msg("glow_render_glow: %s", msg);
+        const double m = mean_green(&res.indirect);
+        printf("furnace dimmed to half, %u iterations after: indirect %.4f (expected %.4f)\n", its[i], m, expected[i]);
+        assert_true(fabs(m / expected[i] - 1.0) < 0.02);
+        glow_render_result_free(&res);
+    }
+    glow_render_glow_settings gs = {.indirect_only = true, .moved = f->floor, .moved_iterations = 1};
+    glow_render_settings st = {.width = 8, .height = 8, .spp = 1, .threads = 1};
+    glow_render_result res;
+    assert_int_equal(glow_render_glow(f->furnace, f->bake, &st, &gs, &res, msg, sizeof msg), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_non_null(strstr(msg, "same mesh"));
+    glow_render_scene_destroy(dim);
+    remove(path);
+}
+
 static void test_bad_input(void **state) {
     fixture *f = *state;
     glow_render_settings st = {.width = 8, .height = 8, .spp = 1, .threads = 1};
@@ -194,6 +231,7 @@ int main(void) {
         cmocka_unit_test(test_blend_by_hand),
         cmocka_unit_test(test_furnace_converges),
         cmocka_unit_test(test_direct_is_the_references),
+        cmocka_unit_test(test_glow_after_a_light_change),
         cmocka_unit_test(test_bad_input),
     };
     return cmocka_run_group_tests(tests, setup, teardown);

@@ -51,6 +51,8 @@ static void usage(FILE *f) {
             "  --no-detail      Glow's view without the bake's lightmap detail (glow-bake --lightmap-detail)\n"
             "  --grid-only      Glow's view with every surface shaded from the grid, as a dynamic object\n"
             "                   there (0.1 %% of the scene's diagonal off the surface): the grid's accuracy\n"
+            "  --glow-move SCENE2.json --glow-move-iterations K  Glow's view after its light changes: converged with\n"
+            "                   SCENE's lights, then K feedback iterations (frames) with SCENE2's (same mesh)\n"
             "  --progress       progress bar on stderr even when it is not a terminal; -q: none, no summary\n"
             "DDISH-GI on the bake's caches (docs/ddish.md): --ddish BAKE instead of --glow BAKE, and\n"
             "  --ddish-rays N   rays per cache per frame (default 256, the paper's)\n"
@@ -73,6 +75,8 @@ typedef struct options {
     const char *ddish;                  /* --ddish BAKE */
     glow_render_ddish_settings ds;
     const char *move_scene, *ref, *ref_add, *ref_moved, *ref_moved_add, *csv;
+    const char *glow_move;              /* --glow-move SCENE2 */
+    int have_glow_move_it;
     int ddish_opts;                     /* a --ddish-* option was given */
     glow_render_settings rs;
     glow_render_glow_settings gs;
@@ -129,6 +133,13 @@ static int parse_args(int argc, char **argv, options *o) {
             if (!v || !*v) { fprintf(stderr, "glow-render: --ddish needs a BAKE file\n"); return 0; }
             o->ddish = v;
             ++i;
+        } else if (!strcmp(a, "--glow-move")) {
+            if (!v || !*v) { fprintf(stderr, "glow-render: --glow-move needs a SCENE2.json\n"); return 0; }
+            o->glow_move = v;
+            ++i;
+        } else if (!strcmp(a, "--glow-move-iterations")) {
+            NEED_U(1, 100000, o->gs.moved_iterations, "a number of iterations in 1..100000");
+            o->have_glow_move_it = 1;
         } else if (!strcmp(a, "--ddish-rays")) { NEED_U(1, 65536, o->ds.rays, "a number of rays in 1..65536"); o->ddish_opts = 1; }
         else if (!strcmp(a, "--ddish-frames")) { NEED_U(1, 1000000, o->ds.frames, "a number of frames in 1..1000000"); o->ddish_opts = 1; }
         else if (!strcmp(a, "--ddish-bounces")) { NEED_U(1, 1024, o->ds.bounces, "a number of bounces in 1..1024"); o->ddish_opts = 1; }
@@ -227,6 +238,10 @@ static int parse_args(int argc, char **argv, options *o) {
     if ((o->ref_add && !o->ref) || (o->ref_moved_add && !o->ref_moved) || (o->ref_moved && !o->move_scene)) {
         fprintf(stderr, "glow-render: --ddish-ref-add needs --ddish-ref, --ddish-ref-moved-add --ddish-ref-moved, "
                         "and --ddish-ref-moved --ddish-move\n");
+        return 0;
+    }
+    if ((o->glow_move || o->have_glow_move_it) && (!o->bake || !o->glow_move || !o->have_glow_move_it)) {
+        fprintf(stderr, "glow-render: --glow-move SCENE2 and --glow-move-iterations K go together, with --glow BAKE\n");
         return 0;
     }
     if (o->ds.move_frame && !o->move_scene) { fprintf(stderr, "glow-render: --ddish-move-frame goes with --ddish-move\n"); return 0; }
@@ -368,7 +383,17 @@ int main(int argc, char **argv) {
             glow_render_scene_destroy(scene);
             return 1;
         }
-    } else if (o.bake) r = glow_render_glow(scene, o.bake, &o.rs, &o.gs, &res, msg, sizeof msg);
+    } else if (o.bake) {
+        glow_render_scene *moved = NULL;
+        if (o.glow_move && glow_render_scene_load(o.glow_move, &moved, msg, sizeof msg) != GLOW_OK) {
+            fprintf(stderr, "glow-render: %s\n", msg);
+            glow_render_scene_destroy(scene);
+            return 1;
+        }
+        o.gs.moved = moved;
+        r = glow_render_glow(scene, o.bake, &o.rs, &o.gs, &res, msg, sizeof msg);
+        glow_render_scene_destroy(moved);
+    }
     else r = glow_render_reference(scene, &o.rs, &res, msg, sizeof msg);
     if (r != GLOW_OK) {
         fprintf(stderr, "glow-render: %s\n", msg);

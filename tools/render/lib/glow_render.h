@@ -111,6 +111,11 @@ typedef struct glow_render_glow_settings {
     bool grid_only;             /* shade every surface from the grid, as a dynamic object there would be
                                    (glow_sample_grid 0.1 % of the scene's diagonal off the surface along
                                    its shading normal): measures the light dynamic objects receive */
+    const struct glow_render_scene *moved; /* optional, the same mesh: after converging, the light changes to
+                                   this scene's lights, environment and emission_scale, the runtime runs
+                                   moved_iterations more feedback iterations (one per update by default: as
+                                   many frames) and the view shows `moved` (the lag after a light change) */
+    uint32_t moved_iterations;
 } glow_render_glow_settings;
 
 typedef struct glow_render_result {

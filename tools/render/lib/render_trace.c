@@ -785,18 +785,45 @@ glow_result glow_render_glow(const glow_render_scene *sc, const char *bake_path,
     if (g.sky_rays > 65536)
         return glow__render_fail(message, message_size, GLOW_ERROR_INVALID_ARGUMENT, "glow_render: sky_rays %u is above 65536",
                                  g.sky_rays);
+    const glow_render_scene *moved = g.moved;
+    if (moved && (moved->mesh.tri_count != sc->mesh.tri_count ||
+                  memcmp(moved->mesh.pos, sc->mesh.pos, (size_t)sc->mesh.tri_count * 3 * sizeof sc->mesh.pos[0]) != 0))
+        return glow__render_fail(message, message_size, GLOW_ERROR_INVALID_ARGUMENT,
+                                 "glow_render: %s and %s do not describe the same mesh (%s, %s): the light can move, the "
+                                 "geometry not", sc->path, moved->path, sc->desc.mesh, moved->desc.mesh);
+    if (g.moved_iterations > 100000)
+        return glow__render_fail(message, message_size, GLOW_ERROR_INVALID_ARGUMENT,
+                                 "glow_render: %u iterations after the move is above 100000", g.moved_iterations);
     capture_log cl;
     memset(&cl, 0, sizeof cl);
     pthread_mutex_init(&cl.lock, NULL);
     glow_view gv;
     double t0 = now_s();
     r = glow__view_create(sc, bake_path, st, &g, &cl, &gv, message, message_size);
+    if (r == GLOW_OK && moved) { /* the light changes: the moved scene's lights, sky and emission, K more iterations */
+        if ((r = glow_host_set_lights(gv.host, moved->desc.lights, moved->desc.light_count)) != GLOW_OK ||
+            (r = glow_host_set_environment(gv.host, moved->desc.environment)) != GLOW_OK)
+            r = glow__render_fail(message, message_size, r, "%s: cannot give the host its lights: %s%s%s", moved->path,
+                                  glow_result_string(r), cl.first_error[0] ? ": " : "", cl.first_error);
+        for (uint32_t left = g.moved_iterations; r == GLOW_OK && left > 0;) {
+            const uint32_t it = left > 64 ? 64 : left;
+            left -= it;
+            if ((r = glow_system_set_params(gv.sys, &(glow_system_params){.bounce_intensity = 1.0f,
+                                                                          .emission_scale = moved->desc.emission_scale,
+                                                                          .bounce_iterations = it})) != GLOW_OK ||
+                (r = glow_system_update(gv.sys, NULL)) != GLOW_OK)
+                r = glow__render_fail(message, message_size, r, "%s: update after the move: %s%s%s", moved->path,
+                                      glow_result_string(r), cl.first_error[0] ? ": " : "", cl.first_error);
+        }
+        if (r == GLOW_OK) gv.out = glow_system_outputs(gv.sys);
+        else glow__view_free(&gv);
+    }
     double t1 = now_s();
     if (r == GLOW_OK) {
         gv.indirect_only = g.indirect_only;
         gv.no_detail = g.no_detail;
         gv.grid_only = g.grid_only;
-        r = render(sc, st, &gv, out, message, message_size);
+        r = render(moved ? moved : sc, st, &gv, out, message, message_size);
         if (r == GLOW_OK) out->solve_seconds = t1 - t0;
         glow__view_free(&gv);
     }
