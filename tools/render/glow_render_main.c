@@ -58,13 +58,33 @@ static void usage(FILE *f) {
             "                   the same width, same split sum), none (no specular from the caches); docs/glossy.md\n"
             "  --grid-only      Glow's view with every surface shaded from the grid, as a dynamic object\n"
             "                   there (0.1 %% of the scene's diagonal off the surface): the grid's accuracy\n"
-            "  --progress       progress bar on stderr even when it is not a terminal; -q: none, no summary\n");
+            "  --glow-move SCENE2.json --glow-move-iterations K  Glow's view after its light changes: converged with\n"
+            "                   SCENE's lights, then K feedback iterations (frames) with SCENE2's (same mesh)\n"
+            "  --progress       progress bar on stderr even when it is not a terminal; -q: none, no summary\n"
+            "DDISH-GI on the bake's caches (docs/ddish.md): --ddish BAKE instead of --glow BAKE, and\n"
+            "  --ddish-rays N   rays per cache per frame (default 256, the paper's)\n"
+            "  --ddish-frames F frames (default 300)\n"
+            "  --ddish-hysteresis A  history weight in [0, 1) (default 0.99, the paper's)\n"
+            "  --ddish-ramp     cold start as a running mean (frame f weighs the history min(A, f/(f+1)))\n"
+            "  --ddish-bounces B path bounces from a cache (default 32, the paper's)\n"
+            "  --ddish-no-cull  probe rays stop at back faces (the paper culls them: rays pass through)\n"
+            "  --ddish-move SCENE2.json --ddish-move-frame K  from frame K on, SCENE2's lights (same mesh)\n"
+            "  --ddish-eval-every K  after every K-th frame and the last, render the view (indirect only) and\n"
+            "                   compare it with --ddish-ref IMG [--ddish-ref-add IMG] (after the move:\n"
+            "                   --ddish-ref-moved IMG [--ddish-ref-moved-add IMG]): 8x8 block error, mean ratio\n"
+            "  --ddish-csv FILE per frame: frame,moved,update_ms,rays,block_error,mean_ratio,rel_rmse\n");
 }
 
 
 
 typedef struct options {
     const char *scene, *out, *bake;
+    const char *ddish;                  /* --ddish BAKE */
+    glow_render_ddish_settings ds;
+    const char *move_scene, *ref, *ref_add, *ref_moved, *ref_moved_add, *csv;
+    const char *glow_move;              /* --glow-move SCENE2 */
+    int have_glow_move_it;
+    int ddish_opts;                     /* a --ddish-* option was given */
     glow_render_settings rs;
     glow_render_glow_settings gs;
     float exposure;
@@ -115,6 +135,41 @@ static int parse_args(int argc, char **argv, options *o) {
         } else if (!strcmp(a, "--glow")) {
             if (!v || !*v) { fprintf(stderr, "glow-render: --glow needs a BAKE file\n"); return 0; }
             o->bake = v;
+            ++i;
+        } else if (!strcmp(a, "--ddish")) {
+            if (!v || !*v) { fprintf(stderr, "glow-render: --ddish needs a BAKE file\n"); return 0; }
+            o->ddish = v;
+            ++i;
+        } else if (!strcmp(a, "--glow-move")) {
+            if (!v || !*v) { fprintf(stderr, "glow-render: --glow-move needs a SCENE2.json\n"); return 0; }
+            o->glow_move = v;
+            ++i;
+        } else if (!strcmp(a, "--glow-move-iterations")) {
+            NEED_U(1, 100000, o->gs.moved_iterations, "a number of iterations in 1..100000");
+            o->have_glow_move_it = 1;
+        } else if (!strcmp(a, "--ddish-rays")) { NEED_U(1, 65536, o->ds.rays, "a number of rays in 1..65536"); o->ddish_opts = 1; }
+        else if (!strcmp(a, "--ddish-frames")) { NEED_U(1, 1000000, o->ds.frames, "a number of frames in 1..1000000"); o->ddish_opts = 1; }
+        else if (!strcmp(a, "--ddish-bounces")) { NEED_U(1, 1024, o->ds.bounces, "a number of bounces in 1..1024"); o->ddish_opts = 1; }
+        else if (!strcmp(a, "--ddish-move-frame")) { NEED_U(1, 999999, o->ds.move_frame, "a frame in 1..999999"); o->ddish_opts = 1; }
+        else if (!strcmp(a, "--ddish-eval-every")) { NEED_U(1, 1000000, o->ds.eval_every, "a number of frames in 1..1000000"); o->ddish_opts = 1; }
+        else if (!strcmp(a, "--ddish-ramp")) { o->ds.ramp = true; o->ddish_opts = 1; }
+        else if (!strcmp(a, "--ddish-no-cull")) { o->ds.no_cull = true; o->ddish_opts = 1; }
+        else if (!strcmp(a, "--ddish-hysteresis")) {
+            if (!glow_cli_float(v, &o->ds.hysteresis) || !(o->ds.hysteresis >= 0.0f && o->ds.hysteresis < 1.0f)) {
+                fprintf(stderr, "glow-render: --ddish-hysteresis needs a number in [0, 1), not \"%s\"\n", v ? v : "nothing");
+                return 0;
+            }
+            o->ds.hysteresis_set = true;
+            o->ddish_opts = 1;
+            ++i;
+        } else if (!strcmp(a, "--ddish-move") || !strcmp(a, "--ddish-ref") || !strcmp(a, "--ddish-ref-add") ||
+                   !strcmp(a, "--ddish-ref-moved") || !strcmp(a, "--ddish-ref-moved-add") || !strcmp(a, "--ddish-csv")) {
+            if (!v || !*v) { fprintf(stderr, "glow-render: %s needs a file\n", a); return 0; }
+            const char **dst = !strcmp(a, "--ddish-move") ? &o->move_scene : !strcmp(a, "--ddish-ref") ? &o->ref
+                             : !strcmp(a, "--ddish-ref-add") ? &o->ref_add : !strcmp(a, "--ddish-ref-moved") ? &o->ref_moved
+                             : !strcmp(a, "--ddish-ref-moved-add") ? &o->ref_moved_add : &o->csv;
+            *dst = v;
+            o->ddish_opts = 1;
             ++i;
         } else if (!strcmp(a, "--spp")) NEED_U(1, 1u << 20, o->rs.spp, "a number of samples in 1..1048576");
         else if (!strcmp(a, "--seed")) {
@@ -193,17 +248,88 @@ static int parse_args(int argc, char **argv, options *o) {
     if (!o->scene) { fprintf(stderr, "glow-render: need a SCENE.json\n"); return 0; }
     if (!o->out) { fprintf(stderr, "glow-render: need --out PREFIX\n"); return 0; }
     if (have_w != have_h) { fprintf(stderr, "glow-render: give both --width and --height\n"); return 0; }
+    if (o->bake && o->ddish) { fprintf(stderr, "glow-render: --glow and --ddish: one view at a time\n"); return 0; }
+    if (o->ddish_opts && !o->ddish) { fprintf(stderr, "glow-render: the --ddish-* options go with --ddish BAKE\n"); return 0; }
+    if (o->ddish && o->rs.near_split > 0.0f) {
+        fprintf(stderr, "glow-render: --near-split splits the reference's light; it does not go with --ddish\n");
+        return 0;
+    }
+    if ((o->ref_add && !o->ref) || (o->ref_moved_add && !o->ref_moved) || (o->ref_moved && !o->move_scene)) {
+        fprintf(stderr, "glow-render: --ddish-ref-add needs --ddish-ref, --ddish-ref-moved-add --ddish-ref-moved, "
+                        "and --ddish-ref-moved --ddish-move\n");
+        return 0;
+    }
+    if ((o->glow_move || o->have_glow_move_it) && (!o->bake || !o->glow_move || !o->have_glow_move_it)) {
+        fprintf(stderr, "glow-render: --glow-move SCENE2 and --glow-move-iterations K go together, with --glow BAKE\n");
+        return 0;
+    }
+    if (o->ds.move_frame && !o->move_scene) { fprintf(stderr, "glow-render: --ddish-move-frame goes with --ddish-move\n"); return 0; }
+    if (o->ref && !o->ds.eval_every) o->ds.eval_every = 1;
     if (o->bake && o->rs.near_split > 0.0f) {
         fprintf(stderr, "glow-render: --near-split splits the reference's light; it does not go with --glow\n");
         return 0;
     }
-    if (!o->bake && (o->gs.bounce_iterations || o->gs.sky_rays || o->gs.surfel_samples || o->gs.sh_bands_luma || o->gs.sh_bands_chroma ||
-                     o->gs.link_mode || o->gs.indirect_only || o->gs.no_detail || o->gs.grid_only || have_glossy)) {
+    if (!o->bake && !o->ddish && (o->gs.bounce_iterations || o->gs.sky_rays || o->gs.surfel_samples || o->gs.sh_bands_luma ||
+                                  o->gs.sh_bands_chroma || o->gs.link_mode || o->gs.indirect_only || o->gs.no_detail ||
+                                  o->gs.grid_only || have_glossy)) {
         fprintf(stderr, "glow-render: --bounces, --sky-rays, --surfel-samples, --luma, --chroma, --link-mode, --indirect-only, "
-                        "--no-detail, --grid-only and --glossy go with --glow BAKE\n");
+                        "--no-detail, --grid-only and --glossy go with --glow BAKE (or --ddish BAKE)\n");
         return 0;
     }
     return 1;
+}
+
+/* ---- --ddish: the per-frame error against a reference image */
+typedef struct ddish_eval {
+    glow_eval_image ref, ref_moved; /* with their --*-add images added */
+    FILE *csv;
+    int quiet;
+} ddish_eval;
+
+static int load_ref(const char *path, const char *add, glow_eval_image *out, uint32_t w, uint32_t h) {
+    char msg[1024];
+    if (glow_eval_read_image(path, out, msg, sizeof msg) != GLOW_OK) {
+        fprintf(stderr, "glow-render: %s\n", msg);
+        return 0;
+    }
+    if (out->width != w || out->height != h) {
+        fprintf(stderr, "glow-render: %s is %u x %u but the view is %u x %u (pass --width %u --height %u)\n", path,
+                out->width, out->height, w, h, out->width, out->height);
+        return 0;
+    }
+    if (add) {
+        glow_eval_image a;
+        if (glow_eval_read_image(add, &a, msg, sizeof msg) != GLOW_OK) {
+            fprintf(stderr, "glow-render: %s\n", msg);
+            return 0;
+        }
+        if (a.width != w || a.height != h) {
+            fprintf(stderr, "glow-render: %s is %u x %u but the view is %u x %u\n", add, a.width, a.height, w, h);
+            glow_eval_image_free(&a);
+            return 0;
+        }
+        for (size_t i = 0; i < (size_t)w * h * 3; ++i) out->rgb[i] += a.rgb[i];
+        glow_eval_image_free(&a);
+    }
+    return 1;
+}
+
+static glow_result ddish_frame(void *user, const glow_render_ddish_frame *f) {
+    ddish_eval *e = user;
+    double be = NAN, mr = NAN, rr = NAN;
+    const glow_eval_image *ref = f->moved ? &e->ref_moved : &e->ref;
+    if (f->view && ref->rgb) {
+        be = glow_eval_block_error(&f->view->indirect, ref, NULL, 0);
+        mr = glow_eval_mean_ratio(&f->view->indirect, ref, NULL);
+        rr = glow_eval_rel_rmse(&f->view->indirect, ref, NULL);
+    }
+    if (e->csv)
+        fprintf(e->csv, "%u,%d,%.4f,%llu,%.6g,%.6g,%.6g\n", f->frame, f->moved ? 1 : 0, f->update_ms,
+                (unsigned long long)f->rays, be, mr, rr);
+    if (!e->quiet && f->view)
+        fprintf(stderr, "glow-render: ddish frame %u%s: update %.1f ms, block error %.4f, mean ratio %.4f\n", f->frame,
+                f->moved ? " (moved)" : "", f->update_ms, be, mr);
+    return GLOW_OK;
 }
 
 int main(int argc, char **argv) {
@@ -235,7 +361,59 @@ int main(int argc, char **argv) {
         o.rs.progress_user = &ps;
     }
     glow_render_result res;
-    if (o.bake) r = glow_render_glow(scene, o.bake, &o.rs, &o.gs, &res, msg, sizeof msg);
+    glow_render_ddish_stats dst;
+    memset(&dst, 0, sizeof dst);
+    if (o.ddish) {
+        glow_render_scene *moved = NULL;
+        ddish_eval ev;
+        memset(&ev, 0, sizeof ev);
+        ev.quiet = o.quiet;
+        glow_render_scene_info si;
+        glow_render_scene_get_info(scene, &si);
+        const uint32_t w = o.rs.width ? o.rs.width : si.camera.width, h = o.rs.height ? o.rs.height : si.camera.height;
+        int ok = 1;
+        if (o.move_scene && glow_render_scene_load(o.move_scene, &moved, msg, sizeof msg) != GLOW_OK) {
+            fprintf(stderr, "glow-render: %s\n", msg);
+            ok = 0;
+        }
+        if (ok && o.ref) ok = load_ref(o.ref, o.ref_add, &ev.ref, w, h);
+        if (ok && o.ref_moved) ok = load_ref(o.ref_moved, o.ref_moved_add, &ev.ref_moved, w, h);
+        if (ok && o.csv) {
+            if (!(ev.csv = fopen(o.csv, "w"))) {
+                fprintf(stderr, "glow-render: --ddish-csv %s: %s\n", o.csv, strerror(errno));
+                ok = 0;
+            } else {
+                fprintf(ev.csv, "frame,moved,update_ms,rays,block_error,mean_ratio,rel_rmse\n");
+            }
+        }
+        if (ok) {
+            o.ds.moved = moved;
+            o.ds.on_frame = ddish_frame;
+            o.ds.user = &ev;
+            r = glow_render_ddish(scene, o.ddish, &o.rs, &o.gs, &o.ds, &res, &dst, msg, sizeof msg);
+        }
+        if (ev.csv && fclose(ev.csv) != 0 && ok && r == GLOW_OK) {
+            snprintf(msg, sizeof msg, "--ddish-csv %s: %s", o.csv, strerror(errno));
+            r = GLOW_ERROR_IO;
+        }
+        glow_eval_image_free(&ev.ref);
+        glow_eval_image_free(&ev.ref_moved);
+        glow_render_scene_destroy(moved);
+        if (!ok) {
+            glow_render_scene_destroy(scene);
+            return 1;
+        }
+    } else if (o.bake) {
+        glow_render_scene *moved = NULL;
+        if (o.glow_move && glow_render_scene_load(o.glow_move, &moved, msg, sizeof msg) != GLOW_OK) {
+            fprintf(stderr, "glow-render: %s\n", msg);
+            glow_render_scene_destroy(scene);
+            return 1;
+        }
+        o.gs.moved = moved;
+        r = glow_render_glow(scene, o.bake, &o.rs, &o.gs, &res, msg, sizeof msg);
+        glow_render_scene_destroy(moved);
+    }
     else r = glow_render_reference(scene, &o.rs, &res, msg, sizeof msg);
     if (r != GLOW_OK) {
         fprintf(stderr, "glow-render: %s\n", msg);
@@ -258,8 +436,15 @@ int main(int argc, char **argv) {
         glow_render_scene_info info;
         glow_render_scene_get_info(scene, &info);
         printf("glow-render %s: %s (%u triangles, %u emissive, %u lights)%s%s\n", o.scene, info.mesh, info.triangle_count,
-               info.emissive_triangle_count, info.light_count, o.bake ? ", Glow's view of " : ", reference",
-               o.bake ? o.bake : "");
+               info.emissive_triangle_count, info.light_count, o.bake ? ", Glow's view of " : o.ddish ? ", DDISH's view of " : ", reference",
+               o.bake ? o.bake : o.ddish ? o.ddish : "");
+        if (o.ddish)
+            printf("  ddish: %u caches (%u grid, %u lightmap), %u coefficients (%u B as float), %u frames x %u rays, "
+                   "hysteresis %g%s, %u threads: update median %.2f ms (mean %.2f, min %.2f), %.2f M rays per frame\n",
+                   dst.caches, dst.grid_caches, dst.lightmap_caches, dst.coeff_count, 4u * dst.coeff_count, dst.frames,
+                   o.ds.rays ? o.ds.rays : 256u, o.ds.hysteresis_set ? (double)o.ds.hysteresis : 0.99,
+                   o.ds.ramp ? " (ramp)" : "", dst.threads, dst.median_ms, dst.mean_ms, dst.min_ms,
+                   dst.frames ? (double)dst.rays * 1e-6 / dst.frames : 0.0);
         if (o.bake)
             printf("  glow: solve %.2f s (%u bounce iterations); first hits from the lightmap %llu, grid %llu, none %llu\n",
                    res.solve_seconds, o.gs.bounce_iterations ? o.gs.bounce_iterations : 192u,

@@ -52,6 +52,7 @@
 #ifndef GLOW_RENDER_H
 #define GLOW_RENDER_H
 
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -128,6 +129,11 @@ typedef struct glow_render_glow_settings {
     bool grid_only;             /* shade every surface from the grid, as a dynamic object there would be
                                    (glow_sample_grid 0.1 % of the scene's diagonal off the surface along
                                    its shading normal): measures the light dynamic objects receive */
+    const struct glow_render_scene *moved; /* optional, the same mesh: after converging, the light changes to
+                                   this scene's lights, environment and emission_scale, the runtime runs
+                                   moved_iterations more feedback iterations (one per update by default: as
+                                   many frames) and the view shows `moved` (the lag after a light change) */
+    uint32_t moved_iterations;
 } glow_render_glow_settings;
 
 typedef struct glow_render_result {
@@ -168,6 +174,67 @@ glow_result glow_render_reference(const glow_render_scene *scene, const glow_ren
 glow_result glow_render_glow(const glow_render_scene *scene, const char *bake_path, const glow_render_settings *settings,
                              const glow_render_glow_settings *glow, glow_render_result *out, char *message,
                              size_t message_size);
+
+
+/* ---------------------------------------------------------------------------------------- DDISH
+ * DDISH-GI (Ikkala et al., "Dynamic Distributed Spherical Harmonics Global Illumination") as a
+ * comparator on Glow's own caches (docs/ddish.md): every frame, each of the bake's caches (grid points
+ * and lightmap texels, exactly the ones Glow's view reads) path traces `rays` rays of incident radiance
+ * (what Glow's caches hold: glow_render_irradiance's estimator, NEE + MIS, Russian roulette, at most
+ * `bounces` bounces), projects them to the SH of Glow's outputs (same bands, YCoCg, real orthonormal
+ * basis: c_k = Σ L(ω_i) y_k(ω_i) / (pdf N)) and blends them with the history by hysteresis
+ * c ← α c + (1 - α) c_new. Grid caches sample the sphere, lightmap caches the hemisphere above their
+ * surface (Glow's lightmap caches hold no light from below): stratified in z with a random offset and
+ * a golden-ratio azimuth with a random rotation per cache and frame (spherical Fibonacci points, an
+ * unbiased stratified estimator). The view then reads these caches exactly as Glow's view reads
+ * Glow's (glow_render_glow; the lightmap detail is Glow's own and is left out). */
+typedef struct glow_render_ddish_frame {
+    uint32_t frame;         /* 0-based */
+    bool moved;             /* traced with the moved scene's light (frame >= move_frame) */
+    double update_ms;       /* this frame's probe update: tracing, projection, hysteresis, output planes */
+    uint64_t rays;          /* Embree queries of this frame's update */
+    const glow_render_result *view; /* frames the callback asked for (eval_every): Glow's view of the DDISH
+                                       caches as they are after this frame (indirect only), else NULL */
+} glow_render_ddish_frame;
+typedef glow_result (*glow_render_ddish_frame_fn)(void *user, const glow_render_ddish_frame *frame);
+
+typedef struct glow_render_ddish_settings {
+    uint32_t rays;          /* per cache per frame; 0 = 256 (the paper's) */
+    uint32_t frames;        /* frames in all; 0 = 300 */
+    float hysteresis;       /* α in [0, 1); the paper's 0.99 when `hysteresis_set` is false */
+    bool hysteresis_set;
+    bool ramp;              /* cold start: frame f (from 0) blends with min(α, f / (f + 1)), a running mean until
+                               the history is as long as α's; off (the paper): the history starts at 0 */
+    uint32_t bounces;       /* path bounces from the cache at most; 0 = 32 (the paper's) */
+    bool no_cull;           /* the paper culls back faces in probe updates (a probe ray passes through them);
+                               true: probe rays stop at back faces, which reflect as in the reference */
+    const glow_render_scene *moved; /* optional: the same mesh lit by another scene file's lights, environment
+                                       and emission from frame move_frame on (the light moves; the lag) */
+    uint32_t move_frame;
+    uint32_t eval_every;    /* > 0: the callback gets a view after every eval_every-th frame and the last */
+    glow_render_ddish_frame_fn on_frame; /* optional, called after every frame; a non-OK return stops the run */
+    void *user;
+} glow_render_ddish_settings;
+
+typedef struct glow_render_ddish_stats {
+    uint32_t caches, grid_caches, lightmap_caches, frames, coeff_count;
+    double median_ms, mean_ms, min_ms;  /* per frame update */
+    uint64_t rays;                      /* all frames' Embree queries */
+    uint32_t threads;
+} glow_render_ddish_stats;
+
+/* Runs DDISH on bake_path's caches (the bake checked against the scene's mesh as glow_render_glow does)
+ * for ds->frames frames, then renders the view after the last frame into `out` (glow->indirect_only
+ * etc. as for glow_render_glow; glow->bounce_iterations is ignored: Glow's solver only provides the
+ * outputs' layout). `moved` must be a scene of the same mesh. stats may be NULL. */
+glow_result glow_render_ddish(const glow_render_scene *scene, const char *bake_path, const glow_render_settings *settings,
+                              const glow_render_glow_settings *glow, const glow_render_ddish_settings *ddish,
+                              glow_render_result *out, glow_render_ddish_stats *stats, char *message,
+                              size_t message_size);
+
+/* Hysteresis blend of one coefficient array (exposed for the tests): history[i] = a history[i] +
+ * (1 - a) fresh[i]. */
+void glow_render_ddish_blend(float *history, const float *fresh, size_t count, float a);
 
 void glow_render_result_free(glow_render_result *result);
 

@@ -27,9 +27,7 @@
 #define RR_START 3u /* Russian roulette from this path vertex on (1 = the camera's hit) */
 
 /* ------------------------------------------------------------------------------------- random */
-typedef struct rng {
-    uint64_t state, inc;
-} rng;
+typedef glow__rng rng; /* render_internal.h: shared with render_ddish.c */
 
 static inline uint32_t pcg32(rng *r) {
     uint64_t old = r->state;
@@ -54,6 +52,9 @@ static void rng_init(rng *r, uint64_t seed, uint64_t pixel, uint32_t stream) {
     (void)pcg32(r);
 }
 
+void glow__rng_seed(glow__rng *r, uint64_t seed, uint64_t index, uint32_t stream) { rng_init(r, seed, index, stream); }
+float glow__rng_float(glow__rng *r) { return rnd(r); }
+
 /* ------------------------------------------------------------------------------------- vectors */
 static inline void v_madd(float o[3], const float a[3], float s, const float b[3]) {
     for (int k = 0; k < 3; ++k) o[k] = a[k] + s * b[k];
@@ -70,25 +71,6 @@ typedef struct render_light {
     float cos_outer, cos_inner;
 } render_light;
 
-typedef struct glow_view_ggx { /* per material with a GGX layer */
-    bool ok;
-    float zh[GLOW_MAX_SH_BANDS];    /* glow_sh_ggx_lobe_factors */
-    float phong[GLOW_MAX_SH_BANDS]; /* glow_sh_lobe_factor of the Phong exponent standing in for it */
-} glow_view_ggx;
-
-typedef struct glow_view {
-    glow_context *ctx;
-    glow_bake *bake;
-    glow_host *host;
-    glow_system *sys;
-    const glow_cache_outputs *out;
-    bool indirect_only; /* glow_render_glow_settings.indirect_only */
-    bool no_detail;     /* glow_render_glow_settings.no_detail */
-    bool grid_only;     /* glow_render_glow_settings.grid_only */
-    glow_render_glossy glossy; /* glow_render_glow_settings.glossy */
-    glow_view_ggx *ggx; /* [material_count] with the scene's GGX layers, else NULL */
-    float (*lm_uv)[6]; /* [tri] the bake's lightmap UV per corner, or NULL without a lightmap */
-} glow_view;
 
 typedef struct worker_stats {
     uint64_t rays, lm, grid, missed, nonfinite;
@@ -749,11 +731,6 @@ float glow_render_phong_exponent(float roughness) {
     return fmaxf(1.0f, 0.25f * nb); /* about the reflection vector θ_i = 2 θ_h: cos^(nb/4) θ_i ≈ cos^nb θ_h */
 }
 
-typedef struct capture_log {
-    pthread_mutex_t lock;
-    char first_error[512];
-} capture_log;
-
 static void capture(void *user, glow_log_level level, glow_result code, const char *msg, const char *file, int line) {
     (void)code; (void)file; (void)line;
     capture_log *cl = user;
@@ -763,7 +740,7 @@ static void capture(void *user, glow_log_level level, glow_result code, const ch
     pthread_mutex_unlock(&cl->lock);
 }
 
-static void glow_view_free(glow_view *gv) {
+void glow__view_free(glow_view *gv) {
     glow_system_destroy(gv->sys);
     glow_host_destroy(gv->host);
     glow_bake_destroy(gv->bake);
@@ -773,9 +750,9 @@ static void glow_view_free(glow_view *gv) {
     memset(gv, 0, sizeof *gv);
 }
 
-static glow_result glow_view_create(const glow_render_scene *sc, const char *bake_path, const glow_render_settings *st,
-                                    const glow_render_glow_settings *gs, capture_log *cl, glow_view *gv, char *message,
-                                    size_t message_size) {
+glow_result glow__view_create(const glow_render_scene *sc, const char *bake_path, const glow_render_settings *st,
+                              const glow_render_glow_settings *gs, capture_log *cl, glow_view *gv, char *message,
+                              size_t message_size) {
     memset(gv, 0, sizeof *gv);
     glow_logger logger = {capture, cl};
     const uint32_t threads = resolve_threads(st->threads);
@@ -883,7 +860,7 @@ static glow_result glow_view_create(const glow_render_scene *sc, const char *bak
 #undef FAIL
     return GLOW_OK;
 fail:
-    glow_view_free(gv);
+    glow__view_free(gv);
     return r;
 }
 
@@ -909,21 +886,48 @@ glow_result glow_render_glow(const glow_render_scene *sc, const char *bake_path,
     if (g.sky_rays > 65536)
         return glow__render_fail(message, message_size, GLOW_ERROR_INVALID_ARGUMENT, "glow_render: sky_rays %u is above 65536",
                                  g.sky_rays);
+    const glow_render_scene *moved = g.moved;
+    if (moved && (moved->mesh.tri_count != sc->mesh.tri_count ||
+                  memcmp(moved->mesh.pos, sc->mesh.pos, (size_t)sc->mesh.tri_count * 3 * sizeof sc->mesh.pos[0]) != 0))
+        return glow__render_fail(message, message_size, GLOW_ERROR_INVALID_ARGUMENT,
+                                 "glow_render: %s and %s do not describe the same mesh (%s, %s): the light can move, the "
+                                 "geometry not", sc->path, moved->path, sc->desc.mesh, moved->desc.mesh);
+    if (g.moved_iterations > 100000)
+        return glow__render_fail(message, message_size, GLOW_ERROR_INVALID_ARGUMENT,
+                                 "glow_render: %u iterations after the move is above 100000", g.moved_iterations);
     capture_log cl;
     memset(&cl, 0, sizeof cl);
     pthread_mutex_init(&cl.lock, NULL);
     glow_view gv;
     double t0 = now_s();
-    r = glow_view_create(sc, bake_path, st, &g, &cl, &gv, message, message_size);
+    r = glow__view_create(sc, bake_path, st, &g, &cl, &gv, message, message_size);
+    if (r == GLOW_OK && moved) { /* the light changes: the moved scene's lights, sky and emission, K more iterations */
+        if ((r = glow_host_set_lights(gv.host, moved->desc.lights, moved->desc.light_count)) != GLOW_OK ||
+            (r = glow_host_set_environment(gv.host, moved->desc.environment)) != GLOW_OK)
+            r = glow__render_fail(message, message_size, r, "%s: cannot give the host its lights: %s%s%s", moved->path,
+                                  glow_result_string(r), cl.first_error[0] ? ": " : "", cl.first_error);
+        for (uint32_t left = g.moved_iterations; r == GLOW_OK && left > 0;) {
+            const uint32_t it = left > 64 ? 64 : left;
+            left -= it;
+            if ((r = glow_system_set_params(gv.sys, &(glow_system_params){.bounce_intensity = 1.0f,
+                                                                          .emission_scale = moved->desc.emission_scale,
+                                                                          .bounce_iterations = it})) != GLOW_OK ||
+                (r = glow_system_update(gv.sys, NULL)) != GLOW_OK)
+                r = glow__render_fail(message, message_size, r, "%s: update after the move: %s%s%s", moved->path,
+                                      glow_result_string(r), cl.first_error[0] ? ": " : "", cl.first_error);
+        }
+        if (r == GLOW_OK) gv.out = glow_system_outputs(gv.sys);
+        else glow__view_free(&gv);
+    }
     double t1 = now_s();
     if (r == GLOW_OK) {
         gv.indirect_only = g.indirect_only;
         gv.no_detail = g.no_detail;
         gv.grid_only = g.grid_only;
         gv.glossy = g.glossy;
-        r = render(sc, st, &gv, out, message, message_size);
+        r = render(moved ? moved : sc, st, &gv, out, message, message_size);
         if (r == GLOW_OK) out->solve_seconds = t1 - t0;
-        glow_view_free(&gv);
+        glow__view_free(&gv);
     }
     pthread_mutex_destroy(&cl.lock);
     return r;
@@ -978,6 +982,37 @@ static void probe_range(void *ctx, uint32_t first, uint32_t end, uint32_t worker
     j->rays[worker % 256] += rays;
 }
 
+/* The render_ctx of probe queries (glow_render_irradiance, the DDISH tracer): lights (NULL = the
+ * scene's), settings; no camera, no images. c->lights is malloc'ed (free it). */
+static glow_result probe_ctx_init(render_ctx *c, const glow_render_scene *sc, const glow_scene_light *lights,
+                                  uint32_t light_count, const glow_render_settings *st, char *message,
+                                  size_t message_size) {
+    memset(c, 0, sizeof *c);
+    c->sc = sc;
+    c->max_depth = st->max_depth ? st->max_depth : DEFAULT_MAX_DEPTH;
+    c->threads = resolve_threads(st->threads);
+    c->seed = st->seed;
+    c->albedo_scale = st->albedo_scale > 0.0f ? st->albedo_scale : 1.0f;
+    c->emission_scale = sc->desc.emission_scale;
+    c->emitters_on = sc->emitter_count > 0 && c->emission_scale > 0.0f;
+    memcpy(c->env, sc->desc.environment, sizeof c->env);
+    if (!lights) {
+        lights = sc->desc.lights;
+        light_count = sc->desc.light_count;
+    }
+    c->lights = light_count ? calloc(light_count, sizeof *c->lights) : NULL;
+    if (light_count && !c->lights)
+        return glow__render_fail(message, message_size, GLOW_ERROR_OUT_OF_MEMORY, "%s: out of memory", sc->path);
+    for (uint32_t i = 0; i < light_count; ++i) {
+        c->lights[i].l = lights[i];
+        v_norm(c->lights[i].l.direction);
+        c->lights[i].cos_outer = cosf(c->lights[i].l.outer_deg * PI_F / 180.0f);
+        c->lights[i].cos_inner = cosf(c->lights[i].l.inner_deg * PI_F / 180.0f);
+    }
+    c->light_count = light_count;
+    return GLOW_OK;
+}
+
 glow_result glow_render_irradiance(const glow_render_scene *sc, const glow_scene_light *lights, uint32_t light_count,
                                    const glow_render_settings *st, const float *points, uint32_t count, uint32_t samples,
                                    uint32_t group, float *out_rgb, uint64_t *out_rays, char *message,
@@ -986,29 +1021,8 @@ glow_result glow_render_irradiance(const glow_render_scene *sc, const glow_scene
     if (!sc || !st || (count && (!points || !out_rgb)) || (light_count && !lights) || samples == 0)
         return glow__render_fail(message, message_size, GLOW_ERROR_INVALID_ARGUMENT, "glow_render_irradiance: bad arguments");
     render_ctx c;
-    memset(&c, 0, sizeof c);
-    c.sc = sc;
-    c.max_depth = st->max_depth ? st->max_depth : DEFAULT_MAX_DEPTH;
-    c.threads = resolve_threads(st->threads);
-    c.seed = st->seed;
-    c.albedo_scale = st->albedo_scale > 0.0f ? st->albedo_scale : 1.0f;
-    c.emission_scale = sc->desc.emission_scale;
-    c.emitters_on = sc->emitter_count > 0 && c.emission_scale > 0.0f;
-    memcpy(c.env, sc->desc.environment, sizeof c.env);
-    if (!lights) {
-        lights = sc->desc.lights;
-        light_count = sc->desc.light_count;
-    }
-    c.lights = light_count ? calloc(light_count, sizeof *c.lights) : NULL;
-    if (light_count && !c.lights)
-        return glow__render_fail(message, message_size, GLOW_ERROR_OUT_OF_MEMORY, "%s: out of memory", sc->path);
-    for (uint32_t i = 0; i < light_count; ++i) {
-        c.lights[i].l = lights[i];
-        v_norm(c.lights[i].l.direction);
-        c.lights[i].cos_outer = cosf(c.lights[i].l.outer_deg * PI_F / 180.0f);
-        c.lights[i].cos_inner = cosf(c.lights[i].l.inner_deg * PI_F / 180.0f);
-    }
-    c.light_count = light_count;
+    glow_result r = probe_ctx_init(&c, sc, lights, light_count, st, message, message_size);
+    if (r != GLOW_OK) return r;
     probe_job j = {.c = &c, .points = points, .count = count, .samples = samples, .group = group, .out = out_rgb};
     glow__pool *pool = glow__pool_create(c.threads); /* NULL (no memory): glow__parallel_for runs serially */
     glow__parallel_for(pool, count, 1, probe_range, &j);
@@ -1019,4 +1033,61 @@ glow_result glow_render_irradiance(const glow_render_scene *sc, const glow_scene
     }
     free(c.lights);
     return GLOW_OK;
+}
+
+/* ------------------------------------------------------------------------ DDISH (render_ddish.c) */
+struct glow__tracer {
+    render_ctx c;
+};
+
+glow_result glow__tracer_create(const glow_render_scene *sc, const glow_scene_light *lights, uint32_t light_count,
+                                const glow_render_settings *st, uint32_t max_depth, glow__tracer **out, char *message,
+                                size_t message_size) {
+    *out = NULL;
+    glow__tracer *t = calloc(1, sizeof *t);
+    if (!t) return glow__render_fail(message, message_size, GLOW_ERROR_OUT_OF_MEMORY, "%s: out of memory", sc->path);
+    glow_result r = probe_ctx_init(&t->c, sc, lights, light_count, st, message, message_size);
+    if (r != GLOW_OK) {
+        free(t);
+        return r;
+    }
+    if (max_depth) t->c.max_depth = max_depth;
+    *out = t;
+    return GLOW_OK;
+}
+
+void glow__tracer_destroy(glow__tracer *t) {
+    if (!t) return;
+    free(t->c.lights);
+    free(t);
+}
+
+void glow__tracer_incoming(const glow__tracer *t, glow__rng *r, const float o[3], const float w[3], bool cull_back,
+                           float out[3], uint64_t *rays) {
+    const render_ctx *c = &t->c;
+    out[0] = out[1] = out[2] = 0.0f;
+    float tnear = 0.0f;
+    for (int passes = 0;; ++passes) {
+        ++*rays;
+        glow__hit h = glow__rt_intersect(c->sc->rt, o, w, tnear, INFINITY);
+        if (h.tri == UINT32_MAX) return;
+        if (cull_back && h.back_face) { /* culled: the ray goes on behind the face */
+            if (passes >= 64) return;
+            tnear = h.t + c->sc->eps;
+            continue;
+        }
+        const float one[3] = {1.0f, 1.0f, 1.0f};
+        continue_path(c, r, h, one, o, w, 0.0f, out, rays); /* pdf 0: no emitter NEE at the probe point */
+        return;
+    }
+}
+
+glow_result glow__view_render(const glow_render_scene *sc, const glow_render_settings *st, const glow_view *gv,
+                              glow_render_result *out, char *message, size_t message_size) {
+    if (message && message_size) message[0] = 0;
+    if (out) memset(out, 0, sizeof *out);
+    if (!out || !gv) return glow__render_fail(message, message_size, GLOW_ERROR_INVALID_ARGUMENT, "glow_render: NULL argument");
+    glow_result r = check_settings(sc, st, message, message_size);
+    if (r != GLOW_OK) return r;
+    return render(sc, st, gv, out, message, message_size);
 }
