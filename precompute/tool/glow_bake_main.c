@@ -235,7 +235,7 @@ static void print_json(cJSON *o) {
     cJSON_free(text);
 }
 
-static void print_summary(const char *scene, const char *out, const glow_pc_stats *s, bool json) {
+static void print_summary(const char *scene, const char *out, const glow_pc_stats *s, bool json, const char *lsub_mode) {
     char fc[5];
     if (json) {
         cJSON *o = cJSON_CreateObject(), *a, *x;
@@ -298,6 +298,7 @@ static void print_summary(const char *scene, const char *out, const glow_pc_stat
         x = cJSON_AddObjectToObject(o, "links");
         cJSON_AddNumberToObject(x, "per_cache", s->links_per_cache);
         cJSON_AddNumberToObject(x, "total", (double)s->links);
+        cJSON_AddStringToObject(x, "subsets", lsub_mode);
         cJSON_AddNumberToObject(x, "bands", s->bands);
         cJSON_AddNumberToObject(x, "bytes_per_link", s->bytes_per_link);
         cJSON_AddNumberToObject(o, "file_bytes", (double)s->file_size);
@@ -346,8 +347,8 @@ static void print_summary(const char *scene, const char *out, const glow_pc_stat
                                    : (double)s->lightmap_width * s->lightmap_height),
                s->small_charts,
                s->shared_texels);
-    printf("  links     %llu (%u per cache, l=%u), %.2f bytes per link\n", (unsigned long long)s->links,
-           s->links_per_cache, s->bands, s->bytes_per_link);
+    printf("  links     %llu (%u per cache, l=%u, link subsets %s), %.2f bytes per link\n", (unsigned long long)s->links,
+           s->links_per_cache, s->bands, lsub_mode, s->bytes_per_link);
     if (s->systems > 1 && s->systems > s->systems_reused)
         printf("  across    the caches of the baked systems link the light of %u neighbouring systems through %llu "
                "proxy nodes\n", s->dependencies, (unsigned long long)s->proxies);
@@ -682,7 +683,8 @@ int main(int argc, char **argv) {
 #endif
         return 1;
     }
-    if (dist.rank == 0) print_summary(scene, out, &stats, json);
+    if (dist.rank == 0)
+        print_summary(scene, out, &stats, json, s.no_link_subsets ? "off" : (s.link_gradients ? "gradient" : "on"));
 #ifdef GLOW_HAVE_MPI
     if (mpi) glow_bake_mpi_end(0);
 #endif

@@ -13,6 +13,7 @@ B=(builtin:pillar-hall --surfels 1024 --texel-density 0.5 --grid-spacing 1.5 --l
 SCENE=$ROOT/scenes/pillar-hall.json
 expect 0 "bake --link-subsets gradient" "$BIN/glow-bake" "${B[@]}" --link-subsets gradient -o "$T/g.glow"
 err_has "link gradients: "
+grep -q "link subsets gradient" "$T/out" && pass "  the summary says 'link subsets gradient'" || fail "  the summary lacks the mode: $(grep links "$T/out")"
 expect 2 "bake --link-subsets bogus" "$BIN/glow-bake" "${B[@]}" --link-subsets bogus -o "$T/x.glow"
 err_has "on, off or gradient"
 expect 0 "--info" "$BIN/glow-bake" --info "$T/g.glow"
