@@ -235,7 +235,8 @@ static void print_json(cJSON *o) {
     cJSON_free(text);
 }
 
-static void print_summary(const char *scene, const char *out, const glow_pc_stats *s, bool json, const char *lsub_mode) {
+static void print_summary(const char *scene, const char *out, const glow_pc_stats *s, bool json,
+                          const char *lsub_mode) {
     char fc[5];
     if (json) {
         cJSON *o = cJSON_CreateObject(), *a, *x;
@@ -347,8 +348,8 @@ static void print_summary(const char *scene, const char *out, const glow_pc_stat
                                    : (double)s->lightmap_width * s->lightmap_height),
                s->small_charts,
                s->shared_texels);
-    printf("  links     %llu (%u per cache, l=%u, link subsets %s), %.2f bytes per link\n", (unsigned long long)s->links,
-           s->links_per_cache, s->bands, lsub_mode, s->bytes_per_link);
+    printf("  links     %llu (%u per cache, l=%u, link subsets %s), %.2f bytes per link\n",
+           (unsigned long long)s->links, s->links_per_cache, s->bands, lsub_mode, s->bytes_per_link);
     if (s->systems > 1 && s->systems > s->systems_reused)
         printf("  across    the caches of the baked systems link the light of %u neighbouring systems through %llu "
                "proxy nodes\n", s->dependencies, (unsigned long long)s->proxies);

@@ -331,7 +331,8 @@ static void sub_ratio_range(glow_system *s, uint32_t first, uint32_t end) {
             if (!(y > 0.0f)) continue;
             const float inv = 1.0f / y;
             const float d[3] = {s->mom[n] * inv - cm[0], s->mom[N + n] * inv - cm[1], s->mom[2 * N + n] * inv - cm[2]};
-            for (int i = 0; i < 3; ++i) out[i] = signed_half(cm[3 + 3 * i] * d[0] + cm[4 + 3 * i] * d[1] + cm[5 + 3 * i] * d[2]);
+            for (int i = 0; i < 3; ++i)
+                out[i] = signed_half(cm[3 + 3 * i] * d[0] + cm[4 + 3 * i] * d[1] + cm[5 + 3 * i] * d[2]);
         }
         return;
     }
@@ -526,7 +527,8 @@ static void free_system(glow_system *s) {
                     s->direct, s->direct_spare, s->fb_w, s->rho_ind_max, s->flux, s->rad, s->inv_pi_area, s->leaf_area,
                     s->cache_sh, s->grid_sh, s->lm_sh, s->grid_map, s->lm_map, s->mat_emis_scale,
                     s->mat_albedo_scale, s->batch_status, s->batch_negative, s->out_index, s->out_cache,
-                    s->xblocks, s->slots, s->sub_ratio, s->sub_nodes, s->mom, s->grad_cm, s->grp_age, s->grp_delta, s->grp_drift_at, s->grp_centre,
+                    s->xblocks, s->slots, s->sub_ratio, s->sub_nodes, s->mom, s->grad_cm, s->grp_age, s->grp_delta,
+                    s->grp_drift_at, s->grp_centre,
                     s->grp_pack, s->grp_sel, s->grp_skip, s->rad_prev, s->uv0, s->det_out, s->rad_out, s->dep_max_node};
     for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; ++i) glow__ctx_free(ctx, bufs[i]);
     glow__ctx_free(ctx, s);
@@ -830,7 +832,8 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
         memset(s->sub_ratio, 0, (N + s->P) * 4 * sizeof(uint16_t)); /* u = 0: scale 1 */
         memset(s->mom, 0, N * 3 * sizeof(float));
         if (!gradient_moments(s)) {
-            GLOW__LOG_ERROR(ctx, GLOW_ERROR_OUT_OF_MEMORY, "glow_system_create(%s): out of memory (link gradients)", label);
+            GLOW__LOG_ERROR(ctx, GLOW_ERROR_OUT_OF_MEMORY, "glow_system_create(%s): out of memory (link gradients)",
+                            label);
             free_system(s);
             return GLOW_ERROR_OUT_OF_MEMORY;
         }
