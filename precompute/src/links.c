@@ -479,7 +479,15 @@ static float cut_priority(const link_job *job, const cl_runs *r, const float *om
  * area-weighted least-squares gradient of the cache's response per unit area across the node (C the
  * leaves' position covariance, p_w the response-weighted centroid; fixed at bake time). Exact when the
  * response per unit area is linear in position over the node. */
+static double audit_gradient_q(const link_job *job, const float *wt, const float *B, uint32_t v, bool quantised,
+                               uint16_t code);
 static double audit_gradient(const link_job *job, const float *wt, const float *B, uint32_t v) {
+    return audit_gradient_q(job, wt, B, v, false, 0);
+}
+/* The same with the link's LSUB gradient code (quantised: the runtime's 1 + (k / 15) . u, u = sigma
+ * (C + eps I)^-1 (p_B - c); code 0 reads the node's mean), or the exact gamma (!quantised) */
+static double audit_gradient_q(const link_job *job, const float *wt, const float *B, uint32_t v, bool quantised,
+                               uint16_t code) {
     const glow__surfels *S = job->surfels;
     const uint32_t a = job->leaf_first[v], b = job->leaf_end[v];
     double A = 0, W = 0, F = 0, c[3] = {0, 0, 0}, pw[3] = {0, 0, 0}, pb[3] = {0, 0, 0}, C[6] = {0, 0, 0, 0, 0, 0};
@@ -501,6 +509,16 @@ static double audit_gradient(const link_job *job, const float *wt, const float *
     const double i11 = m00 * m22 - m02 * m02, i12 = m01 * m02 - m00 * m12, i22 = m00 * m11 - m01 * m01;
     const double det = m00 * i00 + m01 * i01 + m02 * i02;
     if (!(fabs(det) > 0.0)) return W * F / A;
+    if (quantised) {
+        if (!code) return W * F / A;
+        const double sigma = sqrt(C[0] + C[3] + C[5]);
+        const double u[3] = {sigma * (i00 * pb[0] + i01 * pb[1] + i02 * pb[2]) / det,
+                             sigma * (i01 * pb[0] + i11 * pb[1] + i12 * pb[2]) / det,
+                             sigma * (i02 * pb[0] + i12 * pb[1] + i22 * pb[2]) / det};
+        double sc = 1.0;
+        for (int k = 0; k < 3; ++k) sc += ((double)((code >> (5 * k)) & 31u) - 15.0) / 15.0 * u[k];
+        return W * F / A * (sc > 0.0 ? sc : 0.0);
+    }
     const double g[3] = {(i00 * pw[0] + i01 * pw[1] + i02 * pw[2]) / det, (i01 * pw[0] + i11 * pw[1] + i12 * pw[2]) / det,
                          (i02 * pw[0] + i12 * pw[1] + i22 * pw[2]) / det};
     const double sc = 1.0 + g[0] * pb[0] + g[1] * pb[1] + g[2] * pb[2];
@@ -1112,8 +1130,10 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
             linked_d2 += audit_descendants(job, wt, omega, B, v, 2);
             linked_grad += audit_gradient(job, wt, B, v);
             /* what the runtime gathers: with LSUB weights, the weighted mean of the slots' means */
-            const uint16_t q = set->link_subsets ? link_subsets(h, wt, v) : 0u;
-            if (q) {
+            const uint16_t q = set->link_subsets && !set->link_gradients ? link_subsets(h, wt, v) : 0u;
+            if (set->link_subsets && set->link_gradients) { /* the gradient codes, as the runtime reads them */
+                linked_sub += audit_gradient_q(job, wt, B, v, true, link_gradient(job, cr, hemi, omega, kappa, v));
+            } else if (q) {
                 uint32_t slot[4];
                 link_slots(h, v, slot);
                 double num = 0.0, den = 0.0;

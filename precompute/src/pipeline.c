@@ -550,10 +550,11 @@ static void report_audit(const glow__caches *c, const glow__links *l, FILE *csv,
     }
     /* what a link could read instead of its node's mean (links.c): per variant the total, the relative
      * RMS error over caches and the per-cache ratio's p05 / p95 */
-    static const char *const variant[5] = {"its visible leaves' mean", "its visible children's means",
-                                           "its visible grandchildren's means",
-                                           "its link subsets (what this bake's runtime reads)",
-                                           "its node's mean moved by the response gradient to the flux centroid"};
+    const char *const variant[5] = {"its visible leaves' mean", "its visible children's means",
+                                    "its visible grandchildren's means",
+                                    l->gradients ? "its link gradient codes (what this bake's runtime reads)"
+                                                 : "its link subsets (what this bake's runtime reads)",
+                                    "its node's mean moved by the response gradient to the flux centroid"};
     char line[768];
     int len = snprintf(line, sizeof line, "link alternatives audit: if each link read, instead of its node's mean,");
     for (int f = 5; f < GLOW__AUDIT_FIELDS && ratio; ++f) {
