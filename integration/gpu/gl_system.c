@@ -302,6 +302,15 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
     s->logger = desc->logger;
     s->flags = desc->flags;
     snprintf(s->label, sizeof s->label, "%s", desc->label ? desc->label : "gl");
+    { /* before any GL call: what the bake needs that this backend lacks */
+        glow_solver_tables tt;
+        if (glow_system_get_solver_tables(desc->system, &tt) == GLOW_OK && (tt.link_kind & GLOW_LINK_KIND_GRADIENT)) {
+            LOG_ERR(s, GLOW_ERROR_UNSUPPORTED,
+                    "the bake has link gradients: link gradients are CPU-only; bake with --link-subsets on");
+            free_system(s);
+            return GLOW_ERROR_UNSUPPORTED;
+        }
+    }
     char missing[256];
     if (!glow_glfns_load(&s->gl, desc->get_proc_address, missing, sizeof missing)) {
         LOG_ERR(s, GLOW_ERROR_UNSUPPORTED, "the GL context lacks GL 4.5 entry points: %s", missing);

@@ -479,7 +479,15 @@ static float cut_priority(const link_job *job, const cl_runs *r, const float *om
  * area-weighted least-squares gradient of the cache's response per unit area across the node (C the
  * leaves' position covariance, p_w the response-weighted centroid; fixed at bake time). Exact when the
  * response per unit area is linear in position over the node. */
+static double audit_gradient_q(const link_job *job, const float *wt, const float *B, uint32_t v, bool quantised,
+                               uint16_t code);
 static double audit_gradient(const link_job *job, const float *wt, const float *B, uint32_t v) {
+    return audit_gradient_q(job, wt, B, v, false, 0);
+}
+/* The same with the link's LSUB gradient code (quantised: the runtime's 1 + (k / 15) . u, u = sigma
+ * (C + eps I)^-1 (p_B - c); code 0 reads the node's mean), or the exact gamma (!quantised) */
+static double audit_gradient_q(const link_job *job, const float *wt, const float *B, uint32_t v, bool quantised,
+                               uint16_t code) {
     const glow__surfels *S = job->surfels;
     const uint32_t a = job->leaf_first[v], b = job->leaf_end[v];
     double A = 0, W = 0, F = 0, c[3] = {0, 0, 0}, pw[3] = {0, 0, 0}, pb[3] = {0, 0, 0}, C[6] = {0, 0, 0, 0, 0, 0};
@@ -501,6 +509,16 @@ static double audit_gradient(const link_job *job, const float *wt, const float *
     const double i11 = m00 * m22 - m02 * m02, i12 = m01 * m02 - m00 * m12, i22 = m00 * m11 - m01 * m01;
     const double det = m00 * i00 + m01 * i01 + m02 * i02;
     if (!(fabs(det) > 0.0)) return W * F / A;
+    if (quantised) {
+        if (!code) return W * F / A;
+        const double sigma = sqrt(C[0] + C[3] + C[5]);
+        const double u[3] = {sigma * (i00 * pb[0] + i01 * pb[1] + i02 * pb[2]) / det,
+                             sigma * (i01 * pb[0] + i11 * pb[1] + i12 * pb[2]) / det,
+                             sigma * (i02 * pb[0] + i12 * pb[1] + i22 * pb[2]) / det};
+        double sc = 1.0;
+        for (int k = 0; k < 3; ++k) sc += ((double)((code >> (5 * k)) & 31u) - 15.0) / 15.0 * u[k];
+        return W * F / A * (sc > 0.0 ? sc : 0.0);
+    }
     const double g[3] = {(i00 * pw[0] + i01 * pw[1] + i02 * pw[2]) / det, (i01 * pw[0] + i11 * pw[1] + i12 * pw[2]) / det,
                          (i02 * pw[0] + i12 * pw[1] + i22 * pw[2]) / det};
     const double sc = 1.0 + g[0] * pb[0] + g[1] * pb[1] + g[2] * pb[2];
@@ -598,6 +616,67 @@ static uint16_t link_subsets_of(const link_job *job, cl_runs *r, bool hemi, floa
     link_slots(job->h, v, slot);
     for (int i = 0; i < 4; ++i) node_vals(job, r, slot[i], omega, dirsum, kappa);
     return link_subsets(job->h, hemi ? kappa : omega, v);
+}
+
+/* Link gradients (GLOW_LINK_KIND_GRADIENT, bake_format.h): the LSUB code of link v, the offset of the
+ * cache's response-weighted centroid p_w from the node's area centroid c in units of the node's
+ * radius sigma = sqrt(trace C) (C the leaves' area-weighted position covariance), each component
+ * clamped to [-1, 1] and quantised to k in [-15, 15]. The runtime reads the node's radiance times
+ * 1 + (k / 15) . u, u = sigma C^-1 (p_B - c) from the node's flux centroid p_B: audit_gradient's
+ * 1 + gamma . (p_B - c) with gamma = C^-1 (p_w - c). 0 (the node's mean) for a leaf, a node seen by
+ * none of its leaves, a neighbour's node (a proxy at run time) or an offset that rounds to 0.
+ * The response per leaf is the cache's (kappa for lightmap caches, omega for grid caches): with
+ * active runs (clustered visibility) each run's spread over its leaves by area, as node_vals does. */
+static uint16_t link_gradient(const link_job *job, const cl_runs *r, bool hemi, const float *omega, const float *kappa,
+                              uint32_t v) {
+    if (job->settings->own_leaves && job->leaf_first[v] >= job->settings->own_leaves) return 0;
+    const uint32_t a = job->leaf_first[v], b = job->leaf_end[v];
+    if (b - a < 2) return 0;
+    const glow__surfels *S = job->surfels;
+    const double *LA = job->leaf_area;
+    const float *rw = r->active ? (hemi ? r->k : r->w) : NULL;
+    const float *resp = hemi ? kappa : omega;
+    double A = 0.0, W = 0.0, c[3] = {0, 0, 0}, pw[3] = {0, 0, 0};
+    uint32_t j = r->active ? runs_end_after(r, a) : 0;
+    for (uint32_t i = a; i < b; ++i) {
+        const double ai = LA[i + 1] - LA[i];
+        double wi;
+        if (rw) {
+            while (j < r->count && r->b[j] <= i) ++j;
+            wi = (j < r->count && r->a[j] <= i) ? rw[j] * ai / (LA[r->b[j]] - LA[r->a[j]]) : 0.0;
+        } else {
+            wi = resp[i];
+        }
+        if (!(wi > 0.0)) wi = 0.0;
+        A += ai, W += wi;
+        for (int k = 0; k < 3; ++k) c[k] += ai * S->s[i].pos[k], pw[k] += wi * S->s[i].pos[k];
+    }
+    if (!(A > 0.0) || !(W > 0.0)) return 0;
+    for (int k = 0; k < 3; ++k) c[k] /= A, pw[k] = pw[k] / W - c[k];
+    double tr = 0.0;
+    for (uint32_t i = a; i < b; ++i) {
+        const double ai = (LA[i + 1] - LA[i]) / A;
+        for (int k = 0; k < 3; ++k) tr += ai * (S->s[i].pos[k] - c[k]) * (S->s[i].pos[k] - c[k]);
+    }
+    if (!(tr > 0.0)) return 0;
+    const double sigma = sqrt(tr);
+    uint16_t code = 0x8000u;
+    bool any = false;
+    for (int k = 0; k < 3; ++k) {
+        double e = pw[k] / sigma;
+        e = e < -1.0 ? -1.0 : (e > 1.0 ? 1.0 : e);
+        const long q = lrint(15.0 * e);
+        any |= q != 0;
+        code |= (uint16_t)((uint32_t)(q + 15) << (5 * k));
+    }
+    return any ? code : 0u;
+}
+
+/* A link's LSUB entry: its gradient code or its slot weights, whichever the bake stores */
+static uint16_t link_lsub(const link_job *job, cl_runs *r, bool hemi, float *omega, float *dirsum, float *kappa,
+                          uint32_t v) {
+    if (job->settings->link_gradients) return link_gradient(job, r, hemi, omega, kappa, v);
+    return link_subsets_of(job, r, hemi, omega, dirsum, kappa, v);
 }
 
 /* A leaf's solid angle seen from the cache before visibility (0: back-facing, below a lightmap
@@ -1011,7 +1090,7 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
     if (set->link_subsets && cut_n > 1) {
         uint32_t tmp[4096], nt = 0, k = 0;
         for (uint32_t j = 0; j < cut_n && nt < 4096; ++j) {
-            if (link_subsets_of(job, cr, hemi, omega, dirsum, kappa, cut[j])) tmp[nt++] = cut[j];
+            if (link_lsub(job, cr, hemi, omega, dirsum, kappa, cut[j])) tmp[nt++] = cut[j];
             else cut[k++] = cut[j];
         }
         memcpy(cut + k, tmp, nt * sizeof *cut);
@@ -1051,8 +1130,10 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
             linked_d2 += audit_descendants(job, wt, omega, B, v, 2);
             linked_grad += audit_gradient(job, wt, B, v);
             /* what the runtime gathers: with LSUB weights, the weighted mean of the slots' means */
-            const uint16_t q = set->link_subsets ? link_subsets(h, wt, v) : 0u;
-            if (q) {
+            const uint16_t q = set->link_subsets && !set->link_gradients ? link_subsets(h, wt, v) : 0u;
+            if (set->link_subsets && set->link_gradients) { /* the gradient codes, as the runtime reads them */
+                linked_sub += audit_gradient_q(job, wt, B, v, true, link_gradient(job, cr, hemi, omega, kappa, v));
+            } else if (q) {
                 uint32_t slot[4];
                 link_slots(h, v, slot);
                 double num = 0.0, den = 0.0;
@@ -1113,7 +1194,7 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
         /* Lightmap caches: the cone's size is fitted so its diffuse response at the cache normal
          * equals the cluster's (cone_fit.c); grid caches keep the solid angle. */
         if (hemi && !set->no_cone_fit) lk->one_minus_cos = glow__cone_fit_omc(fit_bands, lk->one_minus_cos, glow__dot(lk->dir, cache->nrm), kappa[v]);
-        if (set->link_subsets) lk->subsets = link_subsets_of(job, cr, hemi, omega, dirsum, kappa, v);
+        if (set->link_subsets) lk->subsets = link_lsub(job, cr, hemi, omega, dirsum, kappa, v);
         if (shout) {
             /* PIC Eq. 2 over this node's visible leaves: Σ ω_i y(dir_i), in units of the runtime
              * projection (multiplied by factor; factor_scale applied at runtime). */
@@ -1611,6 +1692,7 @@ glow_result glow__links_build(const glow__scene *scene, const glow__rt *rt, cons
     out->cache_count = caches->count;
     out->per_cache = nl;
     out->sh_bands = settings->sh_bands;
+    out->gradients = settings->link_subsets && settings->link_gradients;
     out->links = calloc((size_t)caches->count * nl + 1, sizeof *out->links);
     if (settings->audit_radiance) out->audit = calloc((size_t)caches->count * GLOW__AUDIT_FIELDS + 1, sizeof(float));
     if (settings->full_sh)

@@ -223,6 +223,8 @@ typedef struct glow__link_settings {
     const float *audit_radiance; /* optional [surfel count]: a radiance per surfel (any lighting); the
                                     links then also fill glow__links.audit (links.c, "Audit") */
     bool link_subsets;         /* fill glow__link.subsets (LSUB, bake_format.h) */
+    bool link_gradients;       /* with link_subsets: LSUB holds link gradient codes instead of slot
+                                  weights (GLOW_LINK_KIND_GRADIENT, links.c link_gradient) */
     float cluster_tau;         /* > 0: clustered visibility (links.c cluster_nodes): nodes smaller than
                                   this many radians seen from the cache share cluster_samples rays */
     uint32_t cluster_samples;
@@ -245,7 +247,8 @@ typedef struct glow__link {
     float factor;             /* surfel_area / node area (times factor_scale at runtime) */
     float one_minus_cos;      /* 1 - cos(alpha) of the equal-visible-solid-angle cone */
     float dir[3];             /* mean visible direction, unit */
-    uint16_t subsets;         /* LSUB weights of the node's four slots (bake_format.h), 0 = none */
+    uint16_t subsets;         /* LSUB weights of the node's four slots (bake_format.h), or with
+                                 link_gradients its gradient code; 0 = none */
 } glow__link;
 
 typedef struct glow__links {
@@ -253,6 +256,7 @@ typedef struct glow__links {
     glow__link *links;
     float *sh;                /* full-SH: [cache_count * per_cache * bands²] or NULL */
     uint32_t sh_bands;
+    bool gradients;           /* links' subsets are gradient codes (settings link_gradients) */
     double visible_solid_angle_total;  /* sum over caches of visible solid angle (diagnostic) */
     uint64_t visibility_rays;          /* leaf and cluster visibility rays cast, all caches (diagnostic) */
     /* with audit_radiance: per cache [GLOW__AUDIT_FIELDS] = the exact gather through the visible leaves,

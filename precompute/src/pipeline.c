@@ -236,7 +236,10 @@ static glow_result serialise(const glow_pc_settings *set, const glow__scene *sc,
         n_used += lk->links[i].factor != 0.0f;
     }
     const bool any_sub = n_sub > 0;
-    if (any_sub)
+    if (any_sub && lk->gradients)
+        glow__infof(log, "link gradients: %zu of %zu links (%.1f %%) read their node's light where the cache sees it "
+                    "(CPU runtime only)", n_sub, n_used, n_used ? 100.0 * (double)n_sub / (double)n_used : 0.0);
+    else if (any_sub)
         glow__infof(log, "link subsets: %zu of %zu links (%.1f %%) read the part of their node the cache sees", n_sub,
                     n_used, n_used ? 100.0 * (double)n_sub / (double)n_used : 0.0);
     uint16_t *lsub = any_sub ? calloc((size_t)ca->count * blocks * GLOW_LINK_BLOCK + 1, sizeof *lsub) : NULL;
@@ -260,7 +263,7 @@ static glow_result serialise(const glow_pc_settings *set, const glow__scene *sc,
     m->link_blocks_per_cache = blocks;
     m->sh_bands = set->bands;
     m->link_kind = GLOW_LINK_KIND_RUNTIME_PROJECTION | (lk->sh ? GLOW_LINK_KIND_FULL_SH : 0u) |
-                   (lsub ? GLOW_LINK_KIND_SUBSETS : 0u);
+                   (lsub ? (lk->gradients ? GLOW_LINK_KIND_GRADIENT : GLOW_LINK_KIND_SUBSETS) : 0u);
     m->material_count = sc->material_count;
     m->triangle_count = sc->tri_count;
     memcpy(m->bounds_min, sc->bounds_min, sizeof m->bounds_min);
@@ -547,10 +550,11 @@ static void report_audit(const glow__caches *c, const glow__links *l, FILE *csv,
     }
     /* what a link could read instead of its node's mean (links.c): per variant the total, the relative
      * RMS error over caches and the per-cache ratio's p05 / p95 */
-    static const char *const variant[5] = {"its visible leaves' mean", "its visible children's means",
-                                           "its visible grandchildren's means",
-                                           "its link subsets (what this bake's runtime reads)",
-                                           "its node's mean moved by the response gradient to the flux centroid"};
+    const char *const variant[5] = {"its visible leaves' mean", "its visible children's means",
+                                    "its visible grandchildren's means",
+                                    l->gradients ? "its link gradient codes (what this bake's runtime reads)"
+                                                 : "its link subsets (what this bake's runtime reads)",
+                                    "its node's mean moved by the response gradient to the flux centroid"};
     char line[768];
     int len = snprintf(line, sizeof line, "link alternatives audit: if each link read, instead of its node's mean,");
     for (int f = 5; f < GLOW__AUDIT_FIELDS && ratio; ++f) {
@@ -729,6 +733,7 @@ static glow_result bake_system(const glow_pc_settings *setp, uint32_t grid_targe
                                  .rays_per_surfel = set.rays_per_surfel, .seed = set.seed,
                                  .no_normalize = set.no_link_normalize, .cut_error = !set.cut_solid_angle,
                                  .audit_radiance = audit_radiance, .link_subsets = !set.no_link_subsets,
+                                 .link_gradients = set.link_gradients,
                                  .cluster_tau = set.link_visibility == GLOW_PC_LINK_VISIBILITY_CLUSTERED ? set.link_cluster_angle : 0.0f,
                                  .cluster_samples = set.link_cluster_rays,
                                  .detail_radius = set.detail_radius, .detail_links = set.detail_links,
@@ -1207,7 +1212,8 @@ static uint64_t world_key(const glow_pc_settings *s, const glow__scene *w) {
                           (uint32_t)s->quality, s->surfels, s->links, s->bands, s->seed, s->sh_links,
                           s->relax_iterations, s->rays_per_surfel, s->no_link_normalize, s->cut_solid_angle,
                           s->lightmap_caches, s->no_link_subsets, (uint32_t)s->link_visibility, s->link_cluster_rays,
-                          s->lightmap_detail, s->detail_links, w->material_count, w->texture_count, s->grid_refine};
+                          s->lightmap_detail, s->detail_links, w->material_count, w->texture_count, s->grid_refine,
+                          s->link_gradients};
     const float f[] = {s->grid_spacing, s->texel_density, s->link_cluster_angle, s->detail_radius, s->surfel_adapt,
                        s->system_area, s->system_reach > 0.0f ? s->system_reach : SYS_REACH_DEFAULT, s->texel_adapt};
     h = fnv64(h, v, sizeof v);

@@ -63,9 +63,11 @@ static const char *usage_text =
     "                         whose link can err most (partly visible nodes, uneven visibility) and links\n"
     "                         a node's visible subtree (see --audit-radiance); solid-angle splits the\n"
     "                         largest visible solid angle first (PIC 4.5)\n"
-    "  --link-subsets on|off  on (default): a partly visible link reads the light of the part of its\n"
-    "                         node the cache sees (four weights per link, 2 bytes, LSUB); off: the\n"
-    "                         node's mean, as PIC\n"
+    "  --link-subsets on|off|gradient  on (default): a partly visible link reads the light of the part\n"
+    "                         of its node the cache sees (four weights per link, 2 bytes, LSUB); off:\n"
+    "                         the node's mean, as PIC; gradient: the node's mean scaled by where in the\n"
+    "                         node the light is against where the cache's response is (2 bytes per\n"
+    "                         link; CPU runtime only, the GL backend refuses such a bake)\n"
     "  --link-visibility clustered|exact  clustered (default): clusters beyond the near field that look\n"
     "                         small from a cache share a few rays (the rays per cache barely grow with\n"
     "                         the surfels); exact: one ray per (cache, surfel)\n"
@@ -216,6 +218,12 @@ static void fourcc_str(uint32_t f, char out[5]) {
 
 /* --json output through cJSON (Debian's libcjson, which the scene loader links too): pretty-printed,
  * strings escaped. Out of memory leaves a short document; it is reported, not printed. */
+/* --info: what the bake's LSUB holds (glow-bake --link-subsets) */
+static const char *link_lsub_mode(uint32_t link_kind) {
+    if (link_kind & GLOW_LINK_KIND_GRADIENT) return "gradient";
+    return (link_kind & GLOW_LINK_KIND_SUBSETS) ? "on" : "off";
+}
+
 static void print_json(cJSON *o) {
     char *text = o ? cJSON_Print(o) : NULL;
     cJSON_Delete(o);
@@ -227,7 +235,8 @@ static void print_json(cJSON *o) {
     cJSON_free(text);
 }
 
-static void print_summary(const char *scene, const char *out, const glow_pc_stats *s, bool json) {
+static void print_summary(const char *scene, const char *out, const glow_pc_stats *s, bool json,
+                          const char *lsub_mode) {
     char fc[5];
     if (json) {
         cJSON *o = cJSON_CreateObject(), *a, *x;
@@ -290,6 +299,7 @@ static void print_summary(const char *scene, const char *out, const glow_pc_stat
         x = cJSON_AddObjectToObject(o, "links");
         cJSON_AddNumberToObject(x, "per_cache", s->links_per_cache);
         cJSON_AddNumberToObject(x, "total", (double)s->links);
+        cJSON_AddStringToObject(x, "subsets", lsub_mode);
         cJSON_AddNumberToObject(x, "bands", s->bands);
         cJSON_AddNumberToObject(x, "bytes_per_link", s->bytes_per_link);
         cJSON_AddNumberToObject(o, "file_bytes", (double)s->file_size);
@@ -338,8 +348,8 @@ static void print_summary(const char *scene, const char *out, const glow_pc_stat
                                    : (double)s->lightmap_width * s->lightmap_height),
                s->small_charts,
                s->shared_texels);
-    printf("  links     %llu (%u per cache, l=%u), %.2f bytes per link\n", (unsigned long long)s->links,
-           s->links_per_cache, s->bands, s->bytes_per_link);
+    printf("  links     %llu (%u per cache, l=%u, link subsets %s), %.2f bytes per link\n",
+           (unsigned long long)s->links, s->links_per_cache, s->bands, lsub_mode, s->bytes_per_link);
     if (s->systems > 1 && s->systems > s->systems_reused)
         printf("  across    the caches of the baked systems link the light of %u neighbouring systems through %llu "
                "proxy nodes\n", s->dependencies, (unsigned long long)s->proxies);
@@ -415,6 +425,7 @@ static int run_info(const char *path, bool json) {
         cJSON_AddNumberToObject(x, "total", links);
         cJSON_AddNumberToObject(x, "bands", in.sh_bands);
         cJSON_AddBoolToObject(x, "full_sh", (in.link_kind & GLOW_LINK_KIND_FULL_SH) != 0);
+        cJSON_AddStringToObject(x, "subsets", link_lsub_mode(in.link_kind));
         cJSON_AddNumberToObject(o, "materials", in.material_count);
         cJSON_AddNumberToObject(o, "triangles", in.triangle_count);
         a = cJSON_AddArrayToObject(o, "bounds");
@@ -441,8 +452,8 @@ static int run_info(const char *path, bool json) {
                in.cache_count, in.grid_cache_count, in.grid_dims[0], in.grid_dims[1], in.grid_dims[2],
                (double)in.grid_spacing, in.lightmap_cache_count, in.lightmap_width, in.lightmap_height,
                (double)in.texel_density);
-        printf("  links     %.0f (%u per cache, l=%u%s)\n", links, in.links_per_cache, in.sh_bands,
-               (in.link_kind & GLOW_LINK_KIND_FULL_SH) ? ", with full-SH links" : "");
+        printf("  links     %.0f (%u per cache, l=%u%s, link subsets %s)\n", links, in.links_per_cache, in.sh_bands,
+               (in.link_kind & GLOW_LINK_KIND_FULL_SH) ? ", with full-SH links" : "", link_lsub_mode(in.link_kind));
         if (in.system_key)
             printf("  system    key %016llx, %u dependencies, %u proxy nodes (its links to their nodes)\n",
                    (unsigned long long)in.system_key, in.dependency_count, in.proxy_count);
@@ -536,9 +547,10 @@ int main(int argc, char **argv) {
             s.audit_csv = v;
         } else if (!strcmp(a, "--link-subsets")) {
             NEED_VALUE();
-            if (!strcmp(v, "off")) s.no_link_subsets = true;
-            else if (!strcmp(v, "on")) s.no_link_subsets = false;
-            else return usage_error("--link-subsets '%s': expected on or off", v);
+            if (!strcmp(v, "off")) s.no_link_subsets = true, s.link_gradients = false;
+            else if (!strcmp(v, "on")) s.no_link_subsets = false, s.link_gradients = false;
+            else if (!strcmp(v, "gradient")) s.no_link_subsets = false, s.link_gradients = true;
+            else return usage_error("--link-subsets '%s': expected on, off or gradient", v);
         } else if (!strcmp(a, "--link-visibility")) {
             NEED_VALUE();
             if (!strcmp(v, "clustered")) s.link_visibility = GLOW_PC_LINK_VISIBILITY_CLUSTERED;
@@ -672,7 +684,8 @@ int main(int argc, char **argv) {
 #endif
         return 1;
     }
-    if (dist.rank == 0) print_summary(scene, out, &stats, json);
+    if (dist.rank == 0)
+        print_summary(scene, out, &stats, json, s.no_link_subsets ? "off" : (s.link_gradients ? "gradient" : "on"));
 #ifdef GLOW_HAVE_MPI
     if (mpi) glow_bake_mpi_end(0);
 #endif

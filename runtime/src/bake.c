@@ -283,7 +283,9 @@ static glow_result check_meta(const vstate *v, const glow_bake_meta *m, section_
         FAIL(GLOW_ERROR_CORRUPT_DATA, "missing section 'SHLK' (link_kind 0x%x has full-SH links)", m->link_kind);
     if (!full_sh && sec[S_SHLK].present)
         FAIL(GLOW_ERROR_CORRUPT_DATA, "section 'SHLK' present but link_kind 0x%x has no full-SH links", m->link_kind);
-    const int subsets = (m->link_kind & GLOW_LINK_KIND_SUBSETS) != 0;
+    if ((m->link_kind & GLOW_LINK_KIND_SUBSETS) && (m->link_kind & GLOW_LINK_KIND_GRADIENT))
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "link_kind 0x%x has both link subsets and link gradients", m->link_kind);
+    const int subsets = (m->link_kind & (GLOW_LINK_KIND_SUBSETS | GLOW_LINK_KIND_GRADIENT)) != 0;
     if (subsets != sec[S_LSUB].present)
         FAIL(GLOW_ERROR_CORRUPT_DATA, subsets ? "missing section 'LSUB' (link_kind 0x%x has link subsets)"
                                               : "section 'LSUB' present but link_kind 0x%x has no link subsets",

@@ -31,6 +31,9 @@ typedef struct glow__cl_args {
                                 ratio of the node's four slots */
     const uint32_t *sub_ratio; /* with subsets: [node] four IEEE halves Y[slot_i] / Y[node] (slot 0 in
                                   the low half of the first uint32), read as uint32 pairs */
+    bool link_gradient; /* with subsets: they are link gradient codes (GLOW_LINK_KIND_GRADIENT) and
+                           sub_ratio holds per node u_x u_y u_z 0 as signed IEEE halves: each link reads
+                           its node's radiance times max(0, 1 + (k / 15) . u) (cache_kernel.inc) */
     float xscale;       /* expanded links only: every cache coefficient times this (SHLK: the bake's
                            factor_scale, with rad_* the node flux); 0 = 1 */
 } glow__cl_args;

@@ -68,6 +68,11 @@ struct glow_system {
     uint16_t *sub_ratio;         /* with subsets: [N][4] Y[slot] / Y[node] as IEEE halves, each update,
                                     for the sub_nodes only (the others stay 1: no weighted link reads them) */
     uint32_t *sub_nodes, sub_count; /* the internal nodes some link reads with LSUB weights, ascending */
+    bool gradient;               /* LSUB holds link gradient codes (GLOW_LINK_KIND_GRADIENT): sub_ratio then
+                                    holds u_x u_y u_z 0 (signed halves) of each sub_node, 0 elsewhere */
+    float *mom;                  /* with gradient: [3][N] luma-flux moments sum Yflux_i p_i, planar, pulled */
+    float *grad_cm;              /* with gradient: [sub_count][12] the node's area centroid c (3) and
+                                    M = sigma (C + 1e-3 trace(C) I)^-1 (9, row-major), from the surfels */
     uint64_t memory_bytes;
     /* surfels */
     float *pos4, *nrm4;
@@ -199,6 +204,8 @@ static void task_flux(void *data, uint32_t k, uint32_t worker) {
     const float *restrict inv_pi_area = s->inv_pi_area, *restrict leaf_area = s->leaf_area;
     float *restrict fy_out = s->flux, *restrict fco_out = s->flux + N, *restrict fcg_out = s->flux + 2 * N;
     float *restrict rad = s->rad;
+    float *restrict mom = s->mom;
+    const float *restrict pos4 = s->pos4;
     const bool fb = bounce > 0.0f;
     for (uint32_t i = first; i < end; ++i) {
         const uint32_t m = mat[i];
@@ -232,6 +239,12 @@ static void task_flux(void *data, uint32_t k, uint32_t worker) {
         fy_out[i] = fy;
         fco_out[i] = fco;
         fcg_out[i] = fcg;
+        if (mom) { /* link gradients: the leaf's luma flux moment Yflux p */
+            const float *p = pos4 + 4 * (size_t)i;
+            mom[i] = fy * p[0];
+            mom[N + i] = fy * p[1];
+            mom[2 * N + i] = fy * p[2];
+        }
         float *r = rad + 4 * (size_t)i;
         r[0] = fy * ipa;
         r[1] = fco * ipa;
@@ -250,12 +263,46 @@ static inline uint16_t ratio_half(float x) {
     return (uint16_t)(((b + 0x1000u) >> 13) - (112u << 10));
 }
 
+/* A signed IEEE half of x, rounded to nearest: |x| below the smallest normal half 0, above the
+ * largest 65504 (cache_kernel.inc's gradient_scale_r decodes normals only), NaN 0. */
+static inline uint16_t signed_half(float x) {
+    /* without branches: the signs of u are a coin toss per node, and ratio_half's branches cost Sponza's
+     * pull 0.4 ms in mispredictions */
+    const uint32_t sign = x < 0.0f ? 0x8000u : 0u;
+    float a = fabsf(x);
+    a = a < 65504.0f ? a : 65504.0f;
+    uint32_t b;
+    memcpy(&b, &a, sizeof b);
+    const uint32_t h = (((b + 0x1000u) >> 13) - (112u << 10)) | sign;
+    return (uint16_t)(a >= 6.103515625e-05f ? h : 0u);
+}
+
 static void pull_range(glow_system *s, uint32_t first, uint32_t end) {
     const size_t N = s->N;
     float *restrict fy = s->flux, *restrict fco = s->flux + N, *restrict fcg = s->flux + 2 * N;
     float *restrict r = s->rad;
     const glow_bake_node *restrict nodes = s->nodes;
     const float *restrict inv_pi_area = s->inv_pi_area;
+    if (s->mom) { /* link gradients: the luma flux moments with the flux (one pass over the children) */
+        float *restrict mx = s->mom, *restrict my = s->mom + N, *restrict mz = s->mom + 2 * N;
+        for (uint32_t n = first; n < end; ++n) {
+            const uint32_t a = nodes[n].child[0], b = nodes[n].child[1];
+            const float ipa = inv_pi_area[n];
+            const float y = fy[a] + fy[b], co = fco[a] + fco[b], cg = fcg[a] + fcg[b];
+            fy[n] = y;
+            fco[n] = co;
+            fcg[n] = cg;
+            mx[n] = mx[a] + mx[b];
+            my[n] = my[a] + my[b];
+            mz[n] = mz[a] + mz[b];
+            float *restrict rn = r + 4 * (size_t)n;
+            rn[0] = y * ipa;
+            rn[1] = co * ipa;
+            rn[2] = cg * ipa;
+            rn[3] = 0.0f;
+        }
+        return;
+    }
     for (uint32_t n = first; n < end; ++n) {
         const uint32_t a = nodes[n].child[0], b = nodes[n].child[1];
         const float ipa = inv_pi_area[n];
@@ -274,6 +321,21 @@ static void pull_range(glow_system *s, uint32_t first, uint32_t end) {
 /* LSUB ratios of sub_nodes [first, end), after the pull (their slots, grandchildren, are final) */
 static void sub_ratio_range(glow_system *s, uint32_t first, uint32_t end) {
     const float *restrict r = s->rad;
+    if (s->gradient) { /* u = M (p_B - c), p_B = the node's luma flux moments over its luma flux */
+        const size_t N = s->N;
+        for (uint32_t k = first; k < end; ++k) {
+            const uint32_t n = s->sub_nodes[k];
+            const float *cm = s->grad_cm + 12 * (size_t)k, y = s->flux[n];
+            uint16_t *out = s->sub_ratio + 4 * (size_t)n;
+            out[0] = out[1] = out[2] = out[3] = 0u;
+            if (!(y > 0.0f)) continue;
+            const float inv = 1.0f / y;
+            const float d[3] = {s->mom[n] * inv - cm[0], s->mom[N + n] * inv - cm[1], s->mom[2 * N + n] * inv - cm[2]};
+            for (int i = 0; i < 3; ++i)
+                out[i] = signed_half(cm[3 + 3 * i] * d[0] + cm[4 + 3 * i] * d[1] + cm[5 + 3 * i] * d[2]);
+        }
+        return;
+    }
     for (uint32_t k = first; k < end; ++k) {
         const uint32_t n = s->sub_nodes[k];
         const uint32_t *sl = s->slots + 4 * (size_t)n;
@@ -319,7 +381,8 @@ static void task_caches(void *data, uint32_t k, uint32_t worker) {
                        .coeff_scale = s->cl_scale,
                        .xscale = s->xscale,
                        .subsets = s->subsets,
-                       .sub_ratio = (const uint32_t *)(const void *)s->sub_ratio};
+                       .sub_ratio = (const uint32_t *)(const void *)s->sub_ratio,
+                       .link_gradient = s->gradient};
     uint32_t first = k * CACHE_CHUNK, count = s->C - first < CACHE_CHUNK ? s->C - first : CACHE_CHUNK;
     glow__cl_light_caches(&a, first, count);
 }
@@ -464,10 +527,58 @@ static void free_system(glow_system *s) {
                     s->direct, s->direct_spare, s->fb_w, s->rho_ind_max, s->flux, s->rad, s->inv_pi_area, s->leaf_area,
                     s->cache_sh, s->grid_sh, s->lm_sh, s->grid_map, s->lm_map, s->mat_emis_scale,
                     s->mat_albedo_scale, s->batch_status, s->batch_negative, s->out_index, s->out_cache,
-                    s->xblocks, s->slots, s->sub_ratio, s->sub_nodes, s->grp_age, s->grp_delta, s->grp_drift_at, s->grp_centre,
+                    s->xblocks, s->slots, s->sub_ratio, s->sub_nodes, s->mom, s->grad_cm, s->grp_age, s->grp_delta,
+                    s->grp_drift_at, s->grp_centre,
                     s->grp_pack, s->grp_sel, s->grp_skip, s->rad_prev, s->uv0, s->det_out, s->rad_out, s->dep_max_node};
     for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; ++i) glow__ctx_free(ctx, bufs[i]);
     glow__ctx_free(ctx, s);
+}
+
+/* Link gradients: each sub_node's area centroid c and M = sigma (C + 1e-3 trace(C) I)^-1 (C the
+ * area-weighted covariance of its leaves' positions, sigma = sqrt(trace C)), as the bake's
+ * link_gradient and audit_gradient (precompute/src/links.c) take them: area moments of the surfels
+ * summed up the hierarchy in double. False when out of memory. */
+static bool gradient_moments(glow_system *s) {
+    const size_t S = s->S, N = s->N;
+    double *mo = glow__ctx_alloc(s->ctx, N * 10 * sizeof(double), 64); /* A, A p (3), A p p^T (6) */
+    if (!mo) return false;
+    for (size_t i = 0; i < S; ++i) {
+        const double a = s->nodes[i].area;
+        const double p[3] = {s->pos4[4 * i], s->pos4[4 * i + 1], s->pos4[4 * i + 2]};
+        double *o = mo + 10 * i;
+        o[0] = a;
+        for (int k = 0; k < 3; ++k) o[1 + k] = a * p[k];
+        o[4] = a * p[0] * p[0], o[5] = a * p[0] * p[1], o[6] = a * p[0] * p[2];
+        o[7] = a * p[1] * p[1], o[8] = a * p[1] * p[2], o[9] = a * p[2] * p[2];
+    }
+    for (uint32_t lv = 1; lv < s->levels; ++lv) /* children precede parents level by level, as the pull */
+        for (uint32_t n = s->level_starts[lv]; n < s->level_starts[lv + 1]; ++n) {
+            const double *a = mo + 10 * (size_t)s->nodes[n].child[0], *b = mo + 10 * (size_t)s->nodes[n].child[1];
+            for (int k = 0; k < 10; ++k) mo[10 * (size_t)n + k] = a[k] + b[k];
+        }
+    for (uint32_t k = 0; k < s->sub_count; ++k) {
+        const double *o = mo + 10 * (size_t)s->sub_nodes[k];
+        float *cm = s->grad_cm + 12 * (size_t)k;
+        memset(cm, 0, 12 * sizeof *cm);
+        if (!(o[0] > 0.0)) continue;
+        const double c[3] = {o[1] / o[0], o[2] / o[0], o[3] / o[0]};
+        const double C[6] = {o[4] / o[0] - c[0] * c[0], o[5] / o[0] - c[0] * c[1], o[6] / o[0] - c[0] * c[2],
+                             o[7] / o[0] - c[1] * c[1], o[8] / o[0] - c[1] * c[2], o[9] / o[0] - c[2] * c[2]};
+        for (int q = 0; q < 3; ++q) cm[q] = (float)c[q];
+        const double tr = C[0] + C[3] + C[5];
+        if (!(tr > 0.0)) continue; /* M = 0: u = 0 */
+        const double eps = 1e-3 * tr + 1e-30;
+        const double m00 = C[0] + eps, m01 = C[1], m02 = C[2], m11 = C[3] + eps, m12 = C[4], m22 = C[5] + eps;
+        const double i00 = m11 * m22 - m12 * m12, i01 = m02 * m12 - m01 * m22, i02 = m01 * m12 - m02 * m11;
+        const double i11 = m00 * m22 - m02 * m02, i12 = m01 * m02 - m00 * m12, i22 = m00 * m11 - m01 * m01;
+        const double det = m00 * i00 + m01 * i01 + m02 * i02;
+        if (!(fabs(det) > 0.0)) continue;
+        const double f = sqrt(tr) / det;
+        const double M[9] = {i00, i01, i02, i01, i11, i12, i02, i12, i22};
+        for (int q = 0; q < 9; ++q) cm[3 + q] = (float)(f * M[q]);
+    }
+    glow__ctx_free(s->ctx, mo);
+    return true;
 }
 
 glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, glow_system **out) {
@@ -614,10 +725,13 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     s->out_cache = alloc_array(s, used, sizeof(uint32_t), &ok);
     if (link_mode == GLOW_LINK_MODE_EXPANDED)
         s->xblocks = alloc_array(s, (size_t)s->C * s->bpc, glow__cl_xblock_size(luma), &ok);
-    if (glow__bake_link_subsets(desc->bake))
+    const bool lsub = glow__bake_link_subsets(desc->bake) != NULL;
+    s->gradient = lsub && (m->link_kind & GLOW_LINK_KIND_GRADIENT);
+    if (lsub && !s->gradient)
         s->slots = alloc_array(s, N, 4 * sizeof(uint32_t), &ok);
-    if (s->slots) s->sub_ratio = alloc_array(s, N + s->P, 4 * sizeof(uint16_t), &ok); /* proxies: ratio 1 */
-    if (s->slots && ok) { /* which internal nodes a weighted link reads (their ratios are computed each update) */
+    if (lsub) s->sub_ratio = alloc_array(s, N + s->P, 4 * sizeof(uint16_t), &ok); /* proxies: ratio 1 (u 0) */
+    if (s->gradient) s->mom = alloc_array(s, N, 3 * sizeof(float), &ok);
+    if (lsub && ok) { /* which internal nodes a weighted link reads (their ratios are computed each update) */
         const uint16_t *sub = glow__bake_link_subsets(desc->bake);
         const glow_bake_link_block *lb = glow__bake_link_blocks(desc->bake);
         uint8_t *mark = glow__ctx_alloc(ctx, N + 1, 64);
@@ -639,6 +753,7 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
                 for (size_t n = S; n < N; ++n)
                     if (mark[n]) s->sub_nodes[marked++] = (uint32_t)n;
             }
+            if (s->gradient) s->grad_cm = alloc_array(s, marked ? marked : 1u, 12 * sizeof(float), &ok);
             glow__ctx_free(ctx, mark);
         }
     }
@@ -712,6 +827,17 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
         if (s->proxies[p].node + 1u > *mx) *mx = s->proxies[p].node + 1u;
     }
     for (size_t n = 0; n < N; ++n) s->inv_pi_area[n] = 1.0f / (PI_F * s->nodes[n].area);
+    if (s->gradient) {
+        s->subsets = glow__bake_link_subsets(desc->bake);
+        memset(s->sub_ratio, 0, (N + s->P) * 4 * sizeof(uint16_t)); /* u = 0: scale 1 */
+        memset(s->mom, 0, N * 3 * sizeof(float));
+        if (!gradient_moments(s)) {
+            GLOW__LOG_ERROR(ctx, GLOW_ERROR_OUT_OF_MEMORY, "glow_system_create(%s): out of memory (link gradients)",
+                            label);
+            free_system(s);
+            return GLOW_ERROR_OUT_OF_MEMORY;
+        }
+    }
     if (s->slots) {
         s->subsets = glow__bake_link_subsets(desc->bake);
         const uint32_t none[2] = {GLOW_NODE_NONE, GLOW_NODE_NONE};
@@ -1368,7 +1494,8 @@ glow_result glow_system_get_solver_tables(const glow_system *s, glow_solver_tabl
                               .cache_stride = (uint32_t)(sizeof(glow_bake_cache) / sizeof(float)),
                               .level_starts = s->level_starts,
                               .link_blocks = glow__bake_link_blocks(s->bake),
-                              .link_subsets = glow__bake_link_subsets(s->bake),
+                              .link_subsets = s->gradient ? NULL : glow__bake_link_subsets(s->bake),
+                              .link_kind = s->meta->link_kind,
                               .output_index = s->out_index,
                               .output_cache = s->out_cache,
                               .grid_used = (uint32_t)s->grid_used,

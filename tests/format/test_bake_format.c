@@ -521,6 +521,11 @@ static void test_load_variants(void **state) {
     EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "missing section 'LSUB'", b->meta.link_kind |= GLOW_LINK_KIND_SUBSETS);
     EXPECT_PATCHED(WITH_LSUB, GLOW_ERROR_CORRUPT_DATA, "section 'LSUB' present but link_kind", (void)b);
     EXPECT_PATCHED(SHORT_LSUB, GLOW_ERROR_CORRUPT_DATA, "LSUB", b->meta.link_kind |= GLOW_LINK_KIND_SUBSETS);
+    /* link gradients (link_kind bit 8): the same section holding gradient codes; never with bit 4 */
+    EXPECT_PATCHED(WITH_LSUB, GLOW_OK, NULL, b->meta.link_kind |= GLOW_LINK_KIND_GRADIENT; b->lsub[3] = 0xFFFFu);
+    EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "missing section 'LSUB'", b->meta.link_kind |= GLOW_LINK_KIND_GRADIENT);
+    EXPECT_PATCHED(WITH_LSUB, GLOW_ERROR_CORRUPT_DATA, "both link subsets and link gradients",
+                   b->meta.link_kind |= GLOW_LINK_KIND_SUBSETS | GLOW_LINK_KIND_GRADIENT);
     {
         test_bake tb;
         build_golden(&tb);

@@ -1020,10 +1020,23 @@ static void test_kernels(void **state) {
     uint16_t *ratio = malloc(4 * (size_t)N * sizeof *ratio);
     assert_non_null(ratio);
     for (size_t i = 0; i < 4 * (size_t)N; ++i) ratio[i] = i % 7 == 3 ? 0u : glow__half_from_float((float)(rnd() * 4.0));
+    /* link gradients (a.link_gradient): random codes (a quarter 0) and per node u_x u_y u_z 0 as signed
+     * halves in [-3, 3], so that some scales clamp at 0 */
+    const size_t n_links = (size_t)C * bpc * GLOW_LINK_BLOCK;
+    uint16_t *gcode = malloc(n_links * sizeof *gcode), *gu = malloc(4 * (size_t)N * sizeof *gu);
+    assert_true(gcode && gu);
+    for (size_t j = 0; j < n_links; ++j) {
+        const uint32_t kx = (uint32_t)(rnd() * 31.0) % 31u, ky = (uint32_t)(rnd() * 31.0) % 31u, kz = (uint32_t)(rnd() * 31.0) % 31u;
+        gcode[j] = rnd() < 0.25 ? 0u : (uint16_t)(0x8000u | kx | (ky << 5) | (kz << 10));
+    }
+    for (size_t i = 0; i < 4 * (size_t)N; ++i) {
+        const float x = (float)(rnd() * 6.0 - 3.0); /* normal halves or 0, as the system writes them */
+        gu[i] = i % 4 == 3 || i % 11 == 5 || fabsf(x) < 1e-3f ? 0u : glow__half_from_float(x);
+    }
     const uint32_t combos[][2] = {{1, 1}, {2, 1}, {3, 3}, {4, 2}, {5, 3}, {8, 8}};
-    for (size_t cw = 0; cw < 2 * sizeof combos / sizeof combos[0]; ++cw) {
-        const size_t ci = cw / 2;
-        const bool ws = cw % 2 == 1;
+    for (size_t cw = 0; cw < 3 * sizeof combos / sizeof combos[0]; ++cw) {
+        const size_t ci = cw / 3;
+        const bool ws = cw % 3 != 0, grad = cw % 3 == 2; /* plain, subsets, gradients */
         const uint32_t L = combos[ci][0], Cb = combos[ci][1], nco = L * L + 2 * Cb * Cb, stride = nco + 3; /* padding */
         float *out[NISA];
         for (int i = 0; i < NISA; ++i) {
@@ -1038,8 +1051,9 @@ static void test_kernels(void **state) {
             glow__cl_args a = {.blocks = lb, .blocks_per_cache = bpc, .rad_y = ws ? rad4 : rad,
                                .rad_co = ws ? rad4 + 1 : rad + N, .rad_cg = ws ? rad4 + 2 : rad + 2 * (size_t)N,
                                .rad_stride = ws ? 4u : 0u, .luma = L, .chroma = Cb, .coeffs = stride,
-                               .cache_sh = out[i], .isa = isas[i], .subsets = ws ? lsub : NULL,
-                               .sub_ratio = (const uint32_t *)(const void *)ratio};
+                               .cache_sh = out[i], .isa = isas[i], .subsets = ws ? (grad ? gcode : lsub) : NULL,
+                               .sub_ratio = (const uint32_t *)(const void *)(grad ? gu : ratio),
+                               .link_gradient = grad};
             /* in uneven ranges: the result must not depend on how the caches are split */
             for (uint32_t first = 0; first < C;) {
                 uint32_t cnt = 1 + (uint32_t)(rnd() * 37.0);
@@ -1064,8 +1078,13 @@ static void test_kernels(void **state) {
                 glow__oct_decode12(du, dv, d);
                 glow_sh_eval(L, d, y);
                 double sr = 1.0; /* LSUB: R[node] x sum_i q_i r_i / sum_i q_i */
-                const uint16_t q = ws ? lsub[(size_t)c * bpc * GLOW_LINK_BLOCK + j] : 0u;
-                if (q) {
+                const uint16_t q = ws ? (grad ? gcode : lsub)[(size_t)c * bpc * GLOW_LINK_BLOCK + j] : 0u;
+                if (q && grad) { /* max(0, 1 + k . u / 15) */
+                    double dot = 0.0;
+                    for (int k = 0; k < 3; ++k)
+                        dot += ((double)((q >> (5 * k)) & 31u) - 15.0) * glow__half_to_float(gu[4 * (size_t)node + (size_t)k]);
+                    sr = fmax(0.0, 1.0 + dot / 15.0);
+                } else if (q) {
                     double num = 0.0, den = 0.0;
                     for (int k = 0; k < 4; ++k) {
                         num += ((q >> (4 * k)) & 15u) * (double)glow__half_to_float(ratio[4 * (size_t)node + (size_t)k]);
@@ -1111,7 +1130,7 @@ static void test_kernels(void **state) {
             if (!run[i]) continue;
             print_message("kernel %-14s luma %u chroma %u%s, %u caches x %u links: vs double %.2e, vs generic %.2e "
                           "(relative to Σ|R| ω)\n",
-                          glow__cl_isa_name(isas[i]), L, Cb, ws ? " subsets" : "", C, m->links_per_cache, worst_ref[i],
+                          glow__cl_isa_name(isas[i]), L, Cb, grad ? " gradients" : (ws ? " subsets" : ""), C, m->links_per_cache, worst_ref[i],
                           worst_gen[i]);
             assert_true(worst_ref[i] < 1e-5);
             assert_true(worst_gen[i] < 1e-5);
@@ -1141,6 +1160,8 @@ static void test_kernels(void **state) {
     free(rad);
     free(rad4);
     free(ratio);
+    free(gcode);
+    free(gu);
     glow_bake_destroy(bake);
     glow_context_destroy(ctx);
 }

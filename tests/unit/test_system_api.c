@@ -154,6 +154,183 @@ static void env_close(env *e) {
     pthread_mutex_destroy(&e->log.mu);
 }
 
+/* ------------------------------------------------------------------------------ link gradients */
+/* Link gradients (glow-bake --link-subsets gradient; bake_format.h): the caches' DC after one update
+ * under a lit spot, against the same formula recomputed here in double from the bake's surfels, nodes
+ * and links (the node's flux centroid p_B, its area centroid c and covariance C, u = sigma (C +
+ * 1e-3 tr C I)^-1 (p_B - c), s = max(0, 1 + k . u / 15)); the same for every kernel build
+ * (GLOW_CACHE_KERNEL) and bit-identical for 1 and 2 workers. The gradients must move the result
+ * well beyond the tolerance (else the test could not fail). */
+static void gradient_light(const glow_bake_meta *m, const glow_bake_surfel *sf, uint32_t S, float *E) {
+    float p0[3];
+    for (int k = 0; k < 3; ++k) p0[k] = m->bounds_min[k] + 0.3f * (m->bounds_max[k] - m->bounds_min[k]);
+    const float d = 0.25f * (m->bounds_max[0] - m->bounds_min[0]);
+    for (uint32_t i = 0; i < S; ++i) {
+        float r2 = 0.0f;
+        for (int k = 0; k < 3; ++k) r2 += (sf[i].position[k] - p0[k]) * (sf[i].position[k] - p0[k]);
+        const float e = 20.0f * expf(-r2 / (d * d)) + 0.2f;
+        E[3 * i] = e, E[3 * i + 1] = 0.8f * e, E[3 * i + 2] = 0.6f * e;
+    }
+}
+
+/* one update of a fresh system of the bake (workers, kernel: GLOW_CACHE_KERNEL or NULL); cache_sh copied out */
+static void gradient_update(const void *bytes, size_t size, uint32_t workers, const char *kernel, float *sh,
+                            size_t floats) {
+    if (kernel) setenv("GLOW_CACHE_KERNEL", kernel, 1);
+    else unsetenv("GLOW_CACHE_KERNEL");
+    env e;
+    env_open_with(&e, bytes, size, NULL, &(glow_task_hooks){.worker_count = workers});
+    glow_system *s;
+    assert_int_equal(glow_system_create(e.ctx, &(glow_system_desc){.bake = e.bake, .label = "gradient"}, &s), GLOW_OK);
+    glow_system_params p = GLOW_SYSTEM_PARAMS_INIT;
+    p.bounce_intensity = 0.0f; /* single bounce: no feedback through the caches */
+    p.emission_scale = 0.0f;
+    assert_int_equal(glow_system_set_params(s, &p), GLOW_OK);
+    const uint32_t S = e.meta->surfel_count;
+    float *E = malloc(3 * (size_t)S * sizeof *E);
+    assert_non_null(E);
+    gradient_light(e.meta, glow__bake_surfels(e.bake), S, E);
+    assert_int_equal(glow_system_set_surfel_irradiance(s, 0, S, E), GLOW_OK);
+    assert_int_equal(glow_system_update(s, NULL), GLOW_OK);
+    const glow_cache_outputs *o = glow_system_outputs(s);
+    assert_int_equal((size_t)o->cache_count * o->coeff_count, floats);
+    memcpy(sh, o->cache_sh, floats * sizeof *sh);
+    free(E);
+    glow_system_destroy(s);
+    env_close(&e);
+    unsetenv("GLOW_CACHE_KERNEL");
+}
+
+static void test_link_gradients(void **state) {
+    (void)state;
+    char path[256];
+    snprintf(path, sizeof path, "/tmp/glow_test_system_api_%d_gradient.glow", (int)getpid());
+    glow_pc_settings ps = {.quality = GLOW_PC_QUALITY_LOW, .surfels = 2048, .links = 64, .bands = 3,
+                           .grid_spacing = 0.5f, .texel_density = 3.0f, .threads = 2, .seed = 5,
+                           .link_gradients = true};
+    glow_pc_stats st;
+    if (glow_pc_bake("builtin:cornell", path, &ps, &st) != GLOW_OK) fail_msg("bake failed: %s", st.error);
+    void *bytes;
+    size_t size;
+    assert_int_equal(read_file(path, &bytes, &size), 0);
+    unlink(path);
+    env e;
+    env_open_with(&e, bytes, size, NULL, NULL);
+    const glow_bake_meta *m = e.meta;
+    assert_true(m->link_kind & GLOW_LINK_KIND_GRADIENT);
+    assert_false(m->link_kind & GLOW_LINK_KIND_SUBSETS);
+    const uint32_t S = m->surfel_count, N = m->node_count, C = m->cache_count, bpc = m->link_blocks_per_cache;
+    const uint16_t *code = glow__bake_link_subsets(e.bake);
+    assert_non_null(code);
+    const glow_bake_link_block *lb = glow__bake_link_blocks(e.bake);
+    const glow_bake_node *nd = glow__bake_nodes(e.bake);
+    const glow_bake_surfel *sf = glow__bake_surfels(e.bake);
+    size_t n_code = 0;
+    for (size_t j = 0; j < (size_t)C * bpc * GLOW_LINK_BLOCK; ++j)
+        if (code[j]) {
+            n_code++;
+            assert_true(code[j] & 0x8000u); /* bit 15 on every code */
+        }
+    assert_true(n_code > (size_t)C); /* the gradient path is exercised */
+    /* the reference: per node in double, area A, luma flux Y, sum A p, sum A p p^T, sum Y p */
+    float *E = malloc(3 * (size_t)S * sizeof *E);
+    double *nm = calloc((size_t)N * 14, sizeof *nm);
+    assert_true(E && nm);
+    gradient_light(m, sf, S, E);
+    for (uint32_t i = 0; i < S; ++i) {
+        double *o = nm + 14 * (size_t)i, B[3];
+        for (int c = 0; c < 3; ++c) {
+            float rho = sf[i].albedo[c];
+            rho = rho < 0.0f ? 0.0f : (rho > 0.999f ? 0.999f : rho);
+            B[c] = (double)(rho * E[3 * i + c]);
+        }
+        const double a = nd[i].area, *p = (const double[3]){sf[i].position[0], sf[i].position[1], sf[i].position[2]};
+        o[0] = a;
+        o[1] = (0.25 * B[0] + 0.5 * B[1] + 0.25 * B[2]) * a;
+        for (int k = 0; k < 3; ++k) o[2 + k] = a * p[k], o[11 + k] = o[1] * p[k];
+        o[5] = a * p[0] * p[0], o[6] = a * p[0] * p[1], o[7] = a * p[0] * p[2];
+        o[8] = a * p[1] * p[1], o[9] = a * p[1] * p[2], o[10] = a * p[2] * p[2];
+    }
+    for (uint32_t n = S; n < N; ++n) {
+        const uint32_t a = nd[n].child[0], b = nd[n].child[1];
+        assert_true(a < n && b < n);
+        for (int k = 0; k < 14; ++k) nm[14 * (size_t)n + k] = nm[14 * (size_t)a + k] + nm[14 * (size_t)b + k];
+    }
+    double *ref = calloc(C, sizeof *ref), *plain = calloc(C, sizeof *plain), *scale = calloc(C, sizeof *scale);
+    assert_true(ref && plain && scale);
+    const double y00 = 0.28209479177387814;
+    for (uint32_t c = 0; c < C; ++c)
+        for (uint32_t j = 0; j < bpc * GLOW_LINK_BLOCK; ++j) {
+            const glow_bake_link_block *b = lb + (size_t)c * bpc + j / GLOW_LINK_BLOCK;
+            const uint32_t lane = j % GLOW_LINK_BLOCK, n = glow_bake_link_node(b, lane);
+            const double omc = glow__half_to_float(b->one_minus_cos[lane]);
+            if (omc == 0.0) continue;
+            assert_true(n < N);
+            const double *o = nm + 14 * (size_t)n;
+            const double R = o[1] / (M_PI * nd[n].area);
+            double sc = 1.0;
+            const uint16_t q = code[(size_t)c * bpc * GLOW_LINK_BLOCK + j];
+            if (q && o[1] > 0.0) {
+                const double cc[3] = {o[2] / o[0], o[3] / o[0], o[4] / o[0]};
+                const double Cv[6] = {o[5] / o[0] - cc[0] * cc[0], o[6] / o[0] - cc[0] * cc[1], o[7] / o[0] - cc[0] * cc[2],
+                                      o[8] / o[0] - cc[1] * cc[1], o[9] / o[0] - cc[1] * cc[2], o[10] / o[0] - cc[2] * cc[2]};
+                const double tr = Cv[0] + Cv[3] + Cv[5], eps = 1e-3 * tr;
+                const double m00 = Cv[0] + eps, m01 = Cv[1], m02 = Cv[2], m11 = Cv[3] + eps, m12 = Cv[4], m22 = Cv[5] + eps;
+                const double i00 = m11 * m22 - m12 * m12, i01 = m02 * m12 - m01 * m22, i02 = m01 * m12 - m02 * m11;
+                const double i11 = m00 * m22 - m02 * m02, i12 = m01 * m02 - m00 * m12, i22 = m00 * m11 - m01 * m01;
+                const double det = m00 * i00 + m01 * i01 + m02 * i02, f = sqrt(tr) / det;
+                const double d[3] = {o[11] / o[1] - cc[0], o[12] / o[1] - cc[1], o[13] / o[1] - cc[2]};
+                const double u[3] = {f * (i00 * d[0] + i01 * d[1] + i02 * d[2]), f * (i01 * d[0] + i11 * d[1] + i12 * d[2]),
+                                     f * (i02 * d[0] + i12 * d[1] + i22 * d[2])};
+                const double kk[3] = {(double)(q & 31u) - 15.0, (double)((q >> 5) & 31u) - 15.0, (double)((q >> 10) & 31u) - 15.0};
+                sc = 1.0 + (kk[0] * u[0] + kk[1] * u[1] + kk[2] * u[2]) / 15.0;
+                sc = sc > 0.0 ? sc : 0.0;
+            }
+            const double w = 2.0 * M_PI * omc * y00;
+            ref[c] += R * sc * w;
+            plain[c] += R * w;
+            scale[c] += fabs(R) * (sc > 1.0 ? sc : 1.0) * w;
+        }
+    const size_t floats = (size_t)C * (3 * 3 + 2 * 3 * 3);
+    float *sh[5];
+    for (int i = 0; i < 5; ++i) {
+        sh[i] = malloc(floats * sizeof *sh[i]);
+        assert_non_null(sh[i]);
+    }
+    gradient_update(bytes, size, 1, NULL, sh[0], floats);
+    gradient_update(bytes, size, 2, NULL, sh[1], floats);
+    assert_memory_equal(sh[0], sh[1], floats * sizeof *sh[0]); /* any worker count: the same bytes */
+    const char *kernels[3] = {"generic", "avx2", "avx512"};
+    double worst_k = 0.0;
+    for (int k = 0; k < 3; ++k) {
+        gradient_update(bytes, size, 2, kernels[k], sh[2 + k], floats);
+        for (uint32_t c = 0; c < C; ++c)
+            for (uint32_t q = 0; q < 27; ++q)
+                worst_k = fmax(worst_k, fabs((double)sh[2 + k][(size_t)c * 27 + q] - sh[0][(size_t)c * 27 + q]) /
+                                            (scale[c] + 1e-12));
+    }
+    double worst = 0.0, moved = 0.0;
+    for (uint32_t c = 0; c < C; ++c) {
+        const double got = sh[0][(size_t)c * 27];
+        worst = fmax(worst, fabs(got - ref[c]) / (scale[c] + 1e-12));
+        moved = fmax(moved, fabs(plain[c] - ref[c]) / (scale[c] + 1e-12));
+    }
+    print_message("link gradients: %zu of %u links carry a code; cache DC vs the double formula %.2e, kernels vs the "
+                  "default %.2e, gradients move the DC by up to %.3f (all relative to sum |R| w)\n",
+                  n_code, C * m->links_per_cache, worst, worst_k, moved);
+    assert_true(worst < 5e-4); /* u as halves: 2^-11 relative */
+    assert_true(worst_k < 1e-5);
+    assert_true(moved > 0.05);
+    for (int i = 0; i < 5; ++i) free(sh[i]);
+    free(ref);
+    free(plain);
+    free(scale);
+    free(E);
+    free(nm);
+    env_close(&e);
+    free(bytes);
+}
+
 /* ------------------------------------------------------------------------------ the host hook */
 enum { MODE_OK, MODE_FAIL, MODE_NAN, MODE_INF, MODE_NEG_INF, MODE_NEGATIVE, MODE_NEGATIVE_AS_ZERO, MODE_HUGE };
 typedef struct hook_ctl {
@@ -1777,6 +1954,7 @@ int main(void) {
         cmocka_unit_test(test_furnace_converges),
         cmocka_unit_test(test_context_destroy_refused_while_live),
         cmocka_unit_test(test_reentrant_update_refused),
+        cmocka_unit_test(test_link_gradients),
     };
     return cmocka_run_group_tests(tests, group_setup, group_teardown);
 }

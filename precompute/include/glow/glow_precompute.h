@@ -166,6 +166,13 @@ typedef struct glow_pc_settings {
        [A-Za-z0-9_-]. At most 256 groups (--system-group, repeated). \since 0.2 */
     const char *const *system_groups;
     uint32_t system_group_count;
+    bool link_gradients;        /* with link subsets on: each link carries instead the gradient of the
+                                   cache's response across its node (LSUB holds a 16-bit code, link_kind
+                                   GLOW_LINK_KIND_GRADIENT) and reads its node's radiance times
+                                   1 + e . u, u from where in the node the light is (the flux centroid,
+                                   each update). CPU runtime only for now; the GL backend refuses such a
+                                   bake (--link-subsets gradient; docs/linker.md "Link gradients").
+                                   \since 0.2 */
 } glow_pc_settings;
 
 typedef struct glow_pc_stats {

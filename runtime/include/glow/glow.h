@@ -218,7 +218,10 @@ GLOW_API glow_result glow_bake_get_geometry(const glow_bake *bake, glow_bake_geo
 typedef enum glow_link_kind_bits {
     GLOW_LINK_KIND_RUNTIME_PROJECTION = 1, /* always: cones projected to SH at run time (PIC 4.6) */
     GLOW_LINK_KIND_FULL_SH = 2,            /* also full-SH links (glow-bake --sh-links; GLOW_LINK_MODE_SH) */
-    GLOW_LINK_KIND_SUBSETS = 4             /* links carry their node's visible-part weights (link subsets) */
+    GLOW_LINK_KIND_SUBSETS = 4,            /* links carry their node's visible-part weights (link subsets) */
+    GLOW_LINK_KIND_GRADIENT = 8            /* links carry the gradient of their response across their node
+                                              (link gradients; LSUB, never with SUBSETS; CPU runtime only).
+                                              \since 0.2 */
 } glow_link_kind_bits;
 
 /* What a cache is: a grid point (dynamic objects, the whole sphere) or a lightmap texel's (the

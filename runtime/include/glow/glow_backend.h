@@ -79,6 +79,11 @@ typedef struct glow_solver_tables {
     const uint32_t *proxy_pairs;
     /* \since 0.2: the bake's bounds diagonal (m): a budget's default focus radius is 0.1 of it */
     float scene_diag;
+    /* \since 0.2: the bake's glow_link_kind_bits. With GLOW_LINK_KIND_GRADIENT (link gradients,
+     * glow-bake --link-subsets gradient) link_subsets is NULL and the links' gradient codes are the
+     * CPU solver's alone: a backend that does not implement them must refuse the system (the GL
+     * backend does, GLOW_ERROR_UNSUPPORTED) */
+    uint32_t link_kind;
 } glow_solver_tables;
 /** Fills `out_tables`. \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT for NULL. \threadsafety Between
  * updates; the views change only through the setters and updates. \since 0.1 */

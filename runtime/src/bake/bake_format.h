@@ -80,7 +80,8 @@
  * node's four grandchildren) are glow.h's glow_cache_kind and glow_link_kind_bits, whose values are
  * the format's (checked below). */
 _Static_assert(GLOW_CACHE_KIND_GRID == 1 && GLOW_CACHE_KIND_LIGHTMAP == 2, "cache kinds are format values");
-_Static_assert(GLOW_LINK_KIND_RUNTIME_PROJECTION == 1 && GLOW_LINK_KIND_FULL_SH == 2 && GLOW_LINK_KIND_SUBSETS == 4,
+_Static_assert(GLOW_LINK_KIND_RUNTIME_PROJECTION == 1 && GLOW_LINK_KIND_FULL_SH == 2 && GLOW_LINK_KIND_SUBSETS == 4 &&
+                   GLOW_LINK_KIND_GRADIENT == 8,
                "link kinds are format values");
 
 #define GLOW_LINK_BLOCK 16u /* links per SoA block; caches own whole blocks */
@@ -246,6 +247,19 @@ static inline void glow_bake_link_pack(glow_bake_link_block *b, uint32_t lane, u
  * instead of R[v]: the mean of the part of the node the cache sees, where R[v] is the mean of all of
  * it (the energy of partly visible nodes; docs/linker.md). A link whose four weights are 0 reads
  * R[v]. Direction and cone are LINK's. */
+/* Link gradients (LSUB with link_kind bit GLOW_LINK_KIND_GRADIENT, never with GLOW_LINK_KIND_SUBSETS;
+ * glow-bake --link-subsets gradient; an older runtime refuses the bake): the same uint16_t per link,
+ * holding instead a gradient code. Code 0: the link reads R[v]. Otherwise bit 15 is 1 and bits 0-4,
+ * 5-9, 10-14 hold k_x + 15, k_y + 15, k_z + 15 with k in [-15, 15]: e = k / 15 approximates
+ * (p_w - c) / sigma, clamped to [-1, 1] per component, where c is the area centroid of v's leaves,
+ * C their area-weighted position covariance, sigma = sqrt(trace C) and p_w the centroid of the
+ * leaves weighted by the cache's response (diffuse response for lightmap caches, solid angle for
+ * grid caches, 0 where hidden). The link reads
+ *     R = R[v] * max(0, 1 + e . u),   u = sigma C'^-1 (p_B - c),   C' = C + 1e-3 trace(C) I
+ * with p_B the luma-flux-weighted centroid of v's leaves (u = 0 where v has no flux): exact where the
+ * response per unit area is linear in position over v (docs/linker.md "Link gradients"). Links with
+ * a code follow those without in each cache, as with subsets. The runtime derives c, C and sigma from
+ * the surfels' positions and areas (SURF, NODE); nothing else is stored. */
 static inline void glow_bake_link_slots(uint32_t v, const uint32_t child[2], const uint32_t child0_child[2],
                                         const uint32_t child1_child[2], uint32_t slot[4]) {
     if (child[0] == 0xFFFFFFFFu) {
