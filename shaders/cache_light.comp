@@ -54,6 +54,21 @@ float glow_subset_scale(uint v, uint q, float yn) {
     return num / (den * yn);
 }
 #endif
+#ifdef GLOW_LINK_GRADIENT
+/* link gradients (bake_format.h, LSUB with GLOW_LINK_KIND_GRADIENT): a link with code q (bit 15 set,
+ * k_x + 15, k_y + 15, k_z + 15 in bits 0-4, 5-9, 10-14) reads R[node] times
+ * max(0, 1 + ((k_x u_x + k_y u_y) + k_z u_z) / 15), u the node's (gradient_u.comp, rounded to halves
+ * as the CPU's), as runtime/src/cache_kernel.inc gradient_scale_r; code 0 (no bit 15) reads R[node] */
+layout(std430, binding = GLOW_BINDING_LINK_SUBSETS) readonly buffer GlowSubsets { uint glow_subsets[]; };
+layout(std430, binding = GLOW_BINDING_GRADIENT_U) readonly buffer GlowGradU { vec4 glow_grad_u[]; };
+float glow_gradient_scale(uint v, uint q) {
+    if ((q & 0x8000u) == 0u) return 1.0;
+    vec3 k = vec3(float(q & 31u), float((q >> 5) & 31u), float((q >> 10) & 31u)) - 15.0;
+    vec3 u = glow_grad_u[v].xyz;
+    float sc = 1.0 + ((k.x * u.x + k.y * u.y) + k.z * u.z) * (1.0 / 15.0);
+    return sc > 0.0 ? sc : 0.0;
+}
+#endif
 
 shared float glow_red[GLOW_REDUCE_CHUNK][GLOW_CACHE_GROUP + 1];
 
@@ -90,6 +105,10 @@ void main() {
 #ifdef GLOW_LINK_SUBSETS
         uint li = (c * glow_p.blocks_per_cache + j / 16u) * 16u + lane;
         R *= glow_subset_scale(nd & 0x00FFFFFFu, (glow_subsets[li >> 1] >> ((li & 1u) * 16u)) & 0xFFFFu, R.x);
+#endif
+#ifdef GLOW_LINK_GRADIENT
+        uint lg = (c * glow_p.blocks_per_cache + j / 16u) * 16u + lane;
+        R *= glow_gradient_scale(nd & 0x00FFFFFFu, (glow_subsets[lg >> 1] >> ((lg & 1u) * 16u)) & 0xFFFFu);
 #endif
         float y[GLOW_L2];
         glow_sh_eval(GLOW_LUMA_BANDS, d, y);

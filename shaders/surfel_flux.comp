@@ -18,6 +18,10 @@ layout(std430, binding = GLOW_BINDING_FEEDBACK_W) readonly buffer GlowFeedbackW 
 layout(std430, binding = GLOW_BINDING_CACHE_SH) readonly buffer GlowCacheSh { float glow_cache_sh[]; };
 layout(std430, binding = GLOW_BINDING_NODES) readonly buffer GlowNodes { uvec4 glow_nodes[]; };
 layout(std430, binding = GLOW_BINDING_FLUX) writeonly buffer GlowFlux { vec4 glow_flux[]; };
+#ifdef GLOW_LINK_GRADIENT
+/* link gradients: each leaf's luma-flux moment Yflux p (runtime/src/system.c task_flux's mom) */
+layout(std430, binding = GLOW_BINDING_MOMENTS) writeonly buffer GlowMoments { vec4 glow_mom[]; };
+#endif
 
 void main() {
     uint i = glow_global_index(GLOW_SURFEL_GROUP);
@@ -41,4 +45,7 @@ void main() {
     vec3 f = vec3((0.25 * B.r + 0.5 * B.g + 0.25 * B.b) * area, (0.5 * B.r - 0.5 * B.b) * area,
                   (-0.25 * B.r + 0.5 * B.g - 0.25 * B.b) * area);
     glow_flux[i] = vec4(f, uintBitsToFloat(glow_nodes[i].z));
+#ifdef GLOW_LINK_GRADIENT
+    glow_mom[i] = vec4(f.x * glow_geom[i].position_area.xyz, 0.0);
+#endif
 }

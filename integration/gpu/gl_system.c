@@ -29,11 +29,12 @@
 extern const char glow__shading_glsl[];
 extern const struct { const char *name, *source; } glow__kernels[];
 
-enum { K_DIRECT, K_FLUX, K_PULL, K_PULL_TAIL, K_CACHE, K_OUTPUT, K_DETAIL, K_PROXY, K_DRIFT, K_COUNT };
+enum { K_DIRECT, K_FLUX, K_PULL, K_PULL_TAIL, K_CACHE, K_OUTPUT, K_DETAIL, K_PROXY, K_DRIFT, K_GRAD, K_COUNT };
 static const char *const kernel_names[K_COUNT] = {"surfel_direct", "surfel_flux", "pull", "pull_tail", "cache_light",
-                                                  "outputs", "detail", "proxy_fill", "drift"};
+                                                  "outputs", "detail", "proxy_fill", "drift", "gradient_u"};
 enum { B_GEOM, B_MAT, B_DIRECT, B_FBW, B_CACHE, B_NODES, B_FLUX, B_LINKS, B_PAIRS, B_STATUS, B_PARAMS, B_LEVELS, B_SUBSETS,
-       B_DET_TEXELS, B_DET_LINKS, B_PROXY_MAP, B_LIST, B_RAD_PREV, B_DRIFT, B_DELTA, B_COUNT };
+       B_DET_TEXELS, B_DET_LINKS, B_PROXY_MAP, B_LIST, B_RAD_PREV, B_DRIFT, B_DELTA, B_MOM, B_GRAD_NODES, B_GRAD_CM,
+       B_GRAD_U, B_COUNT };
 #define MAX_DEPS 64u /* GLOW_BAKE_MAX_DEPENDENCIES */
 enum { T_BEGIN, T_DIRECT, T_FLUX, T_PULL, T_CACHE, T_OUTPUT, T_COUNT };
 
@@ -46,7 +47,7 @@ struct glow_gl_system {
     glow_solver_tables t;
     uint32_t S, N, C, levels, planes;
     GLuint prog[K_COUNT];
-    GLint level_loc, tail_loc, proxy_loc, list_loc, delta_loc, drift_loc;
+    GLint level_loc, tail_loc, proxy_loc, list_loc, delta_loc, drift_loc, grad_loc;
     /* a budget (glow_update_desc max_caches, focus): groups of GLOW_BUDGET_GROUP caches chosen by
      * glow_budget_choose, as the CPU solver chooses; LIST holds their caches for the cache kernel */
     uint32_t groups;
@@ -139,8 +140,9 @@ static GLuint build_program(glow_gl_system *s, int k, const char *hook, glow_res
     }
     char prelude[320];
     snprintf(prelude, sizeof prelude,
-             "#version 450 core\n#define GLOW_GLSL 1\n#define GLOW_LUMA_BANDS %u\n#define GLOW_CHROMA_BANDS %u\n%s#line 1 0\n",
-             s->t.sh_bands_luma, s->t.sh_bands_chroma, s->t.link_subsets ? "#define GLOW_LINK_SUBSETS 1\n" : "");
+             "#version 450 core\n#define GLOW_GLSL 1\n#define GLOW_LUMA_BANDS %u\n#define GLOW_CHROMA_BANDS %u\n%s%s#line 1 0\n",
+             s->t.sh_bands_luma, s->t.sh_bands_chroma, s->t.link_subsets ? "#define GLOW_LINK_SUBSETS 1\n" : "",
+             s->t.link_gradients ? "#define GLOW_LINK_GRADIENT 1\n" : "");
     const char *strings[6];
     GLint lengths[6];
     int n = 0;
@@ -304,9 +306,11 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
     snprintf(s->label, sizeof s->label, "%s", desc->label ? desc->label : "gl");
     { /* before any GL call: what the bake needs that this backend lacks */
         glow_solver_tables tt;
-        if (glow_system_get_solver_tables(desc->system, &tt) == GLOW_OK && (tt.link_kind & GLOW_LINK_KIND_GRADIENT)) {
+        if (glow_system_get_solver_tables(desc->system, &tt) == GLOW_OK && tt.link_gradients &&
+            (tt.link_subsets || (tt.gradient_node_count && (!tt.gradient_nodes || !tt.gradient_cm)))) {
             LOG_ERR(s, GLOW_ERROR_UNSUPPORTED,
-                    "the bake has link gradients: link gradients are CPU-only; bake with --link-subsets on");
+                    "the bake has link gradients but the system's solver tables are inconsistent (gradient_nodes / "
+                    "gradient_cm missing, or link subsets as well): cannot read its link gradients");
             free_system(s);
             return GLOW_ERROR_UNSUPPORTED;
         }
@@ -379,7 +383,8 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
     /* programs */
     glow_result err = GLOW_OK;
     for (int k = 0; k < K_COUNT; ++k) {
-        if ((k == K_DIRECT && !desc->hook_glsl) || (k == K_DETAIL && !t->detail_texels) || (k == K_PROXY && !t->proxy_count))
+        if ((k == K_DIRECT && !desc->hook_glsl) || (k == K_DETAIL && !t->detail_texels) || (k == K_PROXY && !t->proxy_count) ||
+            (k == K_GRAD && !t->link_gradients))
             continue;
         s->prog[k] = build_program(s, k, desc->hook_glsl, &err);
         if (!s->prog[k]) {
@@ -393,6 +398,7 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
     s->list_loc = gl->GetUniformLocation(s->prog[K_CACHE], "glow_cache_list_count");
     s->delta_loc = gl->GetUniformLocation(s->prog[K_CACHE], "glow_cache_delta");
     s->drift_loc = gl->GetUniformLocation(s->prog[K_DRIFT], "glow_drift_count");
+    if (s->prog[K_GRAD]) s->grad_loc = gl->GetUniformLocation(s->prog[K_GRAD], "glow_gradient_count");
     /* the narrow top: the lowest level from which every level up has at most GLOW_PULL_TAIL_MAX nodes */
     s->tail_level = s->levels;
     while (s->tail_level > 1 && t->level_starts[s->tail_level] - t->level_starts[s->tail_level - 1] <= GLOW_PULL_TAIL_MAX)
@@ -511,6 +517,17 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
     s->buf[B_PARAMS] = make_buffer(s, sizeof(glow_gl_params), NULL, dyn);
     s->buf[B_LEVELS] = make_buffer(s, ((size_t)s->levels + 1u) * 4u, t->level_starts, 0);
     if (t->link_subsets) s->buf[B_SUBSETS] = make_buffer(s, links_bytes / 4u, t->link_subsets, 0); /* 2 of 8 bytes per link */
+    if (t->link_gradients) { /* link gradients: the codes, the moments, c and M of the coded nodes, their u */
+        const uint32_t gn = t->gradient_node_count;
+        s->buf[B_SUBSETS] = make_buffer(s, links_bytes / 4u, t->link_gradients, 0);
+        s->buf[B_MOM] = make_buffer(s, (size_t)s->N * 16u, NULL, 0);
+        s->buf[B_GRAD_U] = make_buffer(s, ((size_t)s->N + s->P) * 16u, NULL, 0); /* 0: scale 1 */
+        s->buf[B_GRAD_NODES] = make_buffer(s, (size_t)gn * 4u, gn ? t->gradient_nodes : NULL, 0);
+        s->buf[B_GRAD_CM] = make_buffer(s, (size_t)gn * 48u, gn ? t->gradient_cm : NULL, 0);
+        const float zero = 0.0f;
+        gl->ClearNamedBufferData(s->buf[B_MOM], GL_R32F, GL_RED, GL_FLOAT, &zero);
+        gl->ClearNamedBufferData(s->buf[B_GRAD_U], GL_R32F, GL_RED, GL_FLOAT, &zero);
+    }
     free(geom), free(nodes), free(pairs);
     if (t->detail_texels) { /* the lightmap detail's tables (glow_shared.h GLOW_BINDING_DETAIL_*) */
         uint32_t *dt = malloc(((size_t)t->detail_texels + 1u) * 2u * sizeof(uint32_t));
@@ -889,6 +906,7 @@ glow_result glow_gl_system_update(glow_gl_system *s, const glow_update_desc *des
         bind(s, GLOW_BINDING_CACHE_SH, B_CACHE);
         bind(s, GLOW_BINDING_NODES, B_NODES);
         bind(s, GLOW_BINDING_FLUX, B_FLUX);
+        if (s->prog[K_GRAD]) bind(s, GLOW_BINDING_MOMENTS, B_MOM); /* also the pull's */
         dispatch(s, sgroups);
         gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
         if (it == 0) stamp(s, T_FLUX);
@@ -904,10 +922,22 @@ glow_result glow_gl_system_update(glow_gl_system *s, const glow_update_desc *des
         if (s->tail_level < s->levels) {
             gl->UseProgram(s->prog[K_PULL_TAIL]);
             bind(s, GLOW_BINDING_LEVELS, B_LEVELS);
+            if (s->prog[K_GRAD]) bind(s, GLOW_BINDING_MOMENTS_TAIL, B_MOM);
             gl->Uniform2ui(s->tail_loc, s->tail_level > 1 ? s->tail_level : 1u, s->levels);
             gl->DispatchCompute(1, 1, 1);
             gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
             s->pull_dispatches++;
+        }
+        if (s->prog[K_GRAD] && t->gradient_node_count) { /* link gradients: u of the coded nodes (the CPU's pull) */
+            gl->UseProgram(s->prog[K_GRAD]);
+            bind(s, GLOW_BINDING_FLUX, B_FLUX);
+            bind(s, GLOW_BINDING_MOMENTS, B_MOM);
+            bind(s, GLOW_BINDING_GRADIENT_NODES, B_GRAD_NODES);
+            bind(s, GLOW_BINDING_GRADIENT_CM, B_GRAD_CM);
+            bind(s, GLOW_BINDING_GRADIENT_U, B_GRAD_U);
+            gl->Uniform1ui(s->grad_loc, t->gradient_node_count);
+            dispatch(s, (t->gradient_node_count + GLOW_GRADIENT_GROUP - 1u) / GLOW_GRADIENT_GROUP);
+            gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
         }
         if (it == 0) stamp(s, T_PULL);
         /* 4. the proxy nodes from the attached neighbours' flux (a detached one's stay as last read) */
@@ -1005,6 +1035,10 @@ glow_result glow_gl_system_update(glow_gl_system *s, const glow_update_desc *des
         if (t->link_subsets) {
             bind(s, GLOW_BINDING_LINK_SUBSETS, B_SUBSETS);
             bind(s, GLOW_BINDING_NODES, B_NODES);
+        }
+        if (t->link_gradients) {
+            bind(s, GLOW_BINDING_LINK_SUBSETS, B_SUBSETS);
+            bind(s, GLOW_BINDING_GRADIENT_U, B_GRAD_U);
         }
         if (!budgeted) dispatch(s, s->C);
         else if (s->list_count) dispatch(s, s->list_count);

@@ -58,6 +58,13 @@ typedef struct glow_vec4 { float x, y, z, w; } glow_vec4;
 #define GLOW_BINDING_DRIFT_PARTIAL 1 /* drift only: vec2[groups]: per workgroup (Σ |y - y_prev|, Σ |y|) */
 #define GLOW_BINDING_CACHE_DELTA 1   /* cache_light only (uniform glow_cache_delta != 0): vec2[list]: per listed
                                         cache (|new DC - old DC|, |new DC|) of its luma, for the convergence test */
+/* link gradients (GLOW_LINK_GRADIENT; glow_backend.h glow_solver_tables.link_gradients) */
+#define GLOW_BINDING_MOMENTS 7       /* surfel_flux, pull, gradient_u: vec4[N]: luma-flux moments sum Yflux p (xyz), 0 */
+#define GLOW_BINDING_MOMENTS_TAIL 0  /* pull_tail: the same buffer (its 7 is LEVELS) */
+#define GLOW_BINDING_GRADIENT_U 0    /* gradient_u, cache_light: vec4[N + P]: u (xyz, IEEE-half values), 0;
+                                        0 for nodes no coded link reads and the proxies */
+#define GLOW_BINDING_GRADIENT_NODES 1 /* gradient_u only: uint[]: the nodes some coded link reads */
+#define GLOW_BINDING_GRADIENT_CM 2    /* gradient_u only: float[][12]: per such node c (3), M (9, row-major) */
 #define GLOW_BINDING_HOST_FIRST 8   /* first SSBO/UBO binding the host hook may use */
 /* UBO binding of glow_gl_params */
 #define GLOW_BINDING_PARAMS 0
@@ -75,6 +82,7 @@ typedef struct glow_vec4 { float x, y, z, w; } glow_vec4;
 #define GLOW_OUTPUT_GROUP 64
 #define GLOW_DETAIL_GROUP 64
 #define GLOW_PROXY_GROUP 64
+#define GLOW_GRADIENT_GROUP 64
 #define GLOW_DRIFT_GROUP 256  /* a power of two (drift.comp's reduction) */
 #define GLOW_REDUCE_CHUNK 32  /* coefficients reduced per shared-memory pass */
 #define GLOW_MAX_GROUPS_X 65535u /* dispatches wider than this use y (index = y * 65535 + x) */

@@ -67,6 +67,8 @@ typedef struct fixture {
 } fixture;
 
 static int g_log_errors;
+/* make_fixture bakes with link gradients (glow_pc_settings.link_gradients) instead of link subsets */
+static bool g_gradient;
 static char g_last_log[4096];
 static void logger(void *user, glow_log_level level, glow_result code, const char *msg, const char *file, int line) {
     (void)user, (void)code, (void)file, (void)line;
@@ -98,9 +100,11 @@ static glow_result cpu_point(void *user, const glow_surfel_batch *b, float *out,
 
 static int make_fixture(fixture *f, const char *scene, const char *hook, uint32_t luma, uint32_t chroma, uint32_t flags) {
     memset(f, 0, sizeof *f);
-    snprintf(f->path, sizeof f->path, "/tmp/glow_gpu_agree_%d_%s.glow", (int)getpid(), scene + 8);
+    snprintf(f->path, sizeof f->path, "/tmp/glow_gpu_agree_%d_%s%s.glow", (int)getpid(), scene + 8,
+             g_gradient ? "-grad" : "");
     if (access(f->path, R_OK) != 0) {
-        glow_pc_settings st = {.quality = GLOW_PC_QUALITY_LOW, .surfels = 4096, .links = 96, .bands = 3, .threads = 2, .seed = 1};
+        glow_pc_settings st = {.quality = GLOW_PC_QUALITY_LOW, .surfels = 4096, .links = 96, .bands = 3, .threads = 2, .seed = 1,
+                               .link_gradients = g_gradient};
         glow_pc_stats stats;
         if (glow_pc_bake(scene, f->path, &st, &stats) != GLOW_OK) {
             fprintf(stderr, "bake %s: %s\n", scene, stats.error);
@@ -113,8 +117,13 @@ static int make_fixture(fixture *f, const char *scene, const char *hook, uint32_
                            .lighting = {hook ? cpu_point : NULL, NULL}};
     if (glow_system_create(f->ctx, &sd, &f->cpu) != GLOW_OK) return -1;
     glow_solver_tables tables;
-    if (glow_system_get_solver_tables(f->cpu, &tables) != GLOW_OK || !tables.link_subsets) {
-        fprintf(stderr, "%s: the bake has no link subsets (LSUB): the GPU's subset path would go untested\n", scene);
+    if (glow_system_get_solver_tables(f->cpu, &tables) != GLOW_OK || (g_gradient ? !tables.link_gradients : !tables.link_subsets)) {
+        fprintf(stderr, "%s: the bake has no link %s (LSUB): the GPU's %s path would go untested\n", scene,
+                g_gradient ? "gradients" : "subsets", g_gradient ? "gradient" : "subset");
+        return -1;
+    }
+    if (g_gradient && (!(tables.link_kind & GLOW_LINK_KIND_GRADIENT) || !tables.gradient_node_count)) {
+        fprintf(stderr, "%s: no link reads a gradient: the GPU's gradient path would go untested\n", scene);
         return -1;
     }
     if (!tables.detail_texels || !tables.detail_links) {
@@ -380,6 +389,35 @@ static void test_bands(void **state) {
     agree_scene("builtin:cornell", 5, 2);
 }
 
+/* Link gradients (glow-bake --link-subsets gradient): the GPU pulls the luma-flux moments, computes each
+ * coded node's u (gradient_u.comp, rounded to halves as the CPU) and scales the coded links, as the CPU
+ * solver does; the same checks as agree_scene, and a budget. */
+static void test_link_gradients(void **state) {
+    (void)state;
+    g_gradient = true;
+    agree_scene("builtin:cornell", 3, 3);
+    fixture f;
+    const int made = make_fixture(&f, "builtin:cornell", NULL, 3, 3, 0);
+    g_gradient = false;
+    if (made != 0) fail_msg("fixture (link gradients)");
+    glow_solver_tables t;
+    assert_int_equal(glow_system_get_solver_tables(f.cpu, &t), GLOW_OK);
+    size_t coded = 0, links = (size_t)t.cache_count * t.link_blocks_per_cache * 16u;
+    for (size_t j = 0; j < links; ++j) coded += (t.link_gradients[j] & 0x8000u) != 0;
+    printf("builtin:cornell, link gradients: %zu of %zu link slots carry a code, %u nodes read with one; a budget:\n",
+           coded, links, t.gradient_node_count);
+    assert_true(coded > 0);
+    push_light(&f, 1.0f);
+    const float focus[3] = {-0.5f, 0.2f, 0.3f};
+    const glow_update_desc d = {.max_caches = t.cache_count / 4, .focus = focus, .focus_count = 1};
+    for (int u = 0; u < 8; ++u) {
+        assert_int_equal(glow_system_update(f.cpu, &d), GLOW_OK);
+        assert_int_equal(glow_gl_system_update(f.gpu, &d), GLOW_OK);
+    }
+    assert_true(compare(&f, "gradients, 8 budgeted updates") <= 1.0);
+    free_fixture(&f);
+}
+
 /* the GLSL hook against the same light as a CPU hook */
 static void test_hook(void **state) {
     (void)state;
@@ -616,13 +654,14 @@ int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_cornell), cmocka_unit_test(test_two_rooms), cmocka_unit_test(test_bands),
         cmocka_unit_test(test_hook), cmocka_unit_test(test_bad_hooks), cmocka_unit_test(test_world_systems),
-        cmocka_unit_test(test_budget), cmocka_unit_test(test_converged),
+        cmocka_unit_test(test_budget), cmocka_unit_test(test_converged), cmocka_unit_test(test_link_gradients),
     };
+    if (getenv("GLOW_TEST_FILTER")) cmocka_set_test_filter(getenv("GLOW_TEST_FILTER")); /* e.g. test_link_gradients */
     int rc = cmocka_run_group_tests(tests, NULL, NULL);
     glow_glctx_destroy(g_gl);
     char path[256];
-    const char *scenes[] = {"cornell", "two-rooms"};
-    for (int i = 0; i < 2; ++i) {
+    const char *scenes[] = {"cornell", "two-rooms", "cornell-grad"};
+    for (int i = 0; i < 3; ++i) {
         snprintf(path, sizeof path, "/tmp/glow_gpu_agree_%d_%s.glow", (int)getpid(), scenes[i]);
         remove(path);
     }

@@ -170,8 +170,8 @@ typedef struct glow_pc_settings {
                                    cache's response across its node (LSUB holds a 16-bit code, link_kind
                                    GLOW_LINK_KIND_GRADIENT) and reads its node's radiance times
                                    1 + e . u, u from where in the node the light is (the flux centroid,
-                                   each update). CPU runtime only for now; the GL backend refuses such a
-                                   bake (--link-subsets gradient; docs/linker.md "Link gradients").
+                                   each update). The CPU runtime and the GL backend read it
+                                   (--link-subsets gradient; docs/linker.md "Link gradients").
                                    \since 0.2 */
 } glow_pc_settings;
 

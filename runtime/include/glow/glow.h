@@ -220,7 +220,7 @@ typedef enum glow_link_kind_bits {
     GLOW_LINK_KIND_FULL_SH = 2,            /* also full-SH links (glow-bake --sh-links; GLOW_LINK_MODE_SH) */
     GLOW_LINK_KIND_SUBSETS = 4,            /* links carry their node's visible-part weights (link subsets) */
     GLOW_LINK_KIND_GRADIENT = 8            /* links carry the gradient of their response across their node
-                                              (link gradients; LSUB, never with SUBSETS; CPU runtime only).
+                                              (link gradients; LSUB, never with SUBSETS; CPU runtime and GL backend).
                                               \since 0.2 */
 } glow_link_kind_bits;
 

@@ -80,10 +80,23 @@ typedef struct glow_solver_tables {
     /* \since 0.2: the bake's bounds diagonal (m): a budget's default focus radius is 0.1 of it */
     float scene_diag;
     /* \since 0.2: the bake's glow_link_kind_bits. With GLOW_LINK_KIND_GRADIENT (link gradients,
-     * glow-bake --link-subsets gradient) link_subsets is NULL and the links' gradient codes are the
-     * CPU solver's alone: a backend that does not implement them must refuse the system (the GL
-     * backend does, GLOW_ERROR_UNSUPPORTED) */
+     * glow-bake --link-subsets gradient) link_subsets is NULL and the links' gradient codes are in
+     * the fields below (since 0.2; the GL backend reads them): a backend that does not implement them
+     * must refuse the system */
     uint32_t link_kind;
+    /* \since 0.2, link gradients (link_kind & GLOW_LINK_KIND_GRADIENT; all 0 / NULL without): the
+     * links' gradient codes (LSUB, one per link in link_blocks' order: 0 = none, else bit 15 and
+     * k_x + 15, k_y + 15, k_z + 15 in bits 0-4, 5-9, 10-14; docs/bake-format.md "LSUB"); the
+     * gradient_node_count internal nodes some coded link reads (ascending); per such node k,
+     * gradient_cm[12 k ...] its area centroid c (3) and M = sigma (C + 1e-3 trace(C) I)^-1 (9,
+     * row-major), computed once at load. Each update the CPU solver pulls the luma-flux moments
+     * m = sum of the leaves' Yflux p (p the surfel position) and sets u = M (m / Yflux - c) (0 where
+     * Yflux <= 0), rounded to IEEE halves (|u| < 2^-14: 0, above 65504: 65504); a coded link reads
+     * its node's radiance times max(0, 1 + ((k_x u_x + k_y u_y) + k_z u_z) / 15) */
+    const uint16_t *link_gradients;
+    uint32_t gradient_node_count;
+    const uint32_t *gradient_nodes;
+    const float *gradient_cm;
 } glow_solver_tables;
 /** Fills `out_tables`. \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT for NULL. \threadsafety Between
  * updates; the views change only through the setters and updates. \since 0.1 */
