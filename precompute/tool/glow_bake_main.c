@@ -63,11 +63,11 @@ static const char *usage_text =
     "                         whose link can err most (partly visible nodes, uneven visibility) and links\n"
     "                         a node's visible subtree (see --audit-radiance); solid-angle splits the\n"
     "                         largest visible solid angle first (PIC 4.5)\n"
-    "  --link-subsets on|off|gradient  on (default): a partly visible link reads the light of the part\n"
-    "                         of its node the cache sees (four weights per link, 2 bytes, LSUB); off:\n"
-    "                         the node's mean, as PIC; gradient: the node's mean scaled by where in the\n"
-    "                         node the light is against where the cache's response is (2 bytes per\n"
-    "                         link; CPU runtime only, the GL backend refuses such a bake)\n"
+    "  --link-subsets gradient|on|off  gradient (default): each link reads its node's mean scaled by\n"
+    "                         where in the node the light is (its flux centroid) against how the\n"
+    "                         cache's response varies across the node (2 bytes per link, LSUB); on: a\n"
+    "                         partly visible link reads the part of its node the cache sees (four\n"
+    "                         weights per link, the default before 2026-11-29); off: the node's mean, as PIC\n"
     "  --link-visibility clustered|exact  clustered (default): clusters beyond the near field that look\n"
     "                         small from a cache share a few rays (the rays per cache barely grow with\n"
     "                         the surfels); exact: one ray per (cache, surfel)\n"
@@ -473,6 +473,7 @@ static int run_info(const char *path, bool json) {
 
 int main(int argc, char **argv) {
     glow_pc_settings s = {0};
+    s.link_gradients = true; /* --link-subsets gradient: the CLI's default (docs/linker.md, "Link gradients") */
     static const char *groups[256]; /* --system-group, pointing into argv */
     s.system_groups = groups;
     const char *scene = NULL, *out = NULL, *info = NULL;

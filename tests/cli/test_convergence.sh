@@ -39,7 +39,7 @@ done
 # The audit's alternatives (what a link could read instead of its node's mean): the mean of the node's
 # visible leaves must gather closer to the exact sum than the node's mean does, at every budget.
 for L in 8 32; do
-  "$BIN/glow-bake" "${B[@]}" --links $L -o "$T/x.glow" --audit-radiance "$T/radiance.bin" >"$T/out" 2>"$T/err" \
+  "$BIN/glow-bake" "${B[@]}" --links $L --link-subsets on -o "$T/x.glow" --audit-radiance "$T/radiance.bin" >"$T/out" 2>"$T/err" \
     || fail "bake --links $L (alternatives)"
   cut=$(grep "links audit" "$T/err" | sed -n 's/.*rel\. RMS error \([0-9.]*\);.*/\1/p')
   vis=$(grep "link alternatives audit" "$T/err" | sed -n "s/.*visible leaves' mean: \/ exact [0-9.]*, rel\. RMS error \([0-9.]*\),.*/\1/p")

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Link gradients (glow-bake --link-subsets gradient; docs/linker.md "Link gradients"): a small bake of
 # builtin:pillar-hall says how many links carry a gradient and --info says the mode; glow-render --glow
-# and glow-bench (CPU) run with it and the indirect light stays within a few percent of the default
+# and glow-bench (CPU) run with it and the indirect light stays within a few percent of the link-subsets
 # bake's (finite: glow-compare's mean ratio); glow-bench --backend gl runs it too and its probes agree
 # with the CPU solver's within 1e-3 relative (SKIP without a GL 4.5 context; gpu/test_gl_agreement
 # compares every cache coefficient).
@@ -15,18 +15,20 @@ SCENE=$ROOT/scenes/pillar-hall.json
 expect 0 "bake --link-subsets gradient" "$BIN/glow-bake" "${B[@]}" --link-subsets gradient -o "$T/g.glow"
 err_has "link gradients: "
 grep -q "link subsets gradient" "$T/out" && pass "  the summary says 'link subsets gradient'" || fail "  the summary lacks the mode: $(grep links "$T/out")"
+expect 0 "default bake (link gradients since 2026-11-29)" "$BIN/glow-bake" "${B[@]}" -o "$T/dflt.glow"
+grep -q "link subsets gradient" "$T/out" && pass "  the default is link gradients" || fail "  default mode: $(grep links "$T/out")"
 expect 2 "bake --link-subsets bogus" "$BIN/glow-bake" "${B[@]}" --link-subsets bogus -o "$T/x.glow"
 err_has "on, off or gradient"
 expect 0 "--info" "$BIN/glow-bake" --info "$T/g.glow"
 grep -q "link subsets gradient" "$T/out" && pass "  --info says 'link subsets gradient'" || fail "  --info lacks the mode: $(grep links "$T/out")"
-expect 0 "default bake" "$BIN/glow-bake" "${B[@]}" -o "$T/d.glow"
+expect 0 "bake with link subsets" "$BIN/glow-bake" "${B[@]}" --link-subsets on -o "$T/d.glow"
 R=(--spp 4 --width 64 --height 36 -q)
 expect 0 "glow-render --glow (gradients)" "$BIN/glow-render" "$SCENE" --glow "$T/g.glow" "${R[@]}" --out "$T/g"
-expect 0 "glow-render --glow (default)" "$BIN/glow-render" "$SCENE" --glow "$T/d.glow" "${R[@]}" --out "$T/d"
-expect 0 "glow-compare gradients vs default" "$BIN/glow-compare" "$T/g_indirect.exr" "$T/d_indirect.exr" --no-flip
+expect 0 "glow-render --glow (link subsets)" "$BIN/glow-render" "$SCENE" --glow "$T/d.glow" "${R[@]}" --out "$T/d"
+expect 0 "glow-compare gradients vs link subsets" "$BIN/glow-compare" "$T/g_indirect.exr" "$T/d_indirect.exr" --no-flip
 ratio=$(awk '/mean ratio/ {print $3}' "$T/out")
 python3 -c "import math,sys; r=float(sys.argv[1]); sys.exit(0 if math.isfinite(r) and 0.9 < r < 1.1 else 1)" "${ratio:-nan}" \
-  && pass "  indirect finite, mean ratio $ratio to the default bake's" || fail "  indirect mean ratio '$ratio'"
+  && pass "  indirect finite, mean ratio $ratio to the link-subsets bake's" || fail "  indirect mean ratio '$ratio'"
 expect 0 "glow-bench (CPU) with gradients" "$BIN/glow-bench" "$T/g.glow" "$SCENE" --frames 2 --warmup 1
 "$BIN/glow-bench" "$T/g.glow" "$SCENE" --backend gl --frames 4 --warmup 1 --json >"$T/gl.json" 2>"$T/err"
 rc=$?
@@ -58,7 +60,7 @@ fi
 expect 0 "surfel radiance (glow-stability audit)" "$BIN/glow-stability" audit "$T/d.glow" "$SCENE" --probes 8 --samples 8 \
   --radiance-out "$T/radiance.bin"
 rms() { grep "link alternatives audit" "$T/err" | sed -n "s/.*$1: \/ exact [0-9.]*, rel\. RMS error \([0-9.]*\),.*/\1/p"; }
-expect 0 "audit, link subsets" "$BIN/glow-bake" "${B[@]}" -o "$T/x.glow" --audit-radiance "$T/radiance.bin"
+expect 0 "audit, link subsets" "$BIN/glow-bake" "${B[@]}" --link-subsets on -o "$T/x.glow" --audit-radiance "$T/radiance.bin"
 sub=$(rms "its link subsets (what this bake's runtime reads)")
 expect 0 "audit, link gradients" "$BIN/glow-bake" "${B[@]}" -o "$T/x.glow" --audit-radiance "$T/radiance.bin" --link-subsets gradient
 grd=$(rms "its link gradient codes (what this bake's runtime reads)")
