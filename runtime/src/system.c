@@ -277,32 +277,15 @@ static inline uint16_t signed_half(float x) {
     return (uint16_t)(a >= 6.103515625e-05f ? h : 0u);
 }
 
-static void pull_range(glow_system *s, uint32_t first, uint32_t end) {
+/* One level's nodes [first, end): flux and radiance from the children, and with link gradients the
+ * luma-flux moments in the same pass (`mom` is a constant at each call: two specialised loops). */
+static inline __attribute__((always_inline)) void pull_nodes(glow_system *s, uint32_t first, uint32_t end, bool mom) {
     const size_t N = s->N;
     float *restrict fy = s->flux, *restrict fco = s->flux + N, *restrict fcg = s->flux + 2 * N;
+    float *restrict mx = s->mom, *restrict my = mom ? s->mom + N : NULL, *restrict mz = mom ? s->mom + 2 * N : NULL;
     float *restrict r = s->rad;
     const glow_bake_node *restrict nodes = s->nodes;
     const float *restrict inv_pi_area = s->inv_pi_area;
-    if (s->mom) { /* link gradients: the luma flux moments with the flux (one pass over the children) */
-        float *restrict mx = s->mom, *restrict my = s->mom + N, *restrict mz = s->mom + 2 * N;
-        for (uint32_t n = first; n < end; ++n) {
-            const uint32_t a = nodes[n].child[0], b = nodes[n].child[1];
-            const float ipa = inv_pi_area[n];
-            const float y = fy[a] + fy[b], co = fco[a] + fco[b], cg = fcg[a] + fcg[b];
-            fy[n] = y;
-            fco[n] = co;
-            fcg[n] = cg;
-            mx[n] = mx[a] + mx[b];
-            my[n] = my[a] + my[b];
-            mz[n] = mz[a] + mz[b];
-            float *restrict rn = r + 4 * (size_t)n;
-            rn[0] = y * ipa;
-            rn[1] = co * ipa;
-            rn[2] = cg * ipa;
-            rn[3] = 0.0f;
-        }
-        return;
-    }
     for (uint32_t n = first; n < end; ++n) {
         const uint32_t a = nodes[n].child[0], b = nodes[n].child[1];
         const float ipa = inv_pi_area[n];
@@ -310,12 +293,22 @@ static void pull_range(glow_system *s, uint32_t first, uint32_t end) {
         fy[n] = y;
         fco[n] = co;
         fcg[n] = cg;
+        if (mom) {
+            mx[n] = mx[a] + mx[b];
+            my[n] = my[a] + my[b];
+            mz[n] = mz[a] + mz[b];
+        }
         float *restrict rn = r + 4 * (size_t)n;
         rn[0] = y * ipa;
         rn[1] = co * ipa;
         rn[2] = cg * ipa;
         rn[3] = 0.0f;
     }
+}
+
+static void pull_range(glow_system *s, uint32_t first, uint32_t end) {
+    if (s->mom) pull_nodes(s, first, end, true); /* link gradients */
+    else pull_nodes(s, first, end, false);
 }
 
 /* LSUB ratios of sub_nodes [first, end), after the pull (their slots, grandchildren, are final) */
