@@ -11,7 +11,9 @@
  *     emitted by the FRONT face only (counter-clockwise winding, geometric normal (p1-p0)×(p2-p0));
  *   - point: E = I·max(0, n·l)/d²; spot: × smoothstep falloff of the cone; sun: E = irradiance ·
  *     max(0, -n·direction) — delta lights, reached by next-event estimation only (exact shadow rays);
- *   - environment: constant radiance for every ray that leaves the scene, in any direction.
+ *   - environment: constant radiance for every ray that leaves the scene, in any direction, plus the
+ *     scene's environment_map (an equirectangular HDR sky, tools/eval/glow_envmap.h, docs/envmap.md)
+ *     when it has one: radiance = environment + scale × texel(direction), nearest texel.
  * SURFACES reflect on BOTH sides in the reference (the normal is flipped to face the arriving ray);
  * Glow's surfels live on front faces only, so the two differ where back faces receive light (not in
  * closed rooms). Emission is front-face only in both. Lighting cosines use the interpolated shading
@@ -40,6 +42,9 @@
  * visible-normal and cosine sampling, render_bsdf.h); next-event estimation of
  * every delta light at every vertex; emissive triangles sampled by area × luminance (a CDF) and
  * combined with BSDF-sampled emitter hits by multiple importance sampling (power heuristic);
+ * an environment_map is sampled at every vertex too (its texels ∝ luminance × solid angle, an
+ * unoccluded-to-infinity shadow ray) and combined with BSDF-sampled escaping rays by MIS (power
+ * heuristic), the first hit's part of it being direct light (the constant `environment` stays BSDF-sampled);
  * Russian roulette from the third vertex on (survival min(0.95, max channel of throughput × ρ)); no
  * depth limit except settings.max_depth (default 256 vertices: the bias left is below ρ^256).
  * Deterministic per seed for any thread count: each pixel has its own PCG32 streams seeded from
@@ -98,6 +103,9 @@ typedef struct glow_render_settings {
                                  solver can only resolve at that scale. 0 = no split */
     glow_render_progress_fn progress; /* optional: called with the fraction of rows done (serialised) */
     void *progress_user;
+    bool envmap_bsdf_only;    /* the scene's environment_map reached by BSDF sampling only, no next-event
+                                 estimation of the map (for measuring what the map's importance sampling +
+                                 MIS gains: the same expected image, more noise). false = NEE + MIS */
 } glow_render_settings;
 
 /* How Glow's view shades a GGX layer (scene "materials") from the caches (docs/glossy.md). */
