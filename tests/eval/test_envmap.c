@@ -223,6 +223,16 @@ static void test_sh(void **state) {
         for (int ch = 0; ch < 3; ++ch)
             if (fabs(c[3 * k + ch] - want[k]) > 2e-3)
                 fail_msg("1 + 0.5y + 0.3xz: c%d[%d] = %.6f, want %.6f", k, ch, c[3 * k + ch], want[k]);
+    /* its irradiance facing up: π · 1 + 0.5 · 2π/3 (the xz term integrates to 0), from the texels and from
+     * the SH (exact for a radiance of degree <= 2) */
+    const float up[3] = {0.0f, 1.0f, 0.0f};
+    double e_map[3], e_sh[3];
+    glow_eval_envmap_irradiance(&m, up, e_map);
+    glow_eval_sh9_irradiance(c, up, e_sh);
+    const double e_want = PI_D + 0.5 * 2.0 * PI_D / 3.0;
+    for (int ch = 0; ch < 3; ++ch)
+        if (fabs(e_map[ch] - e_want) > 2e-3 || fabs(e_sh[ch] - e_want) > 2e-3)
+            fail_msg("irradiance up: texels %.6f, SH %.6f, want %.6f", e_map[ch], e_sh[ch], e_want);
     glow_eval_envmap_free(&m);
     /* L = 1 + x_map turned by 90°: world L = 1 - z (map x = -world z), so c2 = -0.4886 · 4π/3 and c3 = 0 */
     make_map(256, lin_x, 90.0f, &m);

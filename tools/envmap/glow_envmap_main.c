@@ -1,6 +1,7 @@
 /* glow_envmap_main.c — glow-envmap: HDR environment maps from the command line (tools/eval/glow_envmap.h,
  * docs/envmap.md). `sky` writes a simple lat-long sky with a sun disc (glow-eval skymap runs it); `info`
  * prints a map's integral, its SH l <= 2 projection and its sun split as JSON, and can write the residual. */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -25,7 +26,9 @@ static void usage(FILE *f) {
             "  image centre, towards +X).\n"
             "info: JSON on stdout: size, the integral of L over the sphere (W/m2), the 9 RGB SH coefficients\n"
             "  (runtime convention, rotation and scale applied) and the sun split (direction towards the sun,\n"
-            "  irradiance W/m2, radius); --residual writes the map with the sun's texels replaced.\n");
+            "  irradiance W/m2, radius), and irradiance_check: at 64 normals, the largest error of the irradiance from\n"
+            "  the map's SH9 alone and from the residual's SH9 + the sun as a directional light, relative to the\n"
+            "  largest irradiance; --residual writes the map with the sun's texels replaced (texels before scale).\n");
 }
 
 static int parse3(const char *s, float out[3]) {
@@ -108,7 +111,7 @@ static int cmd_info(int argc, char **argv) {
         return 1;
     }
     glow_eval_envmap_sun sun;
-    if (glow_eval_envmap_extract_sun(&m, &sp, &sun, residual ? &res : NULL, msg, sizeof msg) != GLOW_OK) {
+    if (glow_eval_envmap_extract_sun(&m, &sp, &sun, &res, msg, sizeof msg) != GLOW_OK) {
         fprintf(stderr, TOOL ": %s\n", msg);
         glow_eval_envmap_free(&m);
         return 1;
@@ -122,11 +125,37 @@ static int cmd_info(int argc, char **argv) {
     for (int k = 0; k < 9; ++k)
         printf("%s[%.6g, %.6g, %.6g]", k ? ", " : "", sh[3 * k], sh[3 * k + 1], sh[3 * k + 2]);
     printf("],\n \"sun\": {\"found\": %s, \"to_sun\": [%.6f, %.6f, %.6f], \"irradiance\": [%.6g, %.6g, %.6g],"
-           " \"radius_deg\": %.4g, \"solid_angle_sr\": %.6g, \"texels\": %u, \"background\": [%.6g, %.6g, %.6g]}}\n",
+           " \"radius_deg\": %.4g, \"solid_angle_sr\": %.6g, \"texels\": %u, \"background\": [%.6g, %.6g, %.6g]},\n",
            sun.found ? "true" : "false", (double)sun.to_sun[0], (double)sun.to_sun[1], (double)sun.to_sun[2],
            (double)sun.irradiance[0], (double)sun.irradiance[1], (double)sun.irradiance[2], (double)sun.radius_deg,
            (double)sun.solid_angle_sr, (unsigned)sun.texel_count, (double)sun.background[0], (double)sun.background[1],
            (double)sun.background[2]);
+    /* how well engines' split lights it: irradiance at 64 normals (a Fibonacci sphere), exact vs the map's
+     * SH9 alone and vs the residual's SH9 + the sun as a directional light; the worst relative error
+     * of the luminance, relative to the largest exact irradiance (normals facing away from the sun get
+     * almost nothing, a relative error there says little) */
+    double rsh[27], worst_map = 0.0, worst_split = 0.0, emax = 0.0, ex[64], em[64], es[64];
+    glow_eval_envmap_sh9(&res, rsh);
+    for (int i = 0; i < 64; ++i) {
+        const double zc = 1.0 - (2.0 * i + 1.0) / 64.0, r = sqrt(1.0 - zc * zc), ph = 2.399963229728653 * i;
+        const float n[3] = {(float)(r * cos(ph)), (float)zc, (float)(r * sin(ph))};
+        double e[3], a[3], b[3];
+        glow_eval_envmap_irradiance(&m, n, e);
+        glow_eval_sh9_irradiance(sh, n, a);
+        glow_eval_sh9_irradiance(rsh, n, b);
+        const double c = sun.found ? fmax(0.0, n[0] * sun.to_sun[0] + n[1] * sun.to_sun[1] + n[2] * sun.to_sun[2]) : 0.0;
+        for (int k = 0; k < 3; ++k) b[k] += c * sun.irradiance[k];
+        ex[i] = 0.2126 * e[0] + 0.7152 * e[1] + 0.0722 * e[2];
+        em[i] = 0.2126 * a[0] + 0.7152 * a[1] + 0.0722 * a[2];
+        es[i] = 0.2126 * b[0] + 0.7152 * b[1] + 0.0722 * b[2];
+        emax = fmax(emax, ex[i]);
+    }
+    for (int i = 0; i < 64; ++i) {
+        worst_map = fmax(worst_map, fabs(em[i] - ex[i]) / fmax(emax, 1e-30));
+        worst_split = fmax(worst_split, fabs(es[i] - ex[i]) / fmax(emax, 1e-30));
+    }
+    printf(" \"irradiance_check\": {\"normals\": 64, \"max_exact\": %.6g, \"sh9_error\": %.4f, \"residual_sh9_plus_sun_error\": %.4f}}\n",
+           emax, worst_map, worst_split);
     int rc = 0;
     if (residual) {
         glow_eval_image img = {.width = res.width, .height = res.height, .rgb = res.rgb};
@@ -134,8 +163,8 @@ static int cmd_info(int argc, char **argv) {
             fprintf(stderr, TOOL ": %s\n", msg);
             rc = 1;
         }
-        glow_eval_envmap_free(&res);
     }
+    glow_eval_envmap_free(&res);
     glow_eval_envmap_free(&m);
     return rc;
 }

@@ -277,6 +277,36 @@ void glow_eval_envmap_sh9(const glow_eval_envmap *m, double out[27]) {
     for (int k = 0; k < 27; ++k) out[k] *= m->scale;
 }
 
+void glow_eval_envmap_irradiance(const glow_eval_envmap *m, const float n[3], double out[3]) {
+    out[0] = out[1] = out[2] = 0.0;
+    for (uint32_t j = 0; j < m->height; ++j) {
+        const double om = texel_omega(m, j), ct = cos(PI_D * (j + 0.5) / m->height);
+        const float *row = m->rgb + 3 * (size_t)j * m->width;
+        for (uint32_t i = 0; i < m->width; ++i) {
+            double d[3];
+            dir_of(m, ct, 2.0 * PI_D * (i + 0.5) / m->width, d);
+            const double c = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
+            if (c > 0.0)
+                for (int k = 0; k < 3; ++k) out[k] += c * om * row[3 * i + k];
+        }
+    }
+    for (int k = 0; k < 3; ++k) out[k] *= m->scale;
+}
+
+void glow_eval_sh9_irradiance(const double sh[27], const float n[3], double out[3]) {
+    const double x = n[0], y = n[1], z = n[2];
+    const double a0 = PI_D, a1 = 2.0 * PI_D / 3.0, a2 = PI_D / 4.0;
+    const double b[9] = {a0 * 0.28209479177387814,      a1 * 0.48860251190291992 * y,
+                         a1 * 0.48860251190291992 * z,  a1 * 0.48860251190291992 * x,
+                         a2 * 1.0925484305920792 * x * y, a2 * 1.0925484305920792 * y * z,
+                         a2 * 0.31539156525252005 * (3.0 * z * z - 1.0), a2 * 1.0925484305920792 * x * z,
+                         a2 * 0.54627421529603959 * (x * x - y * y)};
+    for (int c = 0; c < 3; ++c) {
+        out[c] = 0.0;
+        for (int k = 0; k < 9; ++k) out[c] += b[k] * sh[3 * k + c];
+    }
+}
+
 /* ------------------------------------------------------------------------------------------ sun */
 
 glow_result glow_eval_envmap_extract_sun(const glow_eval_envmap *m, const glow_eval_envmap_sun_params *params,

@@ -96,6 +96,14 @@ void glow_eval_envmap_integral(const glow_eval_envmap *map, double out_rgb[3]);
 /* The real SH l <= 2 projection: out[3 k + c] = c_k of channel c (R, G, B), k = 0..8 (see SH). */
 void glow_eval_envmap_sh9(const glow_eval_envmap *map, double out[27]);
 
+/* The irradiance on a surface with unit world normal n from the whole map, W/m²:
+ * Σ L_texel max(0, n·d_texel) Ω_texel with d_texel the texel's centre direction (the cosine at the centre:
+ * exact to O(texel²), no visibility). */
+void glow_eval_envmap_irradiance(const glow_eval_envmap *map, const float n[3], double out_rgb[3]);
+/* The irradiance at normal n of the SH l <= 2 radiance sh (glow_eval_envmap_sh9's layout): the clamped
+ * cosine's zonal factors π, 2π/3, π/4 (Ramamoorthi & Hanrahan 2001). */
+void glow_eval_sh9_irradiance(const double sh[27], const float n[3], double out_rgb[3]);
+
 /* ---- Sun split ----
  * RULE: (1) the brightest texel (largest Y; the first in row-major order on a tie) and its centre
  * direction d0; (2) the surroundings: the texels whose centres lie between R and 2R from d0 (R =
