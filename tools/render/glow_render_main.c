@@ -441,6 +441,11 @@ int main(int argc, char **argv) {
         printf("glow-render %s: %s (%u triangles, %u emissive, %u lights)%s%s\n", o.scene, info.mesh, info.triangle_count,
                info.emissive_triangle_count, info.light_count, o.bake ? ", Glow's view of " : o.ddish ? ", DDISH's view of " : ", reference",
                o.bake ? o.bake : o.ddish ? o.ddish : "");
+        if (info.environment_map)
+            printf("  environment map %s (%ux%u, rotation %g deg, scale %g)%s\n", info.environment_map,
+                   info.environment_map_width, info.environment_map_height,
+                   (double)info.environment_map_rotation_deg, (double)info.environment_map_scale,
+                   o.rs.envmap_bsdf_only ? ", BSDF sampling only" : ", importance-sampled + MIS");
         if (o.ddish)
             printf("  ddish: %u caches (%u grid, %u lightmap), %u coefficients (%u B as float), %u frames x %u rays, "
                    "hysteresis %g%s, %u threads: update median %.2f ms (mean %.2f, min %.2f), %.2f M rays per frame\n",

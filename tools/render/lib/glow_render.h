@@ -85,6 +85,9 @@ typedef struct glow_render_scene_info {
     glow_scene_camera camera;          /* resolved (glow_scene_camera_default when the file had none) */
     float bounds_min[3], bounds_max[3];
     const char *mesh;                  /* as the scene file resolved it */
+    const char *environment_map;       /* the resolved environment_map path, NULL without one */
+    uint32_t environment_map_width, environment_map_height;
+    float environment_map_rotation_deg, environment_map_scale;
 } glow_render_scene_info;
 glow_result glow_render_scene_get_info(const glow_render_scene *scene, glow_render_scene_info *out_info);
 

@@ -179,6 +179,13 @@ glow_result glow_render_scene_get_info(const glow_render_scene *s, glow_render_s
     memcpy(o->bounds_min, s->mesh.bounds_min, sizeof o->bounds_min);
     memcpy(o->bounds_max, s->mesh.bounds_max, sizeof o->bounds_max);
     o->mesh = s->desc.mesh;
+    if (s->has_envmap) {
+        o->environment_map = s->desc.environment_map.path;
+        o->environment_map_width = s->envmap.width;
+        o->environment_map_height = s->envmap.height;
+        o->environment_map_rotation_deg = s->envmap.rotation_deg;
+        o->environment_map_scale = s->envmap.scale;
+    }
     return GLOW_OK;
 }
 
