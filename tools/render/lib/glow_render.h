@@ -23,7 +23,8 @@
  *   direct   = what the camera ray sees directly (front-face emission × emission_scale, or the
  *              environment when it leaves the scene) + the first hit's reflection of the host-style
  *              lights: point/spot/sun by next-event estimation with an exact shadow ray, and the
- *              environment reached by the first bounce (a cosine-sampled ray that escapes). These are
+ *              environment reached by the first bounce (a cosine-sampled ray that escapes; with an
+ *              environment_map also one map sample + shadow ray, MIS-combined with that ray). These are
  *              exactly the terms Glow's host computes per surfel (the lighting hook's E).
  *   indirect = everything else: light after two or more bounces from lights and environment, and
  *              emissive surfaces' light reflected at the first hit or later. Glow transports emitters
