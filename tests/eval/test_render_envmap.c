@@ -1,8 +1,9 @@
 /* test_render_envmap.c — glow-render with a scene "environment_map" (docs/envmap.md), against answers
  * known without it:
- *   (a) a constant map (× scale 2) renders the same image as the same constant `environment`: a floor
- *       with a box under the sky, camera rays that escape, bounces between box and floor; the per-pixel
- *       difference has mean 0 within 4 standard errors in every channel;
+ *   (a) a constant map (× scale 2) renders the same image as the same constant `environment`, and so
+ *       does half the constant plus the map × 1 (the two add): a floor with a box under the sky, camera
+ *       rays that escape, bounces between box and floor; the per-pixel difference has mean 0 within 4
+ *       standard errors in every channel;
  *   (b) a sunny map (glow_eval_skymap: a 5° sun of 12 W/m² at 50° elevation) over a Lambertian floor
  *       seen from above: every pixel's expected radiance is ρ/π · Σ_upper-hemisphere L_texel ∫ cos θ dω
  *       (exact for the piecewise-constant map). Importance sampling + MIS (the default) and BSDF sampling
@@ -72,6 +73,8 @@ static int setup(void **state) {
     if (write_file("box_env.json", "{\"mesh\": \"box.obj\", " CAM_BOX ", \"environment\": [0.3, 0.4, 0.5]}\n") ||
         write_file("box_map.json",
                    "{\"mesh\": \"box.obj\", " CAM_BOX ", \"environment_map\": {\"path\": \"const.exr\", \"scale\": 2}}\n") ||
+        write_file("box_both.json", "{\"mesh\": \"box.obj\", " CAM_BOX ", \"environment\": [0.15, 0.2, 0.25],"
+                                    " \"environment_map\": {\"path\": \"const.exr\"}}\n") ||
         write_file("plane_sun.json", "{\"mesh\": \"plane.obj\", " CAM_TOP ", \"environment_map\": {\"path\": \"sunny.exr\"}}\n") ||
         write_file("plane_sun_ggx.json", "{\"mesh\": \"plane.obj\", " CAM_TOP ", \"environment_map\": {\"path\": \"sunny.exr\"},"
                                          " \"materials\": {\"grey\": {\"ggx\": {\"roughness\": 0.3}}}}\n") ||
@@ -107,7 +110,7 @@ static int setup(void **state) {
 
 static int teardown(void **state) {
     (void)state;
-    static const char *names[] = {"floor.mtl", "plane.obj", "box.obj", "box_env.json", "box_map.json", "plane_sun.json",
+    static const char *names[] = {"floor.mtl", "plane.obj", "box.obj", "box_env.json", "box_map.json", "box_both.json", "plane_sun.json",
                                   "plane_sun_ggx.json", "missing.json", "notexr.json", "const.exr", "sunny.exr", "plane.glow"};
     for (size_t i = 0; i < sizeof names / sizeof names[0]; ++i) remove(at(names[i]));
     rmdir(F.dir);
@@ -138,33 +141,41 @@ static void stats(const glow_eval_image *img, int c, double *mean, double *var) 
     *var = s2 / (n - 1);
 }
 
-static void test_constant_map(void **state) {
-    (void)state;
-    glow_render_scene *a = load("box_env.json"), *b = load("box_map.json");
-    glow_render_result ra, rb;
-    render(a, 32, false, &ra);
-    render(b, 32, false, &rb);
-    const size_t n = (size_t)ra.final.width * ra.final.height;
+/* a and b render the same expected image: the per-pixel difference's mean is 0 within 4 standard errors */
+static void same_image(const char *what, const glow_render_result *ra, const glow_render_result *rb) {
+    const size_t n = (size_t)ra->final.width * ra->final.height;
     glow_eval_image d;
-    assert_int_equal(glow_eval_image_alloc(&d, ra.final.width, ra.final.height), GLOW_OK);
-    for (size_t i = 0; i < 3 * n; ++i) d.rgb[i] = rb.final.rgb[i] - ra.final.rgb[i];
+    assert_int_equal(glow_eval_image_alloc(&d, ra->final.width, ra->final.height), GLOW_OK);
+    for (size_t i = 0; i < 3 * n; ++i) d.rgb[i] = rb->final.rgb[i] - ra->final.rgb[i];
     for (int c = 0; c < 3; ++c) {
         double m, v, ma, va;
         stats(&d, c, &m, &v);
-        stats(&ra.final, c, &ma, &va);
+        stats(&ra->final, c, &ma, &va);
         const double se = sqrt(v / n);
-        printf("constant map vs environment, channel %d: mean %.5f vs %.5f, difference %.2e (SE %.2e)\n", c, ma + m, ma, m,
-               se);
-        if (!(fabs(m) < 4.0 * se + 1e-4 * ma)) fail_msg("channel %d: mean difference %g, standard error %g", c, m, se);
+        printf("%s vs environment, channel %d: mean %.5f vs %.5f, difference %.2e (SE %.2e)\n", what, c, ma + m, ma, m, se);
+        if (!(fabs(m) < 4.0 * se + 1e-4 * ma)) fail_msg("%s, channel %d: mean difference %g, standard error %g", what, c, m, se);
         assert_true(ma > 0.1);
     }
+    glow_eval_image_free(&d);
+}
+
+static void test_constant_map(void **state) {
+    (void)state;
+    glow_render_scene *a = load("box_env.json"), *b = load("box_map.json"), *both = load("box_both.json");
+    glow_render_result ra, rb, rc;
+    render(a, 32, false, &ra);
+    render(b, 32, false, &rb);
+    render(both, 32, false, &rc);
+    same_image("constant map x 2", &ra, &rb);
+    same_image("half constant + map", &ra, &rc);
     /* there is sky in view and light bounced between box and floor */
     assert_true(rb.mean_indirect[1] > 0.005);
-    glow_eval_image_free(&d);
     glow_render_result_free(&ra);
     glow_render_result_free(&rb);
+    glow_render_result_free(&rc);
     glow_render_scene_destroy(a);
     glow_render_scene_destroy(b);
+    glow_render_scene_destroy(both);
 }
 
 /* ρ/π · ∫_upper L cos θ dω of the piecewise-constant map (rows above the horizon), per channel */
