@@ -340,6 +340,19 @@ static void test_sun(void **state) {
         /* a sky without a sun has none */
         assert_int_equal(glow_eval_envmap_extract_sun(&m0, NULL, &again, NULL, msg, sizeof msg), GLOW_OK);
         assert_false(again.found);
+        /* the host's one call: the residual's SH (float, coefficient-major) and the same sun; unsplit: the map's */
+        float hsh[27];
+        glow_eval_envmap_sun hsun;
+        double rsh[27], msh[27];
+        glow_eval_envmap_sh9(&res, rsh);
+        glow_eval_envmap_sh9(&m, msh);
+        assert_int_equal(glow_eval_envmap_sky_sh(&m, true, NULL, hsh, &hsun, msg, sizeof msg), GLOW_OK);
+        assert_true(hsun.found && memcmp(hsun.to_sun, sun.to_sun, sizeof sun.to_sun) == 0 &&
+                    memcmp(hsun.irradiance, sun.irradiance, sizeof sun.irradiance) == 0);
+        for (int k = 0; k < 27; ++k) assert_true(hsh[k] == (float)rsh[k]);
+        assert_int_equal(glow_eval_envmap_sky_sh(&m, false, NULL, hsh, NULL, msg, sizeof msg), GLOW_OK);
+        for (int k = 0; k < 27; ++k) assert_true(hsh[k] == (float)msh[k]);
+        assert_true(fabs(msh[0] - rsh[0]) > 0.1); /* the sun was in the map's SH */
         glow_eval_envmap_free(&m);
         glow_eval_envmap_free(&m0);
         glow_eval_envmap_free(&res);

@@ -418,6 +418,28 @@ glow_result glow_eval_envmap_extract_sun(const glow_eval_envmap *m, const glow_e
     return r;
 }
 
+glow_result glow_eval_envmap_sky_sh(const glow_eval_envmap *m, bool split, const glow_eval_envmap_sun_params *params,
+                                    float out[27], glow_eval_envmap_sun *out_sun, char *message, size_t message_size) {
+    if (out) memset(out, 0, 27 * sizeof *out);
+    if (out_sun) memset(out_sun, 0, sizeof *out_sun);
+    if (!m || !m->rgb || !out || (split && !out_sun)) {
+        set_message(message, message_size, "envmap: NULL argument to glow_eval_envmap_sky_sh");
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    double sh[27];
+    if (!split) {
+        glow_eval_envmap_sh9(m, sh);
+    } else {
+        glow_eval_envmap res;
+        glow_result r = glow_eval_envmap_extract_sun(m, params, out_sun, &res, message, message_size);
+        if (r != GLOW_OK) return r;
+        glow_eval_envmap_sh9(&res, sh);
+        glow_eval_envmap_free(&res);
+    }
+    for (int k = 0; k < 27; ++k) out[k] = (float)sh[k];
+    return GLOW_OK;
+}
+
 /* ------------------------------------------------------------------------------------- generator */
 
 glow_eval_skymap_params glow_eval_skymap_defaults(void) {

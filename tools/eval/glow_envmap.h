@@ -140,6 +140,16 @@ glow_result glow_eval_envmap_extract_sun(const glow_eval_envmap *map, const glow
                                          glow_eval_envmap_sun *out_sun, glow_eval_envmap *out_residual, char *message,
                                          size_t message_size);
 
+/* What a host that lights the sky with SH and the sun with shadows needs, in one call: with split false,
+ * out_sh_rgb = the whole map's SH (no sun: *out_sun zeroed); with split true, the sun split by `params`
+ * (NULL = defaults) into *out_sun and out_sh_rgb = the residual's SH. out_sh_rgb is float, 9 coefficients
+ * x RGB, COEFFICIENT-MAJOR (out_sh_rgb[3 k + c]), the layout of glow_eval_envmap_sh9 and of the SH sky
+ * the host side takes (issue 18: glow_host_set_environment_sh's sh_rgb); a constant `environment` is
+ * not included (add its radiance × √(4π) to coefficient 0). out_sun may be NULL when split is false. */
+glow_result glow_eval_envmap_sky_sh(const glow_eval_envmap *map, bool split, const glow_eval_envmap_sun_params *params,
+                                    float out_sh_rgb[27], glow_eval_envmap_sun *out_sun, char *message,
+                                    size_t message_size);
+
 /* ---- A simple sky (glow-envmap sky, glow-eval skymap) ----
  * Above the horizon (direction d, d.y >= 0): horizon + (zenith - horizon) · d.y^0.4 (a smooth gradient,
  * brightest near the horizon when horizon > zenith); below: ground (constant). Plus a sun disc of

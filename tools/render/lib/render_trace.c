@@ -868,11 +868,16 @@ glow_result glow__view_create(const glow_render_scene *sc, const char *bake_path
         }
     }
     /* TODO(lead, issue 18): the host lights the surfels with the constant `environment` only. When the
-     * scene has an environment_map (sc->has_envmap), give the host the map's light here once its API
-     * takes it: the SH l <= 2 of the residual (glow_eval_envmap_sh9 of the map after
-     * glow_eval_envmap_extract_sun) as the smooth sky, and the extracted sun (to_sun, irradiance) as a
-     * directional light with shadows. Until then Glow's caches miss the map's light (the first bounce's
-     * sky, which this view computes itself as direct light, is right). */
+     * scene has an environment_map (sc->has_envmap), give the host the map's light here (and after the
+     * move in glow_render_glow) once its API takes it:
+     *   float sh[27]; glow_eval_envmap_sun sun;
+     *   glow_eval_envmap_sky_sh(&sc->envmap, true, NULL, sh, &sun, ...);  (residual SH, coefficient-major)
+     *   sh[0..2] += sc->desc.environment[c] * sqrt(4π);                  (the constant sky adds)
+     *   glow_host_set_environment_sh(host, sh); glow_system_set_sky(sys, sh);
+     *   if (sun.found) one more light {GLOW_SCENE_LIGHT_SUN, direction = -sun.to_sun, irradiance =
+     *   sun.irradiance} (glow_host_set_lights with the scene's lights + it), shadowed like any sun.
+     * Until then Glow's caches miss the map's light (the first bounce's sky, which this view computes
+     * itself as direct light, is right). */
     glow_host_desc hd = glow_host_desc_from_scene(&sc->desc, gv->bake, GLOW_HOST_KIND_EXACT);
     hd.sky_rays = gs->sky_rays;
     hd.surfel_samples = gs->surfel_samples;
