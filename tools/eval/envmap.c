@@ -146,6 +146,25 @@ static inline void dir_of(const glow_eval_envmap *m, double cos_t, double phi_ma
     d[2] = s * cos(phi);
 }
 
+/* sin and cos of the world φ of every column's centre (2W doubles, malloc'd; NULL when out of memory) */
+static double *column_trig(const glow_eval_envmap *m) {
+    double *t = malloc(2 * (size_t)m->width * sizeof *t);
+    if (!t) return NULL;
+    for (uint32_t i = 0; i < m->width; ++i) {
+        const double phi = 2.0 * PI_D * (i + 0.5) / m->width - m->rot_rad;
+        t[2 * i] = sin(phi);
+        t[2 * i + 1] = cos(phi);
+    }
+    return t;
+}
+
+/* the world direction of texel (i, j)'s centre from column_trig's table and the row's cos θ, sin θ */
+static inline void texel_dir(const double *trig, uint32_t i, double ct, double st, double d[3]) {
+    d[0] = -st * trig[2 * i];
+    d[1] = ct;
+    d[2] = st * trig[2 * i + 1];
+}
+
 void glow_eval_envmap_direction(const glow_eval_envmap *m, double u, double v, float out[3]) {
     double d[3];
     dir_of(m, cos(PI_D * v), 2.0 * PI_D * u, d);
@@ -279,17 +298,23 @@ void glow_eval_envmap_sh9(const glow_eval_envmap *m, double out[27]) {
 
 void glow_eval_envmap_irradiance(const glow_eval_envmap *m, const float n[3], double out[3]) {
     out[0] = out[1] = out[2] = 0.0;
+    double *trig = column_trig(m);
+    if (!trig) {
+        out[0] = out[1] = out[2] = NAN;
+        return;
+    }
     for (uint32_t j = 0; j < m->height; ++j) {
-        const double om = texel_omega(m, j), ct = cos(PI_D * (j + 0.5) / m->height);
+        const double om = texel_omega(m, j), th = PI_D * (j + 0.5) / m->height, ct = cos(th), st = sin(th);
         const float *row = m->rgb + 3 * (size_t)j * m->width;
         for (uint32_t i = 0; i < m->width; ++i) {
             double d[3];
-            dir_of(m, ct, 2.0 * PI_D * (i + 0.5) / m->width, d);
+            texel_dir(trig, i, ct, st, d);
             const double c = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
             if (c > 0.0)
                 for (int k = 0; k < 3; ++k) out[k] += c * om * row[3 * i + k];
         }
     }
+    free(trig);
     for (int k = 0; k < 3; ++k) out[k] *= m->scale;
 }
 
@@ -329,7 +354,9 @@ glow_result glow_eval_envmap_extract_sun(const glow_eval_envmap *m, const glow_e
     }
     const uint32_t W = m->width, H = m->height;
     glow_eval_image res = {0};
-    if (glow_eval_image_alloc(&res, W, H) != GLOW_OK) {
+    double *trig = column_trig(m);
+    if (!trig || glow_eval_image_alloc(&res, W, H) != GLOW_OK) {
+        free(trig);
         set_message(message, message_size, "envmap: out of memory");
         return GLOW_ERROR_OUT_OF_MEMORY;
     }
@@ -353,10 +380,11 @@ glow_result glow_eval_envmap_extract_sun(const glow_eval_envmap *m, const glow_e
     /* (2) the surroundings */
     double bg[3] = {0, 0, 0}, bg_w = 0.0;
     for (uint32_t j = 0; j < H; ++j) {
-        const double om = texel_omega(m, j), ct = cos(PI_D * (j + 0.5) / H);
+        const double om = texel_omega(m, j), th = PI_D * (j + 0.5) / H, ct = cos(th), st = sin(th);
+        if (cos(fabs(th - acos(fmin(fmax(d0[1], -1.0), 1.0)))) < cos2R) continue; /* the whole row is too far */
         for (uint32_t i = 0; i < W; ++i) {
             double d[3];
-            dir_of(m, ct, 2.0 * PI_D * (i + 0.5) / W, d);
+            texel_dir(trig, i, ct, st, d);
             const double c = d[0] * d0[0] + d[1] * d0[1] + d[2] * d0[2];
             if (c < cosR && c >= cos2R) {
                 const float *t = m->rgb + 3 * ((size_t)j * W + i);
@@ -379,13 +407,13 @@ glow_result glow_eval_envmap_extract_sun(const glow_eval_envmap *m, const glow_e
         double e[3] = {0, 0, 0}, c[3] = {0, 0, 0}, om_sun = 0.0;
         uint32_t count = 0;
         for (uint32_t j = 0; j < H; ++j) {
-            const double om = texel_omega(m, j), ct = cos(PI_D * (j + 0.5) / H);
+            const double om = texel_omega(m, j), th = PI_D * (j + 0.5) / H, ct = cos(th), st = sin(th);
             for (uint32_t i = 0; i < W; ++i) {
                 const size_t t = (size_t)j * W + i;
                 const float *L = m->rgb + 3 * t;
                 if (!(luma(L) > T)) continue;
                 double d[3];
-                dir_of(m, ct, 2.0 * PI_D * (i + 0.5) / W, d);
+                texel_dir(trig, i, ct, st, d);
                 if (d[0] * d0[0] + d[1] * d0[1] + d[2] * d0[2] < cosR) continue;
                 float rest[3], gone[3];
                 for (int k = 0; k < 3; ++k) {
@@ -410,6 +438,7 @@ glow_result glow_eval_envmap_extract_sun(const glow_eval_envmap *m, const glow_e
         out->radius_deg = (float)(acos(fmax(-1.0, 1.0 - om_sun / (2.0 * PI_D))) * 180.0 / PI_D);
         out->texel_count = count;
     }
+    free(trig);
     glow_result r = GLOW_OK;
     if (out_residual)
         r = glow_eval_envmap_from_image(&res, m->rotation_deg, m->scale, "envmap residual", out_residual, message,
