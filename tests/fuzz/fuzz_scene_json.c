@@ -2,7 +2,8 @@
  *
  * Each input is parsed as a scene file. When the reader accepts it, what it returns must be what its
  * header promises: every light passes glow_scene_light_validate, the camera's numbers and the
- * environment are finite, emission_scale >= 0, the mesh path is a NUL-terminated string. Seed
+ * environment are finite, emission_scale >= 0, the mesh path is a NUL-terminated string, the
+ * environment_map's path fits its buffer and its rotation and scale are finite (scale >= 0). Seed
  * corpus: the JSON files in scenes/ and ../shared/scenes (tools/fuzz-smoke.sh).
  * Build: -DGLOW_FUZZ=ON with CC=clang (tests/fuzz/CMakeLists.txt), or tools/fuzz-smoke.sh. */
 #include <math.h>
@@ -37,6 +38,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
         }
         check_finite(scene.environment, 3);
         if (!(scene.emission_scale >= 0.0f) || !isfinite(scene.emission_scale)) abort();
+        const glow_scene_environment_map *em = &scene.environment_map;
+        if (!memchr(em->path, 0, sizeof em->path)) abort();
+        if (!isfinite(em->rotation_deg) || !isfinite(em->scale) || !(em->scale >= 0.0f)) abort();
         check_finite(scene.camera.position, 3);
         check_finite(scene.camera.target, 3);
         if (scene.has_camera) {

@@ -279,6 +279,23 @@ static const bad_case bad_cases[] = {
     {"{\"mesh\": \"a\", \"materials\": {\"floor\": {}, \"floor\": {}}}", GLOW_ERROR_INVALID_ARGUMENT,
      "materials.floor appears twice"},
     {"{\"mesh\": \"a\", \"materials\": {\"\": {}}}", GLOW_ERROR_INVALID_ARGUMENT, "materials has an empty material name"},
+    {"{\"mesh\": \"a\", \"environment_map\": \"sky.exr\"}", GLOW_ERROR_INVALID_ARGUMENT,
+     "environment_map must be an object ({\"path\": ...}), not a string"},
+    {"{\"mesh\": \"a\", \"environment_map\": {}}", GLOW_ERROR_INVALID_ARGUMENT, "environment_map.path is required but missing"},
+    {"{\"mesh\": \"a\", \"environment_map\": {\"path\": \"\"}}", GLOW_ERROR_INVALID_ARGUMENT,
+     "environment_map.path is an empty string"},
+    {"{\"mesh\": \"a\", \"environment_map\": {\"path\": 3}}", GLOW_ERROR_INVALID_ARGUMENT,
+     "environment_map.path must be a string, not a number"},
+    {"{\"mesh\": \"a\", \"environment_map\": {\"path\": \"s.exr\", \"scale\": -0.5}}", GLOW_ERROR_INVALID_ARGUMENT,
+     "environment_map.scale (-0.5) is negative"},
+    {"{\"mesh\": \"a\", \"environment_map\": {\"path\": \"s.exr\", \"scale\": 1e999}}", GLOW_ERROR_INVALID_ARGUMENT,
+     "environment_map.scale is not a finite number (inf)"},
+    {"{\"mesh\": \"a\", \"environment_map\": {\"path\": \"s.exr\", \"rotation_deg\": -1e999}}",
+     GLOW_ERROR_INVALID_ARGUMENT, "environment_map.rotation_deg is not a finite number (-inf)"},
+    {"{\"mesh\": \"a\", \"environment_map\": {\"path\": \"s.exr\", \"rotation_deg\": \"90\"}}",
+     GLOW_ERROR_INVALID_ARGUMENT, "environment_map.rotation_deg must be a number, not a string"},
+    {"{\"mesh\": \"a\", \"environment_map\": {\"path\": \"s.exr\", \"path\": \"t.exr\"}}", GLOW_ERROR_INVALID_ARGUMENT,
+     "environment_map.path appears twice"},
 };
 
 static void test_bad_input(void **state) {
@@ -493,6 +510,58 @@ static void test_doc_examples(void **state) {
     assert_int_equal(blocks, 2);
 }
 
+/* "environment_map": the path joined to the JSON's folder, rotation and scale with their defaults, the
+ * length limit of the fixed-size path, unknown keys warned about. */
+static void test_environment_map(void **state) {
+    (void)state;
+    glow_scene_desc s;
+    char msg[512];
+    /* absent: no path, scale 1 */
+    assert_int_equal(parse("{\"mesh\": \"a\"}", &s, msg, sizeof msg), GLOW_OK);
+    assert_string_equal(s.environment_map.path, "");
+    assert_true(s.environment_map.scale == 1.0f && s.environment_map.rotation_deg == 0.0f);
+    glow_scene_free(&s);
+    /* defaults, and the path joined to the base folder */
+    assert_int_equal(parse("{\"mesh\": \"a\", \"environment\": [0.1, 0.2, 0.3], \"environment_map\": {\"path\": \"skies/s.exr\"}}",
+                           &s, msg, sizeof msg),
+                     GLOW_OK);
+    assert_string_equal(s.environment_map.path, "/base/dir/skies/s.exr");
+    assert_true(s.environment_map.scale == 1.0f && s.environment_map.rotation_deg == 0.0f);
+    assert_vec3(s.environment, 0.1, 0.2, 0.3, 1e-7); /* coexists with the constant sky */
+    glow_scene_free(&s);
+    /* every key; an absolute path stays; scale 0 is allowed (a switched-off sky) */
+    capture cap = {0};
+    glow_logger lg = {capture_log, &cap};
+    const char *json = "{\"mesh\": \"a\", \"environment_map\": {\"path\": \"/abs/s.exr\", \"rotation_deg\": -90.5,"
+                       " \"scale\": 0, \"_c\": 1, \"gamma\": 2.2}}";
+    assert_int_equal(glow_scene_parse(json, strlen(json), "t.json", "/base", &lg, &s, msg, sizeof msg), GLOW_OK);
+    assert_string_equal(s.environment_map.path, "/abs/s.exr");
+    assert_true(s.environment_map.rotation_deg == -90.5f && s.environment_map.scale == 0.0f);
+    assert_int_equal(s.warning_count, 1);
+    assert_string_equal(cap.last, "t.json: environment_map.gamma is not a known key; ignored");
+    glow_scene_free(&s);
+    /* no base folder: kept relative */
+    json = "{\"mesh\": \"a\", \"environment_map\": {\"path\": \"s.exr\", \"scale\": 2.5}}";
+    assert_int_equal(glow_scene_parse(json, strlen(json), "t.json", NULL, NULL, &s, msg, sizeof msg), GLOW_OK);
+    assert_string_equal(s.environment_map.path, "s.exr");
+    assert_true(s.environment_map.scale == 2.5f);
+    glow_scene_free(&s);
+    /* too long for the fixed-size path: 1023 bytes fit, 1024 do not (with the folder) */
+    static char big[2200], name[1100];
+    memset(name, 'x', sizeof name);
+    name[1023 - 10] = '\0'; /* "/base/dir/" (10) + 1013 = 1023 */
+    snprintf(big, sizeof big, "{\"mesh\": \"a\", \"environment_map\": {\"path\": \"%s\"}}", name);
+    assert_int_equal(parse(big, &s, msg, sizeof msg), GLOW_OK);
+    assert_int_equal(strlen(s.environment_map.path), 1023);
+    glow_scene_free(&s);
+    name[1023 - 10] = 'x';
+    name[1024 - 10] = '\0';
+    snprintf(big, sizeof big, "{\"mesh\": \"a\", \"environment_map\": {\"path\": \"%s\"}}", name);
+    assert_int_equal(parse(big, &s, msg, sizeof msg), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_string_equal(msg, "t.json: environment_map.path is too long (1024 bytes with the scene's folder, at most 1023)");
+    assert_string_equal(s.environment_map.path, "");
+}
+
 static void test_light_validate(void **state) {
     (void)state;
     char msg[256];
@@ -553,6 +622,7 @@ int main(void) {
         cmocka_unit_test(test_files), cmocka_unit_test(test_shared_scenes),
         cmocka_unit_test(test_repo_scenes), cmocka_unit_test(test_doc_examples),
         cmocka_unit_test(test_light_validate), cmocka_unit_test(test_camera_default), cmocka_unit_test(test_materials),
+        cmocka_unit_test(test_environment_map),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -20,11 +20,11 @@
 static void usage(FILE *f) {
     fprintf(f,
             "usage: glow-render SCENE.json --out PREFIX [--spp N] [--seed S] [--threads N] [--width W --height H]\n"
-            "                   [--exposure E] [--max-depth D] [--albedo-scale A] [--near-split R]\n"
+            "                   [--exposure E] [--max-depth D] [--albedo-scale A] [--near-split R] [--envmap-bsdf-only]\n"
             "                   [--glow BAKE [--bounces K] [--sky-rays R] [--surfel-samples K] [--luma L] [--chroma C]\n"
             "                   [--link-mode compact|expanded|sh] [--indirect-only] [--no-detail] [--grid-only]\n"
             "                   [--glossy zh-ggx|zh-ggx-dominant|phong|none]] [--progress | -q]\n"
-            "  SCENE.json       scene description (docs/scene-format.md): mesh, camera, lights, environment\n"
+            "  SCENE.json       scene description (docs/scene-format.md): mesh, camera, lights, environment(_map)\n"
             "  --out PREFIX     writes PREFIX.exr (final), PREFIX_direct.exr, PREFIX_indirect.exr, PREFIX.png;\n"
             "                   Glow's view of a bake with a lightmap also PREFIX_texel.exr, each pixel's texel\n"
             "                   (x + 1, y + 1, cache + 1) for glow-compare --texels; a scene with a GGX material\n"
@@ -40,6 +40,8 @@ static void usage(FILE *f) {
             "  --near-split R   reference only: also writes PREFIX_indirect_near.exr, the part of the indirect\n"
             "                   light that reached each first hit from a surface closer than R scene units (the\n"
             "                   scale a cache-based solver must resolve to reproduce it); the rest is far light\n"
+            "  --envmap-bsdf-only  the scene's environment_map reached by BSDF sampling only (no next-event\n"
+            "                   estimation of the map, no MIS): the same expected image, noisier (docs/envmap.md)\n"
             "  --glow BAKE      render Glow's view: direct light as the reference computes it, indirect light\n"
             "                   from BAKE's caches (lightmap on static surfaces, else the grid)\n"
             "  --bounces K      Glow's feedback iterations in all, run as updates of up to 64 (default 192)\n"
@@ -189,6 +191,7 @@ static int parse_args(int argc, char **argv, options *o) {
         else if (!strcmp(a, "--luma")) NEED_U(1, GLOW_MAX_SH_BANDS, o->gs.sh_bands_luma, "a band count in 1..8");
         else if (!strcmp(a, "--chroma")) NEED_U(1, GLOW_MAX_SH_BANDS, o->gs.sh_bands_chroma, "a band count in 1..8");
         else if (!strcmp(a, "--indirect-only")) o->gs.indirect_only = true;
+        else if (!strcmp(a, "--envmap-bsdf-only")) o->rs.envmap_bsdf_only = true;
         else if (!strcmp(a, "--no-detail")) o->gs.no_detail = true;
         else if (!strcmp(a, "--grid-only")) o->gs.grid_only = true;
         else if (!strcmp(a, "--glossy")) {
@@ -438,6 +441,11 @@ int main(int argc, char **argv) {
         printf("glow-render %s: %s (%u triangles, %u emissive, %u lights)%s%s\n", o.scene, info.mesh, info.triangle_count,
                info.emissive_triangle_count, info.light_count, o.bake ? ", Glow's view of " : o.ddish ? ", DDISH's view of " : ", reference",
                o.bake ? o.bake : o.ddish ? o.ddish : "");
+        if (info.environment_map)
+            printf("  environment map %s (%ux%u, rotation %g deg, scale %g)%s\n", info.environment_map,
+                   info.environment_map_width, info.environment_map_height,
+                   (double)info.environment_map_rotation_deg, (double)info.environment_map_scale,
+                   o.rs.envmap_bsdf_only ? ", BSDF sampling only" : ", importance-sampled + MIS");
         if (o.ddish)
             printf("  ddish: %u caches (%u grid, %u lightmap), %u coefficients (%u B as float), %u frames x %u rays, "
                    "hysteresis %g%s, %u threads: update median %.2f ms (mean %.2f, min %.2f), %.2f M rays per frame\n",

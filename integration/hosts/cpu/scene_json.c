@@ -431,10 +431,49 @@ static glow_result read_material(ctx *c, const cJSON *v, glow_scene_material *ou
     return GLOW_OK;
 }
 
+/* "environment_map": {"path": "sky.exr", "rotation_deg": F, "scale": F} */
+static glow_result read_environment_map(ctx *c, const cJSON *v, const char *base_dir, glow_scene_environment_map *out) {
+    if (!cJSON_IsObject(v))
+        return fail(c, GLOW_ERROR_INVALID_ARGUMENT, "environment_map must be an object ({\"path\": ...}), not %s",
+                    json_type_name(v));
+    static const char *const keys[] = {"path", "rotation_deg", "scale", NULL};
+    glow_result r = check_keys(c, v, "environment_map", keys);
+    if (r != GLOW_OK) return r;
+    const cJSON *e;
+    if ((r = require(c, v, "environment_map", "path", &e)) != GLOW_OK) return r;
+    if (!cJSON_IsString(e))
+        return fail(c, GLOW_ERROR_INVALID_ARGUMENT, "environment_map.path must be a string, not %s", json_type_name(e));
+    const char *p = e->valuestring;
+    if (!p[0]) return fail(c, GLOW_ERROR_INVALID_ARGUMENT, "environment_map.path is an empty string");
+    const bool keep = p[0] == '/' || !base_dir || !base_dir[0];
+    const size_t bn = keep ? 0 : strlen(base_dir);
+    const bool slash = bn > 0 && base_dir[bn - 1] == '/';
+    const size_t need = (keep ? 0 : bn + !slash) + strlen(p);
+    if (need >= sizeof out->path)
+        return fail(c, GLOW_ERROR_INVALID_ARGUMENT, "environment_map.path is too long (%zu bytes with the scene's folder, at most %zu)",
+                    need, sizeof out->path - 1);
+    if (keep)
+        snprintf(out->path, sizeof out->path, "%s", p);
+    else
+        snprintf(out->path, sizeof out->path, "%s%s%s", base_dir, slash ? "" : "/", p);
+    out->rotation_deg = 0.0f;
+    out->scale = 1.0f;
+    if ((e = get(v, "rotation_deg")) != NULL &&
+        (r = read_number(c, e, "environment_map.rotation_deg", &out->rotation_deg)) != GLOW_OK)
+        return r;
+    if ((e = get(v, "scale")) != NULL) {
+        if ((r = read_number(c, e, "environment_map.scale", &out->scale)) != GLOW_OK) return r;
+        if (out->scale < 0.0f)
+            return fail(c, GLOW_ERROR_INVALID_ARGUMENT, "environment_map.scale (%g) is negative", (double)out->scale);
+    }
+    return GLOW_OK;
+}
+
 static glow_result parse_root(ctx *c, const cJSON *root, const char *base_dir, glow_scene_desc *s) {
     if (!cJSON_IsObject(root))
         return fail(c, GLOW_ERROR_CORRUPT_DATA, "the document must be a JSON object, not %s", json_type_name(root));
-    static const char *const keys[] = {"mesh", "camera", "lights", "environment", "emission_scale", "materials", NULL};
+    static const char *const keys[] = {"mesh", "camera", "lights", "environment", "emission_scale", "materials",
+                                       "environment_map", NULL};
     glow_result r = check_keys(c, root, "", keys);
     if (r != GLOW_OK) return r;
     const cJSON *e;
@@ -467,6 +506,10 @@ static glow_result parse_root(ctx *c, const cJSON *root, const char *base_dir, g
         }
     }
     if ((e = get(root, "environment")) != NULL && (r = read_nonneg_vec3(c, e, "environment", s->environment)) != GLOW_OK)
+        return r;
+    s->environment_map.scale = 1.0f;
+    if ((e = get(root, "environment_map")) != NULL &&
+        (r = read_environment_map(c, e, base_dir, &s->environment_map)) != GLOW_OK)
         return r;
     s->emission_scale = 1.0f;
     if ((e = get(root, "emission_scale")) != NULL) {

@@ -11,7 +11,9 @@
  *     emitted by the FRONT face only (counter-clockwise winding, geometric normal (p1-p0)×(p2-p0));
  *   - point: E = I·max(0, n·l)/d²; spot: × smoothstep falloff of the cone; sun: E = irradiance ·
  *     max(0, -n·direction) — delta lights, reached by next-event estimation only (exact shadow rays);
- *   - environment: constant radiance for every ray that leaves the scene, in any direction.
+ *   - environment: constant radiance for every ray that leaves the scene, in any direction, plus the
+ *     scene's environment_map (an equirectangular HDR sky, tools/eval/glow_envmap.h, docs/envmap.md)
+ *     when it has one: radiance = environment + scale × texel(direction), nearest texel.
  * SURFACES reflect on BOTH sides in the reference (the normal is flipped to face the arriving ray);
  * Glow's surfels live on front faces only, so the two differ where back faces receive light (not in
  * closed rooms). Emission is front-face only in both. Lighting cosines use the interpolated shading
@@ -21,7 +23,8 @@
  *   direct   = what the camera ray sees directly (front-face emission × emission_scale, or the
  *              environment when it leaves the scene) + the first hit's reflection of the host-style
  *              lights: point/spot/sun by next-event estimation with an exact shadow ray, and the
- *              environment reached by the first bounce (a cosine-sampled ray that escapes). These are
+ *              environment reached by the first bounce (a cosine-sampled ray that escapes; with an
+ *              environment_map also one map sample + shadow ray, MIS-combined with that ray). These are
  *              exactly the terms Glow's host computes per surfel (the lighting hook's E).
  *   indirect = everything else: light after two or more bounces from lights and environment, and
  *              emissive surfaces' light reflected at the first hit or later. Glow transports emitters
@@ -40,6 +43,9 @@
  * visible-normal and cosine sampling, render_bsdf.h); next-event estimation of
  * every delta light at every vertex; emissive triangles sampled by area × luminance (a CDF) and
  * combined with BSDF-sampled emitter hits by multiple importance sampling (power heuristic);
+ * an environment_map is sampled at every vertex too (its texels ∝ luminance × solid angle, an
+ * unoccluded-to-infinity shadow ray) and combined with BSDF-sampled escaping rays by MIS (power
+ * heuristic), the first hit's part of it being direct light (the constant `environment` stays BSDF-sampled);
  * Russian roulette from the third vertex on (survival min(0.95, max channel of throughput × ρ)); no
  * depth limit except settings.max_depth (default 256 vertices: the bias left is below ρ^256).
  * Deterministic per seed for any thread count: each pixel has its own PCG32 streams seeded from
@@ -80,6 +86,9 @@ typedef struct glow_render_scene_info {
     glow_scene_camera camera;          /* resolved (glow_scene_camera_default when the file had none) */
     float bounds_min[3], bounds_max[3];
     const char *mesh;                  /* as the scene file resolved it */
+    const char *environment_map;       /* the resolved environment_map path, NULL without one */
+    uint32_t environment_map_width, environment_map_height;
+    float environment_map_rotation_deg, environment_map_scale;
 } glow_render_scene_info;
 glow_result glow_render_scene_get_info(const glow_render_scene *scene, glow_render_scene_info *out_info);
 
@@ -98,6 +107,9 @@ typedef struct glow_render_settings {
                                  solver can only resolve at that scale. 0 = no split */
     glow_render_progress_fn progress; /* optional: called with the fraction of rows done (serialised) */
     void *progress_user;
+    bool envmap_bsdf_only;    /* the scene's environment_map reached by BSDF sampling only, no next-event
+                                 estimation of the map (for measuring what the map's importance sampling +
+                                 MIS gains: the same expected image, more noise). false = NEE + MIS */
 } glow_render_settings;
 
 /* How Glow's view shades a GGX layer (scene "materials") from the caches (docs/glossy.md). */

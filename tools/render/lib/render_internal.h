@@ -6,6 +6,7 @@
 #include <stdarg.h>
 #include <stdbool.h>
 
+#include "glow_envmap.h"
 #include "glow_render.h"
 #include "glow/glow_host.h"
 #include "render_bsdf.h"
@@ -31,6 +32,8 @@ struct glow_render_scene {
     uint32_t glossy_count;     /* materials with a GGX layer */
     float eps;                 /* ray offset: 1e-4 x bounds diagonal (glow_host's) */
     float diag;
+    bool has_envmap;           /* the scene's "environment_map" (desc.environment_map.path non-empty) */
+    glow_eval_envmap envmap;   /* loaded with its rotation and scale (glow_envmap.h); zeroed without one */
 };
 
 /* Writes "fmt..." into message (truncated; message may be NULL). Returns `code`. */

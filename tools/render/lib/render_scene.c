@@ -30,6 +30,7 @@ void glow_render_scene_destroy(glow_render_scene *s) {
     free(s->emitter_cdf);
     free(s->light_pdf_area);
     free(s->ggx);
+    glow_eval_envmap_free(&s->envmap);
     free(s);
 }
 
@@ -44,6 +45,17 @@ glow_result glow_render_scene_load(const char *path, glow_render_scene **out, ch
     if (r != GLOW_OK) {
         glow_render_scene_destroy(s);
         return r;
+    }
+    if (s->desc.environment_map.path[0]) { /* the sky image, before the (slower) mesh */
+        char why[600] = "";
+        const glow_scene_environment_map *em = &s->desc.environment_map;
+        r = glow_eval_envmap_load(em->path, em->rotation_deg, em->scale, &s->envmap, why, sizeof why);
+        if (r != GLOW_OK) {
+            glow__render_fail(message, message_size, r, "%s: environment_map: %s", path, why);
+            glow_render_scene_destroy(s);
+            return r;
+        }
+        s->has_envmap = true;
     }
     r = glow__scene_load(s->desc.mesh, &s->log, &s->mesh);
     if (r != GLOW_OK) {
@@ -167,6 +179,13 @@ glow_result glow_render_scene_get_info(const glow_render_scene *s, glow_render_s
     memcpy(o->bounds_min, s->mesh.bounds_min, sizeof o->bounds_min);
     memcpy(o->bounds_max, s->mesh.bounds_max, sizeof o->bounds_max);
     o->mesh = s->desc.mesh;
+    if (s->has_envmap) {
+        o->environment_map = s->desc.environment_map.path;
+        o->environment_map_width = s->envmap.width;
+        o->environment_map_height = s->envmap.height;
+        o->environment_map_rotation_deg = s->envmap.rotation_deg;
+        o->environment_map_scale = s->envmap.scale;
+    }
     return GLOW_OK;
 }
 

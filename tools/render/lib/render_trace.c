@@ -83,6 +83,10 @@ typedef struct render_ctx {
     float albedo_scale, emission_scale;
     bool emitters_on, env_on;
     float env[3];
+    const glow_eval_envmap *map; /* the scene's environment_map (added to env), NULL without one */
+    bool map_nee;                /* next-event estimation of the map + MIS (false: BSDF sampling only); its
+                                    random numbers are drawn only when true, so scenes without a map keep
+                                    their streams (and images) bit for bit */
     render_light *lights;
     uint32_t light_count;
     /* camera */
@@ -295,6 +299,43 @@ static void emitter_nee(const render_ctx *c, rng *rp, const surf *s, float out[3
     for (int k = 0; k < 3; ++k) out[k] = s->rho[k] * le[k] * g;
 }
 
+/* Next-event estimation of the environment map at s from (u1, u2): reflected radiance (before the path's
+ * throughput), MIS-weighted (power heuristic) against BSDF sampling; out_spec (optional) its GGX part.
+ * The shadow ray goes to infinity: any hit blocks the sky. */
+static void envmap_nee(const render_ctx *c, float u1, float u2, const surf *s, float out[3], float out_spec[3],
+                       uint64_t *rays) {
+    out[0] = out[1] = out[2] = 0.0f;
+    if (out_spec) out_spec[0] = out_spec[1] = out_spec[2] = 0.0f;
+    float w[3], L[3];
+    const float pe = glow_eval_envmap_sample(c->map, u1, u2, w, L);
+    if (!(pe > 0.0f)) return;
+    const float cos_s = glow__dot(s->ns, w);
+    if (!(cos_s > 0.0f) || glow__dot(s->ng, w) <= 0.0f) return;
+    ++*rays;
+    if (glow__rt_occluded(c->sc->rt, s->o, w, 0.0f, INFINITY)) return;
+    if (s->lobe.g) {
+        float fd[3], fs[3];
+        const float pb = glow__render_lobe_eval(&s->lobe, w, fd, fs), m = mis2(pe, pb) / pe;
+        for (int k = 0; k < 3; ++k) {
+            out[k] = L[k] * (fd[k] + fs[k]) * m;
+            if (out_spec) out_spec[k] = L[k] * fs[k] * m;
+        }
+        return;
+    }
+    const float g = mis2(pe, cos_s * INV_PI_F) * cos_s * INV_PI_F / pe;
+    for (int k = 0; k < 3; ++k) out[k] = s->rho[k] * L[k] * g;
+}
+
+/* A BSDF-sampled ray w (drawn with solid-angle pdf pdf_bsdf; 0 = its origin did no NEE: full weight) left
+ * the scene: adds beta × the map's radiance there × the MIS weight against envmap_nee to out. */
+static void envmap_escape(const render_ctx *c, const float w[3], float pdf_bsdf, const float beta[3], float out[3]) {
+    if (!c->map) return;
+    float L[3];
+    glow_eval_envmap_eval(c->map, w, L);
+    const float wgt = c->map_nee && pdf_bsdf > 0.0f ? mis2(pdf_bsdf, glow_eval_envmap_pdf(c->map, w)) : 1.0f;
+    for (int k = 0; k < 3; ++k) out[k] += beta[k] * L[k] * wgt;
+}
+
 /* Glow's indirect light at the first hit: ρ · (cosine-lobe mean incident radiance of the caches);
  * with a GGX layer ρ (1 - E(cos θ_o)) · that + the GGX lobe's (glow_view.glossy), which also goes to spec[].
  * When it read the lightmap, texel[] gets the texel whose square holds the lookup (x + 1, y + 1) and
@@ -397,6 +438,11 @@ static void continue_path(const render_ctx *c, rng *rp, glow__hit h, const float
         delta_light(c, &s, E, rays);
         emitter_nee(c, rp, &s, nee, NULL, NULL, rays);
         for (int k = 0; k < 3; ++k) out[k] += beta[k] * (E[k] + nee[k]);
+        if (c->map_nee) {
+            const float u1 = rnd(rp), u2 = rnd(rp);
+            envmap_nee(c, u1, u2, &s, nee, NULL, rays);
+            for (int k = 0; k < 3; ++k) out[k] += beta[k] * nee[k];
+        }
         float r = rnd(rp), a = rnd(rp), b = rnd(rp);
         if (s.lobe.g) { /* GGX layer: sample first, then Russian roulette on the new throughput */
             float w[3], wsp[3], pdf;
@@ -426,6 +472,7 @@ static void continue_path(const render_ctx *c, rng *rp, glow__hit h, const float
         h = glow__rt_intersect(sc->rt, s.o, wdir, 0.0f, INFINITY);
         if (h.tri == UINT32_MAX) {
             for (int k = 0; k < 3; ++k) out[k] += beta[k] * c->env[k];
+            envmap_escape(c, wdir, pdf_prev, beta, out);
             break;
         }
     }
@@ -446,8 +493,14 @@ static void sample(const render_ctx *c, uint32_t x, uint32_t y, rng *rd, rng *rp
     ws->rays++;
     glow__hit h = glow__rt_intersect(sc->rt, c->org, dir, 0.0f, INFINITY);
     if (h.tri == UINT32_MAX) {
-        if (!(c->gv && c->gv->indirect_only))
+        if (!(c->gv && c->gv->indirect_only)) {
             for (int k = 0; k < 3; ++k) direct[k] += c->env[k];
+            if (c->map) {
+                float L[3];
+                glow_eval_envmap_eval(c->map, dir, L);
+                for (int k = 0; k < 3; ++k) direct[k] += L[k];
+            }
+        }
         return;
     }
     surf s;
@@ -455,6 +508,10 @@ static void sample(const render_ctx *c, uint32_t x, uint32_t y, rng *rd, rng *rp
     if (c->gv && c->gv->indirect_only) { /* the caches alone; stream rd advances as below */
         (void)rnd(rd);
         (void)rnd(rd);
+        if (c->map_nee) {
+            (void)rnd(rd);
+            (void)rnd(rd);
+        }
         float g[3];
         glow_indirect(c, &s, coeffs, ws, g, texel, spec);
         for (int k = 0; k < 3; ++k) indirect[k] += g[k];
@@ -486,6 +543,13 @@ static void sample(const render_ctx *c, uint32_t x, uint32_t y, rng *rd, rng *rp
         h1 = glow__rt_intersect(sc->rt, s.o, w1, 0.0f, INFINITY);
         if (h1.tri == UINT32_MAX && c->env_on)
             for (int k = 0; k < 3; ++k) direct[k] += beta[k] * c->env[k];
+        if (h1.tri == UINT32_MAX) envmap_escape(c, w1, pdf1, beta, direct);
+    }
+    if (c->map_nee) { /* the environment map's NEE at the first hit (stream rd): direct light too */
+        const float u1 = rnd(rd), u2 = rnd(rd);
+        float en[3];
+        envmap_nee(c, u1, u2, &s, en, NULL, &ws->rays);
+        for (int k = 0; k < 3; ++k) direct[k] += en[k];
     }
     /* ---- Glow's view: the caches at the first hit */
     if (c->gv) {
@@ -635,6 +699,8 @@ static glow_result render(const glow_render_scene *sc, const glow_render_setting
     c.emitters_on = sc->emitter_count > 0 && c.emission_scale > 0.0f;
     memcpy(c.env, sc->desc.environment, sizeof c.env);
     c.env_on = c.env[0] > 0.0f || c.env[1] > 0.0f || c.env[2] > 0.0f;
+    c.map = sc->has_envmap ? &sc->envmap : NULL;
+    c.map_nee = c.map && c.map->lum_integral > 0.0 && c.map->scale > 0.0f && !st->envmap_bsdf_only;
     c.gv = gv;
     c.progress = st->progress;
     c.progress_user = st->progress_user;
@@ -801,6 +867,17 @@ glow_result glow__view_create(const glow_render_scene *sc, const char *bake_path
             for (int k = 0; k < 6; ++k) gv->lm_uv[t][k] = (float)uv[k] / 65535.0f;
         }
     }
+    /* TODO(lead, issue 18): the host lights the surfels with the constant `environment` only. When the
+     * scene has an environment_map (sc->has_envmap), give the host the map's light here (and after the
+     * move in glow_render_glow) once its API takes it:
+     *   float sh[27]; glow_eval_envmap_sun sun;
+     *   glow_eval_envmap_sky_sh(&sc->envmap, true, NULL, sh, &sun, ...);  (residual SH, coefficient-major)
+     *   sh[0..2] += sc->desc.environment[c] * sqrt(4π);                  (the constant sky adds)
+     *   glow_host_set_environment_sh(host, sh); glow_system_set_sky(sys, sh);
+     *   if (sun.found) one more light {GLOW_SCENE_LIGHT_SUN, direction = -sun.to_sun, irradiance =
+     *   sun.irradiance} (glow_host_set_lights with the scene's lights + it), shadowed like any sun.
+     * Until then Glow's caches miss the map's light (the first bounce's sky, which this view computes
+     * itself as direct light, is right). */
     glow_host_desc hd = glow_host_desc_from_scene(&sc->desc, gv->bake, GLOW_HOST_KIND_EXACT);
     hd.sky_rays = gs->sky_rays;
     hd.surfel_samples = gs->surfel_samples;
@@ -903,7 +980,7 @@ glow_result glow_render_glow(const glow_render_scene *sc, const char *bake_path,
     r = glow__view_create(sc, bake_path, st, &g, &cl, &gv, message, message_size);
     if (r == GLOW_OK && moved) { /* the light changes: the moved scene's lights, sky and emission, K more iterations */
         if ((r = glow_host_set_lights(gv.host, moved->desc.lights, moved->desc.light_count)) != GLOW_OK ||
-            (r = glow_host_set_environment(gv.host, moved->desc.environment)) != GLOW_OK)
+            (r = glow_host_set_environment(gv.host, moved->desc.environment)) != GLOW_OK) /* TODO(lead): + its map */
             r = glow__render_fail(message, message_size, r, "%s: cannot give the host its lights: %s%s%s", moved->path,
                                   glow_result_string(r), cl.first_error[0] ? ": " : "", cl.first_error);
         for (uint32_t left = g.moved_iterations; r == GLOW_OK && left > 0;) {
@@ -996,6 +1073,8 @@ static glow_result probe_ctx_init(render_ctx *c, const glow_render_scene *sc, co
     c->emission_scale = sc->desc.emission_scale;
     c->emitters_on = sc->emitter_count > 0 && c->emission_scale > 0.0f;
     memcpy(c->env, sc->desc.environment, sizeof c->env);
+    c->map = sc->has_envmap ? &sc->envmap : NULL;
+    c->map_nee = c->map && c->map->lum_integral > 0.0 && c->map->scale > 0.0f && !st->envmap_bsdf_only;
     if (!lights) {
         lights = sc->desc.lights;
         light_count = sc->desc.light_count;

@@ -12,6 +12,8 @@
  *                   "outer_deg": 40, "inner_deg": 30 },                                  W/sr on the axis
  *                 { "type": "sun", "direction": [..], "irradiance": [r,g,b] } ],         W/m²
  *     "environment": [r,g,b],                          constant sky radiance W/(m²·sr)
+ *     "environment_map": {"path": "sky.exr", "rotation_deg": 0, "scale": 1},
+ *                                                      lat-long HDR sky W/(m²·sr), added to environment
  *     "emission_scale": 1,                             multiplies material emission (Ke)
  *     "materials": { "floor": { "ggx": { "roughness": 0.3, "specular": [0.04,0.04,0.04] } } } }
  *                                                      optional per-material overrides by the mesh's
@@ -95,6 +97,18 @@ typedef struct glow_scene_material {
     float specular[3];  /* F0, Schlick's reflectance at normal incidence, each in [0, 1]; default 0.04 */
 } glow_scene_material;
 
+/* An HDR environment map ("environment_map" key): an equirectangular (latitude-longitude) image of the
+ * radiance arriving from every direction, W/(m²·sr) per texel, linear RGB, +Y up; the image's centre
+ * column faces -Z, its left/right edge (u = 0 / 1) faces +Z, u = 0.75 faces +X; the top row looks
+ * up (+Y). It ADDS to the constant `environment`. The loader does not open the image (glow-render
+ * does, tools/eval/glow_envmap.h); docs/scene-format.md and docs/envmap.md have the details. */
+typedef struct glow_scene_environment_map {
+    char path[1024];    /* the JSON's "path" joined to the JSON file's folder (absolute stays absolute),
+                           1..1023 bytes; "" = no map */
+    float rotation_deg; /* turns the map about +Y, right-handed (+Z towards +X); default 0; finite */
+    float scale;        /* multiplies every texel; default 1; finite and >= 0 */
+} glow_scene_environment_map;
+
 typedef struct glow_scene_desc {
     char *mesh;                 /* owned: "builtin:NAME" as written, else the JSON's "mesh" joined to the
                                    JSON file's folder (absolute stays absolute; relative to the cwd when
@@ -109,6 +123,7 @@ typedef struct glow_scene_desc {
     uint32_t warning_count;     /* unknown keys that were ignored */
     glow_scene_material *materials; /* owned, material_count entries (NULL when 0), in file order */
     uint32_t material_count;
+    glow_scene_environment_map environment_map; /* "environment_map"; path "" = none (added in 0.1, at the end) */
 } glow_scene_desc;
 
 /**
