@@ -1109,7 +1109,16 @@ glow_result glow__caches_build(const glow__scene *scene, const glow__rt *rt, con
         out->lm_uv = st.uv;
         st.uv = NULL;
         if (settings->detail_factor >= 2 && out->lm_cache_count) {
-            r = build_detail(scene, rt, pool, log, settings->detail_factor, lj.offset, out);
+            /* The detail corrects near light surfel by surfel (links.c), so its texels should resolve the
+             * surfels' spacing: where open ground's texels (1 / density, the coarsest) span more than
+             * detail_factor surfels, the automatic setting takes more detail texels a side, up to its cap
+             * (Sponza moderate: 1.6 m texels, 0.48 m surfels: 3 -> 4, 0.53 -> 0.40 m; docs/linker.md). */
+            uint32_t factor = settings->detail_factor;
+            if (settings->detail_factor_max > factor && settings->detail_spacing > 0.0f && out->texel_density > 0.0f) {
+                const double want = ceil(1.0 / ((double)out->texel_density * settings->detail_spacing) - 1e-6);
+                if (want > factor) factor = want < settings->detail_factor_max ? (uint32_t)want : settings->detail_factor_max;
+            }
+            r = build_detail(scene, rt, pool, log, factor, lj.offset, out);
             if (r != GLOW_OK) goto fail;
         }
     }

@@ -132,6 +132,9 @@ typedef struct glow__cache_settings {
     float adapt_reach;        /* m: how far the concavity rays look (the links' near field) */
     uint32_t grid_refine;     /* >= 2: the grid is refined this many times near geometry (grid_fine.c);
                                  grid_spacing is then the fine spacing */
+    uint32_t detail_factor_max; /* > detail_factor: raise the detail factor, up to this, until open ground's
+                                   detail texels (the coarsest) are no wider than detail_spacing */
+    float detail_spacing;       /* m: the surfels' nominal spacing, sqrt(nominal area) */
 } glow__cache_settings;
 
 typedef struct glow__caches {

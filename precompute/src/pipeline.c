@@ -29,6 +29,7 @@ const char *glow_pc_stage_name(uint32_t stage) { return stage < GLOW_PC_STAGE_CO
 /* The lightmap detail (links.c "Lightmap detail"; docs/results.md): detail texels per lightmap texel
  * side, links per detail texel and the radius (lightmap texels) of the surfels they reach */
 #define GLOW_PC_LIGHTMAP_DETAIL 3u
+#define GLOW_PC_LIGHTMAP_DETAIL_MAX 4u /* automatic: up to this many where open ground's texels are coarse */
 #define GLOW_PC_DETAIL_LINKS 16u
 #define GLOW_PC_DETAIL_RADIUS 1.0f
 
@@ -80,7 +81,8 @@ glow_pc_settings glow_pc_settings_resolve(const glow_pc_settings *in) {
     if (s.link_visibility == GLOW_PC_LINK_VISIBILITY_DEFAULT) s.link_visibility = GLOW_PC_LINK_VISIBILITY_CLUSTERED;
     if (s.link_cluster_angle == 0.0f) s.link_cluster_angle = GLOW_PC_CLUSTER_ANGLE;
     if (!s.link_cluster_rays) s.link_cluster_rays = GLOW_PC_CLUSTER_RAYS;
-    if (!s.lightmap_detail) s.lightmap_detail = GLOW_PC_LIGHTMAP_DETAIL;
+    /* lightmap_detail stays 0 (automatic: GLOW_PC_LIGHTMAP_DETAIL, up to GLOW_PC_LIGHTMAP_DETAIL_MAX where the
+     * texels are coarse; caches.c) so that a system's key tells it from an explicit 3 */
     if (!s.detail_links) s.detail_links = GLOW_PC_DETAIL_LINKS;
     if (s.detail_radius == 0.0f) s.detail_radius = GLOW_PC_DETAIL_RADIUS;
     if (s.surfel_adapt == 0.0f) s.surfel_adapt = p->adapt;
@@ -668,7 +670,11 @@ static glow_result bake_system(const glow_pc_settings *setp, uint32_t grid_targe
     STAGE_BEGIN(ST_CACHES);
     glow__cache_settings scache = {.grid_spacing = set.grid_spacing, .texel_density = set.texel_density,
                                    .target_grid = grid_target, .target_lightmap = set.lightmap_caches, .seed = set.seed,
-                                   .detail_factor = set.lightmap_detail >= 2 ? set.lightmap_detail : 0u,
+                                   .detail_factor = !set.lightmap_detail       ? GLOW_PC_LIGHTMAP_DETAIL
+                                                    : set.lightmap_detail >= 2 ? set.lightmap_detail
+                                                                               : 0u,
+                                   .detail_factor_max = set.lightmap_detail ? 0u : GLOW_PC_LIGHTMAP_DETAIL_MAX,
+                                   .detail_spacing = sqrtf(SF->area),
                                    .texel_adapt = set.texel_adapt, .grid_refine = set.grid_refine,
                                    .adapt_reach = 4.0f * sqrtf(SF->area / (float)GLOW__PI)};
     res = glow__caches_build(sc, rt, SF, &scache, pool, log, &caches);

@@ -75,7 +75,7 @@ static const char *usage_text =
     "  --link-cluster-rays K  clustered: rays per cluster, one per run of its leaves (default 4)\n"
     "  --lightmap-detail N    detail texels per lightmap texel side, each correcting its caches' near\n"
     "                         light through a few links to the surfels beside it: 1 = none, 2..4\n"
-    "                         (default 3)\n"
+    "                         (default 3, or 4 where open ground's texels span more than 3 surfels)\n"
     "  --detail-links K       at most K links per detail texel (default 16)\n"
     "  --detail-radius R      a detail texel corrects the light of surfels within R lightmap texels of\n"
     "                         it (default 1)\n"

@@ -177,7 +177,51 @@ static void test_strip_against_view_factor(void **state) {
     assert_true(fine.rms < 0.5 * coarse.rms);
 }
 
+/* The default factor (lightmap_detail 0): 3 a side, or 4 where open ground's texels span more than 3
+ * nominal surfel spacings (pipeline.c, caches.c). 4096 surfels on this scene's 28 m² are 0.083 m apart:
+ * 0.5 m texels take 4 (0.125 m detail texels), 0.1 m texels keep 3, and an explicit 3 stays 3. */
+static uint32_t factor_of(uint32_t detail, float texel_density, uint32_t *lm_width, uint32_t *det_width) {
+    char path[256];
+    snprintf(path, sizeof path, "/tmp/glow_test_detail_auto_%d.glow", (int)getpid());
+    glow_pc_settings st = {.surfels = 4096, .links = 16, .bands = 2, .threads = 2, .seed = 1,
+                           .texel_density = texel_density, .grid_spacing = 1.0f, .lightmap_detail = detail,
+                           .texel_adapt = 1.0f};
+    glow_pc_stats stats;
+    if (glow_pc_bake(g_obj, path, &st, &stats) != GLOW_OK) fail_msg("bake: %s", stats.error);
+    glow_context *ctx = NULL;
+    glow_bake *bake = NULL;
+    glow_system *sys = NULL;
+    assert_int_equal(glow_context_create(&(glow_context_desc){.api_version = GLOW_VERSION}, &ctx), GLOW_OK);
+    assert_int_equal(glow_bake_load_file(ctx, path, &bake), GLOW_OK);
+    assert_int_equal(glow_system_create(ctx, &(glow_system_desc){.bake = bake}, &sys), GLOW_OK);
+    const glow_cache_outputs *o = glow_system_outputs(sys);
+    *lm_width = o->lightmap_width;
+    *det_width = o->detail_width;
+    glow_system_destroy(sys);
+    glow_bake_destroy(bake);
+    glow_context_destroy(ctx);
+    remove(path);
+    printf("  lightmap_detail %u at %g texels/m: factor %u (lightmap %u, detail %u texels wide)\n", detail,
+           (double)texel_density, stats.detail_factor, *lm_width, *det_width);
+    return stats.detail_factor;
+}
+
+static void test_automatic_factor(void **state) {
+    (void)state;
+    write_scene();
+    uint32_t lw, dw;
+    assert_int_equal(factor_of(0, 2.0f, &lw, &dw), 4u); /* 0.5 m texels over 0.083 m surfels */
+    assert_int_equal(dw, 4u * lw);
+    assert_int_equal(factor_of(3, 2.0f, &lw, &dw), 3u); /* explicit: as asked */
+    assert_int_equal(dw, 3u * lw);
+    assert_int_equal(factor_of(0, 10.0f, &lw, &dw), 3u); /* 0.1 m texels: three detail texels resolve them */
+    assert_int_equal(dw, 3u * lw);
+    remove(g_obj);
+    remove(g_mtl);
+}
+
 int main(void) {
-    const struct CMUnitTest tests[] = {cmocka_unit_test(test_strip_against_view_factor)};
+    const struct CMUnitTest tests[] = {cmocka_unit_test(test_strip_against_view_factor),
+                                       cmocka_unit_test(test_automatic_factor)};
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

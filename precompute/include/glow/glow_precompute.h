@@ -122,7 +122,9 @@ typedef struct glow_pc_settings {
     uint32_t link_cluster_rays; /* clustered: sampled rays per cluster; 0 = default (--link-cluster-rays) */
     uint32_t lightmap_detail;   /* detail texels per lightmap texel side (2..4), each correcting its caches'
                                    near light through a few links to the surfels beside it (LDET,
-                                   docs/linker.md "Lightmap detail"); 0 = default, 1 = none (--lightmap-detail) */
+                                   docs/linker.md "Lightmap detail"); 0 = default (3, or 4 where open
+                                   ground's texels span more than 3 nominal surfel spacings), 1 = none
+                                   (--lightmap-detail) */
     uint32_t detail_links;      /* at most this many links per detail texel; 0 = default (--detail-links) */
     float detail_radius;        /* a detail texel corrects the light of surfels within this many lightmap
                                    texels of it; 0 = default (--detail-radius) */
