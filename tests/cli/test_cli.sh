@@ -151,5 +151,14 @@ else
   echo "skip shared scenes (not found)"
 fi
 
+# A mesh whose walls face away from the room (single-sided, wound outwards): Glow lights front faces
+# only, so the bake must say so (about half its texels see mostly back faces); the same room wound
+# inwards must not be warned about.
+ROOM=$(cd "$(dirname "$0")/../.." && pwd)/scenes/window-room
+expect 0 "bake a room wound outwards" "$BIN" "$ROOM/window-room-outward.obj" -o "$T/wr.glow" "${SMALL[@]}"
+err_has "see mostly back faces"
+expect 0 "bake the same room wound inwards" "$BIN" "$ROOM/window-room.obj" -o "$T/wr.glow" "${SMALL[@]}"
+if grep -q "back faces" "$T/err"; then fail "  a correctly wound room is warned about"; else pass "  no back-face warning"; fi
+
 echo "$fails failure(s)"
 [ "$fails" = 0 ]
