@@ -469,6 +469,46 @@ static void test_rotated_sky(void **state) {
     free_surfels(&s);
 }
 
+/* The grid: glow_system_set_sky adds the visible sky to the grid caches, not to the lightmap's and not
+ * into the surfels' bounce; above the floor a lookup facing up sees the whole sky, facing down little. */
+static void test_system_sky(void **state) {
+    fixture *fx = *state;
+    glow_system *sys = NULL;
+    assert_int_equal(glow_system_create(fx->ctx, &(glow_system_desc){.bake = fx->open}, &sys), GLOW_OK);
+    const float env[3] = {1.0f, 2.0f, 4.0f};
+    float L[GLOW_SKY_SH_FLOATS];
+    glow_sh_sky_constant(env, L);
+    assert_int_equal(glow_system_set_sky(sys, L), GLOW_OK);
+    for (int u = 0; u < 3; ++u) assert_int_equal(glow_system_update(sys, NULL), GLOW_OK);
+    const glow_cache_outputs *o = glow_system_outputs(sys);
+    const uint32_t nc = o->coeff_count;
+    float *sh = malloc(sizeof(float) * nc), rgb[3];
+    const float p[3] = {1.5f, 0.6f, 1.5f}, up[3] = {0, 1, 0}, down[3] = {0, -1, 0};
+    assert_int_equal(glow_sample_grid(o, p, sh), GLOW_OK);
+    glow_shade_sh(sh, o->sh_bands_luma, o->sh_bands_chroma, up, 1.0f, rgb);
+    print_message("grid sky, constant (1, 2, 4): facing up %.3f %.3f %.3f", rgb[0], rgb[1], rgb[2]);
+    for (int c = 0; c < 3; ++c) assert_true(fabsf(rgb[c] - env[c]) < 0.15f * env[c]); /* l <= 1 here (bands 2) */
+    glow_shade_sh(sh, o->sh_bands_luma, o->sh_bands_chroma, down, 1.0f, rgb);
+    print_message(", facing down %.3f %.3f %.3f\n", rgb[0], rgb[1], rgb[2]);
+    for (int c = 0; c < 3; ++c) assert_true(rgb[c] < 0.35f * env[c]);
+    /* nothing else is lit: no lights, and the sky does not bounce through the runtime */
+    for (uint64_t i = (uint64_t)o->grid_cache_count * nc; i < (uint64_t)o->cache_count * nc; ++i)
+        assert_true(o->cache_sh[i] == 0.0f);
+    /* removed: the grid is dark again after the next update */
+    assert_int_equal(glow_system_set_sky(sys, NULL), GLOW_OK);
+    assert_int_equal(glow_system_update(sys, NULL), GLOW_OK);
+    for (uint64_t i = 0; i < (uint64_t)o->cache_count * nc; ++i) assert_true(o->cache_sh[i] == 0.0f);
+    L[4] = NAN;
+    assert_int_equal(glow_system_set_sky(sys, L), GLOW_ERROR_INVALID_ARGUMENT);
+    glow_system_destroy(sys);
+    /* a bake without SKYT cannot */
+    assert_int_equal(glow_system_create(fx->ctx, &(glow_system_desc){.bake = fx->nosky}, &sys), GLOW_OK);
+    L[4] = 0;
+    assert_int_equal(glow_system_set_sky(sys, L), GLOW_ERROR_UNSUPPORTED);
+    glow_system_destroy(sys);
+    free(sh);
+}
+
 /* ----------------------------------------------------------------------- validation */
 
 static unsigned char *read_all(const char *path, size_t *size) {
@@ -582,6 +622,7 @@ int main(void) {
         cmocka_unit_test(test_gaunt_and_product),   cmocka_unit_test(test_rotation),
         cmocka_unit_test(test_open_plane),          cmocka_unit_test(test_constant_sky_matches_S),
         cmocka_unit_test(test_roundtrip_and_threads), cmocka_unit_test(test_rotated_sky),
+        cmocka_unit_test(test_system_sky),
         cmocka_unit_test(test_corrupt_section),     cmocka_unit_test(test_old_bakes),
     };
     return cmocka_run_group_tests(tests, setup, teardown);

@@ -224,6 +224,7 @@ GLOW_API glow_result glow_bake_get_geometry(const glow_bake *bake, glow_bake_geo
  *     V_k = ∫ V(ω) y_k(ω) dω
  * so that the radiance SH of the sky it sees is V ⊗ L (glow_sh_sky_visible). V(ω) = 1 where a ray escapes
  * the scene. Views into the bake, valid until it is destroyed. \since 0.2 */
+#define GLOW_SKY_SH_FLOATS 27 /* a sky's radiance SH: 9 coefficients x RGB, coefficient-major (see "Sky SH" below) */
 typedef struct glow_bake_sky_transfer {
     uint32_t surfel_count;          /* the bake's surfels, or 0 when the bake has no SKYT */
     const float *surfel_transfer;   /* [surfel_count][9] T, or NULL */
@@ -438,6 +439,20 @@ typedef struct glow_system_params {
  * emission_scale above GLOW_MAX_SCALE or bounce_iterations above 64 (nothing changes).
  * \threadsafety Not concurrently with other calls on the system. \since 0.1 */
 GLOW_API glow_result glow_system_set_params(glow_system *system, const glow_system_params *params);
+/** Adds a sky to the grid caches (dynamic objects receive it; docs/sky.md): from the next update on,
+ * each grid cache's radiance SH (cache_sh and grid_sh, in YCoCg) also holds V ⊗ L, the part of the sky
+ * `sh_rgb` (RGB l <= 2 SH, coefficient-major, glow.h GLOW_SKY_SH_FLOATS) that the cache sees
+ * (glow_sh_sky_visible with the bake's grid visibility SH; bands above 2 get nothing, chroma only up to
+ * sh_bands_chroma). Lightmap caches are not changed (the surfels, and through them the static surfaces,
+ * get the sky from the host: glow_host_set_environment_sh), and the sky is not fed back into the
+ * surfels' bounce (the host lights them with it already). Computed here (9 x 27 multiply-adds per grid
+ * cache); an update then costs two copies of the grid caches' rows. NULL removes it. Needs a bake with
+ * the sky transfer (format 1.6 SKYT). For a sky with a sun, give the sun as a light as well: L2 holds
+ * no peak.
+ * \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT (NULL system, a non-finite coefficient or one beyond
+ * GLOW_MAX_IRRADIANCE); GLOW_ERROR_UNSUPPORTED (a bake without SKYT);
+ * GLOW_ERROR_INVALID_OPERATION during an update. \threadsafety As glow_system_set_params. \since 0.2 */
+GLOW_API glow_result glow_system_set_sky(glow_system *system, const float sh_rgb[GLOW_SKY_SH_FLOATS]);
 /** The artist controls in effect. \threadsafety Between updates, from any thread. \since 0.1 */
 GLOW_API glow_result glow_system_get_params(const glow_system *system, glow_system_params *out_params);
 
@@ -708,7 +723,6 @@ GLOW_API void glow_ggx_specular_albedo(float cos_view, float roughness, float ou
 /* Sky SH (docs/sky.md): a sky's radiance as real SH l <= 2 (9 coefficients, glow_sh_eval's basis) per
  * RGB channel, COEFFICIENT-MAJOR: sh_rgb[3 k + c] is coefficient k of channel c (R, G, B), W/(m²·sr).
  * Scenes are Y-up. Pure functions, any thread; an output may alias the input. \since 0.2 */
-#define GLOW_SKY_SH_FLOATS 27
 /** The SH of a constant sky of radiance `radiance_rgb`: L_0 = L √(4π), the rest 0. \since 0.2 */
 GLOW_API void glow_sh_sky_constant(const float radiance_rgb[3], float out_rgb[GLOW_SKY_SH_FLOATS]);
 /** Rotates a sky: out(ω) = in(Rᵀω), so light that came from direction d comes from R d. `rotation` is a
