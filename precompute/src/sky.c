@@ -14,7 +14,7 @@
  * along the surface towards the centre of the nearest triangle facing along n) and rays from t = 0 to
  * infinity. With cosine-distributed directions the estimate is T_k = π/N Σ_open y_k(ω), so for a
  * constant sky (L_0 = L √(4π), the rest 0) Σ T_k L_k = L π (open / N) = L π S: the host's constant sky,
- * ray for ray. Grid caches use N directions of a spherical Fibonacci set: V_k = 4π/N Σ_open y_k(ω).
+ * ray for ray. Grid caches use M directions of a spherical Fibonacci set: V_k = 4π/M Σ_open y_k(ω).
  *
  * Threaded over surfels and caches with glow__parallel_for; every value depends only on its own rays,
  * so the result is the same for any thread count. */
@@ -61,7 +61,7 @@ typedef struct sky_job {
     const glow__surfels *sf;
     const glow__caches *ca;
     const float (*hemi)[3], (*sphere)[3];
-    uint32_t rays;
+    uint32_t rays, grid_rays;
     float eps;
     float *surfel_out, *grid_out;
 } sky_job;
@@ -110,37 +110,37 @@ static void grid_range(void *user, uint32_t first, uint32_t end, uint32_t worker
     for (uint32_t c = first; c < end; ++c) {
         const float *o = j->ca->caches[c].pos;
         double acc[GLOW_BAKE_SKY_COEFFS] = {0};
-        for (uint32_t k = 0; k < j->rays; ++k) {
+        for (uint32_t k = 0; k < j->grid_rays; ++k) {
             float y[GLOW_BAKE_SKY_COEFFS];
             if (glow__rt_occluded(j->rt, o, j->sphere[k], j->eps, INFINITY)) continue;
             glow__sh_eval(3, j->sphere[k], y);
             for (uint32_t q = 0; q < GLOW_BAKE_SKY_COEFFS; ++q) acc[q] += y[q];
         }
-        const double w = 4.0 * GLOW__PI / (double)j->rays;
+        const double w = 4.0 * GLOW__PI / (double)j->grid_rays;
         for (uint32_t q = 0; q < GLOW_BAKE_SKY_COEFFS; ++q)
             j->grid_out[(size_t)c * GLOW_BAKE_SKY_COEFFS + q] = (float)(acc[q] * w);
     }
 }
 
 glow_result glow__sky_transfer(const glow__rt *rt, const glow__scene *sc, const glow__surfels *sf,
-                               const glow__caches *ca, uint32_t rays, glow__pool *pool, float *out_surfel,
-                               float *out_grid) {
-    if (!rt || !sc || !sf || !ca || !out_surfel || (ca->grid_cache_count && !out_grid) || rays == 0)
+                               const glow__caches *ca, uint32_t rays, uint32_t grid_rays, glow__pool *pool,
+                               float *out_surfel, float *out_grid) {
+    if (!rt || !sc || !sf || !ca || !out_surfel || (ca->grid_cache_count && !out_grid) || rays == 0 || grid_rays == 0)
         return GLOW_ERROR_INVALID_ARGUMENT;
-    float(*hemi)[3] = malloc((size_t)rays * sizeof *hemi), (*sphere)[3] = malloc((size_t)rays * sizeof *sphere);
+    float(*hemi)[3] = malloc((size_t)rays * sizeof *hemi), (*sphere)[3] = malloc((size_t)grid_rays * sizeof *sphere);
     if (!hemi || !sphere) {
         free(hemi);
         free(sphere);
         return GLOW_ERROR_OUT_OF_MEMORY;
     }
     glow__sky_dirs(rays, hemi);
-    glow__fibonacci_sphere(rays, sphere);
+    glow__fibonacci_sphere(grid_rays, sphere);
     float ext[3];
     glow__sub(sc->bounds_max, sc->bounds_min, ext);
     float diag = sqrtf(glow__dot(ext, ext));
     if (!(diag > 0.0f)) diag = 1.0f;
     sky_job j = {.rt = rt, .sf = sf, .ca = ca, .hemi = (const float(*)[3])hemi, .sphere = (const float(*)[3])sphere,
-                 .rays = rays, .eps = 1e-4f * diag, .surfel_out = out_surfel, .grid_out = out_grid};
+ .rays = rays, .grid_rays = grid_rays, .eps = 1e-4f * diag, .surfel_out = out_surfel, .grid_out = out_grid};
     glow__parallel_for(pool, sf->count, 64, surfel_range, &j);
     if (ca->grid_cache_count) glow__parallel_for(pool, ca->grid_cache_count, 16, grid_range, &j);
     free(hemi);

@@ -51,7 +51,7 @@ static const char *usage_text =
     "                         --grid-refine, the fine spacing near geometry\n"
     "  --grid-refine R        grid R times finer in the cells near geometry than in open space, within\n"
     "                         the same grid budget: 1 = uniform, 2 or 4 (default: 1)\n"
-    "  --sky-rays N           rays per surfel and per grid cache for the sky transfer (default: 128)\n"
+    "  --sky-rays N           rays per surfel for the sky transfer, 8 N per grid cache (default: 128)\n"
     "  --no-sky               no sky transfer (section SKYT): hosts then trace the sky themselves\n"
     "  --texel-density D      lightmap texels per scene unit (default: from the scene area and the\n"
     "                         lightmap budget)\n"
@@ -340,8 +340,8 @@ static void print_summary(const char *scene, const char *out, const glow_pc_stat
                s->grid_refine, s->grid_bricks, (double)s->grid_spacing, s->grid_refine,
                (double)s->grid_spacing / s->grid_refine, s->grid_fine_caches);
     if (s->sky_rays)
-        printf("  sky       transfer of %u surfels and %u grid caches, %u rays each, %.2f s\n", s->surfels,
-               s->grid_caches, s->sky_rays, s->sky_seconds);
+        printf("  sky       transfer of %u surfels (%u rays each) and %u grid caches (%u rays each), %.2f s\n", s->surfels,
+               s->sky_rays, s->grid_caches, 8u * s->sky_rays, s->sky_seconds);
     if (s->lightmap_width)
         printf("  lightmap  %.3g units per texel (%.3g in the most concave charts); the atlas holds %u caches (%.0f %% of their area is surface), %u gutter "
                "copies and %u unused texels (%.0f %%); %u charts narrower than a texel share %u texels\n",

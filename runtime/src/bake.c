@@ -614,9 +614,10 @@ static glow_result check_sky(const vstate *v, const glow_bake_meta *m, const sec
                                   (unsigned long long)s->size);
     read_at(v, s->offset, &kh, sizeof kh);
     if (kh.coeffs != GLOW_BAKE_SKY_COEFFS || kh.surfel_count != m->surfel_count || kh.grid_count != m->grid_cache_count ||
-        kh.rays == 0)
-        FAIL(GLOW_ERROR_CORRUPT_DATA, "SKYT: %u coefficients (9), %u surfels (%u), %u grid caches (%u) or %u rays (>= 1) "
-             "do not fit the bake", kh.coeffs, kh.surfel_count, m->surfel_count, kh.grid_count, m->grid_cache_count, kh.rays);
+        kh.rays == 0 || (kh.grid_count && kh.grid_rays == 0))
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "SKYT: %u coefficients (9), %u surfels (%u), %u grid caches (%u) or %u / %u rays "
+             "(>= 1) do not fit the bake", kh.coeffs, kh.surfel_count, m->surfel_count, kh.grid_count, m->grid_cache_count,
+             kh.rays, kh.grid_rays);
     const uint64_t n = ((uint64_t)kh.surfel_count + kh.grid_count) * GLOW_BAKE_SKY_COEFFS;
     if (s->size != sizeof kh + 4u * n)
         FAIL(GLOW_ERROR_CORRUPT_DATA, "section 'SKYT' is %llu bytes; %u surfels and %u grid caches need %llu",
@@ -1005,6 +1006,7 @@ glow_result glow_bake_get_sky_transfer(const glow_bake *bake, glow_bake_sky_tran
     if (!kh) return GLOW_OK;
     const float *x = (const float *)(const void *)(kh + 1);
     out->rays = kh->rays;
+    out->grid_rays = kh->grid_rays;
     out->surfel_count = kh->surfel_count;
     out->surfel_transfer = x;
     out->grid_cache_count = kh->grid_count;

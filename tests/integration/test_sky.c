@@ -262,6 +262,7 @@ static void test_open_plane(void **state) {
     assert_int_equal(st.surfel_count, info.surfel_count);
     assert_int_equal(st.grid_cache_count, info.grid_cache_count);
     assert_int_equal(st.rays, 128);
+    assert_int_equal(st.grid_rays, 1024);
     const glow_bake_surfel *sf = glow__bake_surfels(fx->plane);
     const double Ahat[3] = {M_PI, 2 * M_PI / 3, M_PI / 4};
     double worst = 0;
@@ -569,13 +570,14 @@ static void test_corrupt_section(void **state) {
     memcpy(p + ssz - 4, &bad[0], 4);
     expect_load(fx, work, size, GLOW_ERROR_CORRUPT_DATA);
     /* counts that do not fit the bake */
-    const size_t fields[4] = {offsetof(glow_bake_sky, coeffs), offsetof(glow_bake_sky, surfel_count),
-                              offsetof(glow_bake_sky, grid_count), offsetof(glow_bake_sky, rays)};
-    for (int f = 0; f < 4; ++f) {
+    const size_t fields[5] = {offsetof(glow_bake_sky, coeffs), offsetof(glow_bake_sky, surfel_count),
+                              offsetof(glow_bake_sky, grid_count), offsetof(glow_bake_sky, rays),
+                              offsetof(glow_bake_sky, grid_rays)};
+    for (int f = 0; f < 5; ++f) {
         memcpy(work, img, size);
         p = find_section(work, GLOW_SECTION_SKYT, &ssz);
         uint32_t x = fuzz_rd32(p + fields[f]);
-        fuzz_wr32(p + fields[f], f == 3 ? 0u : x + 1u);
+        fuzz_wr32(p + fields[f], f >= 3 ? 0u : x + 1u);
         expect_load(fx, work, size, GLOW_ERROR_CORRUPT_DATA);
     }
     /* a payload shorter than its counts: the section's size shrunk by one float */

@@ -230,7 +230,8 @@ typedef struct glow_bake_sky_transfer {
     const float *surfel_transfer;   /* [surfel_count][9] T, or NULL */
     uint32_t grid_cache_count;      /* the bake's grid caches (0 without SKYT) */
     const float *grid_visibility;   /* [grid_cache_count][9] V, or NULL */
-    uint32_t rays;                  /* rays per surfel and grid cache the linker traced (0 without SKYT) */
+    uint32_t rays;                  /* rays per surfel the linker traced (0 without SKYT) */
+    uint32_t grid_rays;             /* rays per grid cache (0 without SKYT) */
 } glow_bake_sky_transfer;
 /** Fills `out` (all 0 / NULL for a bake without the sky transfer: glow-bake --no-sky, or before format
  * 1.6). \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT for NULL. \threadsafety Any thread. \since 0.2 */

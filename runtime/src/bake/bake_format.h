@@ -359,8 +359,9 @@ typedef struct glow_bake_sky {
     /*  0 */ uint32_t coeffs;       /* 9 (l <= 2) */
     /*  4 */ uint32_t surfel_count; /* meta.surfel_count */
     /*  8 */ uint32_t grid_count;   /* meta.grid_cache_count */
-    /* 12 */ uint32_t rays;         /* rays per surfel and per grid cache the linker traced (informative, >= 1) */
-    /* 16 */ uint32_t reserved[4];
+    /* 12 */ uint32_t rays;         /* rays per surfel the linker traced (informative, >= 1) */
+    /* 16 */ uint32_t grid_rays;    /* rays per grid cache (informative, >= 1 when grid_count > 0) */
+    /* 20 */ uint32_t reserved[3];
 } glow_bake_sky; /* 32 */
 #define GLOW_BAKE_SKY_COEFFS 9u
 #define GLOW_BAKE_SKY_MAX 16.0f
