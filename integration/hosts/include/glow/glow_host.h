@@ -71,6 +71,10 @@
  * the hook, by whichever worker lights that surfel first) and cached for the host's life, unless the
  * desc supplies it (sky_visibility). GLOW_HOST_SKY_UNSHADOWED uses S = 1 (no occlusion).
  * glow_host_irradiance (arbitrary points) traces S on every call.
+ * An HDR sky (glow_host_set_environment_sh, docs/sky.md) replaces environment · π · S by
+ * max(0, Σ_k T_k L_k) per channel: L the sky's radiance SH (l <= 2), T the surfel's sky transfer from the
+ * bake (format 1.6, SKYT: no rays at all) or, for an older bake, traced with the same rays as S on first
+ * use and cached. For a constant sky the two agree ray for ray.
  *
  * ON ERRORS: functions return a glow_result; the message goes to desc.logger ("glow_host: ..."),
  * with the same code. The hook returns GLOW_ERROR_INVALID_ARGUMENT for a batch outside the bake.
