@@ -714,11 +714,8 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     s->cache_sh = alloc_array(s, s->C, (size_t)s->coeffs * sizeof(float), &ok);
     {
         glow_bake_sky_transfer sky;
-        if (glow_bake_get_sky_transfer(s->bake, &sky) == GLOW_OK && sky.grid_visibility && sky.grid_cache_count) {
-            s->sky_V = sky.grid_visibility;
-            s->sky_grid = alloc_array(s, sky.grid_cache_count, (size_t)s->coeffs * sizeof(float), &ok);
-            s->sky_backup = alloc_array(s, sky.grid_cache_count, (size_t)s->coeffs * sizeof(float), &ok);
-        }
+        if (glow_bake_get_sky_transfer(s->bake, &sky) == GLOW_OK && sky.grid_visibility && sky.grid_cache_count)
+            s->sky_V = sky.grid_visibility; /* sky_grid and sky_backup: the first glow_system_set_sky */
     }
     s->grid_sh = alloc_array(s, s->grid_cells, (size_t)s->coeffs * sizeof(float), &ok);
     s->lm_sh = alloc_array(s, s->lm_texels, (size_t)s->coeffs * sizeof(float), &ok);
@@ -1199,6 +1196,19 @@ glow_result glow_system_set_sky(glow_system *s, const float sh_rgb[GLOW_SKY_SH_F
             return GLOW_ERROR_INVALID_ARGUMENT;
         }
     const uint32_t G = s->meta->grid_cache_count, L2 = s->luma * s->luma, C2 = s->chroma * s->chroma;
+    if (!s->sky_grid) { /* once: a system that never gets a sky holds none */
+        bool ok = true;
+        s->sky_grid = alloc_array(s, G, (size_t)s->coeffs * sizeof(float), &ok);
+        s->sky_backup = alloc_array(s, G, (size_t)s->coeffs * sizeof(float), &ok);
+        if (!ok) {
+            glow__ctx_free(s->ctx, s->sky_grid);
+            glow__ctx_free(s->ctx, s->sky_backup);
+            s->sky_grid = s->sky_backup = NULL;
+            GLOW__LOG_ERROR(s->ctx, GLOW_ERROR_OUT_OF_MEMORY, "glow_system_set_sky(%s): out of memory for %u grid caches",
+                            s->label, G);
+            return GLOW_ERROR_OUT_OF_MEMORY;
+        }
+    }
     for (uint32_t c = 0; c < G; ++c) {
         float vis[GLOW_SKY_SH_FLOATS], *row = s->sky_grid + (size_t)c * s->coeffs;
         glow_sh_sky_visible(s->sky_V + 9 * (size_t)c, sh_rgb, vis);

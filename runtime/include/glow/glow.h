@@ -447,11 +447,12 @@ GLOW_API glow_result glow_system_set_params(glow_system *system, const glow_syst
  * sh_bands_chroma). Lightmap caches are not changed (the surfels, and through them the static surfaces,
  * get the sky from the host: glow_host_set_environment_sh), and the sky is not fed back into the
  * surfels' bounce (the host lights them with it already). Computed here (9 x 27 multiply-adds per grid
- * cache); an update then costs two copies of the grid caches' rows. NULL removes it. Needs a bake with
+ * cache); an update then costs two copies of the grid caches' rows. The first call allocates two copies
+ * of the grid caches' SH (8 · grid caches · coeff_count bytes). NULL removes it. Needs a bake with
  * the sky transfer (format 1.6 SKYT). For a sky with a sun, give the sun as a light as well: L2 holds
  * no peak.
  * \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT (NULL system, a non-finite coefficient or one beyond
- * GLOW_MAX_IRRADIANCE); GLOW_ERROR_UNSUPPORTED (a bake without SKYT);
+ * GLOW_MAX_IRRADIANCE); GLOW_ERROR_UNSUPPORTED (a bake without SKYT); GLOW_ERROR_OUT_OF_MEMORY;
  * GLOW_ERROR_INVALID_OPERATION during an update. \threadsafety As glow_system_set_params. \since 0.2 */
 GLOW_API glow_result glow_system_set_sky(glow_system *system, const float sh_rgb[GLOW_SKY_SH_FLOATS]);
 /** The artist controls in effect. \threadsafety Between updates, from any thread. \since 0.1 */
