@@ -109,9 +109,12 @@ float glow_gl_lights_sky_visibility() {
 }
 
 // The SH sky's irradiance max(0, sum_k T_k L_k): T the surfel's transfer (Glow's kernel, when set), else
-// the unoccluded cosine lobe about n, T_k = A_l y_k(n) with A = (pi, 2 pi / 3, pi / 4). Mirrors host.c's sky_T.
+// the unoccluded cosine lobe about n, T_k = A_l y_k(n) with A = (pi, 2 pi / 3, pi / 4), times the sky's
+// visible share glow_gl_lights_sky_visibility() (S when set, GLOW_GL_LIGHTS_PIXEL_SKY at a pixel, else 1).
+// Mirrors host.c's sky_T.
 vec3 glow_gl_lights_sky_sh(vec3 n) {
     float t[9];
+    float share = 1.0;
 #if defined(GLOW_SURFEL_INDEX_AVAILABLE)
     if (uint(glow_gl_lights.counts.w) > glow_surfel_index) {
         uint b = uint(glow_gl_lights.counts.z) + 9u * glow_surfel_index;
@@ -129,10 +132,11 @@ vec3 glow_gl_lights_sky_sh(vec3 n) {
         t[6] = a2 * 0.3153915653 * (3.0 * n.z * n.z - 1.0);
         t[7] = a2 * 1.0925484306 * n.x * n.z;
         t[8] = a2 * 0.5462742153 * (n.x * n.x - n.y * n.y);
+        share = glow_gl_lights_sky_visibility();
     }
     vec3 e = vec3(0.0);
     for (int k = 0; k < 9; ++k) e += t[k] * glow_gl_lights.sky_sh[k].rgb;
-    return max(e, vec3(0.0));
+    return max(e, vec3(0.0)) * share;
 }
 
 vec3 glow_host_surfel_irradiance(vec3 position, vec3 normal, uint material) {

@@ -169,7 +169,9 @@ GLOW_API glow_result glow_gl_lights_set_sky_visibility(glow_gl_lights *lights, c
  * W/(m²·sr) as real SH l <= 2, coefficient-major (sh_rgb[3 k + c]; glow.h GLOW_SKY_SH_FLOATS). The hook's
  * sky term is then max(0, Σ_k T_k L_k) per channel instead of environment · π · S: T the surfel's sky
  * transfer (glow_gl_lights_set_sky_transfer) inside Glow's surfel kernel, else (a fragment shader, or no
- * transfer set) the unoccluded cosine lobe about the normal. NULL returns to the constant environment.
+ * transfer set) the unoccluded cosine lobe about the normal times the sky's visible share as the constant
+ * sky takes it (S when set, GLOW_GL_LIGHTS_PIXEL_SKY at a pixel, else 1). NULL returns to the constant
+ * environment.
  * Persists across set() (whose environment then waits unused). Uploaded at once (part of the light block).
  * \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT (NULL object, a non-finite coefficient or one beyond
  * GLOW_MAX_IRRADIANCE: nothing changes). \since 0.2
