@@ -52,6 +52,9 @@ struct glow_host {
     bool env_sh_on;
     float env_sh[GLOW_SKY_SH_FLOATS];
     const float *bake_T;         /* [surfel_count][9] the bake's SKYT transfer, or NULL */
+    float *sky_E;                /* with bake_T (traced sky): [surfel_count][3] max(0, Σ T L) for env_sh, computed by
+                                    glow_host_set_environment_sh so the hook reads 3 floats (0.95 -> 0.25 ms a pass
+                                    on Sponza) */
     _Atomic uint32_t *t_cache;   /* without bake_T, allocated by the first set_environment_sh: surfel_count x
                                     10, [0] SKY_UNSET until the 9 bits of T in [1..9] are stored */
     _Atomic uint32_t *origin_cache; /* 3 x surfel_count: bits of each surfel's ray origin, [0] SKY_UNSET = not yet */
@@ -589,6 +592,10 @@ static const float *sky_T(const glow_host *h, const float p[3], const float n[3]
 }
 
 static void irradiance_sky(const glow_host *h, const float p[3], const float n[3], uint32_t surfel, float out[3]) {
+    if (h->env_sh_on && h->sky_E && surfel != UINT32_MAX) {
+        memcpy(out, h->sky_E + 3 * (size_t)surfel, 3 * sizeof *out);
+        return;
+    }
     if (h->env_sh_on) {
         float buf[9];
         glow_sh_sky_irradiance(sky_T(h, p, n, surfel, buf), h->env_sh, out);
@@ -956,6 +963,13 @@ glow_result glow_host_set_environment_sh(glow_host *host, const float sh_rgb[GLO
                              host->surfel_count);
         for (size_t i = 0; i < (size_t)host->surfel_count * 10; ++i) atomic_init(&host->t_cache[i], SKY_UNSET);
     }
+    if (host->bake_T && host->sky == GLOW_HOST_SKY_TRACED && host->scene && host->surfel_count) {
+        if (!host->sky_E && !(host->sky_E = malloc((size_t)host->surfel_count * 3 * sizeof *host->sky_E)))
+            return HOST_FAIL(&host->logger, GLOW_ERROR_OUT_OF_MEMORY, "out of memory for the sky of %u surfels",
+                             host->surfel_count);
+        for (uint32_t i = 0; i < host->surfel_count; ++i)
+            glow_sh_sky_irradiance(host->bake_T + 9 * (size_t)i, sh_rgb, host->sky_E + 3 * (size_t)i);
+    }
     memcpy(host->env_sh, sh_rgb, sizeof host->env_sh);
     host->env_sh_on = true;
     return GLOW_OK;
@@ -1009,6 +1023,7 @@ void glow_host_destroy(glow_host *host) {
     free(host->sky_dirs);
     free((void *)host->sky_cache);
     free((void *)host->t_cache);
+    free(host->sky_E);
     free((void *)host->origin_cache);
     free(host->foot);
     free((void *)host->reach);
