@@ -210,6 +210,16 @@ void glow__sh_eval(uint32_t bands, const float dir[3], float *out);
 /* Cone factor k_l(x) (DESIGN §3): SH projection of a cone's indicator, x = cos(half-angle). */
 double glow__cone_factor(uint32_t l, double x);
 
+/* ---------------------------------------------------------------- sky transfer (sky.c) */
+/* The CPU host's cosine-distributed sky directions around +z (host.c make_sky_dirs), n of them. */
+void glow__sky_dirs(uint32_t n, float (*dirs)[3]);
+/* SKYT (bake_format.h glow_bake_sky): out_surfel[sf->count][9] the surfels' sky transfer (`rays` rays
+ * each), out_grid [ca->grid_cache_count][9] the grid caches' sky visibility SH (`grid_rays` each).
+ * Deterministic for any thread count. */
+glow_result glow__sky_transfer(const glow__rt *rt, const glow__scene *sc, const glow__surfels *sf,
+                               const glow__caches *ca, uint32_t rays, uint32_t grid_rays, glow__pool *pool,
+                               float *out_surfel, float *out_grid);
+
 /* ---------------------------------------------------------------- links (links.c) */
 typedef struct glow__link_settings {
     uint32_t links_per_cache; /* n_L */

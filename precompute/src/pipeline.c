@@ -33,6 +33,14 @@ const char *glow_pc_stage_name(uint32_t stage) { return stage < GLOW_PC_STAGE_CO
 #define GLOW_PC_DETAIL_LINKS 16u
 #define GLOW_PC_DETAIL_RADIUS 1.0f
 
+/* Rays per surfel and grid cache of the sky transfer (sky.c): the CPU host's sky_rays default, so that
+ * the bake's constant-sky term is the host's S ray for ray (docs/sky.md, measurements) */
+#define GLOW_PC_SKY_RAYS 128u
+/* ... and this many times as many per grid cache: Sponza's grid V ⊗ L against 1024 rays, 8.4 % RMS at 128
+ * rays (one Fibonacci set over the whole sphere, no cosine weighting), where the surfels' E is 0.5 %; the
+ * grid has ~20x fewer caches than there are surfels (docs/sky.md) */
+#define GLOW_PC_SKY_GRID_RAYS 8u
+
 typedef struct preset {
     uint32_t surfels, links, bands, grid, lightmap, relax;
     float adapt; /* surfel density in concave places against open ground (surfels.c "adaptive
@@ -88,6 +96,7 @@ glow_pc_settings glow_pc_settings_resolve(const glow_pc_settings *in) {
     if (s.surfel_adapt == 0.0f) s.surfel_adapt = p->adapt;
     if (s.texel_adapt == 0.0f) s.texel_adapt = p->texel_adapt;
     if (!s.grid_refine) s.grid_refine = p->grid_refine;
+    if (!s.sky_rays) s.sky_rays = GLOW_PC_SKY_RAYS;
     return s;
 }
 
@@ -120,6 +129,7 @@ glow_result glow_pc_settings_validate(const glow_pc_settings *s, char *msg, size
         BAD("--surfel-adapt %g is out of range (1..4)", (double)s->surfel_adapt);
     if (s->texel_adapt != 0.0f && !(s->texel_adapt >= 1.0f && s->texel_adapt <= 8.0f))
         BAD("--texel-adapt %g is out of range (1..8)", (double)s->texel_adapt);
+    if (s->sky_rays > 65536) BAD("--sky-rays %u is out of range (1..65536)", s->sky_rays);
     if (s->grid_refine > 4 || s->grid_refine == 3) BAD("--grid-refine %u is not 1, 2 or 4", s->grid_refine);
     if (s->system_group_count && !(s->system_area > 0.0f)) BAD("--system-group needs --system-area");
     if (s->system_group_count > 256) BAD("%u system groups; at most 256", s->system_group_count);
@@ -207,7 +217,8 @@ static void add_section(sections *ss, uint32_t fourcc, void *data, uint64_t size
 
 static glow_result serialise(const glow_pc_settings *set, const glow__scene *sc, const glow__surfels *sf,
                              const glow__hierarchy *h, const glow__caches *ca, const glow__links *lk, uint8_t *gvis,
-                             void *xref, uint64_t xref_size, sections *ss, glow__log *log) {
+                             void *xref, uint64_t xref_size, const float *sky_surfel, const float *sky_grid,
+                             sections *ss, glow__log *log) {
     const uint32_t nl = lk->per_cache;
     const uint32_t blocks = (nl + GLOW_LINK_BLOCK - 1) / GLOW_LINK_BLOCK;
     /* LINK stores 24-bit node indices. --surfels <= 2^22 keeps node_count < 2^23; this guards the
@@ -462,6 +473,25 @@ static glow_result serialise(const glow_pc_settings *set, const glow__scene *sc,
         }
         add_section(ss, GLOW_SECTION_TEXP, paths, (uint64_t)sc->material_count * GLOW_BAKE_TEXTURE_PATH);
     }
+    if (sky_surfel) { /* 1.6: SKYT (bake_format.h glow_bake_sky): header, surfels' T, grid caches' V */
+        const uint64_t ns = (uint64_t)sf->count * GLOW_BAKE_SKY_COEFFS, ng = (uint64_t)ca->grid_cache_count * GLOW_BAKE_SKY_COEFFS;
+        const uint64_t size = sizeof(glow_bake_sky) + 4u * (ns + ng);
+        uint8_t *buf = calloc(1, (size_t)size);
+        if (!buf) {
+            if (xref) add_section(ss, GLOW_SECTION_XREF, xref, xref_size); /* freed with the sections */
+            glow__errorf(log, "write: out of memory for the sky transfer");
+            return GLOW_ERROR_OUT_OF_MEMORY;
+        }
+        glow_bake_sky *kh = (glow_bake_sky *)(void *)buf;
+        kh->coeffs = GLOW_BAKE_SKY_COEFFS;
+        kh->surfel_count = sf->count;
+        kh->grid_count = ca->grid_cache_count;
+        kh->rays = set->sky_rays;
+        kh->grid_rays = set->sky_rays * GLOW_PC_SKY_GRID_RAYS;
+        memcpy(buf + sizeof *kh, sky_surfel, 4u * ns);
+        if (ng) memcpy(buf + sizeof *kh + 4u * ns, sky_grid, 4u * ng);
+        add_section(ss, GLOW_SECTION_SKYT, buf, size);
+    }
     if (xref) add_section(ss, GLOW_SECTION_XREF, xref, xref_size); /* the sections own it now */
     return GLOW_OK;
 }
@@ -635,6 +665,7 @@ static glow_result bake_system(const glow_pc_settings *setp, uint32_t grid_targe
     glow__hierarchy hier = {0};
     glow__caches caches = {0};
     uint8_t *gvis = NULL; /* GVIS, until serialise takes it */
+    float *sky_surfel = NULL, *sky_grid = NULL; /* SKYT, until serialise takes them */
     glow__links links = {0};
     sections ss = {0};
     float *audit_radiance = NULL;
@@ -694,6 +725,24 @@ static glow_result bake_system(const glow_pc_settings *setp, uint32_t grid_targe
             if (res == GLOW_OK && fine)
                 res = glow__grid_fine_visibility(rt, &caches, sqrtf(glow__dot(ext, ext)), pool, gvis + cells * 8);
         }
+    }
+    if (res == GLOW_OK && writer && !set.no_sky) { /* 1.6: SKYT (sky.c), on the final surfel order */
+        const double ts = now_seconds();
+        sky_surfel = malloc((size_t)SF->count * GLOW_BAKE_SKY_COEFFS * sizeof *sky_surfel);
+        sky_grid = malloc(((size_t)caches.grid_cache_count + 1u) * GLOW_BAKE_SKY_COEFFS * sizeof *sky_grid);
+        if (!sky_surfel || !sky_grid) {
+            glow__errorf(log, "%s: out of memory for the sky transfer", scene_path);
+            res = GLOW_ERROR_OUT_OF_MEMORY;
+        } else {
+            res = glow__sky_transfer(rt, sc, SF, &caches, set.sky_rays, set.sky_rays * GLOW_PC_SKY_GRID_RAYS, pool,
+                                     sky_surfel, sky_grid);
+        }
+        stats->sky_seconds = now_seconds() - ts;
+        stats->sky_rays = set.sky_rays;
+        if (res == GLOW_OK)
+            glow__infof(log, "sky transfer: %u surfels (%u rays each) and %u grid caches (%u rays each), %.2f s",
+                        SF->count, set.sky_rays, caches.grid_cache_count, set.sky_rays * GLOW_PC_SKY_GRID_RAYS,
+                        stats->sky_seconds);
     }
     STAGE_END(ST_CACHES);
     if (res != GLOW_OK) goto done;
@@ -815,7 +864,7 @@ static glow_result bake_system(const glow_pc_settings *setp, uint32_t grid_targe
     if (!writer) goto done; /* every rank holds the whole link table now; rank 0 writes it */
 
     STAGE_BEGIN(ST_WRITE);
-    res = serialise(&set, sc, SF, H, &caches, &links, gvis, xref, xref_size, &ss, log);
+    res = serialise(&set, sc, SF, H, &caches, &links, gvis, xref, xref_size, sky_surfel, sky_grid, &ss, log);
     gvis = NULL; /* the sections own it now */
     for (uint32_t i = 0; i < ss.n; ++i)
         if (ss.owned[i] == xref) xref = NULL; /* ... and this, once serialise got that far */
@@ -832,6 +881,8 @@ static glow_result bake_system(const glow_pc_settings *setp, uint32_t grid_targe
 done:
     free(audit_radiance);
     free(gvis);
+    free(sky_surfel);
+    free(sky_grid);
     free(xref);
     free(proxy_of);
     for (uint32_t i = 0; i < ss.n; ++i) free(ss.owned[i]);
@@ -1149,6 +1200,8 @@ static void sys_stats_add(glow_pc_stats *w, const glow_pc_stats *s, bool largest
     w->grid_inside += s->grid_inside;
     w->grid_bricks += s->grid_bricks;
     w->grid_fine_caches += s->grid_fine_caches;
+    w->sky_seconds += s->sky_seconds;
+    if (s->sky_rays) w->sky_rays = s->sky_rays;
     if (s->grid_refine > w->grid_refine) w->grid_refine = s->grid_refine;
     w->lightmap_caches += s->lightmap_caches;
     w->lightmap_invalid += s->lightmap_invalid;
@@ -1219,7 +1272,7 @@ static uint64_t world_key(const glow_pc_settings *s, const glow__scene *w) {
                           s->relax_iterations, s->rays_per_surfel, s->no_link_normalize, s->cut_solid_angle,
                           s->lightmap_caches, s->no_link_subsets, (uint32_t)s->link_visibility, s->link_cluster_rays,
                           s->lightmap_detail, s->detail_links, w->material_count, w->texture_count, s->grid_refine,
-                          s->link_gradients};
+                          s->link_gradients, s->no_sky, s->no_sky ? 0u : s->sky_rays};
     const float f[] = {s->grid_spacing, s->texel_density, s->link_cluster_angle, s->detail_radius, s->surfel_adapt,
                        s->system_area, s->system_reach > 0.0f ? s->system_reach : SYS_REACH_DEFAULT, s->texel_adapt};
     h = fnv64(h, v, sizeof v);

@@ -51,6 +51,8 @@ static const char *usage_text =
     "                         --grid-refine, the fine spacing near geometry\n"
     "  --grid-refine R        grid R times finer in the cells near geometry than in open space, within\n"
     "                         the same grid budget: 1 = uniform, 2 or 4 (default: 1)\n"
+    "  --sky-rays N           rays per surfel for the sky transfer, 8 N per grid cache (default: 128)\n"
+    "  --no-sky               no sky transfer (section SKYT): hosts then trace the sky themselves\n"
     "  --texel-density D      lightmap texels per scene unit (default: from the scene area and the\n"
     "                         lightmap budget)\n"
     "  --lightmap-caches N    the lightmap budget: texels that hold a cache (default: the preset's);\n"
@@ -281,6 +283,8 @@ static void print_summary(const char *scene, const char *out, const glow_pc_stat
         cJSON_AddNumberToObject(x, "grid_refine", s->grid_refine);
         cJSON_AddNumberToObject(x, "grid_bricks", s->grid_bricks);
         cJSON_AddNumberToObject(x, "grid_fine", s->grid_fine_caches);
+        cJSON_AddNumberToObject(x, "sky_rays", s->sky_rays);
+        cJSON_AddNumberToObject(x, "sky_seconds", s->sky_seconds);
         cJSON_AddNumberToObject(x, "lightmap", s->lightmap_caches);
         const int lsz[2] = {(int)s->lightmap_width, (int)s->lightmap_height};
         cJSON_AddItemToObject(x, "lightmap_size", cJSON_CreateIntArray(lsz, 2));
@@ -335,6 +339,9 @@ static void print_summary(const char *scene, const char *out, const glow_pc_stat
                "grid's caches\n",
                s->grid_refine, s->grid_bricks, (double)s->grid_spacing, s->grid_refine,
                (double)s->grid_spacing / s->grid_refine, s->grid_fine_caches);
+    if (s->sky_rays)
+        printf("  sky       transfer of %u surfels (%u rays each) and %u grid caches (%u rays each), %.2f s\n", s->surfels,
+               s->sky_rays, s->grid_caches, 8u * s->sky_rays, s->sky_seconds);
     if (s->lightmap_width)
         printf("  lightmap  %.3g units per texel (%.3g in the most concave charts); the atlas holds %u caches (%.0f %% of their area is surface), %u gutter "
                "copies and %u unused texels (%.0f %%); %u charts narrower than a texel share %u texels\n",
@@ -617,6 +624,11 @@ int main(int argc, char **argv) {
         } else if (!strcmp(a, "--detail-links")) {
             NEED_VALUE();
             if (!parse_u32(v, 1, 256, &s.detail_links)) return usage_error("--detail-links '%s': expected an integer in 1..256", v);
+        } else if (!strcmp(a, "--sky-rays")) {
+            NEED_VALUE();
+            if (!parse_u32(v, 1, 65536, &s.sky_rays)) return usage_error("--sky-rays '%s': expected an integer in 1..65536", v);
+        } else if (!strcmp(a, "--no-sky")) {
+            s.no_sky = true;
         } else if (!strcmp(a, "--no-link-normalize")) {
             s.no_link_normalize = true;
         } else if (!strcmp(a, "--sh-links")) {

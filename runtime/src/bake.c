@@ -38,12 +38,13 @@
 #define MAX_SH_BANDS 16u
 
 enum { S_META, S_MATL, S_SURF, S_NODE, S_LEVL, S_CACH, S_GRID, S_LMAP, S_LINK, S_SHLK, S_GEOM, S_GVIS, S_LSUB, S_TUV0, S_TEXP,
-       S_LDET, S_XREF, S_GFIN, S_KNOWN_COUNT };
+       S_LDET, S_XREF, S_GFIN, S_SKYT, S_KNOWN_COUNT };
 
 static const uint32_t known_fourcc[S_KNOWN_COUNT] = {
     GLOW_SECTION_META, GLOW_SECTION_MATL, GLOW_SECTION_SURF, GLOW_SECTION_NODE, GLOW_SECTION_LEVL, GLOW_SECTION_CACH,
     GLOW_SECTION_GRID, GLOW_SECTION_LMAP, GLOW_SECTION_LINK, GLOW_SECTION_SHLK, GLOW_SECTION_GEOM, GLOW_SECTION_GVIS,
     GLOW_SECTION_LSUB, GLOW_SECTION_TUV0, GLOW_SECTION_TEXP, GLOW_SECTION_LDET, GLOW_SECTION_XREF, GLOW_SECTION_GFIN,
+    GLOW_SECTION_SKYT,
 };
 
 typedef struct section_ref {
@@ -605,6 +606,34 @@ static glow_result check_grid_fine(const vstate *v, const glow_bake_meta *m, con
     return GLOW_OK;
 }
 
+/* SKYT (optional, 1.6; bake_format.h glow_bake_sky): 9 coefficients, the bake's surfel and grid cache
+ * counts, rays >= 1, the size from them, every value finite and within GLOW_BAKE_SKY_MAX. */
+static glow_result check_sky(const vstate *v, const glow_bake_meta *m, const section_ref *s) {
+    glow_bake_sky kh;
+    if (s->size < sizeof kh) FAIL(GLOW_ERROR_CORRUPT_DATA, "section 'SKYT' is %llu bytes, shorter than its header",
+                                  (unsigned long long)s->size);
+    read_at(v, s->offset, &kh, sizeof kh);
+    if (kh.coeffs != GLOW_BAKE_SKY_COEFFS || kh.surfel_count != m->surfel_count || kh.grid_count != m->grid_cache_count ||
+        kh.rays == 0 || (kh.grid_count && kh.grid_rays == 0))
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "SKYT: %u coefficients (9), %u surfels (%u), %u grid caches (%u) or %u / %u rays "
+             "(>= 1) do not fit the bake", kh.coeffs, kh.surfel_count, m->surfel_count, kh.grid_count, m->grid_cache_count,
+             kh.rays, kh.grid_rays);
+    const uint64_t n = ((uint64_t)kh.surfel_count + kh.grid_count) * GLOW_BAKE_SKY_COEFFS;
+    if (s->size != sizeof kh + 4u * n)
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "section 'SKYT' is %llu bytes; %u surfels and %u grid caches need %llu",
+             (unsigned long long)s->size, kh.surfel_count, kh.grid_count, (unsigned long long)(sizeof kh + 4u * n));
+    const float *x = (const float *)(const void *)(v->data + s->offset + sizeof kh);
+    for (uint64_t i = 0; i < n; i++)
+        if (!(fabsf(x[i]) <= GLOW_BAKE_SKY_MAX)) { /* also NaN */
+            const uint64_t e = i / GLOW_BAKE_SKY_COEFFS;
+            const int surf = e < kh.surfel_count;
+            FAIL(GLOW_ERROR_CORRUPT_DATA, "SKYT %s %llu coefficient %u: %g is not finite or beyond %g",
+                 surf ? "surfel" : "grid cache", (unsigned long long)(surf ? e : e - kh.surfel_count),
+                 (unsigned)(i % GLOW_BAKE_SKY_COEFFS), (double)x[i], (double)GLOW_BAKE_SKY_MAX);
+        }
+    return GLOW_OK;
+}
+
 /* LDET (optional, 1.2; bake_format.h glow_bake_detail): sizes, ascending texels inside the detail grid,
  * link ranges, surfels in range, finite weights. */
 static glow_result check_detail(const vstate *v, const glow_bake_meta *m, const section_ref *s) {
@@ -731,6 +760,7 @@ static glow_result validate(const vstate *v, struct glow_bake *b) {
         return r;
     if (sec[S_LDET].present && (r = check_detail(v, &m, &sec[S_LDET]))) return r;
     if (sec[S_GFIN].present && (r = check_grid_fine(v, &m, &d, &sec[S_GFIN], sec[S_GVIS].present))) return r;
+    if (sec[S_SKYT].present && (r = check_sky(v, &m, &sec[S_SKYT]))) return r;
 
     b->data = v->data;
     b->size = v->size;
@@ -966,6 +996,21 @@ glow_result glow_bake_get_geometry(const glow_bake *bake, glow_bake_geometry *ou
     out->lightmap_uv = t[0].lm_uv;
     out->materials = &t[0].material;
     out->material_uv = known_ptr(bake, S_TUV0);
+    return GLOW_OK;
+}
+
+glow_result glow_bake_get_sky_transfer(const glow_bake *bake, glow_bake_sky_transfer *out) {
+    if (out) memset(out, 0, sizeof *out);
+    if (!bake || !out) return GLOW_ERROR_INVALID_ARGUMENT;
+    const glow_bake_sky *kh = known_ptr(bake, S_SKYT);
+    if (!kh) return GLOW_OK;
+    const float *x = (const float *)(const void *)(kh + 1);
+    out->rays = kh->rays;
+    out->grid_rays = kh->grid_rays;
+    out->surfel_count = kh->surfel_count;
+    out->surfel_transfer = x;
+    out->grid_cache_count = kh->grid_count;
+    out->grid_visibility = kh->grid_count ? x + (size_t)kh->surfel_count * GLOW_BAKE_SKY_COEFFS : NULL;
     return GLOW_OK;
 }
 

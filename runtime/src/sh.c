@@ -269,3 +269,126 @@ glow_result glow_sample_lightmap_detail(const glow_cache_outputs *o, float u, fl
     for (int k = 0; k < 3; ++k) out[k] = rgb[k] / a;
     return GLOW_OK;
 }
+
+/* ------------------------------------------------------------------ sky SH (docs/sky.md) */
+/* RGB l <= 2 SH, coefficient-major: sh[3 k + c], k < 9 (glow_sh_eval's order), c = R, G, B. */
+
+void glow_sh_sky_constant(const float radiance_rgb[3], float out_rgb[GLOW_SKY_SH_FLOATS]) {
+    if (!out_rgb) return;
+    memset(out_rgb, 0, GLOW_SKY_SH_FLOATS * sizeof *out_rgb);
+    if (!radiance_rgb) return;
+    const float s = (float)sqrt(4.0 * PI_D); /* y_0 = 1/sqrt(4π): L_0 = L sqrt(4π) */
+    for (int c = 0; c < 3; ++c) out_rgb[c] = radiance_rgb[c] * s;
+}
+
+/* Band-2 constants of glow_sh_eval: y_4 = C2 xy, y_5 = C2 yz, y_6 = C0 (3z² - 1), y_7 = C2 xz,
+ * y_8 = C1 (x² - y²) */
+#define SH_C2 1.0925484305920792
+#define SH_C0 0.31539156525252005
+#define SH_C1 0.54627421529603959
+
+void glow_sh_rotate_l2(const float rotation[9], const float in_rgb[GLOW_SKY_SH_FLOATS], float out_rgb[GLOW_SKY_SH_FLOATS]) {
+    if (!rotation || !in_rgb || !out_rgb) return;
+    double R[3][3], o[GLOW_SKY_SH_FLOATS];
+    for (int i = 0; i < 9; ++i) R[i / 3][i % 3] = rotation[i];
+    for (int c = 0; c < 3; ++c) {
+        o[c] = in_rgb[c];
+        /* band 1 is a linear form v·ω, v = (x, y, z) = (in_3, in_1, in_2): it turns to R v */
+        const double v[3] = {in_rgb[9 + c], in_rgb[3 + c], in_rgb[6 + c]};
+        double w[3];
+        for (int i = 0; i < 3; ++i) w[i] = R[i][0] * v[0] + R[i][1] * v[1] + R[i][2] * v[2];
+        o[9 + c] = w[0];
+        o[3 + c] = w[1];
+        o[6 + c] = w[2];
+        /* band 2 is a traceless quadratic form ω^T Q ω: it turns to R Q R^T */
+        const double a = in_rgb[12 + c] * SH_C2, b = in_rgb[15 + c] * SH_C2, g = in_rgb[18 + c] * SH_C0,
+                     d = in_rgb[21 + c] * SH_C2, e = in_rgb[24 + c] * SH_C1;
+        const double Q[3][3] = {{e - g, 0.5 * a, 0.5 * d}, {0.5 * a, -e - g, 0.5 * b}, {0.5 * d, 0.5 * b, 2.0 * g}};
+        double RQ[3][3], P[3][3];
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) RQ[i][j] = R[i][0] * Q[0][j] + R[i][1] * Q[1][j] + R[i][2] * Q[2][j];
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) P[i][j] = RQ[i][0] * R[j][0] + RQ[i][1] * R[j][1] + RQ[i][2] * R[j][2];
+        o[12 + c] = 2.0 * P[0][1] / SH_C2;
+        o[15 + c] = 2.0 * P[1][2] / SH_C2;
+        o[18 + c] = 0.5 * P[2][2] / SH_C0;
+        o[21 + c] = 2.0 * P[0][2] / SH_C2;
+        o[24 + c] = 0.5 * (P[0][0] - P[1][1]) / SH_C1;
+    }
+    for (int k = 0; k < GLOW_SKY_SH_FLOATS; ++k) out_rgb[k] = (float)o[k]; /* in == out allowed */
+}
+
+void glow_sh_rotate_y(const float in_rgb[GLOW_SKY_SH_FLOATS], float angle_radians, float out_rgb[GLOW_SKY_SH_FLOATS]) {
+    const double c = cos((double)angle_radians), s = sin((double)angle_radians);
+    const float R[9] = {(float)c, 0.0f, (float)s, 0.0f, 1.0f, 0.0f, (float)-s, 0.0f, (float)c};
+    glow_sh_rotate_l2(R, in_rgb, out_rgb);
+}
+
+void glow_sh_sky_irradiance(const float transfer[9], const float sky_rgb[GLOW_SKY_SH_FLOATS], float out_rgb[3]) {
+    if (!out_rgb) return;
+    out_rgb[0] = out_rgb[1] = out_rgb[2] = 0.0f;
+    if (!transfer || !sky_rgb) return;
+    float e[3] = {0.0f, 0.0f, 0.0f};
+    for (int k = 0; k < 9; ++k)
+        for (int c = 0; c < 3; ++c) e[c] += transfer[k] * sky_rgb[3 * k + c];
+    for (int c = 0; c < 3; ++c) out_rgb[c] = e[c] > 0.0f ? e[c] : 0.0f; /* also NaN -> 0 */
+}
+
+/* The triple products ∫ y_i y_j y_k over the sphere (Gaunt coefficients of the real basis) that are not
+ * zero for i, j, k < 9: 83 entries, from
+ *   A = 1/(2√π), B = √(3/(20π)), C = 1/(2√(5π)), D = 2C, E = √5/(7√π), F = √15/(14√π), G = E/2,
+ * checked against quadrature in tests/unit/test_sky.c. */
+#define GA 0.28209479177387814f
+#define GB 0.21850968611841584f
+#define GC 0.12615662610100800f
+#define GD 0.25231325220201600f
+#define GE 0.18022375157286857f
+#define GF 0.15607834722743985f
+#define GG 0.09011187578643429f
+static const struct { uint8_t i, j, k; float g; } gaunt_l2[] = {
+#define A GA
+#define B GB
+#define C GC
+#define D GD
+#define E GE
+#define F GF
+#define G GG
+    {0, 0, 0, A}, {0, 1, 1, A}, {0, 2, 2, A}, {0, 3, 3, A}, {0, 4, 4, A}, {0, 5, 5, A},
+    {0, 6, 6, A}, {0, 7, 7, A}, {0, 8, 8, A}, {1, 0, 1, A}, {1, 1, 0, A}, {1, 1, 6, -C},
+    {1, 1, 8, -B}, {1, 2, 5, B}, {1, 3, 4, B}, {1, 4, 3, B}, {1, 5, 2, B}, {1, 6, 1, -C},
+    {1, 8, 1, -B}, {2, 0, 2, A}, {2, 1, 5, B}, {2, 2, 0, A}, {2, 2, 6, D}, {2, 3, 7, B},
+    {2, 5, 1, B}, {2, 6, 2, D}, {2, 7, 3, B}, {3, 0, 3, A}, {3, 1, 4, B}, {3, 2, 7, B},
+    {3, 3, 0, A}, {3, 3, 6, -C}, {3, 3, 8, B}, {3, 4, 1, B}, {3, 6, 3, -C}, {3, 7, 2, B},
+    {3, 8, 3, B}, {4, 0, 4, A}, {4, 1, 3, B}, {4, 3, 1, B}, {4, 4, 0, A}, {4, 4, 6, -E},
+    {4, 5, 7, F}, {4, 6, 4, -E}, {4, 7, 5, F}, {5, 0, 5, A}, {5, 1, 2, B}, {5, 2, 1, B},
+    {5, 4, 7, F}, {5, 5, 0, A}, {5, 5, 6, G}, {5, 5, 8, -F}, {5, 6, 5, G}, {5, 7, 4, F},
+    {5, 8, 5, -F}, {6, 0, 6, A}, {6, 1, 1, -C}, {6, 2, 2, D}, {6, 3, 3, -C}, {6, 4, 4, -E},
+    {6, 5, 5, G}, {6, 6, 0, A}, {6, 6, 6, E}, {6, 7, 7, G}, {6, 8, 8, -E}, {7, 0, 7, A},
+    {7, 2, 3, B}, {7, 3, 2, B}, {7, 4, 5, F}, {7, 5, 4, F}, {7, 6, 7, G}, {7, 7, 0, A},
+    {7, 7, 6, G}, {7, 7, 8, F}, {7, 8, 7, F}, {8, 0, 8, A}, {8, 1, 1, -B}, {8, 3, 3, B},
+    {8, 5, 5, -F}, {8, 6, 8, -E}, {8, 7, 7, F}, {8, 8, 0, A}, {8, 8, 6, -E},
+#undef A
+#undef B
+#undef C
+#undef D
+#undef E
+#undef F
+#undef G
+};
+
+void glow_sh_sky_visible(const float visibility[9], const float sky_rgb[GLOW_SKY_SH_FLOATS], float out_rgb[GLOW_SKY_SH_FLOATS]) {
+    if (!out_rgb) return;
+    float o[GLOW_SKY_SH_FLOATS] = {0};
+    if (visibility && sky_rgb)
+        for (size_t t = 0; t < sizeof gaunt_l2 / sizeof gaunt_l2[0]; ++t) {
+            const float w = gaunt_l2[t].g * visibility[gaunt_l2[t].i];
+            for (int c = 0; c < 3; ++c) o[3 * gaunt_l2[t].k + c] += w * sky_rgb[3 * gaunt_l2[t].j + c];
+        }
+    memcpy(out_rgb, o, sizeof o); /* out may alias an input */
+}
+
+float glow_sh_gaunt_l2(uint32_t i, uint32_t j, uint32_t k) {
+    for (size_t t = 0; t < sizeof gaunt_l2 / sizeof gaunt_l2[0]; ++t)
+        if (gaunt_l2[t].i == i && gaunt_l2[t].j == j && gaunt_l2[t].k == k) return gaunt_l2[t].g;
+    return 0.0f;
+}

@@ -89,6 +89,14 @@ struct glow_system {
     float *leaf_area;         /* per surfel: its leaf node's area (equal unless the bake adapted the density) */
     /* caches and outputs */
     float *cache_sh;
+    /* the visible sky of the grid caches (glow_system_set_sky; docs/sky.md), bakes with SKYT only:
+     * sky_grid [grid caches][coeffs] V ⊗ L in cache_sh's layout (YCoCg), added to the grid caches' rows
+     * after the bounce iterations; sky_backup holds those rows without it, restored before the next
+     * update's surfel flux reads them (feedback: the host already lights the surfels with the sky) */
+    const float *sky_V;           /* the bake's [grid caches][9], NULL without SKYT */
+    float *sky_grid, *sky_backup;
+    bool sky_on, sky_applied;
+    uint64_t sky_revision, sky_out_revision;
     float *grid_sh, *lm_sh;
     uint32_t *grid_map, *lm_map;
     size_t grid_cells, lm_texels;
@@ -522,7 +530,8 @@ static void free_system(glow_system *s) {
                     s->mat_albedo_scale, s->batch_status, s->batch_negative, s->out_index, s->out_cache,
                     s->xblocks, s->slots, s->sub_ratio, s->sub_nodes, s->mom, s->grad_cm, s->grp_age, s->grp_delta,
                     s->grp_drift_at, s->grp_centre,
-                    s->grp_pack, s->grp_sel, s->grp_skip, s->rad_prev, s->uv0, s->det_out, s->rad_out, s->dep_max_node};
+                    s->grp_pack, s->grp_sel, s->grp_skip, s->rad_prev, s->uv0, s->det_out, s->rad_out, s->dep_max_node,
+                    s->sky_grid, s->sky_backup};
     for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; ++i) glow__ctx_free(ctx, bufs[i]);
     glow__ctx_free(ctx, s);
 }
@@ -703,6 +712,11 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     s->inv_pi_area = alloc_array(s, N, sizeof(float), &ok);
     s->leaf_area = alloc_array(s, S, sizeof(float), &ok);
     s->cache_sh = alloc_array(s, s->C, (size_t)s->coeffs * sizeof(float), &ok);
+    {
+        glow_bake_sky_transfer sky;
+        if (glow_bake_get_sky_transfer(s->bake, &sky) == GLOW_OK && sky.grid_visibility && sky.grid_cache_count)
+            s->sky_V = sky.grid_visibility; /* sky_grid and sky_backup: the first glow_system_set_sky */
+    }
     s->grid_sh = alloc_array(s, s->grid_cells, (size_t)s->coeffs * sizeof(float), &ok);
     s->lm_sh = alloc_array(s, s->lm_texels, (size_t)s->coeffs * sizeof(float), &ok);
     s->grid_map = alloc_array(s, s->grid_cells, sizeof(uint32_t), &ok);
@@ -1160,6 +1174,60 @@ glow_result glow_system_set_params(glow_system *s, const glow_system_params *p) 
     return GLOW_OK;
 }
 
+glow_result glow_system_set_sky(glow_system *s, const float sh_rgb[GLOW_SKY_SH_FLOATS]) {
+    if (!s) return null_arg(s, "glow_system_set_sky");
+    if (busy(s, "glow_system_set_sky")) return GLOW_ERROR_INVALID_OPERATION;
+    if (!sh_rgb) {
+        s->sky_revision += s->sky_on;
+        s->sky_on = false;
+        return GLOW_OK;
+    }
+    if (!s->sky_V) {
+        GLOW__LOG_ERROR(s->ctx, GLOW_ERROR_UNSUPPORTED,
+                        "glow_system_set_sky(%s): the bake carries no sky visibility of its grid caches (format 1.6 "
+                        "SKYT; baked with --no-sky, before 1.6, or without a grid)", s->label);
+        return GLOW_ERROR_UNSUPPORTED;
+    }
+    for (int k = 0; k < GLOW_SKY_SH_FLOATS; ++k)
+        if (!isfinite(sh_rgb[k]) || fabsf(sh_rgb[k]) > GLOW_MAX_IRRADIANCE) {
+            GLOW__LOG_ERROR(s->ctx, GLOW_ERROR_INVALID_ARGUMENT,
+                            "glow_system_set_sky(%s): coefficient %d channel %d (%g) is not finite or beyond %g", s->label,
+                            k / 3, k % 3, (double)sh_rgb[k], (double)GLOW_MAX_IRRADIANCE);
+            return GLOW_ERROR_INVALID_ARGUMENT;
+        }
+    const uint32_t G = s->meta->grid_cache_count, L2 = s->luma * s->luma, C2 = s->chroma * s->chroma;
+    if (!s->sky_grid) { /* once: a system that never gets a sky holds none */
+        bool ok = true;
+        s->sky_grid = alloc_array(s, G, (size_t)s->coeffs * sizeof(float), &ok);
+        s->sky_backup = alloc_array(s, G, (size_t)s->coeffs * sizeof(float), &ok);
+        if (!ok) {
+            glow__ctx_free(s->ctx, s->sky_grid);
+            glow__ctx_free(s->ctx, s->sky_backup);
+            s->sky_grid = s->sky_backup = NULL;
+            GLOW__LOG_ERROR(s->ctx, GLOW_ERROR_OUT_OF_MEMORY, "glow_system_set_sky(%s): out of memory for %u grid caches",
+                            s->label, G);
+            return GLOW_ERROR_OUT_OF_MEMORY;
+        }
+    }
+    for (uint32_t c = 0; c < G; ++c) {
+        float vis[GLOW_SKY_SH_FLOATS], *row = s->sky_grid + (size_t)c * s->coeffs;
+        glow_sh_sky_visible(s->sky_V + 9 * (size_t)c, sh_rgb, vis);
+        memset(row, 0, s->coeffs * sizeof *row);
+        for (uint32_t k = 0; k < 9; ++k) {
+            float ycc[3];
+            glow_rgb_to_ycocg(vis + 3 * k, ycc);
+            if (k < L2) row[k] = ycc[0];
+            if (k < C2) {
+                row[L2 + k] = ycc[1];
+                row[L2 + C2 + k] = ycc[2];
+            }
+        }
+    }
+    s->sky_on = true;
+    s->sky_revision++;
+    return GLOW_OK;
+}
+
 glow_result glow_system_get_params(const glow_system *s, glow_system_params *p) {
     if (!s || !p) return null_arg(s, "glow_system_get_params");
     *p = s->params;
@@ -1366,6 +1434,10 @@ static glow_result system_update(glow_system *s, const glow_update_desc *desc) {
         s->direct_spare = t;
         s->direct_revision++;
     }
+    if (s->sky_applied) { /* the grid caches' rows without the sky, bit for bit (set_sky) */
+        memcpy(s->cache_sh, s->sky_backup, (size_t)s->meta->grid_cache_count * s->coeffs * sizeof(float));
+        s->sky_applied = false;
+    }
     if (flags & GLOW_UPDATE_FLAG_RESET_BOUNCE) {
         s->cache_revision++;
         memset(s->cache_sh, 0, (size_t)s->C * s->coeffs * sizeof(float));
@@ -1410,17 +1482,24 @@ static glow_result system_update(glow_system *s, const glow_update_desc *desc) {
         st.caches_skipped_budget = st.caches_skipped_converged = 0;
     }
     double t4 = now_ms();
+    if (s->sky_on) { /* the visible sky into the grid caches, after the bounce (it is not fed back) */
+        const size_t n = (size_t)s->meta->grid_cache_count * s->coeffs;
+        memcpy(s->sky_backup, s->cache_sh, n * sizeof(float));
+        for (size_t i = 0; i < n; ++i) s->cache_sh[i] += s->sky_grid[i];
+        s->sky_applied = true;
+    }
     /* Skip-if-unchanged: the outputs are a function of the caches and the node radiance alone. A
      * budgeted update that gathered no cache (all converged) and whose node radiance is bit for bit
      * the last output's leaves them as they are (a still, converged scene: the output stage was 1.0 of
      * its 2.6 ms on Sponza moderate, the detail's included). */
     const size_t rad_bytes = (size_t)s->N * 4u * sizeof(float);
     st.outputs_skipped = budgeted && s->sel_count == 0 && s->out_written && !(flags & GLOW_UPDATE_FLAG_RESET_BOUNCE) &&
-                         memcmp(s->rad, s->rad_out, rad_bytes) == 0;
+                         memcmp(s->rad, s->rad_out, rad_bytes) == 0 && s->sky_out_revision == s->sky_revision;
     if (!st.outputs_skipped) {
         glow__ctx_run(s->ctx, task_output, s, output_tasks(s, NULL, NULL));
         memcpy(s->rad_out, s->rad, rad_bytes);
         s->out_written = true;
+        s->sky_out_revision = s->sky_revision;
     }
     double t5 = now_ms();
     st.output_ms = t5 - t4;

@@ -30,6 +30,8 @@ expect 2 "texel adapt 0.5" "$BIN" builtin:cornell -o "$T/a.glow" --texel-adapt 0
 expect 2 "grid refine 3" "$BIN" builtin:cornell -o "$T/a.glow" --grid-refine 3; err_has "grid-refine"
 expect 2 "grid refine 8" "$BIN" builtin:cornell -o "$T/a.glow" --grid-refine 8; err_has "grid-refine"
 expect 2 "grid refine x" "$BIN" builtin:cornell -o "$T/a.glow" --grid-refine x; err_has "grid-refine"
+expect 2 "sky rays 0" "$BIN" builtin:cornell -o "$T/a.glow" --sky-rays 0; err_has "sky-rays"
+expect 2 "sky rays huge" "$BIN" builtin:cornell -o "$T/a.glow" --sky-rays 70000; err_has "sky-rays"
 expect 2 "surfel adapt 5" "$BIN" builtin:cornell -o "$T/a.glow" --surfel-adapt 5; err_has "surfel-adapt"
 expect 2 "missing value" "$BIN" builtin:cornell -o
 expect 2 "no output" "$BIN" builtin:cornell
@@ -48,6 +50,10 @@ expect 0 "bake cornell" "$BIN" builtin:cornell -o "$T/c1.glow" "${SMALL[@]}" --t
 grep -q "bytes per link" "$T/out" && pass "  summary printed" || fail "  no summary"
 expect 0 "--info" "$BIN" --info "$T/c1.glow"
 grep -q "valid" "$T/out" && grep -q "surfels   1024" "$T/out" && pass "  info describes the bake" || { fail "  info output"; cat "$T/out"; }
+grep -q "SKYT" "$T/out" && pass "  the sky transfer by default" || fail "  no SKYT"
+expect 0 "bake --no-sky" "$BIN" builtin:cornell -o "$T/ns.glow" "${SMALL[@]}" --no-sky
+expect 0 "--info --no-sky bake" "$BIN" --info "$T/ns.glow"
+grep -q "SKYT" "$T/out" && fail "  --no-sky wrote SKYT" || pass "  --no-sky: no SKYT"
 expect 0 "--info --json" "$BIN" --info "$T/c1.glow" --json
 python3 -c "import json,sys; sys.exit(0 if json.load(open(sys.argv[1]))['surfels'] == 1024 else 1)" "$T/out" \
   && pass "  info json" || fail "  info json"

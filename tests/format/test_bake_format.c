@@ -1774,6 +1774,76 @@ static void test_real_v1_5_grid_fine(void **state) {
     free(img);
 }
 
+/* A real format 1.6 bake with the sky transfer (SKYT): builtin:pillar-court, an open court, baked with
+ *   glow-bake builtin:pillar-court -o seed_court_tiny_skyt.glow --surfels 32 --links 4 --grid-spacing 4
+ *     --texel-density 0.25 --lightmap-detail 1 --link-subsets off -q --seed 1 --sky-rays 16
+ * It loads, its transfer reads back with the counts of the bake, the grid takes a sky, and the section's
+ * checks name what they refuse (docs/bake-format.md "Sky transfer"). */
+static void test_real_v1_6_sky(void **state) {
+    (void)state;
+    size_t size = 0;
+    unsigned char *img = read_file_all(GLOW_TEST_DATA_DIR "/seed_court_tiny_skyt.glow", &size);
+    test_log log;
+    glow_context *ctx = make_ctx(&log);
+    glow_bake *bake = NULL;
+    assert_int_equal(glow_bake_load(ctx, img, size, &bake), GLOW_OK);
+    glow_bake_info info;
+    assert_int_equal(glow_bake_get_info(bake, &info), GLOW_OK);
+    assert_int_equal(info.format_minor, 6);
+    glow_bake_sky_transfer st;
+    assert_int_equal(glow_bake_get_sky_transfer(bake, &st), GLOW_OK);
+    assert_int_equal(st.surfel_count, info.surfel_count);
+    assert_int_equal(st.grid_cache_count, info.grid_cache_count);
+    assert_int_equal(st.rays, 16);
+    assert_int_equal(st.grid_rays, 128);
+    uint32_t open = 0;
+    for (uint32_t i = 0; i < st.surfel_count; ++i) { /* T_0 = π y_0 S, S in [0, 1] */
+        const float t0 = st.surfel_transfer[9 * i];
+        assert_true(t0 >= 0.0f && t0 <= 3.14159265f * 0.28209479f + 1e-5f);
+        open += t0 > 0.0f;
+    }
+    assert_true(open > st.surfel_count / 2);
+    glow_system *sys = NULL;
+    assert_int_equal(glow_system_create(ctx, &(glow_system_desc){.bake = bake}, &sys), GLOW_OK);
+    float L[GLOW_SKY_SH_FLOATS];
+    const float one[3] = {1, 1, 1};
+    glow_sh_sky_constant(one, L);
+    assert_int_equal(glow_system_set_sky(sys, L), GLOW_OK);
+    assert_int_equal(glow_system_update(sys, NULL), GLOW_OK);
+    const glow_cache_outputs *o = glow_system_outputs(sys);
+    for (uint32_t c = 0; c < o->grid_cache_count; ++c) assert_true(o->cache_sh[(size_t)c * o->coeff_count] > 0.0f);
+    glow_system_destroy(sys);
+    glow_bake_destroy(bake);
+    glow_context_destroy(ctx);
+    /* patched copies */
+    unsigned char *bad = malloc(size);
+    const size_t off = (size_t)u64_at(entry_ptr(img, GLOW_SECTION_SKYT) + 8);
+    uint32_t v;
+#define PATCH_SKYT(at, value, code, needle)                                                                            \
+    do {                                                                                                               \
+        memcpy(bad, img, size);                                                                                        \
+        v = (value);                                                                                                   \
+        memcpy(bad + off + (at), &v, 4);                                                                               \
+        fuzz_fix_crcs(bad, size);                                                                                      \
+        EXPECT_LOAD_MSG(bad, size, code, needle);                                                                      \
+    } while (0)
+    PATCH_SKYT(0, 4u, GLOW_ERROR_CORRUPT_DATA, "SKYT: 4 coefficients");
+    PATCH_SKYT(4, info.surfel_count + 1u, GLOW_ERROR_CORRUPT_DATA, "do not fit the bake");
+    PATCH_SKYT(12, 0u, GLOW_ERROR_CORRUPT_DATA, "do not fit the bake");
+    PATCH_SKYT(16, 0u, GLOW_ERROR_CORRUPT_DATA, "do not fit the bake");
+    PATCH_SKYT(32 + 4 * 5, 0x7FC00000u, GLOW_ERROR_CORRUPT_DATA, "SKYT surfel 0 coefficient 5");
+    PATCH_SKYT(32 + 36 * info.surfel_count, 0x41900000u /* 18 */, GLOW_ERROR_CORRUPT_DATA, "SKYT grid cache 0 coefficient 0");
+#undef PATCH_SKYT
+    memcpy(bad, img, size);
+    unsigned char *e = entry_ptr(bad, GLOW_SECTION_SKYT);
+    const uint64_t short_size = u64_at(e + 16) - 4u;
+    memcpy(e + 16, &short_size, 8);
+    fuzz_fix_crcs(bad, size);
+    EXPECT_LOAD_MSG(bad, size, GLOW_ERROR_CORRUPT_DATA, "section 'SKYT' is");
+    free(bad);
+    free(img);
+}
+
 static void test_golden_v1(void **state) {
     (void)state;
     test_bake tb;
@@ -1859,6 +1929,7 @@ int main(void) {
         cmocka_unit_test(test_golden_v1),
         cmocka_unit_test(test_real_v1_2_detail),
         cmocka_unit_test(test_real_v1_5_grid_fine),
+        cmocka_unit_test(test_real_v1_6_sky),
     };
     return cmocka_run_group_tests(tests, setup_tmpdir, teardown_tmpdir);
 }

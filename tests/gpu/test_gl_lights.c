@@ -708,6 +708,94 @@ static void test_in_solver(void **state) {
     glow_host_destroy(hs);
 }
 
+/* The sky as SH (docs/sky.md): a sky bright towards +X, in the GL solver with the bake's per-surfel sky
+ * transfer against the CPU solver driven by the exact host with the same sky; and in a plain compute
+ * shader (no surfel index: the unoccluded cosine lobe) against the CPU host's unshadowed SH sky. */
+static void test_sky_sh(void **state) {
+    (void)state;
+    const scene *s = &g_open;
+    const float px[3] = {1, 0, 0};
+    float y[9], L[GLOW_SKY_SH_FLOATS];
+    glow_sh_eval(3, px, y);
+    const float band[3] = {1.0f, 2.0f / 3.0f, 0.25f}, tint[3] = {1.0f, 0.8f, 0.5f};
+    for (int k = 0; k < 9; ++k)
+        for (int c = 0; c < 3; ++c) L[3 * k + c] = 2.0f * tint[c] * band[k == 0 ? 0 : k < 4 ? 1 : 2] * y[k];
+    for (int c = 0; c < 3; ++c) L[c] += 0.1f;
+    glow_sh_rotate_y(L, 0.7f, L);
+    glow_bake_sky_transfer tr;
+    assert_int_equal(glow_bake_get_sky_transfer(s->bake, &tr), GLOW_OK);
+    assert_non_null(tr.surfel_transfer);
+    assert_int_equal(tr.surfel_count, s->sv.count);
+    glow_scene_light sun = {.type = GLOW_SCENE_LIGHT_SUN, .direction = {0.3f, -1.0f, 0.2f}, .irradiance = {1, 1, 1}};
+
+    glow_host_desc hd = {.kind = GLOW_HOST_KIND_EXACT, .bake = s->bake, .lights = &sun, .light_count = 1};
+    glow_host *he = NULL;
+    assert_int_equal(glow_host_create(&hd, &he), GLOW_OK);
+    assert_int_equal(glow_host_set_environment_sh(he, L), GLOW_OK);
+    glow_system *cpu = NULL;
+    glow_system_desc sd = {.bake = s->bake, .lighting = glow_host_hooks(he)};
+    assert_int_equal(glow_system_create(g_ctx, &sd, &cpu), GLOW_OK);
+    glow_gl_lights *GL = NULL;
+    glow_gl_lights_desc d = {.loader = glow_glctx_get_proc_address(g_glctx), .bake = s->bake, .logger = LOGGER};
+    assert_int_equal(glow_gl_lights_create(&d, &GL), GLOW_OK);
+    /* no light: the sky alone, where the shadow maps cannot differ from the exact host */
+    assert_int_equal(glow_gl_lights_set(GL, NULL, 0, NULL), GLOW_OK);
+    assert_int_equal(glow_host_set_lights(he, NULL, 0), GLOW_OK);
+    assert_int_equal(glow_gl_lights_set_environment_sh(GL, L), GLOW_OK);
+    assert_int_equal(glow_gl_lights_set_sky_transfer(GL, tr.surfel_transfer, tr.surfel_count), GLOW_OK);
+    float bad[GLOW_SKY_SH_FLOATS];
+    memcpy(bad, L, sizeof bad);
+    bad[7] = NAN;
+    assert_int_equal(glow_gl_lights_set_environment_sh(GL, bad), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(glow_gl_lights_set_sky_transfer(GL, tr.surfel_transfer, 0), GLOW_ERROR_INVALID_ARGUMENT);
+    glow_gl_system *gpu = NULL;
+    glow_gl_desc gd = {.system = cpu, .get_proc_address = glow_glctx_get_proc_address(g_glctx),
+                       .hook_glsl = glow_gl_lights_hook_source(GL), .label = "gl_lights sky", .logger = LOGGER};
+    glow_result r = glow_gl_system_create(&gd, &gpu);
+    if (r != GLOW_OK) fail_msg("glow_gl_system_create with the hook: %s\n%s", glow_result_string(r), g_last_log);
+    for (int k = 0; k < 4; ++k) {
+        assert_int_equal(glow_system_update(cpu, NULL), GLOW_OK);
+        assert_int_equal(glow_gl_lights_bind(GL), GLOW_OK);
+        assert_int_equal(glow_gl_system_update(gpu, NULL), GLOW_OK);
+    }
+    assert_true(compare_caches(cpu, gpu, "SH sky, baked T:") <= 1.0);
+    /* set() keeps the SH sky (its environment waits unused) */
+    const float env[3] = {5, 5, 5};
+    assert_int_equal(glow_gl_lights_set(GL, NULL, 0, env), GLOW_OK);
+    assert_int_equal(glow_gl_lights_bind(GL), GLOW_OK);
+    assert_int_equal(glow_gl_system_update(gpu, NULL), GLOW_OK);
+    assert_int_equal(glow_system_update(cpu, NULL), GLOW_OK);
+    assert_true(compare_caches(cpu, gpu, "SH sky after set():") <= 1.0);
+    glow_gl_system_destroy(gpu);
+    glow_system_destroy(cpu);
+    glow_host_destroy(he);
+
+    /* no surfel index: the unoccluded lobe, as the CPU host's GLOW_HOST_SKY_UNSHADOWED */
+    glow_host *hu = cpu_host(s, GLOW_HOST_KIND_SHADOW_MAP, NULL, 0, NULL);
+    assert_int_equal(glow_host_set_environment_sh(hu, L), GLOW_OK);
+    const uint32_t n = s->sv.count;
+    float *a = malloc(sizeof(float) * 3 * n), *b = malloc(sizeof(float) * 3 * n);
+    assert_true(a && b);
+    gpu_eval(GL, s, a);
+    cpu_eval(hu, s, b);
+    double worst = 0, sum = 0;
+    for (uint32_t i = 0; i < 3 * n; ++i) {
+        worst = fmax(worst, fabs((double)a[i] - b[i]));
+        sum += b[i];
+    }
+    print_message("SH sky without a surfel index: worst |GPU - CPU| %.2e (mean %.3f)\n", worst, sum / (3 * n));
+    assert_true(sum > 0 && worst < 1e-4 * (1 + sum / (3 * n)));
+    /* back to the constant environment */
+    assert_int_equal(glow_gl_lights_set_environment_sh(GL, NULL), GLOW_OK);
+    gpu_eval(GL, s, a);
+    for (uint32_t i = 0; i < 3 * n; ++i) assert_true(fabsf(a[i] - 5.0f * (float)M_PI) < 1e-3f);
+    free(a);
+    free(b);
+    glow_host_destroy(hu);
+    assert_int_equal(glow_gl_lights_set_sky_transfer(GL, NULL, 0), GLOW_OK);
+    glow_gl_lights_destroy(GL);
+}
+
 /* set() leaves the host's GL state as it found it. */
 static void test_state_restored(void **state) {
     (void)state;
@@ -916,6 +1004,7 @@ int main(void) {
             cmocka_unit_test(test_sun_closed_box),
             cmocka_unit_test(test_all_lights_and_fragment),
             cmocka_unit_test(test_in_solver),
+            cmocka_unit_test(test_sky_sh),
             cmocka_unit_test(test_state_restored),
             cmocka_unit_test(test_errors),
             cmocka_unit_test(test_timing),

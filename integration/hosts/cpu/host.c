@@ -47,6 +47,16 @@ struct glow_host {
     uint32_t sky_rays;
     float *sky_dirs;             /* sky_rays x 3: cosine-distributed directions around +z */
     _Atomic uint32_t *sky_cache; /* surfel_count: bits of S, SKY_UNSET = not traced yet */
+    /* the sky as SH (glow_host_set_environment_sh; docs/sky.md): when env_sh_on, the sky term is
+     * max(0, Σ T_k L_k) with T the bake's transfer (SKYT) or, without it, traced per surfel on first use */
+    bool env_sh_on;
+    float env_sh[GLOW_SKY_SH_FLOATS];
+    const float *bake_T;         /* [surfel_count][9] the bake's SKYT transfer, or NULL */
+    float *sky_E;                /* with bake_T (traced sky): [surfel_count][3] max(0, Σ T L) for env_sh, computed by
+                                    glow_host_set_environment_sh so the hook reads 3 floats (0.95 -> 0.32 ms a pass
+                                    on Sponza) */
+    _Atomic uint32_t *t_cache;   /* without bake_T, allocated by the first set_environment_sh: surfel_count x
+                                    10, [0] SKY_UNSET until the 9 bits of T in [1..9] are stored */
     _Atomic uint32_t *origin_cache; /* 3 x surfel_count: bits of each surfel's ray origin, [0] SKY_UNSET = not yet */
     uint32_t sm_size, cube_size;
     glow__shadow_params sp;
@@ -329,7 +339,26 @@ static float trace_sky(const glow_host *h, const float o[3], const float n[3]) {
     return (float)open / (float)h->sky_rays;
 }
 
-static bool sky_on(const glow_host *h) { return h->env[0] > 0.0f || h->env[1] > 0.0f || h->env[2] > 0.0f; }
+/* The sky transfer of one point, traced from origin o over n: T_k = π/N Σ_open y_k over the same
+ * cosine-distributed rays as trace_sky, so that with a constant sky Σ T_k L_k = L π S exactly. */
+static void trace_sky_T(const glow_host *h, const float o[3], const float n[3], float T[9]) {
+    float tx[3], ty[3];
+    glow__onb(n, tx, ty);
+    double acc[9] = {0};
+    for (uint32_t k = 0; k < h->sky_rays; ++k) {
+        const float *s = h->sky_dirs + 3 * (size_t)k;
+        float d[3], y[9];
+        for (int i = 0; i < 3; ++i) d[i] = s[0] * tx[i] + s[1] * ty[i] + s[2] * n[i];
+        if (occluded(h, o, d, INFINITY)) continue;
+        glow_sh_eval(3, d, y);
+        for (int q = 0; q < 9; ++q) acc[q] += y[q];
+    }
+    for (int q = 0; q < 9; ++q) T[q] = (float)(acc[q] * HOST_PI / (double)h->sky_rays);
+}
+
+static bool sky_on(const glow_host *h) {
+    return h->env_sh_on || h->env[0] > 0.0f || h->env[1] > 0.0f || h->env[2] > 0.0f;
+}
 static void irradiance_sky(const glow_host *h, const float p[3], const float n[3], uint32_t surfel, float out[3]);
 
 /* ------------------------------------------------------------------------- footprints */
@@ -530,7 +559,48 @@ static float sky_S(const glow_host *h, const float p[3], const float n[3], uint3
     return S;
 }
 
+/* The sky transfer T at p, n: the bake's (SKYT) for a surfel of a bake that has it, else cached per
+ * surfel or traced as sky_S does; for GLOW_HOST_SKY_UNSHADOWED the unoccluded cosine lobe
+ * T_k = Â_l y_k(n), Â = (π, 2π/3, π/4). Returns T (the bake's row, or `buf`). */
+static const float *sky_T(const glow_host *h, const float p[3], const float n[3], uint32_t surfel, float buf[9]) {
+    if (h->sky == GLOW_HOST_SKY_UNSHADOWED || !h->scene) {
+        glow_sh_eval(3, n, buf);
+        for (int q = 0; q < 9; ++q) buf[q] *= q == 0 ? (float)HOST_PI : q < 4 ? (float)(2.0 * HOST_PI / 3.0) : (float)(HOST_PI / 4.0);
+        return buf;
+    }
+    if (surfel != UINT32_MAX && h->bake_T) return h->bake_T + 9 * (size_t)surfel;
+    _Atomic uint32_t *c = surfel != UINT32_MAX && h->t_cache ? h->t_cache + 10 * (size_t)surfel : NULL;
+    if (c && atomic_load_explicit(&c[0], memory_order_acquire) != SKY_UNSET) {
+        for (int q = 0; q < 9; ++q) {
+            const uint32_t b = atomic_load_explicit(&c[1 + q], memory_order_relaxed);
+            memcpy(&buf[q], &b, sizeof b);
+        }
+        return buf;
+    }
+    float o[3];
+    surfel_origin(h, p, n, surfel, o);
+    trace_sky_T(h, o, n, buf);
+    if (c) { /* racing workers store the same values */
+        for (int q = 0; q < 9; ++q) {
+            uint32_t b;
+            memcpy(&b, &buf[q], sizeof b);
+            atomic_store_explicit(&c[1 + q], b, memory_order_relaxed);
+        }
+        atomic_store_explicit(&c[0], 0u, memory_order_release);
+    }
+    return buf;
+}
+
 static void irradiance_sky(const glow_host *h, const float p[3], const float n[3], uint32_t surfel, float out[3]) {
+    if (h->env_sh_on && h->sky_E && surfel != UINT32_MAX) {
+        memcpy(out, h->sky_E + 3 * (size_t)surfel, 3 * sizeof *out);
+        return;
+    }
+    if (h->env_sh_on) {
+        float buf[9];
+        glow_sh_sky_irradiance(sky_T(h, p, n, surfel, buf), h->env_sh, out);
+        return;
+    }
     const float S = sky_S(h, p, n, surfel);
     for (int c = 0; c < 3; ++c) out[c] = h->env[c] * (float)HOST_PI * S;
 }
@@ -871,6 +941,51 @@ glow_result glow_host_set_environment(glow_host *host, const float radiance_rgb[
             return HOST_FAIL(&host->logger, GLOW_ERROR_INVALID_ARGUMENT, "environment[%d] (%g) is negative or not finite",
                              c, (double)radiance_rgb[c]);
     memcpy(host->env, radiance_rgb, sizeof host->env);
+    host->env_sh_on = false;
+    return GLOW_OK;
+}
+
+glow_result glow_host_set_environment_sh(glow_host *host, const float sh_rgb[GLOW_SKY_SH_FLOATS]) {
+    if (!host) return GLOW_ERROR_INVALID_ARGUMENT;
+    if (!sh_rgb) {
+        host->env_sh_on = false;
+        return GLOW_OK;
+    }
+    for (int k = 0; k < GLOW_SKY_SH_FLOATS; ++k)
+        if (!isfinite(sh_rgb[k]) || fabsf(sh_rgb[k]) > GLOW_MAX_IRRADIANCE)
+            return HOST_FAIL(&host->logger, GLOW_ERROR_INVALID_ARGUMENT,
+                             "environment SH coefficient %d channel %d (%g) is not finite or beyond %g", k / 3, k % 3,
+                             (double)sh_rgb[k], (double)GLOW_MAX_IRRADIANCE);
+    if (!host->bake_T && !host->t_cache && host->surfel_count && host->sky == GLOW_HOST_SKY_TRACED) {
+        host->t_cache = malloc((size_t)host->surfel_count * 10 * sizeof *host->t_cache);
+        if (!host->t_cache)
+            return HOST_FAIL(&host->logger, GLOW_ERROR_OUT_OF_MEMORY, "out of memory for the sky transfer of %u surfels",
+                             host->surfel_count);
+        for (size_t i = 0; i < (size_t)host->surfel_count * 10; ++i) atomic_init(&host->t_cache[i], SKY_UNSET);
+    }
+    if (host->bake_T && host->sky == GLOW_HOST_SKY_TRACED && host->scene && host->surfel_count) {
+        if (!host->sky_E && !(host->sky_E = malloc((size_t)host->surfel_count * 3 * sizeof *host->sky_E)))
+            return HOST_FAIL(&host->logger, GLOW_ERROR_OUT_OF_MEMORY, "out of memory for the sky of %u surfels",
+                             host->surfel_count);
+        for (uint32_t i = 0; i < host->surfel_count; ++i)
+            glow_sh_sky_irradiance(host->bake_T + 9 * (size_t)i, sh_rgb, host->sky_E + 3 * (size_t)i);
+    }
+    memcpy(host->env_sh, sh_rgb, sizeof host->env_sh);
+    host->env_sh_on = true;
+    return GLOW_OK;
+}
+
+glow_result glow_host_sky_transfer(glow_host *h, const glow_surfel_view *v, float *out, uint32_t count) {
+    if (!h || !v || !out || !v->positions || !v->normals) return GLOW_ERROR_INVALID_ARGUMENT;
+    if (count != h->surfel_count || v->count != h->surfel_count)
+        return HOST_FAIL(&h->logger, GLOW_ERROR_INVALID_ARGUMENT,
+                         "glow_host_sky_transfer: %u values / %u surfels given, the bake has %u surfels", count, v->count,
+                         h->surfel_count);
+    for (uint32_t i = 0; i < count; ++i) {
+        float buf[9];
+        const float *T = sky_T(h, v->positions + 4 * (size_t)i, v->normals + 4 * (size_t)i, i, buf);
+        memcpy(out + 9 * (size_t)i, T, 9 * sizeof *out);
+    }
     return GLOW_OK;
 }
 
@@ -907,6 +1022,8 @@ void glow_host_destroy(glow_host *host) {
     free(host->tris);
     free(host->sky_dirs);
     free((void *)host->sky_cache);
+    free((void *)host->t_cache);
+    free(host->sky_E);
     free((void *)host->origin_cache);
     free(host->foot);
     free((void *)host->reach);
@@ -1015,6 +1132,11 @@ glow_result glow_host_create(const glow_host_desc *desc, glow_host **out_host) {
     h->sp.normal_offset = desc->normal_offset > 0.0f ? desc->normal_offset : 1.0f;
     h->sp.pcf_radius = desc->pcf_size ? (int)desc->pcf_size / 2 : 1;
     memcpy(h->env, desc->environment, sizeof h->env);
+    {
+        glow_bake_sky_transfer st;
+        if (glow_bake_get_sky_transfer(desc->bake, &st) == GLOW_OK && st.surfel_transfer && st.surfel_count == info.surfel_count)
+            h->bake_T = st.surfel_transfer;
+    }
 
     h->tris = malloc((size_t)h->tri_count * 9 * sizeof(float));
     h->sky_dirs = malloc((size_t)h->sky_rays * 3 * sizeof(float));
@@ -1130,6 +1252,8 @@ glow_result glow_host_get_stats(const glow_host *host, glow_host_stats *out_stat
     for (uint32_t i = 0; i < host->surfel_count; ++i)
         out_stats->sky_cached += atomic_load_explicit(&host->sky_cache[i], memory_order_relaxed) != SKY_UNSET;
     out_stats->surfel_samples = host->samples;
+    out_stats->sky_sh = host->env_sh_on;
+    out_stats->sky_transfer_baked = host->bake_T != NULL;
     for (int w = 0; w < 64; ++w) out_stats->shadow_rays += atomic_load_explicit(&host->rays[w].n, memory_order_relaxed);
     return GLOW_OK;
 }

@@ -47,14 +47,16 @@ typedef struct ubo_map {
 } ubo_map;
 
 typedef struct ubo_head {
-    float environment[4]; /* rgb · π */
+    float environment[4]; /* rgb · π; w: 1 = the sky is sky_sh (glow_gl_lights_set_environment_sh) */
     float shadow[4];      /* depth_bias, slope_bias, normal_offset, unused */
-    int32_t counts[4];    /* lights, PCF radius, per-surfel sky values (0 = none), unused */
+    int32_t counts[4];    /* lights, PCF radius, per-surfel sky values S (0 = none), per-surfel sky transfers T
+                             (0 = none; the SSBO holds S[counts[2]] then T[counts[3]][9]) */
+    float sky_sh[9][4];   /* the sky's radiance SH, rgb per coefficient (docs/sky.md) */
 } ubo_head;
 
 _Static_assert(sizeof(ubo_light) == 64, "std140 light");
 _Static_assert(sizeof(ubo_map) == 96, "std140 map");
-_Static_assert(sizeof(ubo_head) == 48, "std140 head");
+_Static_assert(sizeof(ubo_head) == 192, "std140 head");
 
 /* --------------------------------------------------------------------------------- the object */
 
@@ -69,8 +71,12 @@ struct glow_gl_lights {
     uint32_t tri_count;
     float bmin[3], bmax[3], diag;
     GLuint vbo, vao, prog, fbo, ubo;
-    GLuint sky;             /* SSBO float[sky_count]: per-surfel sky visibility (0 = none) */
-    uint32_t sky_count;
+    GLuint sky;             /* SSBO float[sky_count + 9 transfer_count]: per-surfel sky visibility S, then
+                               per-surfel sky transfer T (0 = none) */
+    uint32_t sky_count, transfer_count;
+    float *sky_s, *sky_t;   /* host copies of S and T, uploaded together (upload_sky) */
+    bool sh_on;
+    float sh[9][4];
     GLuint tex[2];          /* [0] sun / spot maps (sm_size), [1] cube faces (cube_size) */
     uint32_t tex_layers[2]; /* layers allocated; 0 = a 1 x 1 x 1 placeholder */
     GLint loc_origin, loc_ax, loc_ay, loc_az, loc_proj, loc_depth;
@@ -444,6 +450,8 @@ void glow_gl_lights_destroy(glow_gl_lights *g) {
         if (g->vbo) gl->DeleteBuffers(1, &g->vbo);
         if (g->ubo) gl->DeleteBuffers(1, &g->ubo);
         if (g->sky) gl->DeleteBuffers(1, &g->sky);
+        free(g->sky_s);
+        free(g->sky_t);
         if (g->vao) gl->DeleteVertexArrays(1, &g->vao);
         if (g->fbo) gl->DeleteFramebuffers(1, &g->fbo);
         if (g->prog) gl->DeleteProgram(g->prog);
@@ -646,6 +654,9 @@ glow_result glow_gl_lights_set(glow_gl_lights *g, const glow_scene_light *lights
     for (int c = 0; c < 3; ++c) head->environment[c] = environment ? environment[c] * (float)GLL_PI : 0.0f;
     head->counts[0] = (int32_t)count;
     head->counts[2] = (int32_t)g->sky_count; /* set_sky_visibility persists across set() */
+    head->counts[3] = (int32_t)g->transfer_count; /* ... and so do the sky transfer and the SH sky */
+    head->environment[3] = g->sh_on ? 1.0f : 0.0f;
+    memcpy(head->sky_sh, g->sh, sizeof head->sky_sh);
 
     uint32_t margin = (uint32_t)g->pcf_radius + 2, nmaps = 0, layers[2] = {0, 0};
     float near_z = 1e-3f * g->diag;
@@ -761,40 +772,91 @@ glow_result glow_gl_lights_bind(const glow_gl_lights *g) {
     return GLOW_OK;
 }
 
+/* (Re)creates the sky SSBO from the host copies: S[sky_count] then T[transfer_count][9]; the counts go
+ * into the block (and its staging copy, which set() starts from). */
+static glow_result upload_sky(glow_gl_lights *g) {
+    const glow_glfns *gl = &g->gl;
+    if (g->sky) gl->DeleteBuffers(1, &g->sky);
+    g->sky = 0;
+    const size_t n = (size_t)g->sky_count + 9u * (size_t)g->transfer_count;
+    glow_result r = GLOW_OK;
+    if (n) {
+        gl->CreateBuffers(1, &g->sky);
+        gl->NamedBufferStorage(g->sky, (GLsizeiptr)(n * 4u), NULL, GL_DYNAMIC_STORAGE_BIT);
+        if (g->sky_count) gl->NamedBufferSubData(g->sky, 0, (GLsizeiptr)g->sky_count * 4, g->sky_s);
+        if (g->transfer_count)
+            gl->NamedBufferSubData(g->sky, (GLintptr)g->sky_count * 4, (GLsizeiptr)g->transfer_count * 36, g->sky_t);
+        GLenum e = gl->GetError();
+        if (e != GL_NO_ERROR) {
+            gl->DeleteBuffers(1, &g->sky);
+            g->sky = 0;
+            g->sky_count = g->transfer_count = 0;
+            r = GLL_FAIL(&g->logger, e == GL_OUT_OF_MEMORY ? GLOW_ERROR_OUT_OF_MEMORY : GLOW_ERROR_UNSUPPORTED,
+                         "sky buffer of %zu values: GL error 0x%04x", n, e);
+        }
+    }
+    const int32_t c[2] = {(int32_t)g->sky_count, (int32_t)g->transfer_count};
+    ubo_head *head = (ubo_head *)g->staging;
+    head->counts[2] = c[0];
+    head->counts[3] = c[1];
+    gl->NamedBufferSubData(g->ubo, (GLintptr)offsetof(ubo_head, counts) + 2 * (GLintptr)sizeof(int32_t), sizeof c, c);
+    return r;
+}
+
 glow_result glow_gl_lights_set_sky_visibility(glow_gl_lights *g, const float *visibility, uint32_t count) {
     if (!g || (visibility && count == 0)) return GLOW_ERROR_INVALID_ARGUMENT;
-    const glow_glfns *gl = &g->gl;
+    float *copy = NULL;
     if (visibility) {
         for (uint32_t i = 0; i < count; ++i)
             if (!(visibility[i] >= 0.0f && visibility[i] <= 1.0f))
                 return GLL_FAIL(&g->logger, GLOW_ERROR_INVALID_ARGUMENT, "sky visibility[%u] (%g) is outside [0, 1]", i,
                                 (double)visibility[i]);
-        if (g->sky && g->sky_count != count) {
-            gl->DeleteBuffers(1, &g->sky);
-            g->sky = 0;
-        }
-        if (!g->sky) {
-            gl->CreateBuffers(1, &g->sky);
-            gl->NamedBufferStorage(g->sky, (GLsizeiptr)count * 4, visibility, GL_DYNAMIC_STORAGE_BIT);
-        } else {
-            gl->NamedBufferSubData(g->sky, 0, (GLsizeiptr)count * 4, visibility);
-        }
-        GLenum e = gl->GetError();
-        if (e != GL_NO_ERROR) {
-            if (g->sky) gl->DeleteBuffers(1, &g->sky);
-            g->sky = 0;
-            g->sky_count = 0;
-            return GLL_FAIL(&g->logger, e == GL_OUT_OF_MEMORY ? GLOW_ERROR_OUT_OF_MEMORY : GLOW_ERROR_UNSUPPORTED,
-                            "sky visibility buffer of %u values: GL error 0x%04x", count, e);
-        }
-        g->sky_count = count;
-    } else {
-        if (g->sky) gl->DeleteBuffers(1, &g->sky);
-        g->sky = 0;
-        g->sky_count = 0;
+        if (!(copy = malloc((size_t)count * sizeof *copy)))
+            return GLL_FAIL(&g->logger, GLOW_ERROR_OUT_OF_MEMORY, "out of memory for %u sky values", count);
+        memcpy(copy, visibility, (size_t)count * sizeof *copy);
     }
-    const int32_t n = (int32_t)g->sky_count;
-    gl->NamedBufferSubData(g->ubo, (GLintptr)offsetof(ubo_head, counts) + 2 * (GLintptr)sizeof(int32_t), sizeof n, &n);
+    free(g->sky_s);
+    g->sky_s = copy;
+    g->sky_count = visibility ? count : 0u;
+    return upload_sky(g);
+}
+
+glow_result glow_gl_lights_set_sky_transfer(glow_gl_lights *g, const float *transfer, uint32_t count) {
+    if (!g || (transfer && count == 0)) return GLOW_ERROR_INVALID_ARGUMENT;
+    float *copy = NULL;
+    if (transfer) {
+        for (size_t i = 0; i < 9u * (size_t)count; ++i)
+            if (!(fabsf(transfer[i]) <= 16.0f))
+                return GLL_FAIL(&g->logger, GLOW_ERROR_INVALID_ARGUMENT,
+                                "sky transfer of surfel %zu, coefficient %zu (%g): not finite or beyond 16", i / 9, i % 9,
+                                (double)transfer[i]);
+        if (!(copy = malloc(9u * (size_t)count * sizeof *copy)))
+            return GLL_FAIL(&g->logger, GLOW_ERROR_OUT_OF_MEMORY, "out of memory for the sky transfer of %u surfels", count);
+        memcpy(copy, transfer, 9u * (size_t)count * sizeof *copy);
+    }
+    free(g->sky_t);
+    g->sky_t = copy;
+    g->transfer_count = transfer ? count : 0u;
+    return upload_sky(g);
+}
+
+glow_result glow_gl_lights_set_environment_sh(glow_gl_lights *g, const float *sh_rgb) {
+    if (!g) return GLOW_ERROR_INVALID_ARGUMENT;
+    if (sh_rgb)
+        for (int k = 0; k < 27; ++k)
+            if (!isfinite(sh_rgb[k]) || fabsf(sh_rgb[k]) > GLOW_MAX_IRRADIANCE)
+                return GLL_FAIL(&g->logger, GLOW_ERROR_INVALID_ARGUMENT,
+                                "environment SH coefficient %d channel %d (%g) is not finite or beyond %g", k / 3, k % 3,
+                                (double)sh_rgb[k], (double)GLOW_MAX_IRRADIANCE);
+    memset(g->sh, 0, sizeof g->sh);
+    if (sh_rgb)
+        for (int k = 0; k < 9; ++k)
+            for (int c = 0; c < 3; ++c) g->sh[k][c] = sh_rgb[3 * k + c];
+    g->sh_on = sh_rgb != NULL;
+    ubo_head *head = (ubo_head *)g->staging;
+    head->environment[3] = g->sh_on ? 1.0f : 0.0f;
+    memcpy(head->sky_sh, g->sh, sizeof head->sky_sh);
+    g->gl.NamedBufferSubData(g->ubo, 0, (GLsizeiptr)sizeof *head, head);
     return GLOW_OK;
 }
 

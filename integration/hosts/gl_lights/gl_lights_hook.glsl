@@ -25,15 +25,18 @@ struct glow_gl_lights_map {
 };
 
 layout(std140, binding = GLOW_GL_LIGHTS_UBO_BINDING) uniform glow_gl_lights_block {
-    vec4 environment; // rgb: sky radiance * pi (W/m^2); w: unused
+    vec4 environment; // rgb: sky radiance * pi (W/m^2); w: 1 = the sky is sky_sh instead
     vec4 shadow;      // x: depth_bias, y: slope_bias, z: normal_offset (texels); w: unused
-    ivec4 counts;     // x: lights; y: PCF radius; z: per-surfel sky visibility values (0 = none); w: unused
+    ivec4 counts;     // x: lights; y: PCF radius; z: per-surfel sky visibility values S (0 = none);
+                      // w: per-surfel sky transfers T (0 = none), 9 floats each after the S values
+    vec4 sky_sh[9];   // rgb: the sky's radiance SH (l <= 2, glow_sh_eval's basis; docs/sky.md)
     glow_gl_lights_light lights[GLOW_GL_LIGHTS_LIGHTS];
     glow_gl_lights_map maps[GLOW_GL_LIGHTS_MAPS];
 } glow_gl_lights;
 
 #ifdef GLOW_SURFEL_INDEX_AVAILABLE
-// Per-surfel sky visibility S (glow_gl_lights_set_sky_visibility), read inside Glow's surfel kernel.
+// Per-surfel sky visibility S (glow_gl_lights_set_sky_visibility), then per-surfel sky transfer T
+// (glow_gl_lights_set_sky_transfer, 9 floats a surfel), read inside Glow's surfel kernel.
 layout(std430, binding = GLOW_GL_LIGHTS_UBO_BINDING) readonly buffer glow_gl_lights_sky_block { float glow_gl_lights_sky[]; };
 #endif
 
@@ -105,9 +108,41 @@ float glow_gl_lights_sky_visibility() {
 #endif
 }
 
+// The SH sky's irradiance max(0, sum_k T_k L_k): T the surfel's transfer (Glow's kernel, when set), else
+// the unoccluded cosine lobe about n, T_k = A_l y_k(n) with A = (pi, 2 pi / 3, pi / 4), times the sky's
+// visible share glow_gl_lights_sky_visibility() (S when set, GLOW_GL_LIGHTS_PIXEL_SKY at a pixel, else 1).
+// Mirrors host.c's sky_T.
+vec3 glow_gl_lights_sky_sh(vec3 n) {
+    float t[9];
+    float share = 1.0;
+#if defined(GLOW_SURFEL_INDEX_AVAILABLE)
+    if (uint(glow_gl_lights.counts.w) > glow_surfel_index) {
+        uint b = uint(glow_gl_lights.counts.z) + 9u * glow_surfel_index;
+        for (int k = 0; k < 9; ++k) t[k] = glow_gl_lights_sky[b + uint(k)];
+    } else
+#endif
+    {
+        const float a0 = 3.14159265 * 0.2820947918, a1 = 2.0943951 * 0.4886025119, a2 = 0.78539816;
+        t[0] = a0;
+        t[1] = a1 * n.y;
+        t[2] = a1 * n.z;
+        t[3] = a1 * n.x;
+        t[4] = a2 * 1.0925484306 * n.x * n.y;
+        t[5] = a2 * 1.0925484306 * n.y * n.z;
+        t[6] = a2 * 0.3153915653 * (3.0 * n.z * n.z - 1.0);
+        t[7] = a2 * 1.0925484306 * n.x * n.z;
+        t[8] = a2 * 0.5462742153 * (n.x * n.x - n.y * n.y);
+        share = glow_gl_lights_sky_visibility();
+    }
+    vec3 e = vec3(0.0);
+    for (int k = 0; k < 9; ++k) e += t[k] * glow_gl_lights.sky_sh[k].rgb;
+    return max(e, vec3(0.0)) * share;
+}
+
 vec3 glow_host_surfel_irradiance(vec3 position, vec3 normal, uint material) {
     vec3 e = glow_gl_lights.environment.rgb;
-    if (e.r > 0.0 || e.g > 0.0 || e.b > 0.0) e *= glow_gl_lights_sky_visibility();
+    if (glow_gl_lights.environment.w > 0.5) e = glow_gl_lights_sky_sh(normal);
+    else if (e.r > 0.0 || e.g > 0.0 || e.b > 0.0) e *= glow_gl_lights_sky_visibility();
     int count = glow_gl_lights.counts.x;
     for (int i = 0; i < count; ++i) {
         vec3 power = glow_gl_lights.lights[i].power.rgb;

@@ -129,6 +129,11 @@ typedef struct glow__hit {
                                  tri is UINT32_MAX, t and back_face are set; it occludes, nothing more */
 } glow__hit;
 glow__hit glow__rt_intersect(const glow__rt *rt, const float org[3], const float dir[3], float tnear, float tfar);
+/* The triangle nearest to p within `radius` whose geometric normal faces along unit n (cosine >= 0.9),
+ * among the scene's and the foreign ones (an Embree point query, as the CPU host's safe origin does);
+ * false when there is none. out_centroid: its centroid. */
+bool glow__rt_nearest_facing(const glow__rt *rt, const float p[3], const float n[3], float radius,
+                             float out_centroid[3]);
 
 /* ---------------------------------------------------------------- small vector helpers */
 static inline float glow__dot(const float a[3], const float b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }

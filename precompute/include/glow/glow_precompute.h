@@ -175,6 +175,14 @@ typedef struct glow_pc_settings {
                                    each update). The CPU runtime and the GL backend read it
                                    (--link-subsets gradient; docs/linker.md "Link gradients").
                                    \since 0.2 */
+    bool no_sky;                /* false (default): the bake carries the sky transfer (section SKYT,
+                                   format 1.6): per surfel the SH l <= 2 transfer of the cosine-weighted
+                                   visible sky, per grid cache the visible sky's SH, so that a host lights
+                                   with an HDR sky map that turns or changes without a re-bake
+                                   (docs/sky.md). true: none (--no-sky). \since 0.2 */
+    uint32_t sky_rays;          /* rays per surfel for the sky transfer, and 8x as many per grid cache; 0 =
+                                   128 (the CPU host's sky_rays default, whose rays they are), at most 65536
+                                   (--sky-rays). \since 0.2 */
 } glow_pc_settings;
 
 typedef struct glow_pc_stats {
@@ -231,6 +239,8 @@ typedef struct glow_pc_stats {
     uint32_t grid_bricks;     /* ... the coarse cells refined ... */
     uint32_t grid_fine_caches;/* ... and the fine caches among grid_caches (grid_dims and grid_spacing are
                                  the coarse lattice's) \since 0.2 */
+    double sky_seconds;       /* the sky transfer's share of the caches stage (0 with no_sky) \since 0.2 */
+    uint32_t sky_rays;        /* its rays per surfel (8x per grid cache), 0 = none written \since 0.2 */
 } glow_pc_stats;
 
 /** Resolves presets: fills every zero field of `settings` from its quality. \since 0.1 */

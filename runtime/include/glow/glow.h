@@ -59,10 +59,11 @@ extern "C" {
 /* The bake format this runtime reads and glow-bake writes: a bake of another major is refused
  * (GLOW_ERROR_VERSION_MISMATCH); a newer minor loads, its unknown sections skipped. */
 #define GLOW_BAKE_FORMAT_VERSION_MAJOR 1u
-#define GLOW_BAKE_FORMAT_VERSION_MINOR 5u /* 1.1: material UVs and texture paths (TUV0, TEXP); 1.2: lightmap detail (LDET);
+#define GLOW_BAKE_FORMAT_VERSION_MINOR 6u /* 1.1: material UVs and texture paths (TUV0, TEXP); 1.2: lightmap detail (LDET);
                                             * 1.3: leaf surfels may differ in area (an adapted density);
                                             * 1.4: systems of a world and their links to neighbours (XREF);
-                                            * 1.5: the grid refined near geometry (GFIN) */
+                                            * 1.5: the grid refined near geometry (GFIN);
+                                            * 1.6: the sky transfer (SKYT) */
 #define GLOW_BAKE_FORMAT_MAJOR 1 /* the bake major this runtime reads */
 
 /* GLOW_API marks the public functions. A shared build (BUILD_SHARED_LIBS) compiles the libraries with
@@ -213,6 +214,28 @@ typedef struct glow_bake_geometry {
 /** Fills `out_geometry` (triangle_count 0 when the bake carries no geometry). \threadsafety Any
  * thread. \since 0.1 */
 GLOW_API glow_result glow_bake_get_geometry(const glow_bake *bake, glow_bake_geometry *out_geometry);
+
+/* The sky transfer (bake format 1.6, section SKYT; docs/sky.md): what a host needs to light the surfels
+ * with a sky of any radiance, given as RGB l <= 2 SH (glow_sh_sky_constant, glow_sh_rotate_y), without a
+ * re-bake: per surfel (SURF order, the order of glow_surfel_batch) the transfer vector
+ *     T_k = ∫ V(ω) max(0, n·ω) y_k(ω) dω        (k < 9, glow_sh_eval's basis)
+ * so that its sky irradiance is max(0, Σ_k T_k L_k) (glow_sh_sky_irradiance; W/m² for L in
+ * W/(m²·sr)), and per grid cache (the first grid_cache_count caches) the visibility SH
+ *     V_k = ∫ V(ω) y_k(ω) dω
+ * so that the radiance SH of the sky it sees is V ⊗ L (glow_sh_sky_visible). V(ω) = 1 where a ray escapes
+ * the scene. Views into the bake, valid until it is destroyed. \since 0.2 */
+#define GLOW_SKY_SH_FLOATS 27 /* a sky's radiance SH: 9 coefficients x RGB, coefficient-major (see "Sky SH" below) */
+typedef struct glow_bake_sky_transfer {
+    uint32_t surfel_count;          /* the bake's surfels, or 0 when the bake has no SKYT */
+    const float *surfel_transfer;   /* [surfel_count][9] T, or NULL */
+    uint32_t grid_cache_count;      /* the bake's grid caches (0 without SKYT) */
+    const float *grid_visibility;   /* [grid_cache_count][9] V, or NULL */
+    uint32_t rays;                  /* rays per surfel the linker traced (0 without SKYT) */
+    uint32_t grid_rays;             /* rays per grid cache (0 without SKYT) */
+} glow_bake_sky_transfer;
+/** Fills `out` (all 0 / NULL for a bake without the sky transfer: glow-bake --no-sky, or before format
+ * 1.6). \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT for NULL. \threadsafety Any thread. \since 0.2 */
+GLOW_API glow_result glow_bake_get_sky_transfer(const glow_bake *bake, glow_bake_sky_transfer *out);
 
 /* glow_bake_info.link_kind bits: how the bake's links are encoded. \since 0.1 */
 typedef enum glow_link_kind_bits {
@@ -417,6 +440,21 @@ typedef struct glow_system_params {
  * emission_scale above GLOW_MAX_SCALE or bounce_iterations above 64 (nothing changes).
  * \threadsafety Not concurrently with other calls on the system. \since 0.1 */
 GLOW_API glow_result glow_system_set_params(glow_system *system, const glow_system_params *params);
+/** Adds a sky to the grid caches (dynamic objects receive it; docs/sky.md): from the next update on,
+ * each grid cache's radiance SH (cache_sh and grid_sh, in YCoCg) also holds V ⊗ L, the part of the sky
+ * `sh_rgb` (RGB l <= 2 SH, coefficient-major, glow.h GLOW_SKY_SH_FLOATS) that the cache sees
+ * (glow_sh_sky_visible with the bake's grid visibility SH; bands above 2 get nothing, chroma only up to
+ * sh_bands_chroma). Lightmap caches are not changed (the surfels, and through them the static surfaces,
+ * get the sky from the host: glow_host_set_environment_sh), and the sky is not fed back into the
+ * surfels' bounce (the host lights them with it already). Computed here (9 x 27 multiply-adds per grid
+ * cache); an update then costs two copies of the grid caches' rows. The first call allocates two copies
+ * of the grid caches' SH (8 · grid caches · coeff_count bytes). NULL removes it. Needs a bake with
+ * the sky transfer (format 1.6 SKYT). For a sky with a sun, give the sun as a light as well: L2 holds
+ * no peak. The CPU solver's outputs only: the GL backend's grid (glow_gl_system) does not read it yet.
+ * \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT (NULL system, a non-finite coefficient or one beyond
+ * GLOW_MAX_IRRADIANCE); GLOW_ERROR_UNSUPPORTED (a bake without SKYT); GLOW_ERROR_OUT_OF_MEMORY;
+ * GLOW_ERROR_INVALID_OPERATION during an update. \threadsafety As glow_system_set_params. \since 0.2 */
+GLOW_API glow_result glow_system_set_sky(glow_system *system, const float sh_rgb[GLOW_SKY_SH_FLOATS]);
 /** The artist controls in effect. \threadsafety Between updates, from any thread. \since 0.1 */
 GLOW_API glow_result glow_system_get_params(const glow_system *system, glow_system_params *out_params);
 
@@ -683,6 +721,32 @@ GLOW_API void glow_sh_ggx_lobe_factors(float roughness, uint32_t bands, float *o
  * ∫ f_s cos θ_i dω_i = F0 · out_ab[0] + out_ab[1] at cos θ_o = cos_view (0 at or below 0). Deterministic
  * quadrature over the half vector (about 0.4 ms a call: tabulate it over cos_view). \since 0.2 */
 GLOW_API void glow_ggx_specular_albedo(float cos_view, float roughness, float out_ab[2]);
+
+/* Sky SH (docs/sky.md): a sky's radiance as real SH l <= 2 (9 coefficients, glow_sh_eval's basis) per
+ * RGB channel, COEFFICIENT-MAJOR: sh_rgb[3 k + c] is coefficient k of channel c (R, G, B), W/(m²·sr).
+ * Scenes are Y-up. Pure functions, any thread; an output may alias the input. \since 0.2 */
+/** The SH of a constant sky of radiance `radiance_rgb`: L_0 = L √(4π), the rest 0. \since 0.2 */
+GLOW_API void glow_sh_sky_constant(const float radiance_rgb[3], float out_rgb[GLOW_SKY_SH_FLOATS]);
+/** Rotates a sky: out(ω) = in(Rᵀω), so light that came from direction d comes from R d. `rotation` is a
+ * row-major orthonormal 3x3 matrix. Exact for l <= 2. \since 0.2 */
+GLOW_API void glow_sh_rotate_l2(const float rotation[9], const float in_rgb[GLOW_SKY_SH_FLOATS],
+                                float out_rgb[GLOW_SKY_SH_FLOATS]);
+/** glow_sh_rotate_l2 about +Y by `angle_radians`, right-handed: a positive angle turns +Z towards +X
+ * (and +X towards -Z), R = [[cos, 0, sin], [0, 1, 0], [-sin, 0, cos]]. A sky map turned by
+ * rotation_deg is glow_sh_rotate_y(sh, rotation_deg · π/180, out). \since 0.2 */
+GLOW_API void glow_sh_rotate_y(const float in_rgb[GLOW_SKY_SH_FLOATS], float angle_radians,
+                               float out_rgb[GLOW_SKY_SH_FLOATS]);
+/** A surfel's sky irradiance max(0, Σ_k transfer[k] · sky[k]) per channel (W/m²), `transfer` one
+ * surfel's 9 values of glow_bake_sky_transfer.surfel_transfer. NaN gives 0. \since 0.2 */
+GLOW_API void glow_sh_sky_irradiance(const float transfer[9], const float sky_rgb[GLOW_SKY_SH_FLOATS], float out_rgb[3]);
+/** The radiance SH of the part of a sky a grid cache sees: the product projection of its visibility
+ * SH `visibility` (glow_bake_sky_transfer.grid_visibility) and the sky, truncated to l <= 2,
+ * out_k = Σ_ij G_ijk V_i L_j with G the triple products ∫ y_i y_j y_k (glow_sh_gaunt_l2). A host adds it
+ * (in YCoCg, glow_rgb_to_ycocg per coefficient) to the grid cache's radiance SH. \since 0.2 */
+GLOW_API void glow_sh_sky_visible(const float visibility[9], const float sky_rgb[GLOW_SKY_SH_FLOATS],
+                                  float out_rgb[GLOW_SKY_SH_FLOATS]);
+/** The triple product ∫ y_i y_j y_k dω of three basis functions, i, j, k < 9 (0 otherwise). \since 0.2 */
+GLOW_API float glow_sh_gaunt_l2(uint32_t i, uint32_t j, uint32_t k);
 
 /** Trilinear sample of the grid at `position` (m) into out_coeffs[coeff_count]. Cells without a
  * cache get weight 0, and so do corners that outputs->grid_visibility marks as hidden from the

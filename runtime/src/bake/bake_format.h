@@ -68,6 +68,10 @@
  * see glow_bake_grid_fine. Readers that predate it skip it and look the coarse grid up alone. */
 #define GLOW_SECTION_GFIN GLOW_FOURCC('G', 'F', 'I', 'N')
 
+/* Since 1.6 (optional; glow-bake writes it unless --no-sky): the sky transfer, see glow_bake_sky.
+ * Readers that predate it skip it (their hosts trace the sky themselves). */
+#define GLOW_SECTION_SKYT GLOW_FOURCC('S', 'K', 'Y', 'T')
+
 /* Cache-map entries (GRID and LMAP): the low 31 bits index the cache array. */
 #define GLOW_MAP_EMPTY 0xFFFFFFFFu   /* no cache here; samples read zero */
 #define GLOW_MAP_COPY_BIT 0x80000000u /* not a cache of its own: a dilated copy of cache (v & ~bit) */
@@ -341,6 +345,27 @@ typedef struct glow_bake_grid_fine {
     /*  4 */ uint32_t brick_count; /* >= 1 */
     /*  8 */ uint32_t reserved[6];
 } glow_bake_grid_fine; /* 32 */
+
+/* SKYT (since 1.6): per leaf surfel the sky transfer vector
+ *     T_k = ∫ V(ω) max(0, n·ω) y_k(ω) dω          (k < 9: real SH l <= 2, glow_sh_eval's basis)
+ * and per grid cache (the first grid_cache_count caches, fine ones included) the sky visibility SH
+ *     V_k = ∫ V(ω) y_k(ω) dω
+ * with V(ω) = 1 where a ray from the surfel (or the cache) escapes the scene. For a sky of radiance SH
+ * L (RGB, l <= 2) a surfel's sky irradiance is max(0, Σ_k T_k L_k) and a grid cache's visible sky the
+ * product projection V ⊗ L (docs/sky.md). Payload:
+ *     glow_bake_sky; float surfel[surfel_count][9] (SURF order); float grid[grid_count][9] (CACH order).
+ * Every value finite and |x| <= GLOW_BAKE_SKY_MAX (|T_k| <= π max|y_k| < 3.5, |V_k| < 14). */
+typedef struct glow_bake_sky {
+    /*  0 */ uint32_t coeffs;       /* 9 (l <= 2) */
+    /*  4 */ uint32_t surfel_count; /* meta.surfel_count */
+    /*  8 */ uint32_t grid_count;   /* meta.grid_cache_count */
+    /* 12 */ uint32_t rays;         /* rays per surfel the linker traced (informative, >= 1) */
+    /* 16 */ uint32_t grid_rays;    /* rays per grid cache (informative, >= 1 when grid_count > 0) */
+    /* 20 */ uint32_t reserved[3];
+} glow_bake_sky; /* 32 */
+#define GLOW_BAKE_SKY_COEFFS 9u
+#define GLOW_BAKE_SKY_MAX 16.0f
+_Static_assert(sizeof(glow_bake_sky) == 32, "sky header is 32 bytes");
 
 typedef struct glow_bake_xref_proxy {
     uint32_t dependency;

@@ -164,6 +164,30 @@ eturns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT (NULL object, count 0 with values, a
  */
 GLOW_API glow_result glow_gl_lights_set_sky_visibility(glow_gl_lights *lights, const float *visibility, uint32_t count);
 
+/**
+ * The sky as SH (docs/sky.md), as glow_host_set_environment_sh: `sh_rgb` holds 27 floats, the sky's radiance
+ * W/(m²·sr) as real SH l <= 2, coefficient-major (sh_rgb[3 k + c]; glow.h GLOW_SKY_SH_FLOATS). The hook's
+ * sky term is then max(0, Σ_k T_k L_k) per channel instead of environment · π · S: T the surfel's sky
+ * transfer (glow_gl_lights_set_sky_transfer) inside Glow's surfel kernel, else (a fragment shader, or no
+ * transfer set) the unoccluded cosine lobe about the normal times the sky's visible share as the constant
+ * sky takes it (S when set, GLOW_GL_LIGHTS_PIXEL_SKY at a pixel, else 1). NULL returns to the constant
+ * environment.
+ * Persists across set() (whose environment then waits unused). Uploaded at once (part of the light block).
+ * \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT (NULL object, a non-finite coefficient or one beyond
+ * GLOW_MAX_IRRADIANCE: nothing changes). \since 0.2
+ */
+GLOW_API glow_result glow_gl_lights_set_environment_sh(glow_gl_lights *lights, const float *sh_rgb);
+
+/**
+ * Per-surfel sky transfer T (9 floats a surfel, surfel-major: transfer[9 i + k]; count must be the bake's
+ * surfel_count) for the SH sky: the bake's (glow_bake_get_sky_transfer, format 1.6) or the CPU host's
+ * (glow_host_sky_transfer). Same buffer and binding as glow_gl_lights_set_sky_visibility (S first, then T),
+ * read only inside Glow's surfel kernel. NULL removes it. Persists across set().
+ * \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT (NULL object, count 0 with values, a value not finite or
+ * beyond 16: nothing changes); GLOW_ERROR_OUT_OF_MEMORY. \since 0.2
+ */
+GLOW_API glow_result glow_gl_lights_set_sky_transfer(glow_gl_lights *lights, const float *transfer, uint32_t count);
+
 typedef struct glow_gl_lights_stats {
     uint32_t light_count;       /* lights of the last successful set() */
     uint32_t triangle_count;    /* bake triangles drawn into every map */

@@ -71,6 +71,10 @@
  * the hook, by whichever worker lights that surfel first) and cached for the host's life, unless the
  * desc supplies it (sky_visibility). GLOW_HOST_SKY_UNSHADOWED uses S = 1 (no occlusion).
  * glow_host_irradiance (arbitrary points) traces S on every call.
+ * An HDR sky (glow_host_set_environment_sh, docs/sky.md) replaces environment · π · S by
+ * max(0, Σ_k T_k L_k) per channel: L the sky's radiance SH (l <= 2), T the surfel's sky transfer from the
+ * bake (format 1.6, SKYT: no rays at all) or, for an older bake, traced with the same rays as S on first
+ * use and cached. For a constant sky the two agree ray for ray.
  *
  * ON ERRORS: functions return a glow_result; the message goes to desc.logger ("glow_host: ..."),
  * with the same code. The hook returns GLOW_ERROR_INVALID_ARGUMENT for a batch outside the bake.
@@ -204,6 +208,32 @@ GLOW_API glow_result glow_host_get_light(const glow_host *host, uint32_t index, 
 GLOW_API glow_result glow_host_set_environment(glow_host *host, const float radiance_rgb[3]);
 
 /**
+ * Lights the surfels with a sky of any radiance instead of the constant one (docs/sky.md): `sh_rgb` is
+ * its radiance W/(m²·sr) as real SH l <= 2, 9 coefficients x RGB, COEFFICIENT-MAJOR (sh_rgb[3 k + c],
+ * glow.h GLOW_SKY_SH_FLOATS; glow_sh_sky_constant, glow_sh_rotate_y). The sky term of a surfel is then
+ *   E_sky = max(0, Σ_k T_k L_k)        per channel
+ * with T its sky transfer: the bake's (format 1.6, SKYT: glow_bake_get_sky_transfer), or, for a bake
+ * without it, traced with the same rays as S on first use and cached (the first hook pass costs about
+ * what S costs). GLOW_HOST_SKY_UNSHADOWED uses the unoccluded cosine lobe. For a constant sky
+ * (glow_sh_sky_constant) this equals environment · π · S within the rays' noise (exactly, ray for ray,
+ * when T is traced here or the bake's sky rays are the host's: glow-bake's default 128 = sky_rays'). L2
+ * holds no sun: give a sun as a separate shadowed GLOW_SCENE_LIGHT_SUN. With the bake's T (and the traced
+ * sky) this call computes every surfel's sky term once (~1 ms for 32k surfels), so the hook only reads
+ * it and a turning sky costs one call per change. NULL returns to the constant
+ * environment; glow_host_set_environment does too. Lights stay as they are.
+ * \returns GLOW_ERROR_INVALID_ARGUMENT for a NULL host or a non-finite coefficient (or one beyond
+ * GLOW_MAX_IRRADIANCE); GLOW_ERROR_OUT_OF_MEMORY. \threadsafety As glow_host_set_light. \since 0.2
+ */
+GLOW_API glow_result glow_host_set_environment_sh(glow_host *host, const float sh_rgb[GLOW_SKY_SH_FLOATS]);
+
+/**
+ * The sky transfer T (9 per surfel, out[count * 9]) the hook uses with glow_host_set_environment_sh:
+ * the bake's, cached or traced now (as glow_host_sky_visibility). For GPU hooks that light the sky the
+ * same way. \returns as glow_host_sky_visibility. \since 0.2
+ */
+GLOW_API glow_result glow_host_sky_transfer(glow_host *host, const glow_surfel_view *surfels, float *out, uint32_t count);
+
+/**
  * The direct irradiance E (W/m², RGB) the hook would compute at one point: for tests and tools.
  * Traces the sky visibility S afresh (GLOW_HOST_SKY_TRACED) rather than using the per-surfel cache.
  *
@@ -235,6 +265,8 @@ typedef struct glow_host_stats {
     uint32_t sky_cached;           /* surfels whose S is cached (traced or supplied) */
     uint32_t surfel_samples;       /* \since 0.2: footprint points per surfel (exact kind; 1 otherwise) */
     uint64_t shadow_rays;          /* \since 0.2: shadow rays the hook traced for lights (exact kind), in all */
+    uint32_t sky_sh;               /* \since 0.2: 1 while the sky is an SH sky (glow_host_set_environment_sh) */
+    uint32_t sky_transfer_baked;   /* \since 0.2: 1 when the bake carries the surfels' sky transfer (SKYT) */
 } glow_host_stats;
 
 /** Fills `out_stats`. \returns GLOW_ERROR_INVALID_ARGUMENT for NULL. \threadsafety As glow_host_irradiance.
