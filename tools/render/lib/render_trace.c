@@ -816,6 +816,41 @@ void glow__view_free(glow_view *gv) {
     memset(gv, 0, sizeof *gv);
 }
 
+/* The scene's environment_map as the host's light (docs/envmap.md, docs/sky.md): its sun (the texels that
+ * stand out, glow_eval_envmap_sky_sh's RULE) as one more sun light, shadowed by the host like any other,
+ * and the rest as l <= 2 SH through each surfel's baked sky transfer, plus the constant `environment`.
+ * Without a map the host keeps the constant sky. The grid is not given the sky (glow_system_set_sky):
+ * this view adds the sky reached by the first bounce itself, as direct light. */
+static glow_result view_sky(const glow_render_scene *sc, glow_host *host, char *message, size_t message_size) {
+    if (!sc->has_envmap) return GLOW_OK;
+    float sh[GLOW_SKY_SH_FLOATS];
+    glow_eval_envmap_sun sun;
+    glow_result r = glow_eval_envmap_sky_sh(&sc->envmap, true, NULL, sh, &sun, message, message_size);
+    if (r != GLOW_OK) return r;
+    float constant[GLOW_SKY_SH_FLOATS]; /* the constant `environment` adds */
+    glow_sh_sky_constant(sc->desc.environment, constant);
+    for (int k = 0; k < GLOW_SKY_SH_FLOATS; ++k) sh[k] += constant[k];
+    if ((r = glow_host_set_environment_sh(host, sh)) != GLOW_OK)
+        return glow__render_fail(message, message_size, r, "%s: the host refused the environment map's SH sky: %s",
+                                 sc->path, glow_result_string(r));
+    if (!sun.found) return GLOW_OK;
+    const uint32_t n = sc->desc.light_count;
+    glow_scene_light *lights = calloc((size_t)n + 1, sizeof *lights);
+    if (!lights) return glow__render_fail(message, message_size, GLOW_ERROR_OUT_OF_MEMORY, "%s: out of memory", sc->path);
+    if (n) memcpy(lights, sc->desc.lights, (size_t)n * sizeof *lights);
+    lights[n].type = GLOW_SCENE_LIGHT_SUN;
+    for (int k = 0; k < 3; ++k) {
+        lights[n].direction[k] = -sun.to_sun[k];
+        lights[n].irradiance[k] = sun.irradiance[k];
+    }
+    r = glow_host_set_lights(host, lights, n + 1);
+    free(lights);
+    if (r != GLOW_OK)
+        return glow__render_fail(message, message_size, r, "%s: the host refused the environment map's sun: %s", sc->path,
+                                 glow_result_string(r));
+    return GLOW_OK;
+}
+
 glow_result glow__view_create(const glow_render_scene *sc, const char *bake_path, const glow_render_settings *st,
                               const glow_render_glow_settings *gs, capture_log *cl, glow_view *gv, char *message,
                               size_t message_size) {
@@ -867,17 +902,6 @@ glow_result glow__view_create(const glow_render_scene *sc, const char *bake_path
             for (int k = 0; k < 6; ++k) gv->lm_uv[t][k] = (float)uv[k] / 65535.0f;
         }
     }
-    /* TODO(lead, issue 18): the host lights the surfels with the constant `environment` only. When the
-     * scene has an environment_map (sc->has_envmap), give the host the map's light here (and after the
-     * move in glow_render_glow) once its API takes it:
-     *   float sh[27]; glow_eval_envmap_sun sun;
-     *   glow_eval_envmap_sky_sh(&sc->envmap, true, NULL, sh, &sun, ...);  (residual SH, coefficient-major)
-     *   sh[0..2] += sc->desc.environment[c] * sqrt(4π);                  (the constant sky adds)
-     *   glow_host_set_environment_sh(host, sh); glow_system_set_sky(sys, sh);
-     *   if (sun.found) one more light {GLOW_SCENE_LIGHT_SUN, direction = -sun.to_sun, irradiance =
-     *   sun.irradiance} (glow_host_set_lights with the scene's lights + it), shadowed like any sun.
-     * Until then Glow's caches miss the map's light (the first bounce's sky, which this view computes
-     * itself as direct light, is right). */
     glow_host_desc hd = glow_host_desc_from_scene(&sc->desc, gv->bake, GLOW_HOST_KIND_EXACT);
     hd.sky_rays = gs->sky_rays;
     hd.surfel_samples = gs->surfel_samples;
@@ -885,6 +909,7 @@ glow_result glow__view_create(const glow_render_scene *sc, const char *bake_path
     if ((r = glow_host_create(&hd, &gv->host)) != GLOW_OK)
         FAIL(r, "%s: cannot create the host: %s%s%s", bake_path, glow_result_string(r), cl->first_error[0] ? ": " : "",
              cl->first_error);
+    if ((r = view_sky(sc, gv->host, message, message_size)) != GLOW_OK) goto fail;
     if ((r = glow_system_create(gv->ctx,
                                 &(glow_system_desc){.bake = gv->bake, .lighting = glow_host_hooks(gv->host),
                                                     .sh_bands_luma = gs->sh_bands_luma, .sh_bands_chroma = gs->sh_bands_chroma,
@@ -980,7 +1005,8 @@ glow_result glow_render_glow(const glow_render_scene *sc, const char *bake_path,
     r = glow__view_create(sc, bake_path, st, &g, &cl, &gv, message, message_size);
     if (r == GLOW_OK && moved) { /* the light changes: the moved scene's lights, sky and emission, K more iterations */
         if ((r = glow_host_set_lights(gv.host, moved->desc.lights, moved->desc.light_count)) != GLOW_OK ||
-            (r = glow_host_set_environment(gv.host, moved->desc.environment)) != GLOW_OK) /* TODO(lead): + its map */
+            (r = glow_host_set_environment(gv.host, moved->desc.environment)) != GLOW_OK ||
+            (r = view_sky(moved, gv.host, message, message_size)) != GLOW_OK)
             r = glow__render_fail(message, message_size, r, "%s: cannot give the host its lights: %s%s%s", moved->path,
                                   glow_result_string(r), cl.first_error[0] ? ": " : "", cl.first_error);
         for (uint32_t left = g.moved_iterations; r == GLOW_OK && left > 0;) {
