@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "pc_internal.h"
+#include "sky_rays.h"
 
 struct glow__rt {
     RTCDevice device;
@@ -159,53 +160,6 @@ glow__hit glow__rt_intersect(const glow__rt *rt, const float org[3], const float
 }
 
 /* ------------------------------------------------------------------ nearest facing triangle */
-/* Closest point to p on triangle abc (Ericson, Real-Time Collision Detection, 5.1.5). */
-static void closest_on_tri(const float p[3], const float a[3], const float b[3], const float c[3], float out[3]) {
-    float ab[3], ac[3], ap[3];
-    for (int i = 0; i < 3; ++i) {
-        ab[i] = b[i] - a[i];
-        ac[i] = c[i] - a[i];
-        ap[i] = p[i] - a[i];
-    }
-    float d1 = glow__dot(ab, ap), d2 = glow__dot(ac, ap);
-    if (d1 <= 0.0f && d2 <= 0.0f) {
-        memcpy(out, a, 12);
-        return;
-    }
-    float bp[3] = {p[0] - b[0], p[1] - b[1], p[2] - b[2]};
-    float d3 = glow__dot(ab, bp), d4 = glow__dot(ac, bp);
-    if (d3 >= 0.0f && d4 <= d3) {
-        memcpy(out, b, 12);
-        return;
-    }
-    float vc = d1 * d4 - d3 * d2;
-    if (vc <= 0.0f && d1 >= 0.0f && d3 <= 0.0f) {
-        float v = d1 / (d1 - d3);
-        for (int i = 0; i < 3; ++i) out[i] = a[i] + v * ab[i];
-        return;
-    }
-    float cp[3] = {p[0] - c[0], p[1] - c[1], p[2] - c[2]};
-    float d5 = glow__dot(ab, cp), d6 = glow__dot(ac, cp);
-    if (d6 >= 0.0f && d5 <= d6) {
-        memcpy(out, c, 12);
-        return;
-    }
-    float vb = d5 * d2 - d1 * d6;
-    if (vb <= 0.0f && d2 >= 0.0f && d6 <= 0.0f) {
-        float w = d2 / (d2 - d6);
-        for (int i = 0; i < 3; ++i) out[i] = a[i] + w * ac[i];
-        return;
-    }
-    float va = d3 * d6 - d5 * d4;
-    if (va <= 0.0f && (d4 - d3) >= 0.0f && (d5 - d6) >= 0.0f) {
-        float w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        for (int i = 0; i < 3; ++i) out[i] = b[i] + w * (c[i] - b[i]);
-        return;
-    }
-    float denom = 1.0f / (va + vb + vc), v = vb * denom, w = vc * denom;
-    for (int i = 0; i < 3; ++i) out[i] = a[i] + ab[i] * v + ac[i] * w;
-}
-
 typedef struct facing_query {
     const glow__rt *rt;
     const float *p, *n;
@@ -225,7 +179,7 @@ static bool facing_cb(struct RTCPointQueryFunctionArguments *args) {
     const float len = sqrtf(glow__dot(ng, ng));
     if (!(len > 0.0f) || glow__dot(ng, q->n) < 0.9f * len) return false;
     float c[3];
-    closest_on_tri(q->p, t, t + 3, t + 6, c);
+    glow__seam_closest_on_tri(q->p, t, t + 3, t + 6, c);
     const float d[3] = {c[0] - q->p[0], c[1] - q->p[1], c[2] - q->p[2]}, d2 = glow__dot(d, d);
     if (d2 >= q->best_d2) return false;
     q->best_tri = t;

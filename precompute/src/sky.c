@@ -24,37 +24,10 @@
 
 #include "pc_internal.h"
 #include "bake_format.h"
+#include "sky_rays.h"
 
-/* host_math.h's glow__onb (Duff et al. 2017), copied so the rays are the host's */
-static void sky_onb(const float z[3], float x[3], float y[3]) {
-    float sign = copysignf(1.0f, z[2]);
-    float a = -1.0f / (sign + z[2]);
-    float b = z[0] * z[1] * a;
-    x[0] = 1.0f + sign * z[0] * z[0] * a;
-    x[1] = sign * b;
-    x[2] = -sign * z[0];
-    y[0] = b;
-    y[1] = sign + z[1] * z[1] * a;
-    y[2] = -z[1];
-}
-
-/* host.c's make_sky_dirs: cosine-distributed directions around +z (Hammersley, Malley's method),
- * turned so that none lies in the tangent frame's axis planes */
-void glow__sky_dirs(uint32_t n, float (*dirs)[3]) {
-    for (uint32_t i = 0; i < n; ++i) {
-        uint32_t b = i;
-        b = (b << 16) | (b >> 16);
-        b = ((b & 0x55555555u) << 1) | ((b & 0xAAAAAAAAu) >> 1);
-        b = ((b & 0x33333333u) << 2) | ((b & 0xCCCCCCCCu) >> 2);
-        b = ((b & 0x0F0F0F0Fu) << 4) | ((b & 0xF0F0F0F0u) >> 4);
-        b = ((b & 0x00FF00FFu) << 8) | ((b & 0xFF00FF00u) >> 8);
-        double u1 = ((double)i + 0.5) / n, u2 = (double)b * (1.0 / 4294967296.0);
-        double r = sqrt(u1), phi = 2.0 * GLOW__PI * (u2 + 0.1234567);
-        dirs[i][0] = (float)(r * cos(phi));
-        dirs[i][1] = (float)(r * sin(phi));
-        dirs[i][2] = (float)sqrt(fmax(0.0, 1.0 - u1));
-    }
-}
+/* the CPU host's cosine-distributed sky directions around +z (the seam: sky_rays.h) */
+void glow__sky_dirs(uint32_t n, float (*dirs)[3]) { glow__seam_sky_dirs(n, &dirs[0][0]); }
 
 typedef struct sky_job {
     const glow__rt *rt;
@@ -88,7 +61,7 @@ static void surfel_range(void *user, uint32_t first, uint32_t end, uint32_t work
         const glow__surfel *sv = &j->sf->s[s];
         float tx[3], ty[3], o[3];
         double acc[GLOW_BAKE_SKY_COEFFS] = {0};
-        sky_onb(sv->nrm, tx, ty);
+        glow__seam_onb(sv->nrm, tx, ty);
         sky_origin(j, sv->pos, sv->nrm, o);
         for (uint32_t k = 0; k < j->rays; ++k) {
             const float *h = j->hemi[k];

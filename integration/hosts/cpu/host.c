@@ -145,53 +145,6 @@ static bool occluded(const glow_host *h, const float org[3], const float dir[3],
 
 /* ------------------------------------------------------------------------- light models */
 
-/* Closest point to p on triangle abc (Ericson, Real-Time Collision Detection, 5.1.5). */
-static void closest_on_tri(const float p[3], const float a[3], const float b[3], const float c[3], float out[3]) {
-    float ab[3], ac[3], ap[3];
-    for (int i = 0; i < 3; ++i) {
-        ab[i] = b[i] - a[i];
-        ac[i] = c[i] - a[i];
-        ap[i] = p[i] - a[i];
-    }
-    float d1 = glow__dot3(ab, ap), d2 = glow__dot3(ac, ap);
-    if (d1 <= 0.0f && d2 <= 0.0f) {
-        memcpy(out, a, 12);
-        return;
-    }
-    float bp[3] = {p[0] - b[0], p[1] - b[1], p[2] - b[2]};
-    float d3 = glow__dot3(ab, bp), d4 = glow__dot3(ac, bp);
-    if (d3 >= 0.0f && d4 <= d3) {
-        memcpy(out, b, 12);
-        return;
-    }
-    float vc = d1 * d4 - d3 * d2;
-    if (vc <= 0.0f && d1 >= 0.0f && d3 <= 0.0f) {
-        float v = d1 / (d1 - d3);
-        for (int i = 0; i < 3; ++i) out[i] = a[i] + v * ab[i];
-        return;
-    }
-    float cp[3] = {p[0] - c[0], p[1] - c[1], p[2] - c[2]};
-    float d5 = glow__dot3(ab, cp), d6 = glow__dot3(ac, cp);
-    if (d6 >= 0.0f && d5 <= d6) {
-        memcpy(out, c, 12);
-        return;
-    }
-    float vb = d5 * d2 - d1 * d6;
-    if (vb <= 0.0f && d2 >= 0.0f && d6 <= 0.0f) {
-        float w = d2 / (d2 - d6);
-        for (int i = 0; i < 3; ++i) out[i] = a[i] + w * ac[i];
-        return;
-    }
-    float va = d3 * d6 - d5 * d4;
-    if (va <= 0.0f && (d4 - d3) >= 0.0f && (d5 - d6) >= 0.0f) {
-        float w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        for (int i = 0; i < 3; ++i) out[i] = b[i] + w * (c[i] - b[i]);
-        return;
-    }
-    float denom = 1.0f / (va + vb + vc), v = vb * denom, w = vc * denom;
-    for (int i = 0; i < 3; ++i) out[i] = a[i] + ab[i] * v + ac[i] * w;
-}
-
 typedef struct own_query {
     const glow_host *h;
     const float *p, *n;
@@ -209,7 +162,7 @@ static bool own_cb(struct RTCPointQueryFunctionArguments *args) {
     float len = sqrtf(glow__dot3(ng, ng));
     if (!(len > 0.0f) || glow__dot3(ng, q->n) < 0.9f * len) return false;
     float c[3];
-    closest_on_tri(q->p, t, t + 3, t + 6, c);
+    glow__seam_closest_on_tri(q->p, t, t + 3, t + 6, c);
     float d[3] = {c[0] - q->p[0], c[1] - q->p[1], c[2] - q->p[2]}, d2 = glow__dot3(d, d);
     if (d2 >= q->best_d2) return false;
     q->best = args->primID;
@@ -1030,26 +983,9 @@ void glow_host_destroy(glow_host *host) {
     free(host);
 }
 
-/* Deterministic cosine-distributed directions around +z: a Hammersley set (i + 1/2)/N and the
- * base-2 radical inverse, lifted from the unit disk onto the hemisphere (Malley's method). The
- * estimate of S is the fraction of them that escape. */
-static void make_sky_dirs(float *dirs, uint32_t n) {
-    for (uint32_t i = 0; i < n; ++i) {
-        uint32_t b = i;
-        b = (b << 16) | (b >> 16);
-        b = ((b & 0x55555555u) << 1) | ((b & 0xAAAAAAAAu) >> 1);
-        b = ((b & 0x33333333u) << 2) | ((b & 0xCCCCCCCCu) >> 2);
-        b = ((b & 0x0F0F0F0Fu) << 4) | ((b & 0xF0F0F0F0u) >> 4);
-        b = ((b & 0x00FF00FFu) << 8) | ((b & 0xFF00FF00u) >> 8);
-        double u1 = ((double)i + 0.5) / n, u2 = (double)b * (1.0 / 4294967296.0);
-        /* turned by an irrational-looking angle so that no direction lies exactly in the tangent frame's
-         * axis planes: in axis-aligned scenes such a ray would run inside a neighbouring face's plane */
-        double r = sqrt(u1), phi = 2.0 * HOST_PI * (u2 + 0.1234567);
-        dirs[3 * i + 0] = (float)(r * cos(phi));
-        dirs[3 * i + 1] = (float)(r * sin(phi));
-        dirs[3 * i + 2] = (float)sqrt(fmax(0.0, 1.0 - u1));
-    }
-}
+/* Deterministic cosine-distributed directions around +z (the seam's, sky_rays.h: the linker's SKYT uses
+ * the same). The estimate of S is the fraction of them that escape. */
+static void make_sky_dirs(float *dirs, uint32_t n) { glow__seam_sky_dirs(n, dirs); }
 
 static glow_result check_settings(const glow_host_desc *d, const glow_logger *lg) {
     if (d->kind != GLOW_HOST_KIND_DEFAULT && d->kind != GLOW_HOST_KIND_EXACT && d->kind != GLOW_HOST_KIND_SHADOW_MAP)

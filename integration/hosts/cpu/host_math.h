@@ -7,6 +7,8 @@
 #include <math.h>
 #include <stdbool.h>
 
+#include "sky_rays.h"
+
 static inline float glow__dot3(const float a[3], const float b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
 /* out = in / |in| (in double); false for zero-length or non-finite input. */
@@ -17,17 +19,8 @@ static inline bool glow__normalize3(const float in[3], float out[3]) {
     return true;
 }
 
-/* Orthonormal basis (x, y) around unit z (Duff et al. 2017, "Building an orthonormal basis, revisited"). */
-static inline void glow__onb(const float z[3], float x[3], float y[3]) {
-    float sign = copysignf(1.0f, z[2]);
-    float a = -1.0f / (sign + z[2]);
-    float b = z[0] * z[1] * a;
-    x[0] = 1.0f + sign * z[0] * z[0] * a;
-    x[1] = sign * b;
-    x[2] = -sign * z[0];
-    y[0] = b;
-    y[1] = sign + z[1] * z[1] * a;
-    y[2] = -z[1];
-}
+/* Orthonormal basis (x, y) around unit z: the seam's (runtime/src/bake/sky_rays.h), which the linker's
+ * sky transfer uses too, so that a surfel's sky rays are the same on both sides. */
+static inline void glow__onb(const float z[3], float x[3], float y[3]) { glow__seam_onb(z, x, y); }
 
 #endif /* GLOW_HOST_MATH_H */
