@@ -7,13 +7,14 @@
  *      (glow_system_set_sky), so that dynamic objects receive it too,
  *   4. every frame turn the sky about +Y, hand the turned SH and sun to the host and the system, update,
  *      and print how the indirect light follows the sun round.
- * Usage: sample-04_hdr_sky BAKE --sky SKY.exr [--frames N] [--turn DEG_PER_FRAME] [--scale S]
+ * Usage: sample-04_hdr_sky BAKE --sky SKY.exr [--frames N] [--turn DEG_PER_FRAME] [--scale S] [--no-grid-sky]
  *   BAKE   a bake with the sky transfer (format 1.6, glow-bake's default), e.g.
  *            glow-bake builtin:pillar-court -o court.glow --quality low
  *   SKY    a W x W/2 lat-long RGB EXR, radiance W/(m²·sr) (docs/envmap.md); make one with
  *            glow-envmap sky --out sky.exr [--width 512] [--sun-elevation 35] [--sun-azimuth 30]
  *   --frames N (default 8), --turn degrees about +Y per frame (default 45; +Z turns towards +X),
- *   --scale S multiplies the map's radiance (default 1).
+ *   --scale S multiplies the map's radiance (default 1), --no-grid-sky leaves glow_system_set_sky out
+ *   (dynamic objects then get the sky's bounce but not the sky itself: compare the probe's numbers).
  * Each frame prints the sky's turn, the direction towards the sun, the mean indirect irradiance
  * (W/m², luminance) of the lightmap caches facing +X and -X, that of a probe in the middle of the bake
  * (a dynamic object's faces towards +X and -X: bounce plus the sky it sees), and the time of the sky
@@ -243,7 +244,7 @@ static void log_to_stderr(void *user, glow_log_level level, glow_result code, co
 }
 
 static int usage(FILE *f, const char *argv0) {
-    fprintf(f, "usage: %s BAKE --sky SKY.exr [--frames N] [--turn DEG_PER_FRAME] [--scale S]\n"
+    fprintf(f, "usage: %s BAKE --sky SKY.exr [--frames N] [--turn DEG_PER_FRAME] [--scale S] [--no-grid-sky]\n"
                "  a sky: glow-envmap sky --out SKY.exr [--width W] [--sun-elevation DEG] [--sun-azimuth DEG]\n",
             argv0);
     return f == stdout ? 0 : 2;
@@ -261,6 +262,7 @@ int main(int argc, char **argv) {
     sample_args args = {.frames = 8};
     const char *sky_path = NULL;
     float turn_deg = 45.0f, scale = 1.0f;
+    int grid_sky = 1;
     for (int i = 1; i < argc; i++) {
         int took = sample_arg_common(argc, argv, &i, &args); /* --frames, --headless (ignored), --out */
         if (took == 2) return usage(stderr, argv[0]);
@@ -271,7 +273,8 @@ int main(int argc, char **argv) {
         else if (!strcmp(a, "--turn")) {
             if (parse_float(argv[0], a, v, -360, 360, &turn_deg)) return usage(stderr, argv[0]);
             i++;
-        } else if (!strcmp(a, "--scale")) {
+        } else if (!strcmp(a, "--no-grid-sky")) grid_sky = 0;
+        else if (!strcmp(a, "--scale")) {
             if (parse_float(argv[0], a, v, 0, 1e6f, &scale)) return usage(stderr, argv[0]);
             i++;
         } else if (a[0] == '-' || args.input) {
@@ -359,7 +362,7 @@ int main(int argc, char **argv) {
         const double t0 = now_ms();
         r = glow_host_set_environment_sh(host, sh);
         if (r == GLOW_OK) r = glow_host_set_lights(host, &light, sun.found ? 1 : 0);
-        if (r == GLOW_OK) r = glow_system_set_sky(sys, sh);
+        if (r == GLOW_OK && grid_sky) r = glow_system_set_sky(sys, sh);
         const double sky_ms = now_ms() - t0;
         if (r == GLOW_OK) r = glow_system_update(sys, NULL);
         if (r != GLOW_OK) {
