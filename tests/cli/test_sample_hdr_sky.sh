@@ -5,7 +5,7 @@
 # sun going round (+X, -Z, -X, +Z), the light following it (the +X/-X order of the lightmap caches and
 # of the grid probe's two sides flips between frame 4, sun at +X, and frame 6, sun at -X), the grid's
 # sky (--no-grid-sky: the probe darker, the lightmap the same), linearity in --scale (2 doubles frame 0,
-# 0 gives no light), and the error paths (a missing or non-EXR sky and a bake without the sky transfer:
+# 0 gives no light), and the error paths (a missing, non-EXR or truncated sky and a bake without SKYT:
 # exit 1 naming the file; bad options: exit 2).
 #   usage: test_sample_hdr_sky.sh BIN_DIR SHARED_DIR
 set -u
@@ -99,6 +99,8 @@ grep -q "lightmap +X 0.0000 -X 0.0000  probe +X 0.0000 -X 0.0000" "$T/out" && pa
 # errors: file problems are exit 1 naming the file; bad command lines are exit 2
 expect 1 "missing sky" "$SAMPLE" "$T/court.glow" --sky "$T/nope.exr" --frames 1; err_has "nope.exr"
 expect 1 "sky not an EXR" "$SAMPLE" "$T/court.glow" --sky "$T/court.glow" --frames 1; err_has "court.glow"
+head -c $(($(wc -c <"$T/sky.exr") / 2)) "$T/sky.exr" >"$T/cut.exr"
+expect 1 "truncated sky" "$SAMPLE" "$T/court.glow" --sky "$T/cut.exr" --frames 1; err_has "cut.exr"
 expect 1 "missing bake" "$SAMPLE" "$T/nope.glow" --sky "$T/sky.exr" --frames 1; err_has "nope.glow"
 expect 0 "bake without the sky transfer" "$BAKE" builtin:pillar-court -o "$T/nosky.glow" --surfels 256 --links 8 \
   --lightmap-caches 50 -q --threads 2 --no-sky
