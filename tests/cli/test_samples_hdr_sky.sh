@@ -7,7 +7,7 @@
 # sky (--no-grid-sky: the probe darker, the lightmap the same), linearity in --scale (2 doubles frame 0,
 # 0 gives no light), and the error paths (a missing, non-EXR or truncated sky and a bake without SKYT:
 # exit 1 naming the file; bad options: exit 2).
-#   usage: test_sample_hdr_sky.sh BIN_DIR SHARED_DIR
+#   usage: test_samples_hdr_sky.sh BIN_DIR SHARED_DIR
 set -u
 BAKE=$1/glow-bake
 ENVMAP=$1/glow-envmap
