@@ -29,12 +29,12 @@
 extern const char glow__shading_glsl[];
 extern const struct { const char *name, *source; } glow__kernels[];
 
-enum { K_DIRECT, K_FLUX, K_PULL, K_PULL_TAIL, K_CACHE, K_OUTPUT, K_DETAIL, K_PROXY, K_DRIFT, K_GRAD, K_COUNT };
+enum { K_DIRECT, K_FLUX, K_PULL, K_PULL_TAIL, K_CACHE, K_OUTPUT, K_DETAIL, K_PROXY, K_DRIFT, K_GRAD, K_SKY, K_COUNT };
 static const char *const kernel_names[K_COUNT] = {"surfel_direct", "surfel_flux", "pull", "pull_tail", "cache_light",
-                                                  "outputs", "detail", "proxy_fill", "drift", "gradient_u"};
+                                                  "outputs", "detail", "proxy_fill", "drift", "gradient_u", "sky_add"};
 enum { B_GEOM, B_MAT, B_DIRECT, B_FBW, B_CACHE, B_NODES, B_FLUX, B_LINKS, B_PAIRS, B_STATUS, B_PARAMS, B_LEVELS, B_SUBSETS,
        B_DET_TEXELS, B_DET_LINKS, B_PROXY_MAP, B_LIST, B_RAD_PREV, B_DRIFT, B_DELTA, B_MOM, B_GRAD_NODES, B_GRAD_CM,
-       B_GRAD_U, B_COUNT };
+       B_GRAD_U, B_SKY, B_SKY_BACKUP, B_COUNT };
 #define MAX_DEPS 64u /* GLOW_BAKE_MAX_DEPENDENCIES */
 enum { T_BEGIN, T_DIRECT, T_FLUX, T_PULL, T_CACHE, T_OUTPUT, T_COUNT };
 
@@ -47,7 +47,14 @@ struct glow_gl_system {
     glow_solver_tables t;
     uint32_t S, N, C, levels, planes;
     GLuint prog[K_COUNT];
-    GLint level_loc, tail_loc, proxy_loc, list_loc, delta_loc, drift_loc, grad_loc;
+    GLint level_loc, tail_loc, proxy_loc, list_loc, delta_loc, drift_loc, grad_loc, sky_loc;
+    /* the visible sky of the grid caches (glow_gl_system_set_sky), as the CPU solver's glow_system_set_sky:
+     * V ⊗ L per grid cache computed on the CPU at each call (sky_staging, cache_sh's layout) and uploaded
+     * to SKY; after the bounce sky_add.comp saves the grid caches' rows to SKY_BACKUP and adds SKY; the
+     * next update copies SKY_BACKUP back before the surfel flux reads the caches. Buffers and staging
+     * are made at the first call (a system that never gets a sky holds none). */
+    float *sky_staging;  /* [grid caches][coeffs] */
+    int sky_on, sky_applied;
     /* a budget (glow_update_desc max_caches, focus): groups of GLOW_BUDGET_GROUP caches chosen by
      * glow_budget_choose, as the CPU solver chooses; LIST holds their caches for the cache kernel */
     uint32_t groups;
@@ -253,6 +260,7 @@ static void free_system(glow_gl_system *s) {
     free(s->grp_skip);
     free(s->delta_read);
     free(s->drift_read);
+    free(s->sky_staging);
     free(s);
 }
 
@@ -384,7 +392,7 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
     glow_result err = GLOW_OK;
     for (int k = 0; k < K_COUNT; ++k) {
         if ((k == K_DIRECT && !desc->hook_glsl) || (k == K_DETAIL && !t->detail_texels) || (k == K_PROXY && !t->proxy_count) ||
-            (k == K_GRAD && !t->link_gradients))
+            (k == K_GRAD && !t->link_gradients) || (k == K_SKY && !(t->sky_grid_visibility && t->grid_cache_count)))
             continue;
         s->prog[k] = build_program(s, k, desc->hook_glsl, &err);
         if (!s->prog[k]) {
@@ -399,6 +407,7 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
     s->delta_loc = gl->GetUniformLocation(s->prog[K_CACHE], "glow_cache_delta");
     s->drift_loc = gl->GetUniformLocation(s->prog[K_DRIFT], "glow_drift_count");
     if (s->prog[K_GRAD]) s->grad_loc = gl->GetUniformLocation(s->prog[K_GRAD], "glow_gradient_count");
+    if (s->prog[K_SKY]) s->sky_loc = gl->GetUniformLocation(s->prog[K_SKY], "glow_sky_count");
     /* the narrow top: the lowest level from which every level up has at most GLOW_PULL_TAIL_MAX nodes */
     s->tail_level = s->levels;
     while (s->tail_level > 1 && t->level_starts[s->tail_level] - t->level_starts[s->tail_level - 1] <= GLOW_PULL_TAIL_MAX)
@@ -887,6 +896,12 @@ glow_result glow_gl_system_update(glow_gl_system *s, const glow_update_desc *des
             s->direct_valid = 1;
         }
     }
+    if (s->sky_applied) { /* the grid caches' rows without the sky, bit for bit, before the flux reads them */
+        gl->MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+        gl->CopyNamedBufferSubData(s->buf[B_SKY_BACKUP], s->buf[B_CACHE], 0, 0,
+                                   (GLsizeiptr)((size_t)s->t.grid_cache_count * s->t.coeff_count * 4u));
+        s->sky_applied = 0;
+    }
     if (flags & GLOW_UPDATE_FLAG_RESET_BOUNCE) {
         const float zero = 0.0f;
         gl->ClearNamedBufferData(s->buf[B_CACHE], GL_R32F, GL_RED, GL_FLOAT, &zero);
@@ -1048,6 +1063,17 @@ glow_result glow_gl_system_update(glow_gl_system *s, const glow_update_desc *des
     if (!budgeted) s->caches_converged = 0;
     if (budgeted) s->delta_pending = s->list_count > 0; /* an unbudgeted update writes no changes: they wait */
     stamp(s, T_CACHE);
+    if (s->sky_on) { /* the visible sky into the grid caches, after the bounce (it is not fed back) */
+        const uint32_t n = t->grid_cache_count * t->coeff_count;
+        gl->UseProgram(s->prog[K_SKY]);
+        bind(s, GLOW_BINDING_CACHE_SH, B_CACHE);
+        bind(s, GLOW_BINDING_SKY, B_SKY);
+        bind(s, GLOW_BINDING_SKY_BACKUP, B_SKY_BACKUP);
+        gl->Uniform1ui(s->sky_loc, n);
+        dispatch(s, (n + GLOW_SKY_GROUP - 1u) / GLOW_SKY_GROUP);
+        gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+        s->sky_applied = 1;
+    }
     /* 5. outputs (seam/gutter texels are pairs too) */
     if (t->grid_used + t->lightmap_used + s->fine_used) {
         gl->UseProgram(s->prog[K_OUTPUT]);
@@ -1076,6 +1102,70 @@ glow_result glow_gl_system_update(glow_gl_system *s, const glow_update_desc *des
     s->timed_budget = budgeted;
     s->updates++;
     s->out.update_index = s->updates;
+    return GLOW_OK;
+}
+
+glow_result glow_gl_system_set_sky(glow_gl_system *s, const float sh_rgb[GLOW_SKY_SH_FLOATS]) {
+    if (!s) return GLOW_ERROR_INVALID_ARGUMENT;
+    if (!sh_rgb) { /* the next update restores the rows and adds nothing */
+        s->sky_on = 0;
+        return GLOW_OK;
+    }
+    const glow_solver_tables *t = &s->t;
+    const uint32_t G = t->grid_cache_count, L2 = t->sh_bands_luma * t->sh_bands_luma,
+                   C2 = t->sh_bands_chroma * t->sh_bands_chroma, nc = t->coeff_count;
+    if (!s->prog[K_SKY]) {
+        LOG_ERR(s, GLOW_ERROR_UNSUPPORTED,
+                "glow_gl_system_set_sky: the bake carries no sky visibility of its grid caches (format 1.6 SKYT; "
+                "baked with --no-sky, before 1.6, or without a grid)");
+        return GLOW_ERROR_UNSUPPORTED;
+    }
+    for (int k = 0; k < GLOW_SKY_SH_FLOATS; ++k)
+        if (!isfinite(sh_rgb[k]) || fabsf(sh_rgb[k]) > GLOW_MAX_IRRADIANCE) {
+            LOG_ERR(s, GLOW_ERROR_INVALID_ARGUMENT,
+                    "glow_gl_system_set_sky: coefficient %d channel %d (%g) is not finite or beyond %g", k / 3, k % 3,
+                    (double)sh_rgb[k], (double)GLOW_MAX_IRRADIANCE);
+            return GLOW_ERROR_INVALID_ARGUMENT;
+        }
+    glow_glfns *gl = &s->gl;
+    const size_t bytes = (size_t)G * nc * sizeof(float);
+    if (!s->sky_staging) { /* once: a system that never gets a sky holds none */
+        s->sky_staging = malloc(bytes);
+        if (!s->sky_staging) {
+            LOG_ERR(s, GLOW_ERROR_OUT_OF_MEMORY, "glow_gl_system_set_sky: out of host memory for %u grid caches", G);
+            return GLOW_ERROR_OUT_OF_MEMORY;
+        }
+        while (gl->GetError() != GL_NO_ERROR) {}
+        s->buf[B_SKY] = make_buffer(s, bytes, NULL, GL_DYNAMIC_STORAGE_BIT);
+        s->buf[B_SKY_BACKUP] = make_buffer(s, bytes, NULL, 0);
+        const GLenum e = gl->GetError();
+        if (e != GL_NO_ERROR) {
+            LOG_ERR(s, GLOW_ERROR_OUT_OF_MEMORY, "glow_gl_system_set_sky: GL error 0x%x creating 2 x %zu bytes", e, bytes);
+            gl->DeleteBuffers(2, &s->buf[B_SKY]);
+            s->buf[B_SKY] = s->buf[B_SKY_BACKUP] = 0;
+            s->gpu_bytes -= 2 * bytes;
+            free(s->sky_staging);
+            s->sky_staging = NULL;
+            return GLOW_ERROR_OUT_OF_MEMORY;
+        }
+    }
+    /* the CPU solver's arithmetic (glow_system_set_sky), so both add the same floats */
+    for (uint32_t c = 0; c < G; ++c) {
+        float vis[GLOW_SKY_SH_FLOATS], *row = s->sky_staging + (size_t)c * nc;
+        glow_sh_sky_visible(t->sky_grid_visibility + 9 * (size_t)c, sh_rgb, vis);
+        memset(row, 0, nc * sizeof *row);
+        for (uint32_t k = 0; k < 9; ++k) {
+            float ycc[3];
+            glow_rgb_to_ycocg(vis + 3 * k, ycc);
+            if (k < L2) row[k] = ycc[0];
+            if (k < C2) {
+                row[L2 + k] = ycc[1];
+                row[L2 + C2 + k] = ycc[2];
+            }
+        }
+    }
+    gl->NamedBufferSubData(s->buf[B_SKY], 0, (GLsizeiptr)bytes, s->sky_staging);
+    s->sky_on = 1;
     return GLOW_OK;
 }
 

@@ -1581,7 +1581,9 @@ glow_result glow_system_get_solver_tables(const glow_system *s, glow_solver_tabl
                               .emission_revision = s->emission_revision,
                               .material_revision = s->material_revision,
                               .direct_irradiance = s->direct,
-                              .direct_revision = s->direct_revision};
+                              .direct_revision = s->direct_revision,
+                              .grid_cache_count = s->meta->grid_cache_count,
+                              .sky_grid_visibility = s->sky_V};
     if (s->det) {
         t->detail_width = s->det->width;
         t->detail_height = s->det->height;

@@ -18,6 +18,7 @@
  *   proxy_fill        PROXY_SRC (a neighbour's FLUX), PROXY_MAP, FLUX (w)    uniform uvec2 glow_proxy_range
  *   drift             FLUX, RAD_PREV (rw), DRIFT_PARTIAL (w)                 uniform uint glow_drift_count
  *   cache_light with converged_epsilon also CACHE_DELTA (w), CACHE_SH read too   uniform uint glow_cache_delta
+ *   sky_add           CACHE_SH (rw), SKY, SKY_BACKUP (w)                     uniform uint glow_sky_count
  */
 #ifndef GLOW_SHARED_H
 #define GLOW_SHARED_H
@@ -65,6 +66,8 @@ typedef struct glow_vec4 { float x, y, z, w; } glow_vec4;
                                         0 for nodes no coded link reads and the proxies */
 #define GLOW_BINDING_GRADIENT_NODES 1 /* gradient_u only: uint[]: the nodes some coded link reads */
 #define GLOW_BINDING_GRADIENT_CM 2    /* gradient_u only: float[][12]: per such node c (3), M (9, row-major) */
+#define GLOW_BINDING_SKY 0            /* sky_add only: float[grid caches][coeff_count]: V ⊗ L (YCoCg) to add */
+#define GLOW_BINDING_SKY_BACKUP 1     /* sky_add only: float[grid caches][coeff_count]: the rows without it (w) */
 #define GLOW_BINDING_HOST_FIRST 8   /* first SSBO/UBO binding the host hook may use */
 /* UBO binding of glow_gl_params */
 #define GLOW_BINDING_PARAMS 0
@@ -83,6 +86,7 @@ typedef struct glow_vec4 { float x, y, z, w; } glow_vec4;
 #define GLOW_DETAIL_GROUP 64
 #define GLOW_PROXY_GROUP 64
 #define GLOW_GRADIENT_GROUP 64
+#define GLOW_SKY_GROUP 64
 #define GLOW_DRIFT_GROUP 256  /* a power of two (drift.comp's reduction) */
 #define GLOW_REDUCE_CHUNK 32  /* coefficients reduced per shared-memory pass */
 #define GLOW_MAX_GROUPS_X 65535u /* dispatches wider than this use y (index = y * 65535 + x) */

@@ -450,7 +450,7 @@ GLOW_API glow_result glow_system_set_params(glow_system *system, const glow_syst
  * cache); an update then costs two copies of the grid caches' rows. The first call allocates two copies
  * of the grid caches' SH (8 · grid caches · coeff_count bytes). NULL removes it. Needs a bake with
  * the sky transfer (format 1.6 SKYT). For a sky with a sun, give the sun as a light as well: L2 holds
- * no peak. The CPU solver's outputs only: the GL backend's grid (glow_gl_system) does not read it yet.
+ * no peak. The CPU solver's outputs only: the GL backend has its own, glow_gl_system_set_sky (glow_gl.h).
  * \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT (NULL system, a non-finite coefficient or one beyond
  * GLOW_MAX_IRRADIANCE); GLOW_ERROR_UNSUPPORTED (a bake without SKYT); GLOW_ERROR_OUT_OF_MEMORY;
  * GLOW_ERROR_INVALID_OPERATION during an update. \threadsafety As glow_system_set_params. \since 0.2 */

@@ -97,6 +97,12 @@ typedef struct glow_solver_tables {
     uint32_t gradient_node_count;
     const uint32_t *gradient_nodes;
     const float *gradient_cm;
+    /* \since 0.2: the grid caches are the first grid_cache_count caches; for bakes with the sky transfer
+     * (format 1.6 SKYT) sky_grid_visibility is each one's visibility SH V ([grid_cache_count][9],
+     * glow_bake_sky_transfer.grid_visibility), NULL without: a backend's glow_system_set_sky
+     * (glow_gl_system_set_sky) */
+    uint32_t grid_cache_count;
+    const float *sky_grid_visibility;
 } glow_solver_tables;
 /** Fills `out_tables`. \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT for NULL. \threadsafety Between
  * updates; the views change only through the setters and updates. \since 0.1 */

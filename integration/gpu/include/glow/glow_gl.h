@@ -161,6 +161,22 @@ GLOW_API glow_result glow_gl_system_set_neighbour(glow_gl_system *system, uint32
  * back at once: the update then waits for its pull to finish, its one wait).
  * GLOW_ERROR_INVALID_ARGUMENT for a bad focus, budget_ms or converged_epsilon. */
 GLOW_API glow_result glow_gl_system_update(glow_gl_system *system, const glow_update_desc *desc);
+/** The visible sky in the GL grid caches, as glow_system_set_sky does on the CPU solver (glow.h; docs/sky.md
+ * "The grid: visible sky"): from the next update on, each grid cache's SH (cache_sh_buffer, the grid
+ * textures) also holds V ⊗ L, the part of the sky `sh_rgb` (RGB l <= 2 SH, coefficient-major,
+ * GLOW_SKY_SH_FLOATS) the cache sees, in YCoCg (bands above 2 get nothing, chroma only up to
+ * sh_bands_chroma). It is added after the bounce and taken out again before the next update's surfel
+ * flux, so it is never fed back (the hook lights the surfels with the sky already:
+ * glow_gl_lights_set_environment_sh); lightmap caches are not changed. V ⊗ L is computed here on the CPU
+ * (9 x 27 multiply-adds per grid cache, the CPU solver's arithmetic) and uploaded; an update then costs
+ * one small dispatch and one buffer copy over the grid caches' rows. The first call creates two GPU
+ * buffers of the grid caches' SH (8 · grid caches · coeff_count bytes). NULL removes the sky. Independent
+ * of the CPU system's own glow_system_set_sky (call both when a host switches backends). Needs the GL
+ * context current and a bake with the sky transfer (format 1.6 SKYT).
+ * \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT (NULL system, a non-finite coefficient or one beyond
+ * GLOW_MAX_IRRADIANCE: nothing changes); GLOW_ERROR_UNSUPPORTED (a bake without SKYT);
+ * GLOW_ERROR_OUT_OF_MEMORY. \since 0.2 */
+GLOW_API glow_result glow_gl_system_set_sky(glow_gl_system *system, const float sh_rgb[GLOW_SKY_SH_FLOATS]);
 /** Waits for the last update's queries and fills `out`. */
 GLOW_API glow_result glow_gl_system_get_stats(glow_gl_system *system, glow_gl_stats *out);
 /** The output textures and buffers (owned by the system). */
