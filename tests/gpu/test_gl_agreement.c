@@ -15,7 +15,9 @@
  * (GLOW_ERROR_HOST_CALLBACK with the GL log), a hook that returns NaN (counted, stored as 0: the
  * caches stay finite; with GLOW_GL_FLAG_CHECK_HOOK the update fails and keeps the previous outputs),
  * the GLSL SH constants against the runtime's, and light across systems (a world's GL systems attached to
- * each other, against the CPU solvers attached the same way). Exits 77 (skipped) without a GL 4.5 context. */
+ * each other, against the CPU solvers attached the same way), and the visible sky of the grid caches
+ * (glow_gl_system_set_sky against glow_system_set_sky, test_sky). Exits 77 (skipped) without a GL 4.5
+ * context. */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -642,6 +644,173 @@ static void test_world_systems(void **state) {
     rmdir(dir);
 }
 
+/* The GL grid texture against the CPU's grid_sh, cell by cell: the cell's coefficients within 1e-3 of
+ * the largest |c| of its Y, Co or Cg block plus 1e-6 of the largest of all (compare's tolerance).
+ * Returns the worst error in units of the tolerance. */
+static double compare_grid(fixture *f, const char *what) {
+    const glow_cache_outputs *o = glow_system_outputs(f->cpu);
+    const glow_gl_outputs *go = glow_gl_system_outputs(f->gpu);
+    assert_non_null(o->grid_sh);
+    assert_int_not_equal(go->grid_texture, 0);
+    const uint32_t dx = o->grid_dims[0], dy = o->grid_dims[1], dz = o->grid_dims[2], nc = o->coeff_count;
+    const size_t cells = (size_t)dx * dy * dz, n = cells * 4u * go->planes;
+    float *g = malloc(n * sizeof *g);
+    assert_non_null(g);
+    glow_glfns fns;
+    assert_true(glow_glfns_load(&fns, glow_glctx_get_proc_address(g_gl), NULL, 0));
+    fns.MemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT);
+    fns.GetTextureImage(go->grid_texture, 0, GL_RGBA, GL_FLOAT, (GLsizei)(n * sizeof *g), g);
+    const uint32_t L2 = o->sh_bands_luma * o->sh_bands_luma, C2 = o->sh_bands_chroma * o->sh_bands_chroma;
+    const uint32_t starts[4] = {0, L2, L2 + C2, L2 + 2 * C2};
+    double global = 0.0, worst = 0.0;
+    for (size_t i = 0; i < cells * nc; ++i) global = fmax(global, fabs(o->grid_sh[i]));
+    size_t filled = 0;
+    for (size_t cell = 0; cell < cells; ++cell) {
+        if (o->grid_map[cell] == 0xFFFFFFFFu) continue;
+        filled++;
+        const size_t z = cell / ((size_t)dx * dy), xy = cell % ((size_t)dx * dy);
+        for (int blk = 0; blk < 3; ++blk) {
+            double scale = 0.0;
+            for (uint32_t k = starts[blk]; k < starts[blk + 1]; ++k) scale = fmax(scale, fabs(o->grid_sh[k * cells + cell]));
+            for (uint32_t k = starts[blk]; k < starts[blk + 1]; ++k) {
+                const size_t texel = (z + (size_t)(k / 4u) * dz) * dx * dy + xy; /* plane k/4 at z + p dz */
+                const double e = fabs((double)g[4 * texel + k % 4u] - o->grid_sh[k * cells + cell]) / (1e-3 * scale + 1e-6 * global);
+                worst = fmax(worst, e);
+            }
+        }
+    }
+    printf("  %-34s grid %ux%ux%u, %zu cells hold a cache: worst %.3f of tolerance\n", what, dx, dy, dz, filled, worst);
+    free(g);
+    assert_true(filled > 0 && global > 0.0);
+    return worst;
+}
+
+/* The visible sky of the grid caches on the GPU (glow_gl_system_set_sky) against the CPU solver's
+ * (glow_system_set_sky): the same errors; after a bounce reset (whose bounce does not depend on the
+ * past) the caches with the sky minus those without it are the sky's V ⊗ L on both, within compare's
+ * tolerance, non-zero in the grid caches and zero in the lightmap caches; budgeted updates with the sky
+ * (caches not gathered keep their rows: the sky must be taken out and put back, not added again), a
+ * turned sky, and the sky removed all agree. */
+static void test_sky(void **state) {
+    (void)state;
+    fixture f; /* a court open to the sky (the Cornell box is closed: its grid caches see none) */
+    if (make_fixture(&f, "builtin:pillar-court", NULL, 3, 3, 0) != 0) fail_msg("fixture");
+    const glow_cache_outputs *o = glow_system_outputs(f.cpu);
+    const uint32_t C = o->cache_count, G = o->grid_cache_count, nc = o->coeff_count;
+    glow_bake_sky_transfer sk;
+    assert_int_equal(glow_bake_get_sky_transfer(f.bake, &sk), GLOW_OK);
+    assert_int_equal(sk.grid_cache_count, G);
+    assert_true(G > 0 && G < C);
+    /* a sky with every coefficient non-zero: a constant part, a lobe along (0.3, 0.8, 0.5), some l = 2 */
+    float sky[GLOW_SKY_SH_FLOATS];
+    glow_sh_sky_constant((float[3]){0.6f, 0.8f, 1.1f}, sky);
+    for (int k = 1; k < 9; ++k)
+        for (int c = 0; c < 3; ++c) sky[3 * k + c] = (k < 4 ? 0.35f : 0.12f) * (float)((k * 7 + c * 3) % 5 - 2) + 0.05f * (float)c;
+    /* errors: as the CPU call */
+    float bad[GLOW_SKY_SH_FLOATS];
+    memcpy(bad, sky, sizeof bad);
+    bad[13] = NAN;
+    assert_int_equal(glow_gl_system_set_sky(NULL, sky), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(glow_gl_system_set_sky(f.gpu, bad), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(glow_system_set_sky(f.cpu, bad), GLOW_ERROR_INVALID_ARGUMENT);
+    bad[13] = INFINITY;
+    assert_int_equal(glow_gl_system_set_sky(f.gpu, bad), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(glow_gl_system_set_sky(f.gpu, NULL), GLOW_OK);
+    printf("builtin:pillar-court, l = 3/3, %u grid caches of %u, a sky of 27 non-zero coefficients:\n", G, C);
+    push_light(&f, 1.0f);
+    run_both(&f, 6, 0);
+    run_both(&f, 1, GLOW_UPDATE_FLAG_RESET_BOUNCE); /* without the sky */
+    const size_t n = (size_t)C * nc;
+    float *ca = malloc(n * sizeof *ca), *ga = malloc(n * sizeof *ga), *gb = malloc(n * sizeof *gb);
+    assert_true(ca && ga && gb);
+    memcpy(ca, o->cache_sh, n * sizeof *ca);
+    assert_int_equal(glow_gl_system_read_cache_sh(f.gpu, ga, n), GLOW_OK);
+    assert_int_equal(glow_system_set_sky(f.cpu, sky), GLOW_OK);
+    assert_int_equal(glow_gl_system_set_sky(f.gpu, sky), GLOW_OK);
+    run_both(&f, 1, GLOW_UPDATE_FLAG_RESET_BOUNCE); /* the same bounce, with the sky */
+    assert_true(compare(&f, "sky, after a bounce reset") <= 1.0);
+    assert_true(compare_grid(&f, "sky, grid texture") <= 1.0);
+    assert_int_equal(glow_gl_system_read_cache_sh(f.gpu, gb, n), GLOW_OK);
+    /* with minus without: the sky's share, on both */
+    const uint32_t L2 = o->sh_bands_luma * o->sh_bands_luma, C2 = o->sh_bands_chroma * o->sh_bands_chroma;
+    const uint32_t starts[4] = {0, L2, L2 + C2, L2 + 2 * C2};
+    double global = 0.0, worst = 0.0, sky_max = 0.0, lm_max = 0.0, lm_gpu_max = 0.0;
+    uint32_t lit = 0;
+    for (size_t i = 0; i < n; ++i) global = fmax(global, fabs(o->cache_sh[i]));
+    for (uint32_t c = 0; c < C; ++c) {
+        const float *b = o->cache_sh + (size_t)c * nc, *a = ca + (size_t)c * nc;
+        const float *gbc = gb + (size_t)c * nc, *gac = ga + (size_t)c * nc;
+        int any = 0;
+        for (int blk = 0; blk < 3; ++blk) {
+            double scale = 0.0;
+            for (uint32_t k = starts[blk]; k < starts[blk + 1]; ++k) scale = fmax(scale, fabs(b[k]));
+            for (uint32_t k = starts[blk]; k < starts[blk + 1]; ++k) {
+                const double cd = (double)b[k] - a[k], gd = (double)gbc[k] - gac[k];
+                worst = fmax(worst, fabs(gd - cd) / (1e-3 * scale + 1e-6 * global));
+                if (c < G) sky_max = fmax(sky_max, fabs(cd)), any |= cd != 0.0;
+                else lm_max = fmax(lm_max, fabs(cd)), lm_gpu_max = fmax(lm_gpu_max, fabs(gd));
+            }
+        }
+        lit += any;
+    }
+    printf("  %-34s worst %.3g of tolerance; %u of %u grid caches changed, largest change %.4g (largest |c| %.4g); "
+           "lightmap caches' largest change CPU %.3g GPU %.3g\n",
+           "with sky minus without", worst, lit, G, sky_max, global, lm_max, lm_gpu_max);
+    assert_true(worst <= 1.0);
+    assert_true(lit > G / 2);                /* the sky reaches the grid: the check above compares something */
+    assert_true(sky_max > 1e-2 * global);
+    assert_true(lm_max == 0.0 && lm_gpu_max <= 1e-6 * global); /* lightmap caches: untouched */
+    /* budgeted updates with the sky: caches not gathered keep their rows, without the sky added twice */
+    const float focus[3] = {-0.5f, 0.2f, 0.3f};
+    const glow_update_desc d = {.max_caches = C / 4, .focus = focus, .focus_count = 1};
+    for (int u = 0; u < 8; ++u) {
+        assert_int_equal(glow_system_update(f.cpu, &d), GLOW_OK);
+        assert_int_equal(glow_gl_system_update(f.gpu, &d), GLOW_OK);
+    }
+    assert_true(compare(&f, "sky, 8 budgeted updates") <= 1.0);
+    /* a turned sky, then none */
+    float turned[GLOW_SKY_SH_FLOATS];
+    glow_sh_rotate_y(sky, 1.3f, turned);
+    assert_int_equal(glow_system_set_sky(f.cpu, turned), GLOW_OK);
+    assert_int_equal(glow_gl_system_set_sky(f.gpu, turned), GLOW_OK);
+    run_both(&f, 3, 0);
+    assert_true(compare(&f, "turned sky, 3 updates") <= 1.0);
+    assert_true(compare_grid(&f, "turned sky, grid texture") <= 1.0);
+    assert_int_equal(glow_system_set_sky(f.cpu, NULL), GLOW_OK);
+    assert_int_equal(glow_gl_system_set_sky(f.gpu, NULL), GLOW_OK);
+    run_both(&f, 1, GLOW_UPDATE_FLAG_RESET_BOUNCE);
+    assert_true(compare(&f, "sky removed, after a bounce reset") <= 1.0);
+    assert_int_equal(glow_gl_system_read_cache_sh(f.gpu, gb, n), GLOW_OK);
+    double back = 0.0; /* the reset bounce without the sky again: as before it was set */
+    for (size_t i = 0; i < n; ++i) back = fmax(back, fabs((double)gb[i] - ga[i]));
+    printf("  sky removed: GPU caches within %.3g of those before the sky (largest |c| %.4g)\n", back, global);
+    assert_true(back <= 1e-6 * global);
+    free(ca), free(ga), free(gb);
+    free_fixture(&f);
+    remove(f.path);
+    /* a bake without the sky transfer: GLOW_ERROR_UNSUPPORTED, as on the CPU */
+    char path[256];
+    snprintf(path, sizeof path, "/tmp/glow_gpu_agree_%d_nosky.glow", (int)getpid());
+    glow_pc_settings st = {.quality = GLOW_PC_QUALITY_LOW, .surfels = 1024, .links = 32, .bands = 3, .threads = 2,
+                           .seed = 1, .no_sky = true};
+    glow_pc_stats stats;
+    if (glow_pc_bake("builtin:cornell", path, &st, &stats) != GLOW_OK) fail_msg("bake: %s", stats.error);
+    memset(&f, 0, sizeof f);
+    glow_context_desc cd = {.api_version = GLOW_VERSION, .tasks = {.worker_count = 2}, .logger = {logger, NULL}};
+    assert_int_equal(glow_context_create(&cd, &f.ctx), GLOW_OK);
+    assert_int_equal(glow_bake_load_file(f.ctx, path, &f.bake), GLOW_OK);
+    assert_int_equal(glow_system_create(f.ctx, &(glow_system_desc){.bake = f.bake}, &f.cpu), GLOW_OK);
+    glow_gl_desc gd = {.system = f.cpu, .get_proc_address = glow_glctx_get_proc_address(g_gl), .logger = {logger, NULL}};
+    assert_int_equal(glow_gl_system_create(&gd, &f.gpu), GLOW_OK);
+    assert_int_equal(glow_system_set_sky(f.cpu, sky), GLOW_ERROR_UNSUPPORTED);
+    assert_int_equal(glow_gl_system_set_sky(f.gpu, sky), GLOW_ERROR_UNSUPPORTED);
+    printf("  no SKYT: %s\n", g_last_log);
+    assert_int_equal(glow_gl_system_set_sky(f.gpu, NULL), GLOW_OK);
+    assert_int_equal(glow_gl_system_update(f.gpu, NULL), GLOW_OK);
+    free_fixture(&f);
+    remove(path);
+}
+
 int main(void) {
     char why[512];
     glow_result r = glow_glctx_create(&(glow_glctx_desc){.kind = GLOW_GLCTX_HEADLESS}, &g_gl, why, sizeof why);
@@ -655,6 +824,7 @@ int main(void) {
         cmocka_unit_test(test_cornell), cmocka_unit_test(test_two_rooms), cmocka_unit_test(test_bands),
         cmocka_unit_test(test_hook), cmocka_unit_test(test_bad_hooks), cmocka_unit_test(test_world_systems),
         cmocka_unit_test(test_budget), cmocka_unit_test(test_converged), cmocka_unit_test(test_link_gradients),
+        cmocka_unit_test(test_sky),
     };
     if (getenv("GLOW_TEST_FILTER")) cmocka_set_test_filter(getenv("GLOW_TEST_FILTER")); /* e.g. test_link_gradients */
     int rc = cmocka_run_group_tests(tests, NULL, NULL);
