@@ -830,8 +830,8 @@ int main(void) {
     int rc = cmocka_run_group_tests(tests, NULL, NULL);
     glow_glctx_destroy(g_gl);
     char path[256];
-    const char *scenes[] = {"cornell", "two-rooms", "cornell-grad"};
-    for (int i = 0; i < 3; ++i) {
+    const char *scenes[] = {"cornell", "two-rooms", "cornell-grad", "pillar-court", "nosky"};
+    for (int i = 0; i < 5; ++i) {
         snprintf(path, sizeof path, "/tmp/glow_gpu_agree_%d_%s.glow", (int)getpid(), scenes[i]);
         remove(path);
     }
