@@ -169,6 +169,152 @@ static glow_result finalize_materials(glow__scene *s, glow__log *log) {
     return GLOW_OK;
 }
 
+
+/* ---- consistent winding (issue 13: meshes as exporters leave them) ----
+ * Glow lights the front face of a triangle only (surfels and lightmap texels sit on it), while a path
+ * tracer reflects on both sides, so a triangle wound against its neighbours reads dark in Glow: a room
+ * whose triangles were flipped at random (30 %) read 0.30 of the path tracer's indirect light. Where
+ * the file gives no normals, the winding is the only orientation there is: triangles of one material
+ * that share an edge (exactly two triangles on it, manifold) must traverse it in opposite directions,
+ * so each such patch is made consistent by a walk over its edges, and the orientation of the larger
+ * area of the patch's triangles as the file wound them wins, when it is clearly larger (a patch wound consistently keeps its
+ * winding, even when it faces away from where it is seen: glow-bake warns about that, caches.c).
+ * Emissive materials keep the file's winding (it says which side emits). */
+#define WIND_MAJORITY 1.5 /* a patch turns its minority only when the majority's area is this many times larger */
+typedef struct wind_edge {
+    uint32_t key[6]; /* the two corners' position bits, the smaller first */
+    uint32_t material, tri;
+    uint8_t forward; /* the triangle runs from key[0..2] to key[3..5] */
+} wind_edge;
+
+static int wind_edge_cmp(const void *a, const void *b) {
+    const wind_edge *x = a, *y = b;
+    if (x->material != y->material) return x->material < y->material ? -1 : 1;
+    for (int i = 0; i < 6; i++)
+        if (x->key[i] != y->key[i]) return x->key[i] < y->key[i] ? -1 : 1;
+    return x->tri < y->tri ? -1 : (x->tri > y->tri);
+}
+
+static void flip_triangle(glow__scene *s, uint32_t t) {
+    float tmp3[3], tmp2[2];
+    memcpy(tmp3, s->pos[3 * (size_t)t + 1], sizeof tmp3);
+    memcpy(s->pos[3 * (size_t)t + 1], s->pos[3 * (size_t)t + 2], sizeof tmp3);
+    memcpy(s->pos[3 * (size_t)t + 2], tmp3, sizeof tmp3);
+    float (*uvs[2])[2] = {s->uv0, s->uv1};
+    for (int k = 0; k < 2; k++) {
+        if (!uvs[k]) continue;
+        memcpy(tmp2, uvs[k][3 * (size_t)t + 1], sizeof tmp2);
+        memcpy(uvs[k][3 * (size_t)t + 1], uvs[k][3 * (size_t)t + 2], sizeof tmp2);
+        memcpy(uvs[k][3 * (size_t)t + 2], tmp2, sizeof tmp2);
+    }
+}
+
+/* Returns the number of triangles turned, or UINT32_MAX when out of memory. s->nrm must be NULL. */
+static uint32_t orient_consistently(glow__scene *s) {
+    const uint32_t n = s->tri_count;
+    if (n < 2) return 0;
+    wind_edge *e = malloc((size_t)n * 3 * sizeof *e);
+    uint32_t *adj_first = calloc((size_t)n + 1, sizeof *adj_first), *adj = NULL, *queue = malloc((size_t)n * sizeof *queue);
+    uint8_t *adj_flip = NULL, *state = calloc(n, 1); /* 0 unseen; else 1 + relative flip */
+    double *area = malloc((size_t)n * sizeof *area);
+    uint32_t turned = UINT32_MAX;
+    if (!e || !adj_first || !queue || !state || !area) goto out;
+    size_t m = 0;
+    for (uint32_t t = 0; t < n; t++) {
+        double nn[3];
+        area[t] = 0.5 * tri_area2(s->pos[3 * (size_t)t], s->pos[3 * (size_t)t + 1], s->pos[3 * (size_t)t + 2], nn);
+        const glow__material *mt = &s->materials[s->tri_material[t]];
+        if (mt->emission[0] > 0.0f || mt->emission[1] > 0.0f || mt->emission[2] > 0.0f) continue;
+        for (int i = 0; i < 3; i++) {
+            uint32_t a[3], b[3];
+            memcpy(a, s->pos[3 * (size_t)t + i], sizeof a);
+            memcpy(b, s->pos[3 * (size_t)t + (i + 1) % 3], sizeof b);
+            const bool fwd = memcmp(a, b, sizeof a) < 0;
+            wind_edge *w = &e[m++];
+            memcpy(w->key, fwd ? a : b, sizeof a);
+            memcpy(w->key + 3, fwd ? b : a, sizeof a);
+            w->material = s->tri_material[t];
+            w->tri = t;
+            w->forward = fwd;
+        }
+    }
+    qsort(e, m, sizeof *e, wind_edge_cmp);
+    /* manifold edges: exactly two entries with the same key and material */
+    size_t pairs = 0;
+    for (size_t i = 0; i + 1 < m;) {
+        size_t j = i + 1;
+        while (j < m && e[j].material == e[i].material && !memcmp(e[j].key, e[i].key, sizeof e[i].key)) j++;
+        if (j - i == 2 && e[i].tri != e[i + 1].tri) {
+            adj_first[e[i].tri]++;
+            adj_first[e[i + 1].tri]++;
+            pairs++;
+        }
+        i = j;
+    }
+    adj = malloc((2 * pairs + 1) * sizeof *adj);
+    adj_flip = malloc(2 * pairs + 1);
+    if (!adj || !adj_flip) goto out;
+    for (uint32_t t = 0, acc = 0; t <= n; t++) { /* counts -> exclusive prefix sums (fill positions) */
+        const uint32_t c = t < n ? adj_first[t] : 0;
+        adj_first[t] = acc;
+        acc += c;
+    }
+    for (size_t i = 0; i + 1 < m;) {
+        size_t j = i + 1;
+        while (j < m && e[j].material == e[i].material && !memcmp(e[j].key, e[i].key, sizeof e[i].key)) j++;
+        if (j - i == 2 && e[i].tri != e[i + 1].tri) {
+            /* consistent neighbours run the shared edge in opposite directions: the same direction means
+             * one of the two must turn */
+            const uint8_t same = e[i].forward == e[i + 1].forward;
+            const uint32_t a = e[i].tri, b = e[i + 1].tri;
+            adj[adj_first[a]] = b;
+            adj_flip[adj_first[a]++] = same;
+            adj[adj_first[b]] = a;
+            adj_flip[adj_first[b]++] = same;
+        }
+        i = j;
+    }
+    for (uint32_t t = n; t > 0; t--) adj_first[t] = adj_first[t - 1]; /* back to starts */
+    adj_first[0] = 0;
+    turned = 0;
+    for (uint32_t seed = 0; seed < n; seed++) {
+        if (state[seed]) continue;
+        uint32_t head = 0, tail = 0;
+        double keep = 0.0, flip = 0.0;
+        state[seed] = 1;
+        queue[tail++] = seed;
+        while (head < tail) {
+            const uint32_t t = queue[head++];
+            if (state[t] == 2) flip += area[t];
+            else keep += area[t];
+            for (uint32_t k = adj_first[t]; k < adj_first[t + 1]; k++) {
+                const uint32_t u = adj[k];
+                if (state[u]) continue; /* a patch that cannot be oriented (a Moebius strip) keeps its first choice */
+                state[u] = (uint8_t)(1 + ((state[t] - 1) ^ adj_flip[k]));
+                queue[tail++] = u;
+            }
+        }
+        /* the patch's larger area keeps the file's winding; a patch whose two orientations cover
+         * similar areas (within 1.5x: a quad of two triangles, one of them turned) has no clear
+         * majority and stays as the file has it */
+        const uint8_t turn = flip > WIND_MAJORITY * keep ? 1 : keep > WIND_MAJORITY * flip ? 2 : 0;
+        for (uint32_t q = 0; turn && q < tail; q++)
+            if (state[queue[q]] == turn) {
+                flip_triangle(s, queue[q]);
+                turned++;
+            }
+    }
+out:
+    free(e);
+    free(adj_first);
+    free(adj);
+    free(adj_flip);
+    free(queue);
+    free(state);
+    free(area);
+    return turned;
+}
+
 glow_result glow__scene_finalize(glow__scene *s, glow__log *log) {
     if (!s) return GLOW_ERROR_INVALID_ARGUMENT;
     if (!s->source[0]) snprintf(s->source, sizeof s->source, "%s", "scene");
@@ -314,6 +460,18 @@ glow_result glow__scene_finalize(glow__scene *s, glow__log *log) {
                      s->source, s->source_tri_count, s->skipped_degenerate, s->skipped_nonfinite,
                      s->skipped_duplicate);
         return GLOW_ERROR_EMPTY_SCENE;
+    }
+
+    /* winding: consistent across shared edges where no normals say which side is the front */
+    if (!s->nrm) {
+        const uint32_t turned = orient_consistently(s);
+        if (turned == UINT32_MAX) goto oom;
+        s->turned_triangles = turned;
+        if (turned)
+            glow__warnf(log,
+                        "%s: %u triangles turned to agree with the winding of their neighbours (inconsistent winding; "
+                        "each surface keeps the orientation of most of its area)",
+                        s->source, turned);
     }
 
     /* normals: flat geometric ones when absent; given ones normalised, bad ones replaced */

@@ -693,6 +693,88 @@ static void test_plain_obj(void **state) {
     glow__scene_free(&s);
 }
 
+/* Inconsistent winding (issue 13): a floor of 4 x 4 quads (32 triangles, one material, shared
+ * vertices) with 8 triangles wound the other way is made consistent (all normals +y, 8 turned); a
+ * lone quad with one of its two triangles turned has no majority and stays as the file has it; an
+ * emissive material keeps the file's winding; a consistent mesh turns nothing. */
+static void write_floor(const char *path, int flip_every, bool emissive) {
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fprintf(f, "newmtl m\nKd 0.5 0.5 0.5\n%s", emissive ? "Ke 1 1 1\n" : "");
+    fclose(f);
+    char obj[300];
+    snprintf(obj, sizeof obj, "%s.obj", path);
+    f = fopen(obj, "w");
+    assert_non_null(f);
+    const char *slash = strrchr(path, '/');
+    fprintf(f, "mtllib %s\nusemtl m\n", slash ? slash + 1 : path);
+    for (int j = 0; j <= 4; j++)
+        for (int i = 0; i <= 4; i++) fprintf(f, "v %d 0 %d\n", i, j);
+    int t = 0;
+    for (int j = 0; j < 4; j++)
+        for (int i = 0; i < 4; i++) {
+            const int a = 1 + j * 5 + i, b = a + 1, c = a + 6, d = a + 5; /* (a, d, c) winds +y */
+            const int tri[2][3] = {{a, d, c}, {a, c, b}};
+            for (int k = 0; k < 2; k++, t++) {
+                const bool flip = flip_every && t % flip_every == 0;
+                fprintf(f, "f %d %d %d\n", tri[k][0], flip ? tri[k][2] : tri[k][1], flip ? tri[k][1] : tri[k][2]);
+            }
+        }
+    fclose(f);
+}
+
+static void geometric_normal_of(const glow__scene *s, uint32_t t, float g[3]) {
+    const float *p0 = s->pos[3 * (size_t)t], *p1 = s->pos[3 * (size_t)t + 1], *p2 = s->pos[3 * (size_t)t + 2];
+    const float e1[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]}, e2[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
+    g[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    g[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    g[2] = e1[0] * e2[1] - e1[1] * e2[0];
+}
+
+static uint32_t count_up(const glow__scene *s) {
+    uint32_t up = 0;
+    for (uint32_t t = 0; t < s->tri_count; t++) {
+        float g[3];
+        geometric_normal_of(s, t, g);
+        up += g[1] > 0.0f;
+    }
+    return up;
+}
+
+static void test_winding(void **state) {
+    (void)state;
+    char base[64], obj[80];
+    snprintf(base, sizeof base, "/tmp/glow_test_winding_%d.mtl", (int)getpid());
+    snprintf(obj, sizeof obj, "%s.obj", base);
+    capture c;
+    glow__scene s;
+    write_floor(base, 4, false); /* triangles 0, 4, 8, ... : 8 of 32 turned */
+    assert_int_equal(load(obj, &c, &s), GLOW_OK);
+    assert_int_equal(s.tri_count, 32);
+    assert_int_equal(s.turned_triangles, 8);
+    assert_int_equal(count_up(&s), 32);
+    assert_true(has(&c, "8 triangles turned to agree with the winding of their neighbours"));
+    glow__scene_free(&s);
+    write_floor(base, 0, false); /* consistent: nothing turned, no warning */
+    assert_int_equal(load(obj, &c, &s), GLOW_OK);
+    assert_int_equal(s.turned_triangles, 0);
+    assert_int_equal(count_up(&s), 32);
+    assert_false(has(&c, "turned"));
+    glow__scene_free(&s);
+    write_floor(base, 4, true); /* emissive: the file's winding says which side emits */
+    assert_int_equal(load(obj, &c, &s), GLOW_OK);
+    assert_int_equal(s.turned_triangles, 0);
+    assert_int_equal(count_up(&s), 24);
+    glow__scene_free(&s);
+    write_floor(base, 2, false); /* every other triangle turned: 16 against 16, no majority */
+    assert_int_equal(load(obj, &c, &s), GLOW_OK);
+    assert_int_equal(s.turned_triangles, 0);
+    assert_int_equal(count_up(&s), 16);
+    glow__scene_free(&s);
+    remove(obj);
+    remove(base);
+}
+
 static void test_gltf(void **state) {
     (void)state;
     capture c;
@@ -1049,6 +1131,7 @@ static void test_sponza(void **state) {
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_emission_texture_import),
+        cmocka_unit_test(test_winding),
         cmocka_unit_test(test_builtin_cornell),
         cmocka_unit_test(test_builtin_furnace),
         cmocka_unit_test(test_builtin_two_rooms),
