@@ -197,9 +197,13 @@ static int wind_edge_cmp(const void *a, const void *b) {
 
 static void flip_triangle(glow__scene *s, uint32_t t) {
     float tmp3[3], tmp2[2];
-    memcpy(tmp3, s->pos[3 * (size_t)t + 1], sizeof tmp3);
-    memcpy(s->pos[3 * (size_t)t + 1], s->pos[3 * (size_t)t + 2], sizeof tmp3);
-    memcpy(s->pos[3 * (size_t)t + 2], tmp3, sizeof tmp3);
+    float (*c3[2])[3] = {s->pos, s->nrm};
+    for (int k = 0; k < 2; k++) {
+        if (!c3[k]) continue;
+        memcpy(tmp3, c3[k][3 * (size_t)t + 1], sizeof tmp3);
+        memcpy(c3[k][3 * (size_t)t + 1], c3[k][3 * (size_t)t + 2], sizeof tmp3);
+        memcpy(c3[k][3 * (size_t)t + 2], tmp3, sizeof tmp3);
+    }
     float (*uvs[2])[2] = {s->uv0, s->uv1};
     for (int k = 0; k < 2; k++) {
         if (!uvs[k]) continue;
@@ -501,6 +505,27 @@ glow_result glow__scene_finalize(glow__scene *s, glow__log *log) {
         if (bad)
             glow__warnf(log, "%s: %u zero or non-finite vertex normals replaced by the face normal (first: triangle %u)",
                         s->source, bad, first_bad);
+        /* winding: where the file gives normals they say which side is the front (Glow's surfels and
+         * texels sit on the wound front; orient_consistently above): a triangle wound against its own
+         * corners' normals turns (emissive materials keep the file's winding: it says which side emits) */
+        uint32_t turned = 0;
+        for (uint32_t t = 0; t < kept; t++) {
+            const glow__material *mt = &s->materials[s->tri_material[t]];
+            if (mt->emission[0] > 0.0f || mt->emission[1] > 0.0f || mt->emission[2] > 0.0f) continue;
+            float g[3];
+            geometric_normal((const float (*)[3])(s->pos + 3 * (size_t)t), g);
+            double d = 0.0;
+            for (int i = 0; i < 3; i++)
+                for (int k = 0; k < 3; k++) d += (double)g[k] * s->nrm[3 * (size_t)t + i][k];
+            if (d < 0.0) {
+                flip_triangle(s, t);
+                turned++;
+            }
+        }
+        s->turned_triangles = turned;
+        if (turned)
+            glow__warnf(log, "%s: %u triangles turned to face along their vertex normals (wound against them)", s->source,
+                        turned);
     }
 
     /* UVs: non-finite -> 0 */

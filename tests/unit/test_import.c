@@ -697,7 +697,9 @@ static void test_plain_obj(void **state) {
  * vertices) with 8 triangles wound the other way is made consistent (all normals +y, 8 turned); a
  * lone quad with one of its two triangles turned has no majority and stays as the file has it; an
  * emissive material keeps the file's winding; a consistent mesh turns nothing. */
-static void write_floor(const char *path, int flip_every, bool emissive) {
+static void write_floor_n(const char *path, int flip_every, bool emissive, bool normals);
+static void write_floor(const char *path, int flip_every, bool emissive) { write_floor_n(path, flip_every, emissive, false); }
+static void write_floor_n(const char *path, int flip_every, bool emissive, bool normals) {
     FILE *f = fopen(path, "w");
     assert_non_null(f);
     fprintf(f, "newmtl m\nKd 0.5 0.5 0.5\n%s", emissive ? "Ke 1 1 1\n" : "");
@@ -710,6 +712,7 @@ static void write_floor(const char *path, int flip_every, bool emissive) {
     fprintf(f, "mtllib %s\nusemtl m\n", slash ? slash + 1 : path);
     for (int j = 0; j <= 4; j++)
         for (int i = 0; i <= 4; i++) fprintf(f, "v %d 0 %d\n", i, j);
+    if (normals) fprintf(f, "vn 0 1 0\n");
     int t = 0;
     for (int j = 0; j < 4; j++)
         for (int i = 0; i < 4; i++) {
@@ -717,7 +720,9 @@ static void write_floor(const char *path, int flip_every, bool emissive) {
             const int tri[2][3] = {{a, d, c}, {a, c, b}};
             for (int k = 0; k < 2; k++, t++) {
                 const bool flip = flip_every && t % flip_every == 0;
-                fprintf(f, "f %d %d %d\n", tri[k][0], flip ? tri[k][2] : tri[k][1], flip ? tri[k][1] : tri[k][2]);
+                const int v1 = flip ? tri[k][2] : tri[k][1], v2 = flip ? tri[k][1] : tri[k][2];
+                if (normals) fprintf(f, "f %d//1 %d//1 %d//1\n", tri[k][0], v1, v2);
+                else fprintf(f, "f %d %d %d\n", tri[k][0], v1, v2);
             }
         }
     fclose(f);
@@ -765,6 +770,14 @@ static void test_winding(void **state) {
     assert_int_equal(load(obj, &c, &s), GLOW_OK);
     assert_int_equal(s.turned_triangles, 0);
     assert_int_equal(count_up(&s), 24);
+    glow__scene_free(&s);
+    write_floor_n(base, 2, false, true); /* with normals (+y): they say which side is the front */
+    assert_int_equal(load(obj, &c, &s), GLOW_OK);
+    assert_false(s.normals_generated);
+    assert_int_equal(s.turned_triangles, 16);
+    assert_int_equal(count_up(&s), 32);
+    assert_true(has(&c, "16 triangles turned to face along their vertex normals"));
+    for (uint32_t k = 0; k < 3 * s.tri_count; k++) assert_true(s.nrm[k][1] > 0.999f); /* normals kept */
     glow__scene_free(&s);
     write_floor(base, 2, false); /* every other triangle turned: 16 against 16, no majority */
     assert_int_equal(load(obj, &c, &s), GLOW_OK);

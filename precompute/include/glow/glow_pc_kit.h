@@ -84,7 +84,8 @@ typedef struct glow__scene {
     uint32_t skipped_collinear;   /* height below 2^-20 of the longest edge (import.c) */
     uint32_t skipped_nonfinite;   /* NaN/Inf in a vertex */
     uint32_t skipped_duplicate;   /* coincident duplicate faces (same three positions) */
-    uint32_t turned_triangles;    /* turned to agree with their neighbours' winding (no file normals) */
+    uint32_t turned_triangles;    /* turned to agree with their neighbours' winding (no file normals) or
+                                     with their vertex normals (file normals) */
     uint32_t textures_missing;
     bool normals_generated;
     char source[512];             /* file path or builtin:NAME */
