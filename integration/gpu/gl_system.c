@@ -1112,8 +1112,7 @@ glow_result glow_gl_system_set_sky(glow_gl_system *s, const float sh_rgb[GLOW_SK
         return GLOW_OK;
     }
     const glow_solver_tables *t = &s->t;
-    const uint32_t G = t->grid_cache_count, L2 = t->sh_bands_luma * t->sh_bands_luma,
-                   C2 = t->sh_bands_chroma * t->sh_bands_chroma, nc = t->coeff_count;
+    const uint32_t G = t->grid_cache_count, nc = t->coeff_count;
     if (!s->prog[K_SKY]) {
         LOG_ERR(s, GLOW_ERROR_UNSUPPORTED,
                 "glow_gl_system_set_sky: the bake carries no sky visibility of its grid caches (format 1.6 SKYT; "
@@ -1149,21 +1148,8 @@ glow_result glow_gl_system_set_sky(glow_gl_system *s, const float sh_rgb[GLOW_SK
             return GLOW_ERROR_OUT_OF_MEMORY;
         }
     }
-    /* the CPU solver's arithmetic (glow_system_set_sky), so both add the same floats */
-    for (uint32_t c = 0; c < G; ++c) {
-        float vis[GLOW_SKY_SH_FLOATS], *row = s->sky_staging + (size_t)c * nc;
-        glow_sh_sky_visible(t->sky_grid_visibility + 9 * (size_t)c, sh_rgb, vis);
-        memset(row, 0, nc * sizeof *row);
-        for (uint32_t k = 0; k < 9; ++k) {
-            float ycc[3];
-            glow_rgb_to_ycocg(vis + 3 * k, ycc);
-            if (k < L2) row[k] = ycc[0];
-            if (k < C2) {
-                row[L2 + k] = ycc[1];
-                row[L2 + C2 + k] = ycc[2];
-            }
-        }
-    }
+    /* the CPU solver's rows (glow_system_set_sky), so both add the same floats */
+    glow_sky_grid_rows(t->sky_grid_visibility, G, sh_rgb, t->sh_bands_luma, t->sh_bands_chroma, s->sky_staging);
     gl->NamedBufferSubData(s->buf[B_SKY], 0, (GLsizeiptr)bytes, s->sky_staging);
     s->sky_on = 1;
     return GLOW_OK;

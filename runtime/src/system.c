@@ -1204,7 +1204,7 @@ glow_result glow_system_set_sky(glow_system *s, const float sh_rgb[GLOW_SKY_SH_F
                             k / 3, k % 3, (double)sh_rgb[k], (double)GLOW_MAX_IRRADIANCE);
             return GLOW_ERROR_INVALID_ARGUMENT;
         }
-    const uint32_t G = s->meta->grid_cache_count, L2 = s->luma * s->luma, C2 = s->chroma * s->chroma;
+    const uint32_t G = s->meta->grid_cache_count;
     if (!s->sky_grid) { /* once: a system that never gets a sky holds none */
         bool ok = true;
         s->sky_grid = alloc_array(s, G, (size_t)s->coeffs * sizeof(float), &ok);
@@ -1218,20 +1218,7 @@ glow_result glow_system_set_sky(glow_system *s, const float sh_rgb[GLOW_SKY_SH_F
             return GLOW_ERROR_OUT_OF_MEMORY;
         }
     }
-    for (uint32_t c = 0; c < G; ++c) {
-        float vis[GLOW_SKY_SH_FLOATS], *row = s->sky_grid + (size_t)c * s->coeffs;
-        glow_sh_sky_visible(s->sky_V + 9 * (size_t)c, sh_rgb, vis);
-        memset(row, 0, s->coeffs * sizeof *row);
-        for (uint32_t k = 0; k < 9; ++k) {
-            float ycc[3];
-            glow_rgb_to_ycocg(vis + 3 * k, ycc);
-            if (k < L2) row[k] = ycc[0];
-            if (k < C2) {
-                row[L2 + k] = ycc[1];
-                row[L2 + C2 + k] = ycc[2];
-            }
-        }
-    }
+    glow_sky_grid_rows(s->sky_V, G, sh_rgb, s->luma, s->chroma, s->sky_grid);
     s->sky_on = true;
     s->sky_revision++;
     return GLOW_OK;
@@ -1304,6 +1291,25 @@ static int cmp_u64(const void *a, const void *b) {
 static int cmp_u32(const void *a, const void *b) {
     const uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
     return (x > y) - (x < y);
+}
+
+void glow_sky_grid_rows(const float *visibility, uint32_t grid_caches, const float sh_rgb[GLOW_SKY_SH_FLOATS],
+                        uint32_t luma_bands, uint32_t chroma_bands, float *out_rows) {
+    const uint32_t L2 = luma_bands * luma_bands, C2 = chroma_bands * chroma_bands, nc = L2 + 2u * C2;
+    for (uint32_t c = 0; c < grid_caches; ++c) {
+        float vis[GLOW_SKY_SH_FLOATS], *row = out_rows + (size_t)c * nc;
+        glow_sh_sky_visible(visibility + 9 * (size_t)c, sh_rgb, vis);
+        memset(row, 0, nc * sizeof *row);
+        for (uint32_t k = 0; k < 9; ++k) {
+            float ycc[3];
+            glow_rgb_to_ycocg(vis + 3 * k, ycc);
+            if (k < L2) row[k] = ycc[0];
+            if (k < C2) {
+                row[L2 + k] = ycc[1];
+                row[L2 + C2 + k] = ycc[2];
+            }
+        }
+    }
 }
 
 uint32_t glow_budget_choose(const float *centre, uint32_t *age, const uint8_t *skip, uint32_t groups, const float *focus,

@@ -119,6 +119,14 @@ GLOW_API uint32_t glow_budget_choose(const float *centre, uint32_t *age, const u
                                      const float *focus, uint32_t focus_count, float focus_radius, uint32_t max_groups,
                                      uint64_t *scratch, uint32_t *out_sel);
 
+/** The visible sky of the grid caches as cache rows (cache_sh's layout: luma² Y, chroma² Co, chroma²
+ * Cg per cache): per grid cache c, V_c ⊗ L (glow_sh_sky_visible of `visibility` [grid_caches][9] with
+ * the sky `sh_rgb`) in YCoCg, coefficients past the bands dropped. glow_system_set_sky adds these rows
+ * to the grid caches; a backend's (glow_gl_system_set_sky) uploads them, so both add the same floats.
+ * out_rows: [grid_caches][luma² + 2 chroma²]. No allocation. \since 0.2 */
+GLOW_API void glow_sky_grid_rows(const float *visibility, uint32_t grid_caches, const float sh_rgb[GLOW_SKY_SH_FLOATS],
+                                 uint32_t luma_bands, uint32_t chroma_bands, float *out_rows);
+
 #ifdef __cplusplus
 }
 #endif
