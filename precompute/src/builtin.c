@@ -4,8 +4,10 @@
  * Metres, +Y up, counter-clockwise front faces (geometric normal (p1-p0)x(p2-p0)). Room walls face
  * into the rooms, solid blocks face outwards. Every quad is two triangles (p0,p1,p2), (p0,p2,p3).
  * Faces of one closed shell are cut along shared grid lines, so every edge of a closed shell is
- * shared by exactly two triangles (no T-junctions). No UVs; normals are generated (flat) by
- * glow__scene_finalize, which every builtin goes through. */
+ * shared by exactly two triangles (no T-junctions). Normals are generated (flat) by
+ * glow__scene_finalize, which every builtin goes through. Only builtin:cornell has material UVs
+ * (cornell_uvs): its lamp spans [0,1]² so that a host can drive it with an emission texture
+ * (glow_system_set_emission_texture; samples/01_cornell); the others have none. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -183,6 +185,36 @@ static void build_cornell(builder *b, glow__material *m) {
     add_quad_facing(b, l0, l1, l2, l3, down, CB_LIGHT);
 }
 
+/* builtin:cornell's material UVs: the lamp (material CB_LIGHT) spans [0,1]² with u along +x and v
+ * along +z (u = (x + 0.24) / 0.48, v = (z + 0.22) / 0.44); every other face is box-mapped in metres
+ * (the two axes other than its normal's largest, 0.5 u per metre about the box's centre, so the 2 m
+ * room spans [0,1]). Untextured materials ignore them. false: out of memory. */
+static bool cornell_uvs(glow__scene *s) {
+    s->uv0 = malloc((size_t)s->tri_count * 3 * sizeof *s->uv0);
+    if (!s->uv0) return false;
+    for (uint32_t t = 0; t < s->tri_count; t++) {
+        const float *p0 = s->pos[3 * (size_t)t], *p1 = s->pos[3 * (size_t)t + 1], *p2 = s->pos[3 * (size_t)t + 2];
+        float e1[3], e2[3], n[3];
+        glow__sub(p1, p0, e1);
+        glow__sub(p2, p0, e2);
+        glow__cross(e1, e2, n);
+        int axis = fabsf(n[0]) >= fabsf(n[1]) && fabsf(n[0]) >= fabsf(n[2]) ? 0 : fabsf(n[1]) >= fabsf(n[2]) ? 1 : 2;
+        int ua = axis == 0 ? 2 : 0, va = axis == 1 ? 2 : 1;
+        for (int k = 0; k < 3; k++) {
+            const float *p = s->pos[3 * (size_t)t + k];
+            float *uv = s->uv0[3 * (size_t)t + k];
+            if (s->tri_material[t] == CB_LIGHT) {
+                uv[0] = (p[0] + 0.24f) / 0.48f;
+                uv[1] = (p[2] + 0.22f) / 0.44f;
+            } else {
+                uv[0] = 0.5f + 0.5f * p[ua];
+                uv[1] = 0.5f + 0.5f * (p[va] - (va == 1 ? 1.0f : 0.0f));
+            }
+        }
+    }
+    return true;
+}
+
 /* White furnace: a closed cube, uniformly emissive and grey; radiance inside converges to
  * E / (1 - albedo) = 2 everywhere. */
 static void build_furnace(builder *b, glow__material *m) {
@@ -313,6 +345,11 @@ glow_result glow__scene_builtin(const char *name, glow__log *log, glow__scene *o
         return GLOW_ERROR_OUT_OF_MEMORY;
     }
     out->source_tri_count = b.count;
+    if (build == build_cornell && !cornell_uvs(out)) {
+        glow__errorf(log, "%s: out of memory", out->source);
+        glow__scene_free(out);
+        return GLOW_ERROR_OUT_OF_MEMORY;
+    }
     glow_result r = glow__scene_finalize(out, log);
     if (r != GLOW_OK) glow__scene_free(out);
     return r;

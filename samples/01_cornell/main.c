@@ -3,8 +3,11 @@
  *   1. a moving, colour-changing point light (or --spot) with GPU shadow maps (glow_gl_lights.h). Its
  *      GLSL hook lights Glow's surfels on the GPU AND the screen's pixels: one light function for both;
  *   2. an ANIMATED TEXTURED AREA LIGHT: the ceiling lamp's emission changes every frame, a travelling
- *      stripe pattern evaluated at its surfels (glow_system_set_surfel_emission) and, the same pattern
- *      in GLSL, at its pixels. Area lights need no shadow maps: Glow's bounce carries their light.
+ *      stripe pattern written into an emission texture that Glow samples at the lamp's surfels
+ *      (glow_system_set_emission_texture, through the bake's material UVs: builtin:cornell's lamp
+ *      spans [0,1]²) and, the same pattern in GLSL, at its pixels. A bake whose lamp has no UVs, or
+ *      UVs that do not run along x, gets the pattern per surfel instead (glow_system_set_surfel_emission).
+ *      Area lights need no shadow maps: Glow's bounce carries their light.
  * Every frame: move the light (renders its cube shadow map), write the lamp's emission, update the GL
  * system, draw (sample_gl.h: direct from the hook, indirect from the lightmap SH, emission), show it or
  * write DIR/frame_NNN.png, and print the GPU ms per stage.
@@ -40,6 +43,30 @@ static const char *const LAMP_GLSL =
     "    float k = 0.15 + 1.7 * s;\n"
     "    return base * vec3(k * (0.8 + 0.4 * s), k, k * (1.2 - 0.4 * s));\n"
     "}\n";
+
+/* The emission texture: TEX_W texels along u (the pattern's x), TEX_H rows (the same values). */
+#define TEX_W 64u
+#define TEX_H 4u
+
+/* Whether the lamp's surfels (one emissive material) have UVs with x = a + b u (to 1 mm): then the
+ * pattern, a function of x, is a function of u and one texture drives the whole lamp. */
+static bool lamp_u_maps_x(const glow_surfel_view *sv, const uint32_t *emitters, uint32_t n, float *a, float *b) {
+    if (!sv->uv0 || n < 2) return false;
+    double su = 0, sx = 0, suu = 0, sux = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        if (sv->materials[emitters[i]] != sv->materials[emitters[0]]) return false;
+        double u = sv->uv0[2 * (size_t)emitters[i]], x = sv->positions[4 * (size_t)emitters[i]];
+        su += u, sx += x, suu += u * u, sux += u * x;
+    }
+    double det = n * suu - su * su;
+    if (!(fabs(det) > 1e-12)) return false;
+    *b = (float)((n * sux - su * sx) / det);
+    *a = (float)((sx - *b * su) / n);
+    for (uint32_t i = 0; i < n; i++)
+        if (fabsf(*a + *b * sv->uv0[2 * (size_t)emitters[i]] - sv->positions[4 * (size_t)emitters[i]]) > 1e-3f)
+            return false;
+    return true;
+}
 
 /* A hue on the colour wheel, with a constant luma (Y = R/4 + G/2 + B/4) of 1/2. */
 static void hue(float h, float out[3]) {
@@ -103,11 +130,16 @@ int main(int argc, char **argv) {
             emitters[emitter_count++] = s;
         }
     }
+    float ua = 0.0f, ub = 0.0f;
+    const bool textured = status < 0 && lamp_u_maps_x(&sv, emitters, emitter_count, &ua, &ub);
+    float *texture = textured ? malloc((size_t)TEX_W * TEX_H * 3 * sizeof *texture) : NULL;
+    if (textured && !texture) status = 1;
     if (status < 0) {
         glow_system_params p;
         glow_system_get_params(a.sys, &p);
-        printf("lamp: %u emissive surfels, animated (emission scale %.2f)%s; light 0: %s, %s\n", emitter_count,
+        printf("lamp: %u emissive surfels, animated (emission scale %.2f)%s; %s; light 0: %s, %s\n", emitter_count,
                p.emission_scale, p.emission_scale == 0.0f ? " - off in this scene: the pattern has no effect" : "",
+               textured ? "an emission texture of 64 x 4 texels through its UVs" : "per surfel (its UVs do not run along x)",
                light_count ? glow_scene_light_type_name(base.type) : "none", moving ? "moving, changing colour" : "static");
     }
 
@@ -126,20 +158,35 @@ int main(int argc, char **argv) {
             status = 1;
             break;
         }
-        for (uint32_t i = 0; i < emitter_count; i++)
-            lamp_pattern(sv.positions + 4 * (size_t)emitters[i], t, emission + 3 * (size_t)i);
-        for (uint32_t i = 0; i < emitter_count; i++) emission[3 * i] *= base_emission[3 * i],
-                                                     emission[3 * i + 1] *= base_emission[3 * i + 1],
-                                                     emission[3 * i + 2] *= base_emission[3 * i + 2];
-        for (uint32_t i = 0, j; i < emitter_count; i = j) { /* one call per run of consecutive surfels */
-            for (j = i + 1; j < emitter_count && emitters[j] == emitters[j - 1] + 1; j++) {}
-            if (glow_system_set_surfel_emission(a.sys, emitters[i], j - i, emission + 3 * (size_t)i) != GLOW_OK) {
-                fprintf(stderr, "%s: glow_system_set_surfel_emission failed\n", argv[0]);
+        if (textured) { /* the pattern at each texel's u, times the lamp's own emission: W/(m²·sr) */
+            for (uint32_t i = 0; i < TEX_W; i++) {
+                const float p[3] = {ua + ub * ((float)i + 0.5f) / (float)TEX_W, 0.0f, 0.0f};
+                float k[3];
+                lamp_pattern(p, t, k);
+                for (uint32_t r = 0; r < TEX_H; r++)
+                    for (int c = 0; c < 3; c++) texture[3 * ((size_t)r * TEX_W + i) + c] = k[c] * base_emission[c];
+            }
+            if (glow_system_set_emission_texture(a.sys, sv.materials[emitters[0]], texture, TEX_W, TEX_H, 1.0f) != GLOW_OK) {
+                fprintf(stderr, "%s: glow_system_set_emission_texture failed\n", argv[0]);
                 status = 1;
+            }
+        } else {
+            for (uint32_t i = 0; i < emitter_count; i++)
+                lamp_pattern(sv.positions + 4 * (size_t)emitters[i], t, emission + 3 * (size_t)i);
+            for (uint32_t i = 0; i < emitter_count; i++) emission[3 * i] *= base_emission[3 * i],
+                                                         emission[3 * i + 1] *= base_emission[3 * i + 1],
+                                                         emission[3 * i + 2] *= base_emission[3 * i + 2];
+            for (uint32_t i = 0, j; i < emitter_count; i = j) { /* one call per run of consecutive surfels */
+                for (j = i + 1; j < emitter_count && emitters[j] == emitters[j - 1] + 1; j++) {}
+                if (glow_system_set_surfel_emission(a.sys, emitters[i], j - i, emission + 3 * (size_t)i) != GLOW_OK) {
+                    fprintf(stderr, "%s: glow_system_set_surfel_emission failed\n", argv[0]);
+                    status = 1;
+                }
             }
         }
         if (status < 0) status = sample_app_frame(&a, f, NULL, 0, NULL);
     }
+    free(texture);
     free(emitters);
     free(base_emission);
     free(emission);

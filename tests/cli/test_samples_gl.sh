@@ -51,6 +51,9 @@ check_run() { # NAME OUT_TXT PNG_DIR FRAMES W H
 check_run 01_cornell "$T/run1.txt" "$T/p1" 3 320 240
 grep -q '^frame 2 .*bounces 3 ' "$T/run1.txt" && pass "  01_cornell: one bounce per update" || fail "  01_cornell: bounce count"
 grep -q 'emissive surfels, animated' "$T/run1.txt" && pass "  01_cornell: the lamp is animated" || fail "  01_cornell: no animated lamp"
+grep -q 'an emission texture of 64 x 4 texels through its UVs' "$T/run1.txt" &&
+  pass "  01_cornell: the lamp is driven by glow_system_set_emission_texture (builtin:cornell's lamp UVs)" ||
+  fail "  01_cornell: the lamp is not driven by an emission texture"
 if ! cmp -s "$T/p1/frame_001.png" "$T/p1/frame_002.png"; then pass "  01_cornell: frames 1 and 2 differ (moving light)"; else fail "  01_cornell: frames 1 and 2 identical"; fi
 # the animated area light on its own: the light stands still, the surfels view shows direct light + emission
 # (no bounce), so only the lamp's emission can change the picture

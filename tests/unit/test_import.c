@@ -213,8 +213,22 @@ static void test_builtin_cornell(void **state) {
     double expect = 6 * 4.0 + (4 * 0.36 + 0.36) + (4 * 0.72 + 0.36) + 0.48 * 0.44;
     assert_true(fabs(s.area - expect) < 1e-4);
     assert_true(s.normals_generated);
-    assert_null(s.uv0);
+    /* material UVs (box-mapped; the lamp spans [0,1]² along x and z, for emission textures) */
+    assert_non_null(s.uv0);
     assert_null(s.uv1);
+    uint32_t lamp_tris = 0;
+    for (uint32_t t = 0; t < s.tri_count; t++)
+        for (int k = 0; k < 3; k++) {
+            const float *p = s.pos[3 * (size_t)t + k], *uv = s.uv0[3 * (size_t)t + k];
+            assert_true(uv[0] >= 0.0f && uv[0] <= 1.0f && uv[1] >= 0.0f && uv[1] <= 1.0f);
+            if (strcmp(s.materials[s.tri_material[t]].name, "light") == 0) {
+                assert_true(fabsf(uv[0] - (p[0] + 0.24f) / 0.48f) < 1e-6f);
+                assert_true(fabsf(uv[1] - (p[2] + 0.22f) / 0.44f) < 1e-6f);
+                assert_true(uv[0] == 0.0f || uv[0] == 1.0f); /* the lamp's corners are its UV square's */
+                lamp_tris += k == 0;
+            }
+        }
+    assert_int_equal(lamp_tris, 2);
     const float bmin[3] = {-1, 0, -1}, bmax[3] = {1, 2, 1};
     for (int k = 0; k < 3; k++) {
         assert_true(s.bounds_min[k] == bmin[k]);

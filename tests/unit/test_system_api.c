@@ -1914,7 +1914,7 @@ static void test_emission_texture(void **state) {
     glow_bake_destroy(bake);
     remove(out);
     /* a bake without material UVs: no uv0, and the call refuses */
-    assert_int_equal(glow_pc_bake("builtin:cornell", out, &ps, &pst), GLOW_OK);
+    assert_int_equal(glow_pc_bake("builtin:furnace", out, &ps, &pst), GLOW_OK);
     assert_int_equal(glow_bake_load_file(ctx, out, &bake), GLOW_OK);
     assert_int_equal(glow_system_create(ctx, &(glow_system_desc){.bake = bake}, &s), GLOW_OK);
     assert_int_equal(glow_system_get_surfels(s, &v), GLOW_OK);
