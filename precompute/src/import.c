@@ -179,7 +179,10 @@ static glow_result finalize_materials(glow__scene *s, glow__log *log) {
  * so each such patch is made consistent by a walk over its edges, and the orientation of the larger
  * area of the patch's triangles as the file wound them wins, when it is clearly larger (a patch wound consistently keeps its
  * winding, even when it faces away from where it is seen: glow-bake warns about that, caches.c).
- * Emissive materials keep the file's winding (it says which side emits). */
+ * Emissive materials keep the file's winding (it says which side emits). Exporters also leave
+ * T-junctions (a long edge of one triangle met by two shorter edges of others, the corner between them
+ * lying on it): such edges are joined too (wind_tjunctions), so a wall cut around a window orients with
+ * the rest of its room. */
 #define WIND_MAJORITY 1.5 /* a patch turns its minority only when the majority's area is this many times larger */
 typedef struct wind_edge {
     uint32_t key[6]; /* the two corners' position bits, the smaller first */
@@ -213,6 +216,162 @@ static void flip_triangle(glow__scene *s, uint32_t t) {
     }
 }
 
+/* T-junctions: a boundary edge (no manifold partner) of one material that lies along another's — the
+ * long edge of a T-junction and the pieces of other triangles that run along it — makes their triangles
+ * neighbours across the overlap. Edge a is tested against the boundary edges that pass by its midpoint
+ * (a grid of cells of about the mean boundary edge's length; every edge is entered in the cells of
+ * points half a cell apart along it, a midpoint's cell and the 26 around it are searched): b must run
+ * along a (the shorter's corners within WIND_TJ_TOL x (coordinate magnitude + the longer's length) of
+ * the longer's line, a few float ulps) and cover a's midpoint. A midpoint covered by two or more such
+ * edges (a non-manifold seam) joins nothing. Appends (tri a, tri b, same direction) to *pairs; returns
+ * how many, or UINT32_MAX when out of memory. */
+#define WIND_TJ_TOL 4e-6
+#define WIND_TJ_MAX_ENTRIES (1u << 26)
+typedef struct wind_cell {
+    uint64_t cell;
+    uint32_t edge;
+} wind_cell;
+static int wind_cell_cmp(const void *a, const void *b) {
+    const wind_cell *x = a, *y = b;
+    if (x->cell != y->cell) return x->cell < y->cell ? -1 : 1;
+    return x->edge < y->edge ? -1 : (x->edge > y->edge);
+}
+static void wind_key_pos(const uint32_t key[3], double p[3]) {
+    float f[3];
+    memcpy(f, key, sizeof f);
+    for (int i = 0; i < 3; i++) p[i] = f[i];
+}
+static uint64_t wind_cell_key(int64_t x, int64_t y, int64_t z) { /* 21 bits each, wrapped */
+    return ((uint64_t)x & 0x1FFFFFu) | ((uint64_t)y & 0x1FFFFFu) << 21 | ((uint64_t)z & 0x1FFFFFu) << 42;
+}
+/* whether edges a and b run along each other (see above) and b covers a's midpoint */
+static bool wind_along(const double a0[3], const double a1[3], const double b0[3], const double b1[3]) {
+    double da[3], db[3], la = 0.0, lb = 0.0, mag = 0.0;
+    for (int c = 0; c < 3; c++) {
+        da[c] = a1[c] - a0[c], db[c] = b1[c] - b0[c];
+        la += da[c] * da[c], lb += db[c] * db[c];
+        mag = fmax(mag, fmax(fmax(fabs(a0[c]), fabs(a1[c])), fmax(fabs(b0[c]), fabs(b1[c]))));
+    }
+    la = sqrt(la), lb = sqrt(lb);
+    const bool a_short = la <= lb;
+    const double *s0 = a_short ? a0 : b0, *s1 = a_short ? a1 : b1, *l0 = a_short ? b0 : a0, *dl = a_short ? db : da;
+    const double ll = a_short ? lb : la, tol = WIND_TJ_TOL * (mag + ll);
+    for (int k = 0; k < 2; k++) { /* the shorter edge's corners against the longer's line */
+        const double *p = k ? s1 : s0;
+        double r[3], t = 0.0, off = 0.0;
+        for (int c = 0; c < 3; c++) r[c] = p[c] - l0[c], t += r[c] * dl[c];
+        t /= ll * ll;
+        for (int c = 0; c < 3; c++) off += (r[c] - t * dl[c]) * (r[c] - t * dl[c]);
+        if (off > tol * tol) return false;
+    }
+    double t = 0.0; /* a's midpoint along b */
+    for (int c = 0; c < 3; c++) t += (0.5 * (a0[c] + a1[c]) - b0[c]) * db[c];
+    t /= lb * lb;
+    return t > 0.0 && t < 1.0;
+}
+static uint32_t wind_tjunctions(const wind_edge *e, const uint8_t *boundary, size_t m, uint32_t (**pairs)[3]) {
+    *pairs = NULL;
+    size_t nb = 0;
+    double mean = 0.0;
+    for (size_t i = 0; i < m; i++) {
+        if (!boundary[i]) continue;
+        double p0[3], p1[3], l = 0.0;
+        wind_key_pos(e[i].key, p0);
+        wind_key_pos(e[i].key + 3, p1);
+        for (int c = 0; c < 3; c++) l += (p1[c] - p0[c]) * (p1[c] - p0[c]);
+        mean += sqrt(l);
+        nb++;
+    }
+    if (nb < 2) return 0;
+    double h = mean / (double)nb; /* the cell: doubled until the entries fit */
+    size_t entries = 0;
+    for (;;) {
+        entries = 0;
+        for (size_t i = 0; i < m; i++) {
+            if (!boundary[i]) continue;
+            double p0[3], p1[3], l = 0.0;
+            wind_key_pos(e[i].key, p0);
+            wind_key_pos(e[i].key + 3, p1);
+            for (int c = 0; c < 3; c++) l += (p1[c] - p0[c]) * (p1[c] - p0[c]);
+            entries += (size_t)ceil(2.0 * sqrt(l) / h) + 1;
+        }
+        if (entries <= WIND_TJ_MAX_ENTRIES && entries <= 64 * nb + 4096) break;
+        h *= 2.0;
+    }
+    wind_cell *cells = malloc(entries * sizeof *cells);
+    uint32_t(*out)[3] = malloc(nb * sizeof *out); /* at most one pair per edge */
+    if (!cells || !out) {
+        free(cells);
+        free(out);
+        return UINT32_MAX;
+    }
+    size_t k = 0;
+    for (size_t i = 0; i < m; i++) {
+        if (!boundary[i]) continue;
+        double p0[3], p1[3], l = 0.0;
+        wind_key_pos(e[i].key, p0);
+        wind_key_pos(e[i].key + 3, p1);
+        for (int c = 0; c < 3; c++) l += (p1[c] - p0[c]) * (p1[c] - p0[c]);
+        const size_t steps = (size_t)ceil(2.0 * sqrt(l) / h);
+        for (size_t q = 0; q <= steps && k < entries; q++) {
+            const double t = steps ? (double)q / (double)steps : 0.0;
+            cells[k].cell = wind_cell_key((int64_t)floor((p0[0] + t * (p1[0] - p0[0])) / h),
+                                          (int64_t)floor((p0[1] + t * (p1[1] - p0[1])) / h),
+                                          (int64_t)floor((p0[2] + t * (p1[2] - p0[2])) / h));
+            cells[k++].edge = (uint32_t)i;
+        }
+    }
+    qsort(cells, k, sizeof *cells, wind_cell_cmp);
+    uint32_t count = 0;
+    for (size_t i = 0; i < m; i++) {
+        if (!boundary[i]) continue;
+        double a0[3], a1[3], mid[3];
+        wind_key_pos(e[i].key, a0);
+        wind_key_pos(e[i].key + 3, a1);
+        for (int c = 0; c < 3; c++) mid[c] = 0.5 * (a0[c] + a1[c]);
+        const int64_t cx = (int64_t)floor(mid[0] / h), cy = (int64_t)floor(mid[1] / h), cz = (int64_t)floor(mid[2] / h);
+        uint32_t found = 0, partner = UINT32_MAX;
+        for (int dz = -1; dz <= 1 && found < 2; dz++)
+            for (int dy = -1; dy <= 1 && found < 2; dy++)
+                for (int dx = -1; dx <= 1 && found < 2; dx++) {
+                    const uint64_t key = wind_cell_key(cx + dx, cy + dy, cz + dz);
+                    size_t lo = 0, hi = k; /* the first entry of the cell */
+                    while (lo < hi) {
+                        const size_t mi = (lo + hi) / 2;
+                        if (cells[mi].cell < key) lo = mi + 1;
+                        else hi = mi;
+                    }
+                    for (size_t q = lo; q < k && cells[q].cell == key && found < 2; q++) {
+                        const uint32_t b = cells[q].edge;
+                        if (b == i || b == partner || e[b].material != e[i].material || e[b].tri == e[i].tri) continue;
+                        double b0[3], b1[3];
+                        wind_key_pos(e[b].key, b0);
+                        wind_key_pos(e[b].key + 3, b1);
+                        if (!wind_along(a0, a1, b0, b1)) continue;
+                        found++;
+                        partner = b;
+                    }
+                }
+        if (found != 1) continue;
+        /* the wound directions along the line: key[0..2] -> key[3..5] when forward */
+        double da[3], db[3], b0[3], b1[3], dot = 0.0;
+        wind_key_pos(e[partner].key, b0);
+        wind_key_pos(e[partner].key + 3, b1);
+        for (int c = 0; c < 3; c++) {
+            da[c] = (a1[c] - a0[c]) * (e[i].forward ? 1.0 : -1.0);
+            db[c] = (b1[c] - b0[c]) * (e[partner].forward ? 1.0 : -1.0);
+            dot += da[c] * db[c];
+        }
+        out[count][0] = e[i].tri;
+        out[count][1] = e[partner].tri;
+        out[count][2] = dot > 0.0; /* both run the same way along the overlap: one must turn */
+        count++;
+    }
+    free(cells);
+    *pairs = out;
+    return count;
+}
+
 /* Returns the number of triangles turned, or UINT32_MAX when out of memory. s->nrm must be NULL. */
 static uint32_t orient_consistently(glow__scene *s) {
     const uint32_t n = s->tri_count;
@@ -221,6 +380,8 @@ static uint32_t orient_consistently(glow__scene *s) {
     uint32_t *adj_first = calloc((size_t)n + 1, sizeof *adj_first), *adj = NULL, *queue = malloc((size_t)n * sizeof *queue);
     uint8_t *adj_flip = NULL, *state = calloc(n, 1); /* 0 unseen; else 1 + relative flip */
     double *area = malloc((size_t)n * sizeof *area);
+    uint8_t *boundary = NULL;
+    uint32_t(*tj_pairs)[3] = NULL;
     uint32_t turned = UINT32_MAX;
     if (!e || !adj_first || !queue || !state || !area) goto out;
     size_t m = 0;
@@ -243,9 +404,11 @@ static uint32_t orient_consistently(glow__scene *s) {
         }
     }
     qsort(e, m, sizeof *e, wind_edge_cmp);
-    /* manifold edges: exactly two entries with the same key and material */
+    /* manifold edges: exactly two entries with the same key and material; boundary edges: one */
+    boundary = calloc(m ? m : 1, 1);
+    if (!boundary) goto out;
     size_t pairs = 0;
-    for (size_t i = 0; i + 1 < m;) {
+    for (size_t i = 0; i < m;) {
         size_t j = i + 1;
         while (j < m && e[j].material == e[i].material && !memcmp(e[j].key, e[i].key, sizeof e[i].key)) j++;
         if (j - i == 2 && e[i].tri != e[i + 1].tri) {
@@ -253,8 +416,16 @@ static uint32_t orient_consistently(glow__scene *s) {
             adj_first[e[i + 1].tri]++;
             pairs++;
         }
+        boundary[i] = j - i == 1;
         i = j;
     }
+    const uint32_t tj = wind_tjunctions(e, boundary, m, &tj_pairs);
+    if (tj == UINT32_MAX) goto out;
+    for (uint32_t k = 0; k < tj; k++) {
+        adj_first[tj_pairs[k][0]]++;
+        adj_first[tj_pairs[k][1]]++;
+    }
+    pairs += tj;
     adj = malloc((2 * pairs + 1) * sizeof *adj);
     adj_flip = malloc(2 * pairs + 1);
     if (!adj || !adj_flip) goto out;
@@ -277,6 +448,13 @@ static uint32_t orient_consistently(glow__scene *s) {
             adj_flip[adj_first[b]++] = same;
         }
         i = j;
+    }
+    for (uint32_t k = 0; k < tj; k++) {
+        const uint32_t a = tj_pairs[k][0], b = tj_pairs[k][1];
+        adj[adj_first[a]] = b;
+        adj_flip[adj_first[a]++] = (uint8_t)tj_pairs[k][2];
+        adj[adj_first[b]] = a;
+        adj_flip[adj_first[b]++] = (uint8_t)tj_pairs[k][2];
     }
     for (uint32_t t = n; t > 0; t--) adj_first[t] = adj_first[t - 1]; /* back to starts */
     adj_first[0] = 0;
@@ -310,6 +488,8 @@ static uint32_t orient_consistently(glow__scene *s) {
     }
 out:
     free(e);
+    free(boundary);
+    free(tj_pairs);
     free(adj_first);
     free(adj);
     free(adj_flip);

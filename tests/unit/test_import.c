@@ -802,6 +802,43 @@ static void test_winding(void **state) {
     remove(base);
 }
 
+/* T-junctions (exporters cut a surface where it meets another): a 3 x 1 m quad A, and along its
+ * z = 1 edge three 1 m deep pieces that touch it only there: x 0..1, 1.2..1.8 (its corners lie inside
+ * A's edge: a piece in the middle) and 2..3, with gaps between them, so no piece shares an edge with A
+ * or with another. The last two are wound downwards: joined to A across the T-junctions they are the
+ * minority (1.6 m² against 4) and turn; without the joins each is a consistent patch of its own. */
+static void test_winding_tjunction(void **state) {
+    (void)state;
+    char base[64], obj[80];
+    snprintf(base, sizeof base, "/tmp/glow_test_tjunction_%d.mtl", (int)getpid());
+    snprintf(obj, sizeof obj, "%s.obj", base);
+    FILE *f = fopen(base, "w");
+    assert_non_null(f);
+    fprintf(f, "newmtl m\nKd 0.5 0.5 0.5\n");
+    fclose(f);
+    f = fopen(obj, "w");
+    assert_non_null(f);
+    fprintf(f, "mtllib %s\nusemtl m\n", strrchr(base, '/') + 1);
+    static const float quads[4][4] = {{0, 3, 0, 1}, {0, 1, 1, 2}, {1.2f, 1.8f, 1, 2}, {2, 3, 1, 2}}; /* x0 x1 z0 z1 */
+    for (int q = 0; q < 4; q++) {
+        const float *r = quads[q];
+        fprintf(f, "v %g 0 %g\nv %g 0 %g\nv %g 0 %g\nv %g 0 %g\n", r[0], r[2], r[0], r[3], r[1], r[3], r[1], r[2]);
+        const int a = 1 + 4 * q, b = a + 1, c = a + 2, d = a + 3; /* (a, b, c) and (a, c, d) wind +y */
+        if (q >= 2) fprintf(f, "f %d %d %d\nf %d %d %d\n", a, c, b, a, d, c);
+        else fprintf(f, "f %d %d %d\nf %d %d %d\n", a, b, c, a, c, d);
+    }
+    fclose(f);
+    capture c;
+    glow__scene s;
+    assert_int_equal(load(obj, &c, &s), GLOW_OK);
+    assert_int_equal(s.tri_count, 8);
+    assert_int_equal(s.turned_triangles, 4);
+    assert_int_equal(count_up(&s), 8);
+    glow__scene_free(&s);
+    remove(obj);
+    remove(base);
+}
+
 static void test_gltf(void **state) {
     (void)state;
     capture c;
@@ -1168,6 +1205,7 @@ int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_emission_texture_import),
         cmocka_unit_test(test_winding),
+        cmocka_unit_test(test_winding_tjunction),
         cmocka_unit_test(test_builtin_cornell),
         cmocka_unit_test(test_builtin_furnace),
         cmocka_unit_test(test_builtin_two_rooms),
