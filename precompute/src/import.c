@@ -241,6 +241,14 @@ static void wind_key_pos(const uint32_t key[3], double p[3]) {
     memcpy(f, key, sizeof f);
     for (int i = 0; i < 3; i++) p[i] = f[i];
 }
+/* edge i's corners and length */
+static double wind_edge_ends(const wind_edge *e, double p0[3], double p1[3]) {
+    double l = 0.0;
+    wind_key_pos(e->key, p0);
+    wind_key_pos(e->key + 3, p1);
+    for (int c = 0; c < 3; c++) l += (p1[c] - p0[c]) * (p1[c] - p0[c]);
+    return sqrt(l);
+}
 static uint64_t wind_cell_key(int64_t x, int64_t y, int64_t z) { /* 21 bits each, wrapped */
     return ((uint64_t)x & 0x1FFFFFu) | ((uint64_t)y & 0x1FFFFFu) << 21 | ((uint64_t)z & 0x1FFFFFu) << 42;
 }
@@ -275,11 +283,8 @@ static uint32_t wind_tjunctions(const wind_edge *e, const uint8_t *boundary, siz
     double mean = 0.0;
     for (size_t i = 0; i < m; i++) {
         if (!boundary[i]) continue;
-        double p0[3], p1[3], l = 0.0;
-        wind_key_pos(e[i].key, p0);
-        wind_key_pos(e[i].key + 3, p1);
-        for (int c = 0; c < 3; c++) l += (p1[c] - p0[c]) * (p1[c] - p0[c]);
-        mean += sqrt(l);
+        double p0[3], p1[3];
+        mean += wind_edge_ends(&e[i], p0, p1);
         nb++;
     }
     if (nb < 2) return 0;
@@ -289,11 +294,8 @@ static uint32_t wind_tjunctions(const wind_edge *e, const uint8_t *boundary, siz
         entries = 0;
         for (size_t i = 0; i < m; i++) {
             if (!boundary[i]) continue;
-            double p0[3], p1[3], l = 0.0;
-            wind_key_pos(e[i].key, p0);
-            wind_key_pos(e[i].key + 3, p1);
-            for (int c = 0; c < 3; c++) l += (p1[c] - p0[c]) * (p1[c] - p0[c]);
-            entries += (size_t)ceil(2.0 * sqrt(l) / h) + 1;
+            double p0[3], p1[3];
+            entries += (size_t)ceil(2.0 * wind_edge_ends(&e[i], p0, p1) / h) + 1;
         }
         if (entries <= WIND_TJ_MAX_ENTRIES && entries <= 64 * nb + 4096) break;
         h *= 2.0;
@@ -308,11 +310,8 @@ static uint32_t wind_tjunctions(const wind_edge *e, const uint8_t *boundary, siz
     size_t k = 0;
     for (size_t i = 0; i < m; i++) {
         if (!boundary[i]) continue;
-        double p0[3], p1[3], l = 0.0;
-        wind_key_pos(e[i].key, p0);
-        wind_key_pos(e[i].key + 3, p1);
-        for (int c = 0; c < 3; c++) l += (p1[c] - p0[c]) * (p1[c] - p0[c]);
-        const size_t steps = (size_t)ceil(2.0 * sqrt(l) / h);
+        double p0[3], p1[3];
+        const size_t steps = (size_t)ceil(2.0 * wind_edge_ends(&e[i], p0, p1) / h);
         for (size_t q = 0; q <= steps && k < entries; q++) {
             const double t = steps ? (double)q / (double)steps : 0.0;
             cells[k].cell = wind_cell_key((int64_t)floor((p0[0] + t * (p1[0] - p0[0])) / h),
@@ -326,8 +325,7 @@ static uint32_t wind_tjunctions(const wind_edge *e, const uint8_t *boundary, siz
     for (size_t i = 0; i < m; i++) {
         if (!boundary[i]) continue;
         double a0[3], a1[3], mid[3];
-        wind_key_pos(e[i].key, a0);
-        wind_key_pos(e[i].key + 3, a1);
+        wind_edge_ends(&e[i], a0, a1);
         for (int c = 0; c < 3; c++) mid[c] = 0.5 * (a0[c] + a1[c]);
         const int64_t cx = (int64_t)floor(mid[0] / h), cy = (int64_t)floor(mid[1] / h), cz = (int64_t)floor(mid[2] / h);
         uint32_t found = 0, partner = UINT32_MAX;
@@ -345,8 +343,7 @@ static uint32_t wind_tjunctions(const wind_edge *e, const uint8_t *boundary, siz
                         const uint32_t b = cells[q].edge;
                         if (b == i || b == partner || e[b].material != e[i].material || e[b].tri == e[i].tri) continue;
                         double b0[3], b1[3];
-                        wind_key_pos(e[b].key, b0);
-                        wind_key_pos(e[b].key + 3, b1);
+                        wind_edge_ends(&e[b], b0, b1);
                         if (!wind_along(a0, a1, b0, b1)) continue;
                         found++;
                         partner = b;
@@ -355,8 +352,7 @@ static uint32_t wind_tjunctions(const wind_edge *e, const uint8_t *boundary, siz
         if (found != 1) continue;
         /* the wound directions along the line: key[0..2] -> key[3..5] when forward */
         double da[3], db[3], b0[3], b1[3], dot = 0.0;
-        wind_key_pos(e[partner].key, b0);
-        wind_key_pos(e[partner].key + 3, b1);
+        wind_edge_ends(&e[partner], b0, b1);
         for (int c = 0; c < 3; c++) {
             da[c] = (a1[c] - a0[c]) * (e[i].forward ? 1.0 : -1.0);
             db[c] = (b1[c] - b0[c]) * (e[partner].forward ? 1.0 : -1.0);
