@@ -865,7 +865,9 @@ static void test_meta_counts(void **state) {
                    b->meta.grid_dims[1] = 0xFFFFFFFFu; b->meta.grid_dims[2] = 0xFFFFFFFFu);
     EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "'LMAP'", b->meta.lightmap_width = 0x80000000u;
                    b->meta.lightmap_height = 0x80000000u);
-    EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "lightmap_count", b->meta.lightmap_count = 2);
+    /* 1.7: pages; LMAP then holds lightmap_count pages, and more than GLOW_BAKE_MAX_LIGHTMAP_PAGES are refused */
+    EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "'LMAP'", b->meta.lightmap_count = 2);
+    EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "lightmap_count", b->meta.lightmap_count = GLOW_BAKE_MAX_LIGHTMAP_PAGES + 1u);
     EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "sh_bands", b->meta.sh_bands = 0);
     EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "sh_bands", b->meta.sh_bands = 0x10000u);
     EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "grid_spacing", b->meta.grid_spacing = 0.0f);
