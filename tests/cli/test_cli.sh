@@ -202,6 +202,18 @@ struct.pack_into("<I", b, 32, zlib.crc32(bytes(b[0:64])))
 open(sys.argv[2], "wb").write(b)
 PY
 expect 1 "--info on a bake with a page index out of range" "$BIN" --info "$T/pgbad.glow"; err_has "TPAG triangle 0: lightmap page 99"
+python3 - "$T/pg5.glow" "$T/pgnone.glow" <<'PY' && pass "  TPAG renamed (an unknown section) and resealed" || fail "  could not rename TPAG"
+import struct, sys, zlib
+b = bytearray(open(sys.argv[1], "rb").read())
+n = struct.unpack_from("<I", b, 12)[0]
+e = next(64 + 32 * i for i in range(n) if b[64 + 32 * i:68 + 32 * i] == b"TPAG")
+b[e:e + 4] = b"XPAG"  # readers skip fourccs they do not know: the pages are gone
+struct.pack_into("<I", b, 28, zlib.crc32(bytes(b[64:64 + 32 * n])))
+struct.pack_into("<I", b, 32, 0)
+struct.pack_into("<I", b, 32, zlib.crc32(bytes(b[0:64])))
+open(sys.argv[2], "wb").write(b)
+PY
+expect 1 "--info on a paged bake without TPAG" "$BIN" --info "$T/pgnone.glow"; err_has "missing section 'TPAG'"
 
 # the shared Cornell box (two coincident duplicate faces: skipped and counted)
 if [ -n "$SHARED" ] && [ -f "$SHARED/scenes/cornell-box/CornellBox-Original.obj" ]; then
