@@ -1052,9 +1052,9 @@ glow_result glow__charts_pack_pages(const glow__chart_set *cs, float texel_densi
         glow__errorf(log, "charts: texel density %g must be a positive finite number", (double)texel_density);
         return GLOW_ERROR_INVALID_ARGUMENT;
     }
-    if (max_side < 4 || max_side % 4 || max_side > GLOW__CHART_MAX_ATLAS || max_pages < 1) {
-        glow__errorf(log, "charts: atlas side %u must be a multiple of 4 in [4, %u], and pages %u at least 1",
-                     max_side, GLOW__CHART_MAX_ATLAS, max_pages);
+    if (max_side < 4 || max_side % 4 || max_side > GLOW__CHART_MAX_ATLAS || max_pages < 1 || max_side <= 2u * padding) {
+        glow__errorf(log, "charts: atlas side %u must be a multiple of 4 in [4, %u] wider than twice the padding %u, and "
+                     "pages %u at least 1", max_side, GLOW__CHART_MAX_ATLAS, padding, max_pages);
         return GLOW_ERROR_INVALID_ARGUMENT;
     }
     if (out_page) memset(out_page, 0, (size_t)cs->tri_count * sizeof *out_page);
@@ -1080,12 +1080,22 @@ glow_result glow__charts_pack_pages(const glow__chart_set *cs, float texel_densi
          * at the same density, up to max_pages; beyond that (or a footprint wider than a page) the
          * density is lowered as with one page. */
         if (max_pages > 1 && out_page) {
-            pages = shelf_pack_pages(sl, u.count, max_side, max_side, padding, max_pages, NULL, NULL);
-            if (pages) {
+            uint64_t big = 1;
+            for (uint32_t i = 0; i < u.count; ++i) {
+                if (sl[i].w > big) big = sl[i].w;
+                if (sl[i].h > big) big = sl[i].h;
+            }
+            if (big + 2u * padding > max_side) { /* a footprint wider than a page: shrink it to fit one */
+                d *= fmin(0.98 * (double)(max_side - 2u * padding) / (double)big, 0.98);
+                continue;
+            }
+            const uint32_t need = shelf_pack_pages(sl, u.count, max_side, max_side, padding, UINT32_MAX, NULL, NULL);
+            if (need && need <= max_pages) {
+                pages = need;
                 w = h = max_side;
                 break;
             }
-            d *= 0.95;
+            d *= fmin(0.98 * sqrt((double)max_pages / (double)(need ? need : 2u * max_pages)), 0.98);
             continue;
         }
         d *= fmin(0.98 * max_side / (double)side, 0.98);

@@ -1202,6 +1202,7 @@ static void sys_stats_add(glow_pc_stats *w, const glow_pc_stats *s, bool largest
         memcpy(w->grid_dims, s->grid_dims, sizeof w->grid_dims);
         w->lightmap_width = s->lightmap_width;
         w->lightmap_height = s->lightmap_height;
+        w->lightmap_pages = s->lightmap_pages;
         w->detail_factor = s->detail_factor;
         w->levels = s->levels;
     }
