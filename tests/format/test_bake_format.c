@@ -1849,7 +1849,8 @@ static void test_real_v1_6_sky(void **state) {
 /* Format 1.7, lightmap pages: tests/data/seed_cornell_tiny_pages.glow is glow-bake builtin:cornell --surfels 64
  * --links 16 --grid-spacing 1 --lightmap-caches 200 --no-sky --lightmap-detail 2 --link-subsets off
  * --lightmap-max-size 16: 3 pages of 16x16 at the one-page density (1.299 texels/unit, 185 lightmap caches).
- * It loads, every triangle's page is below 3 and every page holds triangles and caches, a system updates
+ * It loads, every triangle's page is below 3 and every page holds triangles and caches, every LMAP entry
+ * (copies included) names a cache of its own page, a system updates
  * and its outputs hold the 3 pages, the page lookups read them; a page index out of range, a missing
  * TPAG and a short TPAG are refused, naming the section. */
 static void test_real_v1_7_pages(void **state) {
@@ -1881,6 +1882,17 @@ static void test_real_v1_7_pages(void **state) {
         caches_on[ci[c].texel / 256u]++;
     }
     for (int p = 0; p < 3; ++p) assert_true(tris_on[p] > 0 && caches_on[p] > 0);
+    const uint32_t *lmap = glow__bake_lightmap_map(bake); /* gutter and invalid-texel copies stay in their page */
+    assert_non_null(lmap);
+    uint32_t copies = 0;
+    for (uint32_t i = 0; i < 3u * 256u; ++i) {
+        if (lmap[i] == GLOW_MAP_EMPTY) continue;
+        const uint32_t c = lmap[i] & GLOW_MAP_INDEX_MASK;
+        copies += (lmap[i] & GLOW_MAP_COPY_BIT) != 0;
+        assert_true(c >= info.grid_cache_count && c < info.cache_count);
+        assert_int_equal(ci[c].texel / 256u, i / 256u);
+    }
+    assert_true(copies > 0);
     free(ci);
     glow_system *sys = NULL;
     assert_int_equal(glow_system_create(ctx, &(glow_system_desc){.bake = bake}, &sys), GLOW_OK);
