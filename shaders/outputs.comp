@@ -3,6 +3,7 @@
  * lightmap gutter and seam texels included: they name the cache they copy, so this is also the seam
  * copy) gets its cache's coefficients, 4 per RGBA32F texel: plane p holds coefficients 4p..4p+3 of
  * the cache layout (Y luma², Co chroma², Cg chroma², zero-padded). Empty texels stay 0 (cleared at create).
+ * A lightmap of pages (format 1.7) has page g's planes at layers g * planes + p.
  */
 #include "glow_kernel_common.glsl"
 #ifndef GLOW_OUTPUT_GROUP
@@ -38,11 +39,14 @@ void main() {
     }
     uint dx = glow_p.grid_dx, dxy = glow_p.grid_dx * glow_p.grid_dy, W = glow_p.lightmap_width;
     ivec3 cell = ivec3(pr.x % dx, (pr.x / dx) % glow_p.grid_dy, pr.x / dxy);
-    ivec2 texel = ivec2(pr.x % max(W, 1u), pr.x / max(W, 1u));
+    /* a lightmap texel page * W * H + y * W + x: plane p of page g at layer g * planes + p (format 1.7) */
+    uint row = pr.x / max(W, 1u), H = max(glow_p.lightmap_height, 1u);
+    ivec2 texel = ivec2(pr.x % max(W, 1u), row % H);
+    uint layer0 = (row / H) * glow_p.planes;
     for (uint p = 0u; p < glow_p.planes; ++p) {
         vec4 v = vec4(glow_coeff(base, 4u * p), glow_coeff(base, 4u * p + 1u), glow_coeff(base, 4u * p + 2u),
                       glow_coeff(base, 4u * p + 3u));
         if (grid) imageStore(glow_grid, cell + ivec3(0, 0, int(p * glow_p.grid_dz)), v);
-        else imageStore(glow_lightmap, ivec3(texel, int(p)), v);
+        else imageStore(glow_lightmap, ivec3(texel, int(layer0 + p)), v);
     }
 }

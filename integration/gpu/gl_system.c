@@ -380,7 +380,8 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
         free_system(s);
         return GLOW_ERROR_UNSUPPORTED;
     }
-    if ((int64_t)s->planes > max_layers || max_shared < (int)(GLOW_REDUCE_CHUNK * (GLOW_CACHE_GROUP + 1) * 4) ||
+    const uint32_t lm_pages = co->lightmap_map && co->lightmap_pages ? co->lightmap_pages : 1u; /* format 1.7 */
+    if ((int64_t)s->planes * lm_pages > max_layers || max_shared < (int)(GLOW_REDUCE_CHUNK * (GLOW_CACHE_GROUP + 1) * 4) ||
         max_bindings < GLOW_BINDING_HOST_FIRST) {
         LOG_ERR(s, GLOW_ERROR_UNSUPPORTED, "GL limits too small (array layers %d, compute shared memory %d, SSBO bindings %d)",
                 max_layers, max_shared, max_bindings);
@@ -667,35 +668,37 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
         }
     }
     if (co->lightmap_map) {
-        const uint32_t W = co->lightmap_width, H = co->lightmap_height;
+        /* pages (format 1.7): planes of page g at layers g * planes + p; the valid mask's pages stacked */
+        const uint32_t W = co->lightmap_width, H = co->lightmap_height, HP = H * lm_pages;
         s->out.lightmap_width = W;
         s->out.lightmap_height = H;
+        s->out.lightmap_pages = lm_pages;
         if (desc->lightmap_texture) {
-            if (!check_host_texture(s, desc->lightmap_texture, GL_TEXTURE_2D_ARRAY, (int)W, (int)H, (int)s->planes,
-                                    "lightmap")) {
+            if (!check_host_texture(s, desc->lightmap_texture, GL_TEXTURE_2D_ARRAY, (int)W, (int)H,
+                                    (int)(s->planes * lm_pages), "lightmap")) {
                 free_system(s);
                 return GLOW_ERROR_INVALID_ARGUMENT;
             }
             s->lm_tex = desc->lightmap_texture;
         } else {
             gl->CreateTextures(GL_TEXTURE_2D_ARRAY, 1, &s->lm_tex);
-            gl->TextureStorage3D(s->lm_tex, 1, GL_RGBA32F, (GLsizei)W, (GLsizei)H, (GLsizei)s->planes);
+            gl->TextureStorage3D(s->lm_tex, 1, GL_RGBA32F, (GLsizei)W, (GLsizei)H, (GLsizei)(s->planes * lm_pages));
             s->own_lm = 1;
-            s->gpu_bytes += (size_t)W * H * s->planes * 16u;
+            s->gpu_bytes += (size_t)W * HP * s->planes * 16u;
         }
         gl->ClearTexImage(s->lm_tex, 0, GL_RGBA, GL_FLOAT, zero4);
-        uint8_t *valid = malloc((size_t)W * H);
+        uint8_t *valid = malloc((size_t)W * HP);
         if (!valid) {
             free_system(s);
             return GLOW_ERROR_OUT_OF_MEMORY;
         }
-        for (size_t i = 0; i < (size_t)W * H; ++i) valid[i] = co->lightmap_map[i] != MAP_EMPTY;
+        for (size_t i = 0; i < (size_t)W * HP; ++i) valid[i] = co->lightmap_map[i] != MAP_EMPTY;
         gl->CreateTextures(GL_TEXTURE_2D, 1, &s->lm_valid_tex);
-        gl->TextureStorage2D(s->lm_valid_tex, 1, GL_R8UI, (GLsizei)W, (GLsizei)H);
+        gl->TextureStorage2D(s->lm_valid_tex, 1, GL_R8UI, (GLsizei)W, (GLsizei)HP);
         gl->PixelStorei(GL_UNPACK_ALIGNMENT, 1);
-        gl->TextureSubImage2D(s->lm_valid_tex, 0, 0, 0, (GLsizei)W, (GLsizei)H, GL_RED_INTEGER, GL_UNSIGNED_BYTE, valid);
+        gl->TextureSubImage2D(s->lm_valid_tex, 0, 0, 0, (GLsizei)W, (GLsizei)HP, GL_RED_INTEGER, GL_UNSIGNED_BYTE, valid);
         gl->PixelStorei(GL_UNPACK_ALIGNMENT, 4);
-        s->gpu_bytes += (size_t)W * H;
+        s->gpu_bytes += (size_t)W * HP;
         free(valid);
         nearest(s, s->lm_valid_tex);
         if (s->own_lm) nearest(s, s->lm_tex);
@@ -704,9 +707,10 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
     }
     if (t->detail_texels) { /* RGBA32F, (0, 0, 0, 0) where no detail texel covers a surface */
         gl->CreateTextures(GL_TEXTURE_2D, 1, &s->det_tex);
-        gl->TextureStorage2D(s->det_tex, 1, GL_RGBA32F, (GLsizei)t->detail_width, (GLsizei)t->detail_height);
+        /* the pages one above another: detail texel page * w * h + y * w + x is row y + page * h */
+        gl->TextureStorage2D(s->det_tex, 1, GL_RGBA32F, (GLsizei)t->detail_width, (GLsizei)(t->detail_height * lm_pages));
         gl->ClearTexImage(s->det_tex, 0, GL_RGBA, GL_FLOAT, zero4);
-        s->gpu_bytes += (size_t)t->detail_width * t->detail_height * 16u;
+        s->gpu_bytes += (size_t)t->detail_width * t->detail_height * lm_pages * 16u;
         nearest(s, s->det_tex);
         s->out.lightmap_detail_texture = s->det_tex;
         s->out.detail_width = t->detail_width;

@@ -316,10 +316,14 @@ static bool tri_box(const double t[3][2], double x0, double y0, double eps) {
     return true;
 }
 
-static void tri_texels(const float (*uv)[2], size_t t, uint32_t w, uint32_t h, double out[3][2]) {
+/* Triangle t's corners in texel units of the stacked pages (page p's rows start at p * h: the texel
+ * index page*w*h + y*w + x is then y'*w + x). page may be NULL (one page). */
+static void tri_texels(const float (*uv)[2], const uint32_t *page, size_t t, uint32_t w, uint32_t h,
+                       double out[3][2]) {
+    const double y0 = page ? (double)page[t] * h : 0.0;
     for (int k = 0; k < 3; ++k) {
         out[k][0] = (double)uv[3 * t + (size_t)k][0] * w;
-        out[k][1] = (double)uv[3 * t + (size_t)k][1] * h;
+        out[k][1] = (double)uv[3 * t + (size_t)k][1] * h + y0;
     }
 }
 
@@ -366,9 +370,9 @@ static double clip_tri_box(const double t[3][2], double x0, double y0, double ce
  * point: ref[texel] (texel units) when given, else the texel centre. Returns the number of owned
  * texels. With `foot` (3 doubles per texel, zeroed here), also sums the texel's footprint: the area of
  * every overlapping triangle inside the texel and its area-weighted centroid. */
-static uint32_t rasterise(uint32_t tri_count, const float (*uv)[2], uint32_t w, uint32_t h, const double (*ref)[2],
-                          uint32_t *owner, float *dist, double (*foot)[3]) {
-    const size_t n = (size_t)w * h;
+static uint32_t rasterise(uint32_t tri_count, const float (*uv)[2], const uint32_t *page, uint32_t w, uint32_t h,
+                          uint32_t pages, const double (*ref)[2], uint32_t *owner, float *dist, double (*foot)[3]) {
+    const size_t n = (size_t)w * h * pages;
     for (size_t i = 0; i < n; ++i) {
         owner[i] = NONE;
         dist[i] = INFINITY;
@@ -377,14 +381,15 @@ static uint32_t rasterise(uint32_t tri_count, const float (*uv)[2], uint32_t w, 
     uint32_t covered = 0;
     for (uint32_t t = 0; t < tri_count; ++t) {
         double tc[3][2];
-        tri_texels(uv, t, w, h, tc);
+        tri_texels(uv, page, t, w, h, tc);
+        const long ylo = page ? (long)page[t] * (long)h : 0, yhi = ylo + (long)h - 1; /* its page's rows */
         double mnx = fmin(fmin(tc[0][0], tc[1][0]), tc[2][0]), mxx = fmax(fmax(tc[0][0], tc[1][0]), tc[2][0]);
         double mny = fmin(fmin(tc[0][1], tc[1][1]), tc[2][1]), mxy = fmax(fmax(tc[0][1], tc[1][1]), tc[2][1]);
         long x0 = (long)floor(mnx), x1 = (long)floor(mxx), y0 = (long)floor(mny), y1 = (long)floor(mxy);
         if (x0 < 0) x0 = 0;
-        if (y0 < 0) y0 = 0;
+        if (y0 < ylo) y0 = ylo;
         if (x1 > (long)w - 1) x1 = (long)w - 1;
-        if (y1 > (long)h - 1) y1 = (long)h - 1;
+        if (y1 > yhi) y1 = yhi;
         for (long y = y0; y <= y1; ++y)
             for (long x = x0; x <= x1; ++x) {
                 if (!tri_box((const double(*)[2])tc, (double)x, (double)y, 1e-4)) continue;
@@ -414,11 +419,12 @@ static uint32_t rasterise(uint32_t tri_count, const float (*uv)[2], uint32_t w, 
  * reference point (texels with no footprint area keep their centre), and rasterise again to find the
  * triangle nearest to it. Returns the covered texel count; *footprint = the covered surface area in
  * texels (overlapping charts' triangles count once). */
-static uint32_t place_texels(uint32_t tri_count, const float (*uv)[2], uint32_t w, uint32_t h, uint32_t *owner,
-                             float *dist, double (*ref)[2], double (*foot)[3], double *footprint) {
-    rasterise(tri_count, uv, w, h, NULL, owner, dist, foot);
+static uint32_t place_texels(uint32_t tri_count, const float (*uv)[2], const uint32_t *page, uint32_t w, uint32_t h,
+                             uint32_t pages, uint32_t *owner, float *dist, double (*ref)[2], double (*foot)[3],
+                             double *footprint) {
+    rasterise(tri_count, uv, page, w, h, pages, NULL, owner, dist, foot);
     *footprint = 0.0;
-    for (size_t i = 0; i < (size_t)w * h; ++i) {
+    for (size_t i = 0; i < (size_t)w * h * pages; ++i) {
         *footprint += foot[i][0] < 1.0 ? foot[i][0] : 1.0;
         if (foot[i][0] > 0.0) {
             ref[i][0] = foot[i][1] / foot[i][0];
@@ -428,7 +434,7 @@ static uint32_t place_texels(uint32_t tri_count, const float (*uv)[2], uint32_t 
             ref[i][1] = (double)(i / w) + 0.5;
         }
     }
-    return rasterise(tri_count, uv, w, h, (const double(*)[2])ref, owner, dist, NULL);
+    return rasterise(tri_count, uv, page, w, h, pages, (const double(*)[2])ref, owner, dist, NULL);
 }
 
 /* Unorm16 rounding, as the bake stores lightmap UVs: rasterise what the host will sample. */
@@ -442,7 +448,8 @@ typedef struct lm_job {
     const glow__scene *scene;
     const glow__rt *rt;
     const float (*uv)[2];
-    uint32_t w, h;
+    const uint32_t *page;   /* per triangle, or NULL */
+    uint32_t w, h;          /* a page's */
     const uint32_t *texel;  /* candidate texels */
     const uint32_t *owner;
     const double (*ref)[2]; /* per texel: where its cache goes (texel units), see lm_try */
@@ -458,7 +465,7 @@ static void lm_range(void *p, uint32_t begin, uint32_t end, uint32_t worker) {
     for (uint32_t i = begin; i < end; ++i) {
         uint32_t texel = j->texel[i], t = j->owner[texel];
         double tc[3][2], bary[3];
-        tri_texels(j->uv, t, j->w, j->h, tc);
+        tri_texels(j->uv, j->page, t, j->w, j->h, tc);
         closest_bary(j->ref[texel], (const double(*)[2])tc, bary);
         const float(*P)[3] = j->scene->pos + 3 * (size_t)t;
         double pos[3], cen[3], e1[3], e2[3], n[3], dc = 0.0;
@@ -574,7 +581,8 @@ static void fb_range(void *p, uint32_t begin, uint32_t end, uint32_t worker) {
             double fx = floor(u * c->lm_width), fy = floor(v * c->lm_height);
             uint32_t x = fx < 0.0 ? 0 : fx >= c->lm_width ? c->lm_width - 1 : (uint32_t)fx;
             uint32_t y = fy < 0.0 ? 0 : fy >= c->lm_height ? c->lm_height - 1 : (uint32_t)fy;
-            uint32_t m = c->lm_map[(size_t)y * c->lm_width + x];
+            const size_t pg = c->lm_page ? c->lm_page[s->tri] : 0u;
+            uint32_t m = c->lm_map[(pg * c->lm_height + y) * c->lm_width + x];
             if (m != GLOW_MAP_EMPTY) fb = m & GLOW_MAP_INDEX_MASK;
         }
         if (fb == NONE && c->grid_cache_count) fb = nearest_grid_cache(c, s->pos);
@@ -605,6 +613,7 @@ void glow__caches_free(glow__caches *c) {
     free(c->grid_fine_cell);
     free(c->lm_map);
     free(c->lm_uv);
+    free(c->lm_page);
     free(c->surfel_feedback);
     free(c->detail_texel);
     free(c->detail_pos);
@@ -614,7 +623,9 @@ void glow__caches_free(glow__caches *c) {
 
 typedef struct lm_state {
     float (*uv)[2];
-    uint32_t w, h;
+    uint32_t *page;   /* [tri_count] */
+    uint32_t w, h, pages;
+    uint32_t max_side;
     float density;
     uint32_t *owner;
     float *dist;
@@ -626,6 +637,7 @@ typedef struct lm_state {
 
 static void lm_state_free(lm_state *s) {
     free(s->uv);
+    free(s->page);
     free(s->owner);
     free(s->dist);
     free(s->ref);
@@ -640,19 +652,22 @@ static glow_result lm_try(const glow__scene *scene, const glow__chart_set *cs, d
     glow_result r = GLOW_OK;
     if (cs) {
         float used = 0.0f;
-        r = glow__charts_pack(cs, (float)d, LM_PADDING, log, st->uv, &st->w, &st->h, &used, &st->pack);
+        r = glow__charts_pack_pages(cs, (float)d, LM_PADDING, st->max_side, GLOW__CHART_MAX_PAGES, log, st->uv, st->page,
+                                    &st->pages, &st->w, &st->h, &used, &st->pack);
         if (r != GLOW_OK) return r;
         st->density = used;
     } else {
         double side = d / sqrt(uv_ratio);
         double s4 = ceil(side / 4.0 - 1e-9) * 4.0;
         if (!(s4 >= 4.0)) s4 = 4.0;
-        if (s4 > GLOW__CHART_MAX_ATLAS) {
+        if (s4 > st->max_side) { /* (a mesh's own UV set is one atlas) */
             glow__warnf(log, "%s: caches: the lightmap at %g texels per unit would be %.0f texels a side; using %u",
-                        scene->source, d, s4, GLOW__CHART_MAX_ATLAS);
-            s4 = GLOW__CHART_MAX_ATLAS;
+                        scene->source, d, s4, st->max_side);
+            s4 = st->max_side;
         }
         st->w = st->h = (uint32_t)s4;
+        st->pages = 1;
+        memset(st->page, 0, (size_t)n * sizeof *st->page);
         st->density = (float)(s4 * sqrt(uv_ratio));
         memcpy(st->uv, scene->uv1, 3 * (size_t)n * sizeof *st->uv);
     }
@@ -664,14 +679,15 @@ static glow_result lm_try(const glow__scene *scene, const glow__chart_set *cs, d
     free(st->dist);
     free(st->ref);
     st->ref = NULL;
-    size_t texels = (size_t)st->w * st->h;
+    size_t texels = (size_t)st->w * st->h * st->pages;
     st->owner = malloc(texels * sizeof *st->owner);
     st->dist = malloc(texels * sizeof *st->dist);
     st->ref = malloc(texels * sizeof *st->ref);
     double(*foot)[3] = malloc(texels * sizeof *foot);
     if (!st->owner || !st->dist || !st->ref || !foot) {
         free(foot);
-        glow__errorf(log, "%s: caches: out of memory for a %ux%u lightmap", scene->source, st->w, st->h);
+        glow__errorf(log, "%s: caches: out of memory for a %ux%u lightmap (%u pages)", scene->source, st->w, st->h,
+                     st->pages);
         return GLOW_ERROR_OUT_OF_MEMORY;
     }
     /* A texel's cache stands for the surface the texel covers, so it goes to the centroid of that
@@ -679,8 +695,8 @@ static glow_result lm_try(const glow__scene *scene, const glow__chart_set *cs, d
      * 4757 charts for 9245 texels in the Dabrovic Sponza most texels overhang their chart, and the
      * centre-nearest point lay on the chart's border, often a crease, whose irradiance is not the
      * texel's. Texels with no footprint area (slivers) keep their centre. */
-    st->covered = place_texels(n, (const float(*)[2])st->uv, st->w, st->h, st->owner, st->dist, st->ref, foot,
-                               &st->footprint);
+    st->covered = place_texels(n, (const float(*)[2])st->uv, st->page, st->w, st->h, st->pages, st->owner, st->dist,
+                               st->ref, foot, &st->footprint);
     free(foot);
     return GLOW_OK;
 }
@@ -800,7 +816,9 @@ static glow_result build_lightmap_layout(const glow__scene *scene, const glow__r
                                          glow__pool *pool, glow__log *log, glow__caches *out, lm_state *st) {
     const uint32_t n = scene->tri_count;
     st->uv = malloc(3 * (size_t)n * sizeof *st->uv);
-    if (!st->uv) {
+    st->page = calloc((size_t)n + 1, sizeof *st->page);
+    st->max_side = set->lightmap_max_size ? set->lightmap_max_size : GLOW__CHART_MAX_ATLAS;
+    if (!st->uv || !st->page) {
         glow__errorf(log, "%s: caches: out of memory for lightmap UVs", scene->source);
         return GLOW_ERROR_OUT_OF_MEMORY;
     }
@@ -890,6 +908,7 @@ static glow_result build_lightmap_layout(const glow__scene *scene, const glow__r
     if (r != GLOW_OK) return r;
     out->lm_width = st->w;
     out->lm_height = st->h;
+    out->lm_pages = st->pages;
     out->texel_density = st->density;
     out->texel_density_max = (float)(st->density * smax);
     return GLOW_OK;
@@ -906,9 +925,10 @@ static glow_result build_lightmap_layout(const glow__scene *scene, const glow__r
 static glow_result build_detail(const glow__scene *scene, const glow__rt *rt, glow__pool *pool, glow__log *log,
                                 uint32_t factor, float offset, glow__caches *out) {
     const uint32_t asked = factor;
-    while (factor > 2 && (uint64_t)out->lm_width * factor * out->lm_height * factor > MAX_DETAIL_TEXELS) factor--;
+    const uint64_t P = out->lm_pages ? out->lm_pages : 1u;
+    while (factor > 2 && (uint64_t)out->lm_width * factor * out->lm_height * factor * P > MAX_DETAIL_TEXELS) factor--;
     const uint64_t fw = (uint64_t)out->lm_width * factor, fh = (uint64_t)out->lm_height * factor;
-    if (fw * fh > MAX_DETAIL_TEXELS) {
+    if (fw * fh * P > MAX_DETAIL_TEXELS) {
         glow__warnf(log, "%s: caches: a lightmap detail of %llux%llu texels would exceed %u; no detail", scene->source,
                     (unsigned long long)fw, (unsigned long long)fh, MAX_DETAIL_TEXELS);
         return GLOW_OK;
@@ -916,7 +936,7 @@ static glow_result build_detail(const glow__scene *scene, const glow__rt *rt, gl
     if (factor != asked)
         glow__warnf(log, "%s: caches: the %ux%u lightmap takes %u detail texels a side, not %u (at most %u detail texels)",
                     scene->source, out->lm_width, out->lm_height, factor, asked, MAX_DETAIL_TEXELS);
-    const size_t n = (size_t)(fw * fh);
+    const size_t n = (size_t)(fw * fh * P);
     const uint32_t tris = scene->tri_count;
     uint32_t *owner = malloc(n * sizeof *owner), *cand = NULL;
     float *dist = malloc(n * sizeof *dist);
@@ -925,8 +945,8 @@ static glow_result build_detail(const glow__scene *scene, const glow__rt *rt, gl
     glow_result r = GLOW_OK;
     if (!owner || !dist || !ref || !foot) goto oom;
     double unused_footprint;
-    const uint32_t covered = place_texels(tris, (const float(*)[2])out->lm_uv, (uint32_t)fw, (uint32_t)fh, owner, dist,
-                                          ref, foot, &unused_footprint);
+    const uint32_t covered = place_texels(tris, (const float(*)[2])out->lm_uv, out->lm_page, (uint32_t)fw, (uint32_t)fh,
+                                          (uint32_t)P, owner, dist, ref, foot, &unused_footprint);
     cand = malloc(((size_t)covered + 1) * sizeof *cand);
     j.pos = malloc(((size_t)covered + 1) * sizeof *j.pos);
     j.nrm = malloc(((size_t)covered + 1) * sizeof *j.nrm);
@@ -938,6 +958,7 @@ static glow_result build_detail(const glow__scene *scene, const glow__rt *rt, gl
     j.scene = scene;
     j.rt = rt;
     j.uv = (const float(*)[2])out->lm_uv;
+    j.page = out->lm_page;
     j.w = (uint32_t)fw;
     j.h = (uint32_t)fh;
     j.texel = cand;
@@ -1015,7 +1036,7 @@ glow_result glow__caches_build(const glow__scene *scene, const glow__rt *rt, con
     if (scene->tri_count) {
         r = build_lightmap_layout(scene, rt, settings, pool, log, out, &st);
         if (r != GLOW_OK) goto fail;
-        const size_t texels = (size_t)st.w * st.h;
+        const size_t texels = (size_t)st.w * st.h * st.pages;
         cand = malloc(((size_t)st.covered + 1) * sizeof *cand);
         lj.pos = malloc(((size_t)st.covered + 1) * sizeof *lj.pos);
         lj.nrm = malloc(((size_t)st.covered + 1) * sizeof *lj.nrm);
@@ -1032,6 +1053,7 @@ glow_result glow__caches_build(const glow__scene *scene, const glow__rt *rt, con
         lj.scene = scene;
         lj.rt = rt;
         lj.uv = (const float(*)[2])st.uv;
+        lj.page = st.page;
         lj.w = st.w;
         lj.h = st.h;
         lj.texel = cand;
@@ -1077,7 +1099,7 @@ glow_result glow__caches_build(const glow__scene *scene, const glow__rt *rt, con
         if (!dilate(out->grid_map, d, inside, (const int(*)[3])nb, nbn, GRID_DILATE_PASSES)) goto oom;
     }
     if (scene->tri_count) {
-        const size_t texels = (size_t)st.w * st.h;
+        const size_t texels = (size_t)st.w * st.h * st.pages;
         out->lm_map = malloc(texels * sizeof *out->lm_map);
         eligible = calloc(texels, 1);
         if (!out->lm_map || !eligible) goto oom;
@@ -1093,7 +1115,7 @@ glow_result glow__caches_build(const glow__scene *scene, const glow__rt *rt, con
         }
         int nb[26][3];
         uint32_t nbn = neighbour_offsets(2, nb);
-        const uint32_t dims[3] = {st.w, st.h, 1};
+        const uint32_t dims[3] = {st.w, st.h, st.pages}; /* 2-D neighbours: copies stay within their page */
         /* invalid texels from the valid ones around them (as far as it takes), then the gutter */
         for (size_t i = 0; i < texels; ++i) eligible[i] = st.owner[i] != NONE;
         if (!dilate(out->lm_map, dims, eligible, (const int(*)[3])nb, nbn, UINT32_MAX)) goto oom;
@@ -1109,6 +1131,8 @@ glow_result glow__caches_build(const glow__scene *scene, const glow__rt *rt, con
         out->shared_texels = st.pack.shared;
         out->lm_uv = st.uv;
         st.uv = NULL;
+        out->lm_page = st.page;
+        st.page = NULL;
         if (settings->detail_factor >= 2 && out->lm_cache_count) {
             /* The detail corrects near light surfel by surfel (links.c), so its texels should resolve the
              * surfels' spacing: where open ground's texels (1 / density, the coarsest) span more than
@@ -1142,9 +1166,9 @@ glow_result glow__caches_build(const glow__scene *scene, const glow__rt *rt, con
                     "%s: lightmap budget: %u of %u atlas texels hold a cache (%.0f %% of their area is surface, the "
                     "rest overhangs a chart's border), %u invalid (filled), %u gutter copies, %u unused (%.0f %%); "
                     "%.3g units per texel",
-                    scene->source, out->lm_cache_count, out->lm_width * out->lm_height,
+                    scene->source, out->lm_cache_count, out->lm_width * out->lm_height * out->lm_pages,
                     st.covered ? 100.0 * out->lm_footprint / st.covered : 0.0, out->lm_invalid, out->lm_gutter,
-                    out->lm_unused, 100.0 * out->lm_unused / ((double)out->lm_width * out->lm_height),
+                    out->lm_unused, 100.0 * out->lm_unused / ((double)out->lm_width * out->lm_height * out->lm_pages),
                     out->texel_density > 0.0f ? 1.0 / out->texel_density : 0.0);
     /* Texels whose hemisphere meets mostly back faces are invalid: a few along creases and inside solids
      * (Sponza 3.6 %, Cornell 3.7 %, a window room 4.7 %), but about half when surfaces face away from where
@@ -1164,6 +1188,9 @@ glow_result glow__caches_build(const glow__scene *scene, const glow__rt *rt, con
                 scene->source, out->grid_dims[0], out->grid_dims[1], out->grid_dims[2], (double)out->grid_spacing,
                 out->grid_cache_count, out->grid_inside, out->lm_width, out->lm_height, (double)out->texel_density,
                 out->chart_count, out->small_charts, out->shared_texels, out->lm_cache_count, out->lm_invalid);
+    if (out->lm_pages > 1)
+        glow__infof(log, "%s: caches: the lightmap is %u pages of %ux%u (--lightmap-max-size) at %g texels/unit",
+                    scene->source, out->lm_pages, out->lm_width, out->lm_height, (double)out->texel_density);
     if (out->grid_refine)
         glow__infof(log,
                     "%s: caches: grid refined %ux near geometry: %u of %u cells are bricks of %u³ cells at %g; %u coarse "

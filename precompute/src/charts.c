@@ -746,6 +746,38 @@ static uint64_t shelf_pack(const slot *sl, uint32_t count, uint64_t width, uint3
     return h < 4 ? 4 : h;
 }
 
+/* Shelf packing onto pages of width x height (issue 16 item 5): the same next fit, and a shelf that
+ * does not fit below the page's last starts the next page. Returns the page count, or 0 when a
+ * footprint does not fit a page or more than max_pages would be needed; pos and page (when not NULL)
+ * receive each slot's origin in its page and its page. */
+static uint32_t shelf_pack_pages(const slot *sl, uint32_t count, uint64_t width, uint64_t height, uint32_t pad,
+                                 uint32_t max_pages, uint32_t (*pos)[2], uint32_t *page) {
+    uint64_t x = pad, y = pad, shelf = 0;
+    uint32_t p = 0;
+    for (uint32_t i = 0; i < count; ++i) {
+        if ((uint64_t)sl[i].w + 2u * pad > width || (uint64_t)sl[i].h + 2u * pad > height) return 0;
+        if (x > pad && x + sl[i].w + pad > width) {
+            y += shelf + pad;
+            x = pad;
+            shelf = 0;
+        }
+        if (y + sl[i].h + pad > height) { /* (slots come tallest first: only a shelf's first can overflow) */
+            if (++p >= max_pages) return 0;
+            x = pad;
+            y = pad;
+            shelf = 0;
+        }
+        if (pos) {
+            pos[i][0] = (uint32_t)x;
+            pos[i][1] = (uint32_t)y;
+        }
+        if (page) page[i] = p;
+        x += sl[i].w + pad;
+        if (sl[i].h > shelf) shelf = sl[i].h;
+    }
+    return p + 1;
+}
+
 /* ------------------------------------------------------------------ small charts
  * A chart narrower than a texel still took a texel of its own (plus its padding): in the Dabrovic
  * Sponza 4023 of 4757 charts were narrower than one texel at the default budget and held 3.8 % of
@@ -991,7 +1023,25 @@ static void place_unit(const glow__chart_set *cs, const unit_plan *u, uint32_t v
 glow_result glow__charts_pack(const glow__chart_set *cs, float texel_density, uint32_t padding, glow__log *log,
                               float (*out_uv)[2], uint32_t *out_width, uint32_t *out_height, float *out_density,
                               glow__chart_pack_stats *stats) {
+    uint32_t pages = 0;
+    return glow__charts_pack_pages(cs, texel_density, padding, GLOW__CHART_MAX_ATLAS, 1u, log, out_uv, NULL, &pages,
+                                   out_width, out_height, out_density, stats);
+}
+
+/* Marks every triangle of unit v as lying on page p. */
+static void unit_page(const glow__chart_set *cs, const unit_plan *u, uint32_t v, uint32_t p, uint32_t *out_page) {
+    for (uint32_t jc = u->first[v]; jc < u->first[v + 1]; ++jc) {
+        const uint32_t ch = u->charts[jc];
+        for (uint32_t j = cs->chart_start[ch]; j < cs->chart_start[ch + 1]; ++j) out_page[cs->chart_tris[j]] = p;
+    }
+}
+
+glow_result glow__charts_pack_pages(const glow__chart_set *cs, float texel_density, uint32_t padding,
+                                    uint32_t max_side, uint32_t max_pages, glow__log *log, float (*out_uv)[2],
+                                    uint32_t *out_page, uint32_t *out_pages, uint32_t *out_width,
+                                    uint32_t *out_height, float *out_density, glow__chart_pack_stats *stats) {
     *out_width = *out_height = 0;
+    *out_pages = 0;
     if (out_density) *out_density = texel_density;
     if (stats) {
         uint32_t *keep = stats->unit_of;
@@ -1002,38 +1052,76 @@ glow_result glow__charts_pack(const glow__chart_set *cs, float texel_density, ui
         glow__errorf(log, "charts: texel density %g must be a positive finite number", (double)texel_density);
         return GLOW_ERROR_INVALID_ARGUMENT;
     }
+    if (max_side < 4 || max_side % 4 || max_side > GLOW__CHART_MAX_ATLAS || max_pages < 1 || max_side <= 2u * padding) {
+        glow__errorf(log, "charts: atlas side %u must be a multiple of 4 in [4, %u] wider than twice the padding %u, and "
+                     "pages %u at least 1", max_side, GLOW__CHART_MAX_ATLAS, padding, max_pages);
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
+    if (out_page) memset(out_page, 0, (size_t)cs->tri_count * sizeof *out_page);
     if (cs->tri_count == 0 || cs->chart_count == 0) return GLOW_OK;
     slot *sl = malloc((size_t)cs->chart_count * sizeof *sl);
     uint32_t(*pos)[2] = malloc((size_t)cs->chart_count * sizeof *pos);
+    uint32_t *pg = malloc((size_t)cs->chart_count * sizeof *pg);
     unit_plan u = {0};
-    if (!sl || !pos) goto oom;
+    if (!sl || !pos || !pg) goto oom;
     double d = texel_density;
     uint64_t w = 0, h = 0;
-    bool fits = false;
-    for (int iter = 0; iter < 40; ++iter) {
+    uint32_t pages = 0;
+    for (int iter = 0; iter < 60; ++iter) {
         unit_plan_free(&u);
         if (!plan_units(cs, d, &u)) goto oom;
         layout(cs, &u, d, padding, sl, &w, &h);
         uint64_t side = w > h ? w : h;
-        if (side <= GLOW__CHART_MAX_ATLAS) {
-            fits = true;
+        if (side <= max_side) { /* one atlas: exactly as before pages */
+            pages = 1;
             break;
         }
-        d *= fmin(0.98 * GLOW__CHART_MAX_ATLAS / (double)side, 0.98);
+        /* Too large for one atlas: pages of max_side x max_side (the slots are sorted tallest first),
+         * at the same density, up to max_pages; beyond that (or a footprint wider than a page) the
+         * density is lowered as with one page. */
+        if (max_pages > 1 && out_page) {
+            uint64_t big = 1;
+            for (uint32_t i = 0; i < u.count; ++i) {
+                if (sl[i].w > big) big = sl[i].w;
+                if (sl[i].h > big) big = sl[i].h;
+            }
+            if (big + 2u * padding > max_side) { /* a footprint wider than a page: shrink it to fit one */
+                d *= fmin(0.98 * (double)(max_side - 2u * padding) / (double)big, 0.98);
+                continue;
+            }
+            const uint32_t need = shelf_pack_pages(sl, u.count, max_side, max_side, padding, UINT32_MAX, NULL, NULL);
+            if (need && need <= max_pages) {
+                pages = need;
+                w = h = max_side;
+                break;
+            }
+            d *= fmin(0.98 * sqrt((double)max_pages / (double)(need ? need : 2u * max_pages)), 0.98);
+            continue;
+        }
+        d *= fmin(0.98 * max_side / (double)side, 0.98);
     }
-    if (!fits) {
+    if (!pages) {
         free(sl);
         free(pos);
+        free(pg);
         unit_plan_free(&u);
-        glow__errorf(log, "charts: %u charts do not fit a %ux%u atlas at any texel density", cs->chart_count,
-                     GLOW__CHART_MAX_ATLAS, GLOW__CHART_MAX_ATLAS);
+        glow__errorf(log, "charts: %u charts do not fit %u atlas(es) of %ux%u at any texel density", cs->chart_count,
+                     max_pages, max_side, max_side);
         return GLOW_ERROR_UNSUPPORTED;
     }
     if (d < texel_density)
-        glow__warnf(log, "charts: the atlas at %g texels per unit would exceed %u texels a side; using %g",
-                    (double)texel_density, GLOW__CHART_MAX_ATLAS, d);
-    shelf_pack(sl, u.count, w, padding, pos);
-    for (uint32_t i = 0; i < u.count; ++i) place_unit(cs, &u, sl[i].chart, &sl[i], pos[i][0], pos[i][1], d, w, h, out_uv);
+        glow__warnf(log, "charts: the atlas at %g texels per unit would exceed %u page(s) of %u texels a side (or a "
+                    "chart a page); using %g", (double)texel_density, max_pages, max_side, d);
+    if (pages == 1) {
+        shelf_pack(sl, u.count, w, padding, pos);
+        memset(pg, 0, (size_t)u.count * sizeof *pg);
+    } else {
+        shelf_pack_pages(sl, u.count, w, h, padding, pages, pos, pg);
+    }
+    for (uint32_t i = 0; i < u.count; ++i) {
+        place_unit(cs, &u, sl[i].chart, &sl[i], pos[i][0], pos[i][1], d, w, h, out_uv);
+        if (out_page && pg[i]) unit_page(cs, &u, sl[i].chart, pg[i], out_page);
+    }
     if (stats) {
         stats->small = u.small;
         stats->shared = u.shared;
@@ -1044,14 +1132,17 @@ glow_result glow__charts_pack(const glow__chart_set *cs, float texel_density, ui
     }
     free(sl);
     free(pos);
+    free(pg);
     unit_plan_free(&u);
     *out_width = (uint32_t)w;
     *out_height = (uint32_t)h;
+    *out_pages = pages;
     if (out_density) *out_density = (float)d;
     return GLOW_OK;
 oom:
     free(sl);
     free(pos);
+    free(pg);
     unit_plan_free(&u);
     glow__errorf(log, "charts: out of memory packing %u charts", cs->chart_count);
     return GLOW_ERROR_OUT_OF_MEMORY;

@@ -48,10 +48,23 @@ glow_result glow__charts_pack(const glow__chart_set *cs, float texel_density, ui
                               float (*out_uv)[2], uint32_t *out_width, uint32_t *out_height, float *out_density,
                               glow__chart_pack_stats *stats);
 
+/* As glow__charts_pack with at most `max_side` texels a side (a multiple of 4, at most
+ * GLOW__CHART_MAX_ATLAS), and when the charts at `texel_density` do not fit one atlas, pages (issue 16
+ * item 5): up to `max_pages` atlases of max_side x max_side each (out_page != NULL needed), shelf
+ * packing continuing on the next page, at the same density; beyond max_pages the density is lowered
+ * (warning). Charts that fit one atlas are packed exactly as glow__charts_pack packs them.
+ * out_page: [tri_count] each triangle's page (its UVs are in [0,1] within that page); out_pages: the
+ * page count (1 when one atlas holds them; 0 without charts). */
+glow_result glow__charts_pack_pages(const glow__chart_set *cs, float texel_density, uint32_t padding,
+                                    uint32_t max_side, uint32_t max_pages, glow__log *log, float (*out_uv)[2],
+                                    uint32_t *out_page, uint32_t *out_pages, uint32_t *out_width,
+                                    uint32_t *out_height, float *out_density, glow__chart_pack_stats *stats);
+
 void glow__charts_free(glow__chart_set *cs);
 
 #define GLOW__CHART_MAX_ANGLE_DEG 40.0
-#define GLOW__CHART_MAX_ATLAS 4096u
+#define GLOW__CHART_MAX_ATLAS 4096u   /* the largest atlas side (glow-bake --lightmap-max-size's default) */
+#define GLOW__CHART_MAX_PAGES 64u     /* atlases before the density is lowered */
 #define GLOW__CHART_SMALL 1.0          /* texels: charts no wider than this may share a texel */
 #define GLOW__CHART_MERGE_ANGLE_DEG 30.0
 

@@ -1439,7 +1439,10 @@ static bool detail_sees_relief(const detail_job *dj, const float pd[3], const fl
  * when all four are empty. */
 static bool detail_lookup(const glow__caches *ca, uint32_t d, uint32_t m4[4], float b4[4]) {
     const uint32_t D = ca->detail_factor, W = ca->lm_width, H = ca->lm_height;
-    const uint32_t tx = ca->detail_texel[d] % ca->detail_width, ty = ca->detail_texel[d] / ca->detail_width;
+    const size_t dpage = (size_t)ca->detail_width * ca->detail_height; /* a page's detail texels */
+    const uint32_t dt = (uint32_t)(ca->detail_texel[d] % dpage);
+    const uint32_t *lm_map = ca->lm_map + (size_t)(ca->detail_texel[d] / dpage) * W * H; /* its page's */
+    const uint32_t tx = dt % ca->detail_width, ty = dt / ca->detail_width;
     const float fx = ((float)tx + 0.5f) / (float)D - 0.5f, fy = ((float)ty + 0.5f) / (float)D - 0.5f;
     float f = fx < 0.0f ? 0.0f : (fx > (float)(W - 1) ? (float)(W - 1) : fx), fl = floorf(f);
     const uint32_t x0 = (uint32_t)fl, x1 = x0 + 1 < W ? x0 + 1 : x0;
@@ -1448,8 +1451,8 @@ static bool detail_lookup(const glow__caches *ca, uint32_t d, uint32_t m4[4], fl
     fl = floorf(f);
     const uint32_t y0 = (uint32_t)fl, y1 = y0 + 1 < H ? y0 + 1 : y0;
     const float ay = f - fl;
-    m4[0] = ca->lm_map[(size_t)y0 * W + x0], m4[1] = ca->lm_map[(size_t)y0 * W + x1];
-    m4[2] = ca->lm_map[(size_t)y1 * W + x0], m4[3] = ca->lm_map[(size_t)y1 * W + x1];
+    m4[0] = lm_map[(size_t)y0 * W + x0], m4[1] = lm_map[(size_t)y0 * W + x1];
+    m4[2] = lm_map[(size_t)y1 * W + x0], m4[3] = lm_map[(size_t)y1 * W + x1];
     b4[0] = (1 - ax) * (1 - ay), b4[1] = ax * (1 - ay), b4[2] = (1 - ax) * ay, b4[3] = ax * ay;
     float bs = 0.0f;
     for (int i = 0; i < 4; ++i) {

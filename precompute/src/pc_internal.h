@@ -116,7 +116,7 @@ typedef struct glow__cache {
     float pos[3];
     float nrm[3];             /* lightmap: surface normal; grid: 0,0,0 (spherical) */
     uint32_t kind;            /* GLOW_CACHE_KIND_GRID / _LIGHTMAP (bake_format.h) */
-    uint32_t texel;           /* grid cell index or lightmap texel index (y*w + x) */
+    uint32_t texel;           /* grid cell index or lightmap texel index (page*w*h + y*w + x) */
 } glow__cache;
 
 typedef struct glow__cache_settings {
@@ -135,6 +135,8 @@ typedef struct glow__cache_settings {
     uint32_t detail_factor_max; /* > detail_factor: raise the detail factor, up to this, until open ground's
                                    detail texels (the coarsest) are no wider than detail_spacing */
     float detail_spacing;       /* m: the surfels' nominal spacing, sqrt(nominal area) */
+    uint32_t lightmap_max_size; /* texels a side of an atlas page (a multiple of 4); 0 = GLOW__CHART_MAX_ATLAS.
+                                   Generated charts that do not fit one page go onto several (issue 16 item 5) */
 } glow__cache_settings;
 
 typedef struct glow__caches {
@@ -154,16 +156,17 @@ typedef struct glow__caches {
     uint32_t grid_fine_inside;/* fine points rejected as inside solid geometry */
     float (*grid_fine_pos)[3];/* [grid_fine_count], until caches.c appends them */
     uint32_t *grid_fine_cell; /* [grid_fine_count] the coarse cell each lies in */
-    /* lightmap (one atlas) */
-    uint32_t lm_width, lm_height;
+    /* lightmap: lm_pages atlases of lm_width x lm_height, stacked (texel page*w*h + y*w + x) */
+    uint32_t lm_width, lm_height, lm_pages;
+    uint32_t *lm_page;        /* [tri_count] each triangle's page (all 0 with one page) */
     float texel_density;
     float texel_density_max;  /* the finest chart's (caches.c, texel density per chart) */
-    uint32_t *lm_map;         /* [w*h], same encoding as grid_map */
+    uint32_t *lm_map;         /* [pages*w*h], same encoding as grid_map */
     uint32_t lm_invalid;      /* texels that saw back faces (filled from neighbours) */
     uint32_t lm_gutter;       /* atlas texels outside every footprint that hold a copy (gutters) */
     uint32_t lm_unused;       /* atlas texels that hold nothing */
     double lm_footprint;      /* Σ over covered texels of the surface area inside them, in texels */
-    float (*lm_uv)[2];        /* [3*tri_count] lightmap UV per triangle corner, in [0,1] */
+    float (*lm_uv)[2];        /* [3*tri_count] lightmap UV per triangle corner, in [0,1] of its page */
     uint32_t chart_count;     /* 0 when the mesh's own second UV set was used */
     uint32_t small_charts;    /* charts narrower than a texel (charts.h GLOW__CHART_SMALL) ... */
     uint32_t shared_texels;   /* ... and the texels they share (a lone one keeps its own) */
@@ -172,7 +175,8 @@ typedef struct glow__caches {
     /* lightmap detail (cache settings' detail_factor): the texels of a detail_factor-times finer grid
      * over the same atlas that cover a surface, each with a point and normal as a lightmap cache's */
     uint32_t detail_factor, detail_width, detail_height, detail_count;
-    uint32_t *detail_texel;   /* [detail_count] y * detail_width + x, ascending */
+    uint32_t *detail_texel;   /* [detail_count] page * detail_width * detail_height + y * detail_width + x,
+                                 ascending (detail_width x detail_height a page) */
     float (*detail_pos)[3], (*detail_nrm)[3];
 } glow__caches;
 

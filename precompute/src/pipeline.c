@@ -113,6 +113,8 @@ glow_result glow_pc_settings_validate(const glow_pc_settings *s, char *msg, size
         BAD("--texel-density %g must be a positive finite number of texels per unit", (double)s->texel_density);
     if (s->threads > 1024) BAD("--threads %u is out of range (0..1024)", s->threads);
     if (s->cut_error && s->cut_solid_angle) BAD("cut_error and cut_solid_angle are both set: pick one cut");
+    if (s->lightmap_max_size && (s->lightmap_max_size < 4 || s->lightmap_max_size > 4096 || s->lightmap_max_size % 4))
+        BAD("--lightmap-max-size %u must be a multiple of 4 in 4..4096", s->lightmap_max_size);
     if (s->lightmap_caches > (1u << 24)) BAD("--lightmap-caches %u is out of range (1..16777216)", s->lightmap_caches);
     if (s->rays_per_surfel > 256) BAD("rays per surfel %u is out of range (1..256)", s->rays_per_surfel);
     if (s->relax_iterations > 1000) BAD("relaxation iterations %u is out of range", s->relax_iterations);
@@ -238,7 +240,7 @@ static glow_result serialise(const glow_pc_settings *set, const glow__scene *sc,
     glow_bake_cache *cc = calloc(ca->count ? ca->count : 1, sizeof *cc);
     size_t grid_cells = (size_t)ca->grid_dims[0] * ca->grid_dims[1] * ca->grid_dims[2];
     uint32_t *gm = grid_cells ? malloc(grid_cells * sizeof *gm) : NULL;
-    size_t lm_texels = (size_t)ca->lm_width * ca->lm_height;
+    size_t lm_texels = (size_t)ca->lm_width * ca->lm_height * ca->lm_pages; /* pages stacked: [page][h][w] */
     uint32_t *lmm = lm_texels ? malloc(lm_texels * sizeof *lmm) : NULL;
     glow_bake_link_block *lb = calloc((size_t)ca->count * blocks + 1, sizeof *lb);
     size_t shlk_block = glow_bake_shlk_block_size(lk->sh_bands);
@@ -286,7 +288,7 @@ static glow_result serialise(const glow_pc_settings *set, const glow__scene *sc,
     memcpy(m->grid_origin, ca->grid_origin, sizeof m->grid_origin);
     m->grid_spacing = ca->grid_spacing;
     memcpy(m->grid_dims, ca->grid_dims, sizeof m->grid_dims);
-    m->lightmap_count = lm_texels ? 1u : 0u;
+    m->lightmap_count = lm_texels ? ca->lm_pages : 0u;
     m->lightmap_width = ca->lm_width;
     m->lightmap_height = ca->lm_height;
     m->texel_density = ca->texel_density;
@@ -417,6 +419,15 @@ static glow_result serialise(const glow_pc_settings *set, const glow__scene *sc,
     if (sh) add_section(ss, GLOW_SECTION_SHLK, sh, (uint64_t)ca->count * blocks * shlk_block);
     if (lsub) add_section(ss, GLOW_SECTION_LSUB, lsub, (uint64_t)ca->count * blocks * GLOW_LINK_BLOCK * sizeof *lsub);
     add_section(ss, GLOW_SECTION_GEOM, tr, (uint64_t)sc->tri_count * sizeof *tr);
+    if (lm_texels && ca->lm_pages > 1 && sc->tri_count) { /* 1.7: TPAG, each triangle's lightmap page */
+        uint32_t *pg = malloc((size_t)sc->tri_count * sizeof *pg);
+        if (!pg) {
+            glow__errorf(log, "write: out of memory for the lightmap pages");
+            return GLOW_ERROR_OUT_OF_MEMORY;
+        }
+        memcpy(pg, ca->lm_page, (size_t)sc->tri_count * sizeof *pg);
+        add_section(ss, GLOW_SECTION_TPAG, pg, (uint64_t)sc->tri_count * sizeof *pg);
+    }
     if (lk->detail_count && ca->detail_count == lk->detail_count) { /* 1.2: LDET (bake_format.h) */
         const uint32_t T = lk->detail_count, nlk = lk->detail_first[T];
         const uint64_t size = sizeof(glow_bake_detail) + 4ull * T + 4ull * (T + 1ull) + 8ull * nlk;
@@ -707,6 +718,7 @@ static glow_result bake_system(const glow_pc_settings *setp, uint32_t grid_targe
                                    .detail_factor_max = set.lightmap_detail ? 0u : GLOW_PC_LIGHTMAP_DETAIL_MAX,
                                    .detail_spacing = sqrtf(SF->area),
                                    .texel_adapt = set.texel_adapt, .grid_refine = set.grid_refine,
+                                   .lightmap_max_size = set.lightmap_max_size,
                                    .adapt_reach = 4.0f * sqrtf(SF->area / (float)GLOW__PI)};
     res = glow__caches_build(sc, rt, SF, &scache, pool, log, &caches);
     if (res == GLOW_OK && caches.grid_dims[0] && caches.grid_dims[1] && caches.grid_dims[2]) {
@@ -757,6 +769,7 @@ static glow_result bake_system(const glow_pc_settings *setp, uint32_t grid_targe
     stats->grid_fine_caches = caches.grid_fine_count;
     stats->lightmap_width = caches.lm_width;
     stats->lightmap_height = caches.lm_height;
+    stats->lightmap_pages = caches.lm_pages;
     stats->lightmap_caches = caches.lm_cache_count;
     stats->lightmap_invalid = caches.lm_invalid;
     stats->lightmap_gutter = caches.lm_gutter;
@@ -1189,6 +1202,7 @@ static void sys_stats_add(glow_pc_stats *w, const glow_pc_stats *s, bool largest
         memcpy(w->grid_dims, s->grid_dims, sizeof w->grid_dims);
         w->lightmap_width = s->lightmap_width;
         w->lightmap_height = s->lightmap_height;
+        w->lightmap_pages = s->lightmap_pages;
         w->detail_factor = s->detail_factor;
         w->levels = s->levels;
     }
@@ -1277,6 +1291,7 @@ static uint64_t world_key(const glow_pc_settings *s, const glow__scene *w) {
                        s->system_area, s->system_reach > 0.0f ? s->system_reach : SYS_REACH_DEFAULT, s->texel_adapt};
     h = fnv64(h, v, sizeof v);
     h = fnv64(h, f, sizeof f);
+    if (s->lightmap_max_size && s->lightmap_max_size != 4096u) HASH_VAL(h, s->lightmap_max_size); /* (keys unchanged without) */
     for (uint32_t m = 0; m < w->material_count; ++m) {
         const glow__material *mt = &w->materials[m];
         h = fnv64(h, mt->name, strnlen(mt->name, sizeof mt->name));

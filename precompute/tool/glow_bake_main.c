@@ -57,6 +57,8 @@ static const char *usage_text =
     "                         lightmap budget)\n"
     "  --lightmap-caches N    the lightmap budget: texels that hold a cache (default: the preset's);\n"
     "                         the density is chosen to land within 20 % of it\n"
+    "  --lightmap-max-size N  texels a side of a lightmap atlas, a multiple of 4 in 4..4096 (default\n"
+    "                         4096); generated charts that need more go onto several such pages\n"
     "  --threads N            worker threads (default: all CPUs); output is identical for any N\n"
     "  --seed S               sampling seed (default 0); same input and seed give the same bytes\n"
     "  --sh-links             also store full-SH links (PIC Eq. 2) next to runtime-projection links\n"
@@ -288,6 +290,7 @@ static void print_summary(const char *scene, const char *out, const glow_pc_stat
         cJSON_AddNumberToObject(x, "lightmap", s->lightmap_caches);
         const int lsz[2] = {(int)s->lightmap_width, (int)s->lightmap_height};
         cJSON_AddItemToObject(x, "lightmap_size", cJSON_CreateIntArray(lsz, 2));
+        cJSON_AddNumberToObject(x, "lightmap_pages", s->lightmap_pages);
         cJSON_AddNumberToObject(x, "texel_density", s->texel_density);
         cJSON_AddNumberToObject(x, "lightmap_invalid", s->lightmap_invalid);
         cJSON_AddNumberToObject(x, "lightmap_gutter", s->lightmap_gutter);
@@ -334,6 +337,9 @@ static void print_summary(const char *scene, const char *out, const glow_pc_stat
            s->caches, s->grid_caches, s->grid_dims[0], s->grid_dims[1], s->grid_dims[2], (double)s->grid_spacing,
            s->grid_inside, s->lightmap_caches, s->lightmap_width, s->lightmap_height, (double)s->texel_density,
            s->charts, s->lightmap_invalid);
+    if (s->lightmap_pages > 1)
+        printf("  lightmap  %u pages of %ux%u texels (--lightmap-max-size)\n", s->lightmap_pages, s->lightmap_width,
+               s->lightmap_height);
     if (s->grid_refine)
         printf("  grid      refined %ux near geometry: %u cells of %.4g are bricks of %u³ cells of %.4g, holding %u of the "
                "grid's caches\n",
@@ -352,7 +358,7 @@ static void print_summary(const char *scene, const char *out, const glow_pc_stat
                100.0 * (double)s->lightmap_coverage, s->lightmap_gutter, s->lightmap_unused,
                100.0 * s->lightmap_unused /
                    (s->systems > 1 ? (double)s->lightmap_caches + s->lightmap_invalid + s->lightmap_gutter + s->lightmap_unused
-                                   : (double)s->lightmap_width * s->lightmap_height),
+                                   : (double)s->lightmap_width * s->lightmap_height * (s->lightmap_pages ? s->lightmap_pages : 1u)),
                s->small_charts,
                s->shared_texels);
     printf("  links     %llu (%u per cache, l=%u, link subsets %s), %.2f bytes per link\n",
@@ -455,6 +461,8 @@ static int run_info(const char *path, bool json) {
                (unsigned long long)in.file_size);
         printf("  surfels   %u (area %.6g each, scene %.6g)   nodes %u   levels %u\n", in.surfel_count,
                (double)in.surfel_area, in.scene_area, in.node_count, in.level_count);
+        if (in.lightmap_count > 1) printf("  lightmap  %u pages of %ux%u\n", in.lightmap_count, in.lightmap_width,
+                                          in.lightmap_height);
         printf("  caches    %u = grid %u (%ux%ux%u, spacing %.4g) + lightmap %u (%ux%u, %.4g texels/unit)\n",
                in.cache_count, in.grid_cache_count, in.grid_dims[0], in.grid_dims[1], in.grid_dims[2],
                (double)in.grid_spacing, in.lightmap_cache_count, in.lightmap_width, in.lightmap_height,
@@ -533,6 +541,10 @@ int main(int argc, char **argv) {
             NEED_VALUE();
             if (!parse_u32(v, 1, 1u << 24, &s.lightmap_caches))
                 return usage_error("--lightmap-caches '%s': expected an integer in 1..16777216", v);
+        } else if (!strcmp(a, "--lightmap-max-size")) {
+            NEED_VALUE();
+            if (!parse_u32(v, 4, 4096, &s.lightmap_max_size) || s.lightmap_max_size % 4)
+                return usage_error("--lightmap-max-size '%s': expected a multiple of 4 in 4..4096", v);
         } else if (!strcmp(a, "--threads")) {
             NEED_VALUE();
             if (!parse_u32(v, 1, 1024, &s.threads)) return usage_error("--threads '%s': expected an integer in 1..1024", v);

@@ -38,13 +38,13 @@
 #define MAX_SH_BANDS 16u
 
 enum { S_META, S_MATL, S_SURF, S_NODE, S_LEVL, S_CACH, S_GRID, S_LMAP, S_LINK, S_SHLK, S_GEOM, S_GVIS, S_LSUB, S_TUV0, S_TEXP,
-       S_LDET, S_XREF, S_GFIN, S_SKYT, S_KNOWN_COUNT };
+       S_LDET, S_XREF, S_GFIN, S_SKYT, S_TPAG, S_KNOWN_COUNT };
 
 static const uint32_t known_fourcc[S_KNOWN_COUNT] = {
     GLOW_SECTION_META, GLOW_SECTION_MATL, GLOW_SECTION_SURF, GLOW_SECTION_NODE, GLOW_SECTION_LEVL, GLOW_SECTION_CACH,
     GLOW_SECTION_GRID, GLOW_SECTION_LMAP, GLOW_SECTION_LINK, GLOW_SECTION_SHLK, GLOW_SECTION_GEOM, GLOW_SECTION_GVIS,
     GLOW_SECTION_LSUB, GLOW_SECTION_TUV0, GLOW_SECTION_TEXP, GLOW_SECTION_LDET, GLOW_SECTION_XREF, GLOW_SECTION_GFIN,
-    GLOW_SECTION_SKYT,
+    GLOW_SECTION_SKYT, GLOW_SECTION_TPAG,
 };
 
 typedef struct section_ref {
@@ -243,7 +243,9 @@ static glow_result check_meta(const vstate *v, const glow_bake_meta *m, section_
              m->link_blocks_per_cache, m->links_per_cache, GLOW_LINK_BLOCK);
     if (m->sh_bands == 0 || m->sh_bands > MAX_SH_BANDS)
         FAIL(GLOW_ERROR_CORRUPT_DATA, "META: sh_bands %u not in [1, %u]", m->sh_bands, MAX_SH_BANDS);
-    if (m->lightmap_count > 1) FAIL(GLOW_ERROR_CORRUPT_DATA, "META: lightmap_count %u (0 or 1 supported)", m->lightmap_count);
+    if (m->lightmap_count > GLOW_BAKE_MAX_LIGHTMAP_PAGES) /* 1.7: pages (TPAG) */
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "META: lightmap_count %u exceeds %u pages", m->lightmap_count,
+             GLOW_BAKE_MAX_LIGHTMAP_PAGES);
     /* floats */
     if (!finite3(m->bounds_min) || !finite3(m->bounds_max))
         FAIL(GLOW_ERROR_CORRUPT_DATA, "META: non-finite scene bounds");
@@ -266,7 +268,10 @@ static glow_result check_meta(const vstate *v, const glow_bake_meta *m, section_
     if (d->grid_cells > 0 && !(m->grid_spacing > 0.0f))
         FAIL(GLOW_ERROR_CORRUPT_DATA, "META: grid_spacing %g must be > 0 for a grid of %llu cells",
              (double)m->grid_spacing, (unsigned long long)d->grid_cells);
-    d->lm_texels = m->lightmap_count ? (uint64_t)m->lightmap_width * m->lightmap_height : 0u;
+    /* lightmap_count pages of width x height, stacked (1.7) */
+    if (!mul_u64((uint64_t)m->lightmap_width * m->lightmap_height, m->lightmap_count, &d->lm_texels))
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "META: lightmap %u x %u x %u pages overflows", m->lightmap_width,
+             m->lightmap_height, m->lightmap_count);
     d->link_blocks = (uint64_t)m->cache_count * m->link_blocks_per_cache;
     d->shlk_block_size = glow_bake_shlk_block_size(m->sh_bands);
 
@@ -335,6 +340,15 @@ static glow_result check_meta(const vstate *v, const glow_bake_meta *m, section_
         return r;
     if (sec[S_TEXP].present && (r = check_section_size(v, &sec[S_TEXP], GLOW_SECTION_TEXP, m->material_count,
                                                        GLOW_BAKE_TEXTURE_PATH, "material_count x path")))
+        return r;
+    /* TPAG (1.7): a page per GEOM triangle, exactly when the lightmap has several pages and GEOM is present */
+    if (sec[S_TPAG].present && (!sec[S_GEOM].present || m->lightmap_count < 2))
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "section 'TPAG' (lightmap pages) needs 'GEOM' and lightmap_count > 1 (it is %u)",
+             m->lightmap_count);
+    if (!sec[S_TPAG].present && sec[S_GEOM].present && m->lightmap_count > 1)
+        FAIL(GLOW_ERROR_CORRUPT_DATA, "missing section 'TPAG' (lightmap_count %u pages with GEOM)", m->lightmap_count);
+    if (sec[S_TPAG].present && (r = check_section_size(v, &sec[S_TPAG], GLOW_SECTION_TPAG, m->triangle_count,
+                                                       sizeof(uint32_t), "triangle_count pages")))
         return r;
     /* GVIS (optional): 8 octant masks per grid cell; any byte value is valid */
     if (sec[S_GVIS].present &&
@@ -556,6 +570,15 @@ static glow_result check_geom(const vstate *v, const glow_bake_meta *m, const gl
     return GLOW_OK;
 }
 
+/* TPAG: every triangle's page below lightmap_count. */
+static glow_result check_pages(const vstate *v, const glow_bake_meta *m, const uint32_t *page) {
+    for (uint32_t i = 0; i < m->triangle_count; i++)
+        if (page[i] >= m->lightmap_count)
+            FAIL(GLOW_ERROR_CORRUPT_DATA, "TPAG triangle %u: lightmap page %u not below lightmap_count %u", i, page[i],
+                 m->lightmap_count);
+    return GLOW_OK;
+}
+
 /* TUV0: finite UVs (a host samples textures with them); TEXP: every path NUL-terminated in its slot. */
 static glow_result check_textures(const vstate *v, const glow_bake_meta *m, const float *uv, const char *paths) {
     for (uint64_t i = 0; uv && i < 6ull * m->triangle_count; i++)
@@ -647,7 +670,8 @@ static glow_result check_detail(const vstate *v, const glow_bake_meta *m, const 
         FAIL(GLOW_ERROR_CORRUPT_DATA, "LDET: detail %ux%u at factor %u does not fit the %ux%u lightmap (factor 2..%u)",
              dh.width, dh.height, dh.factor, m->lightmap_width, m->lightmap_height, GLOW_BAKE_DETAIL_MAX_FACTOR);
     const uint64_t T = dh.texel_count, Lk = dh.link_count;
-    if (T > (uint64_t)dh.width * dh.height)
+    const uint64_t grid = (uint64_t)dh.width * dh.height * m->lightmap_count; /* every page's (1.7) */
+    if (T > grid)
         FAIL(GLOW_ERROR_CORRUPT_DATA, "LDET: %u detail texels in a %ux%u grid", dh.texel_count, dh.width, dh.height);
     const uint64_t expect = sizeof dh + 4u * T + 4u * (T + 1u) + 8u * Lk;
     if (s->size != expect)
@@ -657,7 +681,7 @@ static glow_result check_detail(const vstate *v, const glow_bake_meta *m, const 
     const uint32_t *first = texel + T, *surfel = first + T + 1u;
     const float *weight = (const float *)(const void *)(surfel + Lk);
     for (uint64_t i = 0; i < T; i++) {
-        if (texel[i] >= (uint64_t)dh.width * dh.height || (i && texel[i] <= texel[i - 1]))
+        if (texel[i] >= grid || (i && texel[i] <= texel[i - 1]))
             FAIL(GLOW_ERROR_CORRUPT_DATA, "LDET texel %llu: %u is outside the grid or not ascending", (unsigned long long)i,
                  texel[i]);
         if (first[i] > first[i + 1])
@@ -754,6 +778,7 @@ static glow_result validate(const vstate *v, struct glow_bake *b) {
         return r;
     if (sec[S_SHLK].present && (r = check_shlk(v, &m, &d, payload(v, &sec[S_SHLK])))) return r;
     if (sec[S_GEOM].present && (r = check_geom(v, &m, payload(v, &sec[S_GEOM])))) return r;
+    if (sec[S_TPAG].present && (r = check_pages(v, &m, payload(v, &sec[S_TPAG])))) return r;
     if ((sec[S_TUV0].present || sec[S_TEXP].present) &&
         (r = check_textures(v, &m, sec[S_TUV0].present ? (const float *)payload(v, &sec[S_TUV0]) : NULL,
                             sec[S_TEXP].present ? (const char *)payload(v, &sec[S_TEXP]) : NULL)))
@@ -996,6 +1021,7 @@ glow_result glow_bake_get_geometry(const glow_bake *bake, glow_bake_geometry *ou
     out->lightmap_uv = t[0].lm_uv;
     out->materials = &t[0].material;
     out->material_uv = known_ptr(bake, S_TUV0);
+    out->lightmap_page = known_ptr(bake, S_TPAG);
     return GLOW_OK;
 }
 

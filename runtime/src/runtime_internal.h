@@ -90,7 +90,7 @@ const uint32_t *glow__bake_grid_map(const glow_bake *bake);
 const uint8_t *glow__bake_grid_visibility(const glow_bake *bake);
 /* GFIN's header or NULL; brick_of_cell, the bricks and their masks follow it (bake_format.h) */
 const glow_bake_grid_fine *glow__bake_grid_fine(const glow_bake *bake);
-/* [lightmap_width*lightmap_height]; NULL when lightmap_count == 0. */
+/* [lightmap_count pages][lightmap_height][lightmap_width]; NULL when lightmap_count == 0. */
 const uint32_t *glow__bake_lightmap_map(const glow_bake *bake);
 /* [cache_count * link_blocks_per_cache] */
 const glow_bake_link_block *glow__bake_link_blocks(const glow_bake *bake);

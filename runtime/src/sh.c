@@ -235,23 +235,36 @@ glow_result glow_sample_grid_oriented(const glow_cache_outputs *o, const float p
     return grid_lookup(o, p, n, out);
 }
 
-glow_result glow_sample_lightmap(const glow_cache_outputs *o, float u, float v, float *out) {
+/* The pages are stacked (page * width * height + y * width + x); a lookup stays within its page. */
+glow_result glow_sample_lightmap_page(const glow_cache_outputs *o, uint32_t page, float u, float v, float *out) {
     if (!out || !o || !o->lightmap_map || o->lightmap_width == 0) return GLOW_ERROR_INVALID_ARGUMENT;
+    if (page > 0 && page >= o->lightmap_pages) return GLOW_ERROR_INVALID_ARGUMENT;
     uint32_t x0, x1, y0, y1;
     float tx, ty;
     axis_coord(u * (float)o->lightmap_width - 0.5f, o->lightmap_width, &x0, &x1, &tx);
     axis_coord(v * (float)o->lightmap_height - 0.5f, o->lightmap_height, &y0, &y1, &ty);
     const uint32_t W = o->lightmap_width;
-    uint32_t idx[4] = {o->lightmap_map[(size_t)y0 * W + x0], o->lightmap_map[(size_t)y0 * W + x1],
-                       o->lightmap_map[(size_t)y1 * W + x0], o->lightmap_map[(size_t)y1 * W + x1]};
+    const uint32_t *map = o->lightmap_map + (size_t)page * W * o->lightmap_height;
+    uint32_t idx[4] = {map[(size_t)y0 * W + x0], map[(size_t)y0 * W + x1], map[(size_t)y1 * W + x0],
+                       map[(size_t)y1 * W + x1]};
     float w[4] = {(1 - tx) * (1 - ty), tx * (1 - ty), (1 - tx) * ty, tx * ty};
     return blend(o, idx, w, 4, out);
 }
 
+glow_result glow_sample_lightmap(const glow_cache_outputs *o, float u, float v, float *out) {
+    return glow_sample_lightmap_page(o, 0u, u, v, out);
+}
+
 glow_result glow_sample_lightmap_detail(const glow_cache_outputs *o, float u, float v, float out[3]) {
+    return glow_sample_lightmap_detail_page(o, 0u, u, v, out);
+}
+
+glow_result glow_sample_lightmap_detail_page(const glow_cache_outputs *o, uint32_t page, float u, float v,
+                                             float out[3]) {
     if (!out) return GLOW_ERROR_INVALID_ARGUMENT;
     out[0] = out[1] = out[2] = 0.0f;
     if (!o || !o->lightmap_detail || o->detail_width == 0 || o->detail_height == 0) return GLOW_ERROR_INVALID_ARGUMENT;
+    if (page > 0 && page >= o->lightmap_pages) return GLOW_ERROR_INVALID_ARGUMENT;
     uint32_t x0, x1, y0, y1;
     float tx, ty;
     axis_coord(u * (float)o->detail_width - 0.5f, o->detail_width, &x0, &x1, &tx);
@@ -261,7 +274,7 @@ glow_result glow_sample_lightmap_detail(const glow_cache_outputs *o, float u, fl
     const float w[4] = {(1 - tx) * (1 - ty), tx * (1 - ty), (1 - tx) * ty, tx * ty};
     float rgb[3] = {0.0f, 0.0f, 0.0f}, a = 0.0f;
     for (int i = 0; i < 4; ++i) {
-        const float *t = o->lightmap_detail + 4 * idx[i];
+        const float *t = o->lightmap_detail + 4 * ((size_t)page * W * o->detail_height + idx[i]);
         for (int k = 0; k < 3; ++k) rgb[k] += w[i] * t[k];
         a += w[i] * t[3];
     }

@@ -700,7 +700,7 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     s->params = (glow_system_params)GLOW_SYSTEM_PARAMS_INIT;
     const uint32_t *gmap = glow__bake_grid_map(desc->bake), *lmap = glow__bake_lightmap_map(desc->bake);
     s->grid_cells = gmap ? (size_t)m->grid_dims[0] * m->grid_dims[1] * m->grid_dims[2] : 0;
-    s->lm_texels = lmap && m->lightmap_count ? (size_t)m->lightmap_width * m->lightmap_height : 0;
+    s->lm_texels = lmap && m->lightmap_count ? (size_t)m->lightmap_width * m->lightmap_height * m->lightmap_count : 0;
 
     bool ok = true;
     const size_t S = s->S, N = s->N;
@@ -790,7 +790,8 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     if (geo.material_uv) s->uv0 = alloc_array(s, S, 2 * sizeof(float), &ok);
     s->det = s->lm_texels ? glow__bake_detail(desc->bake, &s->det_texel, &s->det_first, &s->det_surfel, &s->det_weight)
                           : NULL;
-    if (s->det) s->det_out = alloc_array(s, (size_t)s->det->width * s->det->height, 4 * sizeof(float), &ok);
+    if (s->det) /* every page's (format 1.7) */
+        s->det_out = alloc_array(s, (size_t)s->det->width * s->det->height * m->lightmap_count, 4 * sizeof(float), &ok);
     if (!ok) {
         GLOW__LOG_ERROR(ctx, GLOW_ERROR_OUT_OF_MEMORY, "glow_system_create(%s): out of memory (%u surfels, %u caches)",
                         label, s->S, s->C);
@@ -900,7 +901,7 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     if (s->grid_cells) memset(s->grid_sh, 0, s->grid_cells * s->coeffs * sizeof(float));
     if (s->lm_texels) memset(s->lm_sh, 0, s->lm_texels * s->coeffs * sizeof(float));
     if (s->det) { /* RGB 0 until the first update; A = 1 where a detail texel covers a surface */
-        memset(s->det_out, 0, (size_t)s->det->width * s->det->height * 4 * sizeof(float));
+        memset(s->det_out, 0, (size_t)s->det->width * s->det->height * m->lightmap_count * 4 * sizeof(float));
         for (uint32_t i = 0; i < s->det->texel_count; ++i) s->det_out[4 * (size_t)s->det_texel[i] + 3] = 1.0f;
     }
     glow__ctx_start_pool(ctx); /* threads start here, never in an update */
@@ -933,6 +934,7 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     if (s->lm_texels) {
         s->out.lightmap_width = m->lightmap_width;
         s->out.lightmap_height = m->lightmap_height;
+        s->out.lightmap_pages = m->lightmap_count;
     }
     const glow_bake_grid_fine *gf = s->grid_cells ? glow__bake_grid_fine(desc->bake) : NULL;
     if (gf) { /* the refined grid (GFIN), read in place: validated at load */

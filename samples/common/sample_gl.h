@@ -9,7 +9,8 @@
  *     direct   = glow_host_surfel_irradiance(p, n, material) · albedo/π      (the lights' GLSL hook:
  *                glow_gl_lights_hook_source — the same function that lights Glow's surfels on the GPU)
  *     indirect = albedo · (glow_shade_sh(SH, n, 1) + detail)                    (glow_shading.glsl: SH =
- *                glow_sample_lightmap at the triangle's lightmap uv, detail = glow_sample_lightmap_detail
+ *                glow_sample_lightmap_page at the triangle's lightmap page and uv, detail =
+ *                glow_sample_lightmap_detail_page
  *                there for bakes with a lightmap detail; spheres: glow_sample_grid_oriented at p, n, no detail)
  *     emission = the material's (front faces), through an optional GLSL hook (animated emitters)
  * albedo and emission are the bake's materials (glow_bake_get_material) times the CPU system's scales
@@ -257,15 +258,17 @@ static const char sample_gl__scene_vs[] =
     "layout(location = 2) in vec2 a_uv;\n"
     "layout(location = 3) in uint a_mat;\n"
     "layout(location = 4) in vec2 a_uv0;\n"
+    "layout(location = 5) in uint a_page;\n" /* the triangle's lightmap page (glow_bake_geometry.lightmap_page) */
     "uniform mat4 u_view_proj;\n"
     "uniform vec4 u_sphere;\n"      /* xyz centre, w radius; w = 0: bake triangles */
-    "out vec3 v_pos;\nout vec3 v_nrm;\nout vec2 v_uv;\nout vec2 v_uv0;\nflat out uint v_mat;\n"
+    "out vec3 v_pos;\nout vec3 v_nrm;\nout vec2 v_uv;\nout vec2 v_uv0;\nflat out uint v_mat;\nflat out uint v_page;\n"
     "void main() {\n"
     "    v_pos = u_sphere.w > 0.0 ? u_sphere.xyz + u_sphere.w * a_pos : a_pos;\n"
     "    v_nrm = a_nrm;\n"
     "    v_uv = a_uv;\n"
     "    v_uv0 = a_uv0;\n"
     "    v_mat = u_sphere.w > 0.0 ? 0u : a_mat;\n"
+    "    v_page = u_sphere.w > 0.0 ? 0u : a_page;\n"
     "    gl_Position = u_view_proj * vec4(v_pos, 1.0);\n"
     "}\n";
 
@@ -277,14 +280,14 @@ static const char sample_gl__scene_fs[] =
     "layout(binding = 6) uniform sampler2D u_lightmap_detail;\n"
     "struct sample_material { vec4 albedo; vec4 emission; };\n"
     "layout(std430, binding = SAMPLE_GL_MATERIAL_BINDING) readonly buffer sample_materials { sample_material sample_mat[]; };\n"
-    "uniform int u_direct, u_indirect, u_object, u_has_grid, u_has_lightmap, u_has_detail;\n"
+    "uniform int u_direct, u_indirect, u_object, u_has_grid, u_has_lightmap, u_has_detail, u_lightmap_pages;\n"
     "uniform vec3 u_object_albedo, u_grid_origin;\n"
     "uniform float u_grid_spacing;\n"
     "uniform uvec3 u_grid_dims;\n"
     "layout(binding = 4) uniform sampler2D u_sky;\n"
     "layout(binding = 5) uniform sampler2DArray u_albedo_tex;\n" /* material albedo textures (sRGB, linear when read) */
     "uniform int u_has_sky, u_textures;\n"
-    "in vec3 v_pos;\nin vec3 v_nrm;\nin vec2 v_uv;\nin vec2 v_uv0;\nflat in uint v_mat;\n"
+    "in vec3 v_pos;\nin vec3 v_nrm;\nin vec2 v_uv;\nin vec2 v_uv0;\nflat in uint v_mat;\nflat in uint v_page;\n"
     "void main() {\n"
     /* the sky's visible fraction at this pixel, for the light hook's sky term (GLOW_GL_LIGHTS_PIXEL_SKY) */
     "    if (u_has_sky != 0 && u_object == 0) sample_pixel_sky = textureLod(u_sky, v_uv, 0.0).r;\n"
@@ -299,9 +302,10 @@ static const char sample_gl__scene_fs[] =
     "    vec4 sh[GLOW_SH_PLANES];\n"
     "    bool has = false;\n"
     "    if (u_object != 0) { if (u_has_grid != 0) has = glow_sample_grid_oriented(u_grid, u_grid_mask, u_grid_origin, u_grid_spacing, ivec3(u_grid_dims), v_pos, n, sh); }\n"
-    "    else if (u_has_lightmap != 0) has = glow_sample_lightmap(u_lightmap, u_lightmap_valid, v_uv, sh);\n"
+    "    else if (u_has_lightmap != 0) has = glow_sample_lightmap_page(u_lightmap, u_lightmap_valid, int(v_page), v_uv, sh);\n"
     "    vec3 e_ind = has ? glow_shade_sh(sh, n, 1.0) : vec3(0.0);\n"
-    "    if (has && u_object == 0 && u_has_detail != 0) e_ind += glow_sample_lightmap_detail(u_lightmap_detail, v_uv);\n"
+    "    if (has && u_object == 0 && u_has_detail != 0)\n"
+    "        e_ind += glow_sample_lightmap_detail_page(u_lightmap_detail, u_lightmap_pages, int(v_page), v_uv);\n"
     "    vec3 indirect = albedo * e_ind;\n"
     "    vec3 direct = vec3(0.0);\n"
     "    if (u_view == SAMPLE_VIEW_DIRECT || (u_view == SAMPLE_VIEW_FINAL && u_direct != 0))\n"
@@ -473,6 +477,7 @@ typedef struct sample_gl__vertex {
     uint16_t uv[2];
     uint32_t mat;
     float uv0[2]; /* material UV (glow_bake_geometry.material_uv), 0 when the bake has none */
+    uint32_t page; /* lightmap page (glow_bake_geometry.lightmap_page), 0 with one page */
 } sample_gl__vertex;
 
 static inline int sample_gl__upload_scene(sample_gl *r) {
@@ -499,6 +504,7 @@ static inline int sample_gl__upload_scene(sample_gl *r) {
             memcpy(o->nrm, n, sizeof n);
             o->uv[0] = uv[2 * k], o->uv[1] = uv[2 * k + 1];
             o->mat = mat < info.material_count ? mat : 0;
+            o->page = g.lightmap_page ? g.lightmap_page[t] : 0u;
             if (g.material_uv) o->uv0[0] = g.material_uv[6 * (size_t)t + 2 * k], o->uv0[1] = g.material_uv[6 * (size_t)t + 2 * k + 1];
         }
     }
@@ -507,7 +513,7 @@ static inline int sample_gl__upload_scene(sample_gl *r) {
     free(v);
     gl->CreateVertexArrays(1, &r->vao_scene);
     gl->VertexArrayVertexBuffer(r->vao_scene, 0, r->vbo_scene, 0, sizeof(sample_gl__vertex));
-    for (GLuint a = 0; a < 5; a++) {
+    for (GLuint a = 0; a < 6; a++) {
         gl->EnableVertexArrayAttrib(r->vao_scene, a);
         gl->VertexArrayAttribBinding(r->vao_scene, a, 0);
     }
@@ -516,6 +522,7 @@ static inline int sample_gl__upload_scene(sample_gl *r) {
     gl->VertexArrayAttribFormat(r->vao_scene, 1, 3, GL_FLOAT, GL_FALSE, offsetof(sample_gl__vertex, nrm));
     gl->VertexArrayAttribFormat(r->vao_scene, 2, 2, GL_UNSIGNED_SHORT, GL_TRUE, offsetof(sample_gl__vertex, uv));
     gl->VertexArrayAttribIFormat(r->vao_scene, 3, 1, GL_UNSIGNED_INT, offsetof(sample_gl__vertex, mat));
+    gl->VertexArrayAttribIFormat(r->vao_scene, 5, 1, GL_UNSIGNED_INT, offsetof(sample_gl__vertex, page));
     /* materials: the bake's, scaled per draw */
     r->material_base = calloc((size_t)r->material_count * 6 + 6, sizeof(float));
     if (!r->material_base) return sample_gl__fail(r, "out of memory");
@@ -1112,6 +1119,7 @@ static inline int sample_gl_draw(sample_gl *r, const sample_gl_frame *f) {
     gl->Uniform1i(gl->GetUniformLocation(p, "u_has_grid"), o->grid_texture != 0);
     gl->Uniform1i(gl->GetUniformLocation(p, "u_has_lightmap"), o->lightmap_texture != 0);
     gl->Uniform1i(gl->GetUniformLocation(p, "u_has_detail"), o->lightmap_detail_texture != 0);
+    gl->Uniform1i(gl->GetUniformLocation(p, "u_lightmap_pages"), o->lightmap_pages ? (GLint)o->lightmap_pages : 1);
     gl->Uniform1i(gl->GetUniformLocation(p, "u_has_sky"), r->sky_tex ? 1 : 0);
     gl->Uniform1i(gl->GetUniformLocation(p, "u_textures"), r->albedo_tex ? 1 : 0);
     gl->Uniform3fv(gl->GetUniformLocation(p, "u_grid_origin"), 1, o->grid_origin);

@@ -10,7 +10,10 @@
  *   grid mask usampler3D RG32UI (dx, dy, dz): for the cell whose lowest corner is (x,y,z) and each octant o
  *             of it, byte o (x: octants 0-3, y: 4-7) has bit k set when corner k may be blended (it holds a
  *             cache and, with the bake's GVIS, is visible from that octant's centre)
- *   lightmap  sampler2DArray, layer p = plane p; lightmap valid: usampler2D R8UI, 1 where a texel holds a cache
+ *   lightmap  sampler2DArray, layer p = plane p; lightmap valid: usampler2D R8UI, 1 where a texel holds a cache.
+ *             A lightmap of P pages (bake format 1.7, glow_gl_outputs.lightmap_pages): plane p of page g at
+ *             layer g · planes + p, and the valid mask P pages high (page g's rows from g · height):
+ *             glow_sample_lightmap_page, glow_sample_lightmap_detail_page with the triangle's page
  *   a refined grid's bricks (glow_gl_outputs grid_brick/fine/fine_mask_texture): glow_sample_grid_refined
  * Lookups use texelFetch and weight empty/hidden neighbours 0 (renormalising the rest). glow_gl creates the
  * textures with NEAREST filtering; do not sample the integer mask/valid textures through a sampler object with
@@ -190,11 +193,18 @@ bool glow_sample_grid_refined(sampler3D grid, usampler3D grid_mask, usampler3D b
     return glow__grid_lookup(grid, grid_mask, origin, spacing, dims, p, p0, oriented, u, sh);
 }
 
-/** Bilinear lookup of the lightmap at uv in [0,1]² (texel centres at (i + 0.5)/size, v = 0 is row 0),
- * clamped to the edge, empty texels weighted 0 and the rest renormalised. \returns false when all 4 are empty. */
-bool glow_sample_lightmap(sampler2DArray lightmap, usampler2D lightmap_valid, vec2 uv, out vec4 sh[GLOW_SH_PLANES]) {
+/** Bilinear lookup of page `page` of the lightmap at uv in [0,1]² of that page (texel centres at
+ * (i + 0.5)/size, v = 0 is row 0), clamped to the page's edge, empty texels weighted 0 and the rest
+ * renormalised, as glow.h glow_sample_lightmap_page. The page count and the planes per page follow from
+ * the textures' sizes (the valid mask is pages x the lightmap's height; the array pages x planes layers).
+ * \returns false when all 4 are empty. */
+bool glow_sample_lightmap_page(sampler2DArray lightmap, usampler2D lightmap_valid, int page, vec2 uv,
+                               out vec4 sh[GLOW_SH_PLANES]) {
     for (int q = 0; q < GLOW_SH_PLANES; ++q) sh[q] = vec4(0.0);
-    ivec2 size = textureSize(lightmap_valid, 0);
+    ivec3 lsize = textureSize(lightmap, 0);
+    ivec2 size = lsize.xy;
+    int pages = max(textureSize(lightmap_valid, 0).y / max(size.y, 1), 1);
+    int row0 = page * size.y, layer0 = page * (lsize.z / pages);
     vec2 f = clamp(uv * vec2(size) - 0.5, vec2(0.0), vec2(size - 1));
     vec2 fl = floor(f);
     ivec2 i0 = ivec2(fl), i1 = min(i0 + 1, size - 1);
@@ -203,21 +213,27 @@ bool glow_sample_lightmap(sampler2DArray lightmap, usampler2D lightmap_valid, ve
     for (int c = 0; c < 4; ++c) {
         ivec2 cc = ivec2((c & 1) != 0 ? i1.x : i0.x, (c & 2) != 0 ? i1.y : i0.y);
         float w = ((c & 1) != 0 ? t.x : 1.0 - t.x) * ((c & 2) != 0 ? t.y : 1.0 - t.y);
-        if (!(w > 0.0) || texelFetch(lightmap_valid, cc, 0).x == 0u) continue;
+        if (!(w > 0.0) || texelFetch(lightmap_valid, ivec2(cc.x, cc.y + row0), 0).x == 0u) continue;
         wsum += w;
-        for (int q = 0; q < GLOW_SH_PLANES; ++q) sh[q] += w * texelFetch(lightmap, ivec3(cc, q), 0);
+        for (int q = 0; q < GLOW_SH_PLANES; ++q) sh[q] += w * texelFetch(lightmap, ivec3(cc, layer0 + q), 0);
     }
     if (!(wsum > 0.0)) return false;
     for (int q = 0; q < GLOW_SH_PLANES; ++q) sh[q] /= wsum;
     return true;
 }
 
-/** The lightmap detail (glow_gl_outputs.lightmap_detail_texture, bakes made with glow-bake
- * --lightmap-detail) at uv, the lightmap's UVs: bilinear, clamped to the edge, weighted by coverage (A)
- * and renormalised, as glow.h glow_sample_lightmap_detail. Add it to glow_shade_sh(lightmap sample, n,
- * 1.0) before clamping at 0 and multiplying by the albedo. vec3(0) where no neighbour covers a surface. */
-vec3 glow_sample_lightmap_detail(sampler2D detail, vec2 uv) {
+/** glow_sample_lightmap_page on page 0: the whole lightmap when it has one page. */
+bool glow_sample_lightmap(sampler2DArray lightmap, usampler2D lightmap_valid, vec2 uv, out vec4 sh[GLOW_SH_PLANES]) {
+    return glow_sample_lightmap_page(lightmap, lightmap_valid, 0, uv, sh);
+}
+
+/** glow_sample_lightmap_detail (below) on page `page` of a lightmap of `pages` pages (glow_gl_outputs.lightmap_pages:
+ * the detail texture is that many pages high), clamped to the page's edge, as glow.h
+ * glow_sample_lightmap_detail_page. */
+vec3 glow_sample_lightmap_detail_page(sampler2D detail, int pages, int page, vec2 uv) {
     ivec2 size = textureSize(detail, 0);
+    size.y /= max(pages, 1);
+    int row0 = page * size.y;
     vec2 f = clamp(uv * vec2(size) - 0.5, vec2(0.0), vec2(size - 1));
     vec2 fl = floor(f);
     ivec2 i0 = ivec2(fl), i1 = min(i0 + 1, size - 1);
@@ -226,9 +242,16 @@ vec3 glow_sample_lightmap_detail(sampler2D detail, vec2 uv) {
     for (int c = 0; c < 4; ++c) {
         ivec2 cc = ivec2((c & 1) != 0 ? i1.x : i0.x, (c & 2) != 0 ? i1.y : i0.y);
         float w = ((c & 1) != 0 ? t.x : 1.0 - t.x) * ((c & 2) != 0 ? t.y : 1.0 - t.y);
-        acc += w * texelFetch(detail, cc, 0);
+        acc += w * texelFetch(detail, ivec2(cc.x, cc.y + row0), 0);
     }
     return acc.w > 1e-6 ? acc.xyz / acc.w : vec3(0.0);
 }
+
+/** The lightmap detail (glow_gl_outputs.lightmap_detail_texture, bakes made with glow-bake
+ * --lightmap-detail) at uv, the lightmap's UVs: bilinear, clamped to the edge, weighted by coverage (A)
+ * and renormalised, as glow.h glow_sample_lightmap_detail. Add it to glow_shade_sh(lightmap sample, n,
+ * 1.0) before clamping at 0 and multiplying by the albedo. vec3(0) where no neighbour covers a surface.
+ * With several pages: glow_sample_lightmap_detail_page. */
+vec3 glow_sample_lightmap_detail(sampler2D detail, vec2 uv) { return glow_sample_lightmap_detail_page(detail, 1, 0, uv); }
 
 #endif /* GLOW_SHADING_GLSL */

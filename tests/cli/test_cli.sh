@@ -33,6 +33,8 @@ expect 2 "grid refine x" "$BIN" builtin:cornell -o "$T/a.glow" --grid-refine x; 
 expect 2 "sky rays 0" "$BIN" builtin:cornell -o "$T/a.glow" --sky-rays 0; err_has "sky-rays"
 expect 2 "sky rays huge" "$BIN" builtin:cornell -o "$T/a.glow" --sky-rays 70000; err_has "sky-rays"
 expect 2 "surfel adapt 5" "$BIN" builtin:cornell -o "$T/a.glow" --surfel-adapt 5; err_has "surfel-adapt"
+expect 2 "lightmap max size 30" "$BIN" builtin:cornell -o "$T/a.glow" --lightmap-max-size 30; err_has "lightmap-max-size"
+expect 2 "lightmap max size 8192" "$BIN" builtin:cornell -o "$T/a.glow" --lightmap-max-size 8192; err_has "multiple of 4"
 expect 2 "missing value" "$BIN" builtin:cornell -o
 expect 2 "no output" "$BIN" builtin:cornell
 no_file "$T/a.glow"
@@ -63,7 +65,7 @@ python3 - "$T/out" <<'PY' && pass "  json: the lightmap budget adds up (caches +
 import json, sys
 c = json.load(open(sys.argv[1]))["caches"]
 w, h = c["lightmap_size"]
-assert c["lightmap"] + c["lightmap_invalid"] + c["lightmap_gutter"] + c["lightmap_unused"] == w * h, c
+assert c["lightmap"] + c["lightmap_invalid"] + c["lightmap_gutter"] + c["lightmap_unused"] == w * h * c["lightmap_pages"], c
 assert 0.0 < c["lightmap_coverage"] <= 1.0, c
 PY
 # the lightmap budget: without --texel-density the density is searched so that the texels holding
@@ -147,6 +149,71 @@ expect 0 "bake over a killed writer's temporary" "$BIN" builtin:cornell -o "$T/k
 [ -e "$T/k.glow.tmp.$dead" ] && fail "  dead writer's temporary kept" || pass "  dead writer's temporary removed"
 [ -e "$T/k.glow.tmp.$live" ] && pass "  live writer's temporary kept" || fail "  live writer's temporary removed"
 kill $live 2>/dev/null; wait $live 2>/dev/null; rm -f "$T/k.glow.tmp.$live"
+
+# Lightmap pages (issue 16 item 5, bake format 1.7): atlases of at most 28 texels a side force the
+# 48x44 atlas of this budget onto 5 pages at the same texel density (not a lower one), the paged bake
+# loads, Glow's view of it (each triangle's page) matches the one-page bake's, and a page index beyond
+# lightmap_count (resealed, so that only the contents check can catch it) is refused, naming TPAG.
+# ~2 s in all (release).
+PG=(--surfels 1024 --links 32 --grid-spacing 0.5 --lightmap-caches 1000 --no-sky -q --json)
+expect 0 "bake one lightmap page" "$BIN" builtin:cornell -o "$T/pg1.glow" "${PG[@]}"; cp "$T/out" "$T/pg1.json"
+expect 0 "bake --lightmap-max-size 28" "$BIN" builtin:cornell -o "$T/pg5.glow" "${PG[@]}" --lightmap-max-size 28
+cp "$T/out" "$T/pg5.json"
+python3 - "$T/pg1.json" "$T/pg5.json" <<'PY' && pass "  >= 3 pages of 28x28 at the one-page density" || fail "  pages"
+import json, sys
+a, b = (json.load(open(f))["caches"] for f in sys.argv[1:3])
+print("     one page %s at %.5g texels/unit, %d caches; paged %d x %s at %.5g, %d caches" % (a["lightmap_size"],
+      a["texel_density"], a["lightmap"], b["lightmap_pages"], b["lightmap_size"], b["texel_density"], b["lightmap"]))
+assert a["lightmap_pages"] == 1 and b["lightmap_pages"] >= 3 and b["lightmap_size"] == [28, 28], (a, b)
+assert b["texel_density"] == a["texel_density"] and b["lightmap"] == a["lightmap"], (a, b)
+PY
+expect 0 "--info on the paged bake" "$BIN" --info "$T/pg5.glow"
+grep -q "TPAG" "$T/out" && grep -q "pages of 28x28" "$T/out" && pass "  valid, with TPAG" || fail "  info: no pages"
+R=$(dirname "$BIN")
+SCN=$(cd "$(dirname "$0")/../.." && pwd)/scenes/cornell-builtin.json
+for k in 1 5; do
+  expect 0 "glow-render the $k-page bake" "$R/glow-render" "$SCN" --out "$T/pg$k" --glow "$T/pg$k.glow" --spp 1 \
+    --width 48 --height 48 --indirect-only --bounces 64 -q
+done
+"$R/glow-compare" "$T/pg5_indirect.exr" "$T/pg1_indirect.exr" --no-flip --json > "$T/cmp.json" 2>"$T/err"
+python3 - "$T/cmp.json" <<'PY' && pass "  paged Glow view = one-page view (means within 1 %, block error < 0.01)" || fail "  paged view differs"
+import json, sys
+c = json.load(open(sys.argv[1]))
+print("     block error %.2g, mean ratio %.5f" % (c["block_error"], c["mean_ratio"]))
+assert c["block_error"] < 0.01 and abs(c["mean_ratio"] - 1.0) < 0.01, c
+assert all(abs(t - r) <= 0.01 * r for t, r in zip(c["mean_test"], c["mean_ref"])), c
+PY
+python3 - "$T/pg5.glow" "$T/pgbad.glow" <<'PY' && pass "  TPAG page patched and resealed" || fail "  could not patch TPAG"
+import struct, sys, zlib
+b = bytearray(open(sys.argv[1], "rb").read())
+n = struct.unpack_from("<I", b, 12)[0]
+for i in range(n):
+    e = 64 + 32 * i
+    fourcc, _, off, size = struct.unpack_from("<4sIQQ", b, e)
+    if fourcc == b"TPAG":
+        struct.pack_into("<I", b, off, 99)  # triangle 0 on page 99 of 5
+        struct.pack_into("<I", b, e + 24, zlib.crc32(bytes(b[off:off + size])))
+        break
+else:
+    sys.exit(1)
+struct.pack_into("<I", b, 28, zlib.crc32(bytes(b[64:64 + 32 * n])))
+struct.pack_into("<I", b, 32, 0)
+struct.pack_into("<I", b, 32, zlib.crc32(bytes(b[0:64])))
+open(sys.argv[2], "wb").write(b)
+PY
+expect 1 "--info on a bake with a page index out of range" "$BIN" --info "$T/pgbad.glow"; err_has "TPAG triangle 0: lightmap page 99"
+python3 - "$T/pg5.glow" "$T/pgnone.glow" <<'PY' && pass "  TPAG renamed (an unknown section) and resealed" || fail "  could not rename TPAG"
+import struct, sys, zlib
+b = bytearray(open(sys.argv[1], "rb").read())
+n = struct.unpack_from("<I", b, 12)[0]
+e = next(64 + 32 * i for i in range(n) if b[64 + 32 * i:68 + 32 * i] == b"TPAG")
+b[e:e + 4] = b"XPAG"  # readers skip fourccs they do not know: the pages are gone
+struct.pack_into("<I", b, 28, zlib.crc32(bytes(b[64:64 + 32 * n])))
+struct.pack_into("<I", b, 32, 0)
+struct.pack_into("<I", b, 32, zlib.crc32(bytes(b[0:64])))
+open(sys.argv[2], "wb").write(b)
+PY
+expect 1 "--info on a paged bake without TPAG" "$BIN" --info "$T/pgnone.glow"; err_has "missing section 'TPAG'"
 
 # the shared Cornell box (two coincident duplicate faces: skipped and counted)
 if [ -n "$SHARED" ] && [ -f "$SHARED/scenes/cornell-box/CornellBox-Original.obj" ]; then

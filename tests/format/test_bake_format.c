@@ -865,7 +865,9 @@ static void test_meta_counts(void **state) {
                    b->meta.grid_dims[1] = 0xFFFFFFFFu; b->meta.grid_dims[2] = 0xFFFFFFFFu);
     EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "'LMAP'", b->meta.lightmap_width = 0x80000000u;
                    b->meta.lightmap_height = 0x80000000u);
-    EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "lightmap_count", b->meta.lightmap_count = 2);
+    /* 1.7: pages; LMAP then holds lightmap_count pages, and more than GLOW_BAKE_MAX_LIGHTMAP_PAGES are refused */
+    EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "'LMAP'", b->meta.lightmap_count = 2);
+    EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "lightmap_count", b->meta.lightmap_count = GLOW_BAKE_MAX_LIGHTMAP_PAGES + 1u);
     EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "sh_bands", b->meta.sh_bands = 0);
     EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "sh_bands", b->meta.sh_bands = 0x10000u);
     EXPECT_PATCHED(0, GLOW_ERROR_CORRUPT_DATA, "grid_spacing", b->meta.grid_spacing = 0.0f);
@@ -1844,6 +1846,97 @@ static void test_real_v1_6_sky(void **state) {
     free(img);
 }
 
+/* Format 1.7, lightmap pages: tests/data/seed_cornell_tiny_pages.glow is glow-bake builtin:cornell --surfels 64
+ * --links 16 --grid-spacing 1 --lightmap-caches 200 --no-sky --lightmap-detail 2 --link-subsets off
+ * --lightmap-max-size 16: 3 pages of 16x16 at the one-page density (1.299 texels/unit, 185 lightmap caches).
+ * It loads, every triangle's page is below 3 and every page holds triangles and caches, every LMAP entry
+ * (copies included) names a cache of its own page, a system updates
+ * and its outputs hold the 3 pages, the page lookups read them; a page index out of range, a missing
+ * TPAG and a short TPAG are refused, naming the section. */
+static void test_real_v1_7_pages(void **state) {
+    (void)state;
+    size_t size = 0;
+    unsigned char *img = read_file_all(GLOW_TEST_DATA_DIR "/seed_cornell_tiny_pages.glow", &size);
+    test_log log;
+    glow_context *ctx = make_ctx(&log);
+    glow_bake *bake = NULL;
+    assert_int_equal(glow_bake_load(ctx, img, size, &bake), GLOW_OK);
+    glow_bake_info info;
+    assert_int_equal(glow_bake_get_info(bake, &info), GLOW_OK);
+    assert_int_equal(info.format_minor, 7);
+    assert_int_equal(info.lightmap_count, 3);
+    assert_int_equal(info.lightmap_width, 16);
+    assert_int_equal(info.lightmap_height, 16);
+    glow_bake_geometry geo;
+    assert_int_equal(glow_bake_get_geometry(bake, &geo), GLOW_OK);
+    assert_non_null(geo.lightmap_page);
+    uint32_t tris_on[3] = {0, 0, 0}, caches_on[3] = {0, 0, 0};
+    for (uint32_t t = 0; t < geo.triangle_count; ++t) {
+        assert_true(geo.lightmap_page[t] < 3);
+        tris_on[geo.lightmap_page[t]]++;
+    }
+    glow_cache_info *ci = malloc((size_t)info.cache_count * sizeof *ci);
+    assert_int_equal(glow_bake_get_caches(bake, 0, info.cache_count, ci), GLOW_OK);
+    for (uint32_t c = info.grid_cache_count; c < info.cache_count; ++c) {
+        assert_true(ci[c].texel < 3u * 16u * 16u);
+        caches_on[ci[c].texel / 256u]++;
+    }
+    for (int p = 0; p < 3; ++p) assert_true(tris_on[p] > 0 && caches_on[p] > 0);
+    const uint32_t *lmap = glow__bake_lightmap_map(bake); /* gutter and invalid-texel copies stay in their page */
+    assert_non_null(lmap);
+    uint32_t copies = 0;
+    for (uint32_t i = 0; i < 3u * 256u; ++i) {
+        if (lmap[i] == GLOW_MAP_EMPTY) continue;
+        const uint32_t c = lmap[i] & GLOW_MAP_INDEX_MASK;
+        copies += (lmap[i] & GLOW_MAP_COPY_BIT) != 0;
+        assert_true(c >= info.grid_cache_count && c < info.cache_count);
+        assert_int_equal(ci[c].texel / 256u, i / 256u);
+    }
+    assert_true(copies > 0);
+    free(ci);
+    glow_system *sys = NULL;
+    assert_int_equal(glow_system_create(ctx, &(glow_system_desc){.bake = bake}, &sys), GLOW_OK);
+    assert_int_equal(glow_system_update(sys, NULL), GLOW_OK);
+    const glow_cache_outputs *o = glow_system_outputs(sys);
+    assert_int_equal(o->lightmap_pages, 3);
+    assert_non_null(o->lightmap_detail);
+    float *coeffs = malloc(o->coeff_count * sizeof *coeffs), rgb[3];
+    uint32_t hits = 0;
+    for (uint32_t t = 0; t < geo.triangle_count; ++t) { /* each triangle's UV centroid on its page */
+        const uint16_t *q = (const uint16_t *)(const void *)((const char *)geo.lightmap_uv + (size_t)t * geo.stride);
+        const float u = (q[0] + q[2] + q[4]) / (3.0f * 65535.0f), v = (q[1] + q[3] + q[5]) / (3.0f * 65535.0f);
+        hits += glow_sample_lightmap_page(o, geo.lightmap_page[t], u, v, coeffs) == GLOW_OK;
+        const glow_result rd = glow_sample_lightmap_detail_page(o, geo.lightmap_page[t], u, v, rgb);
+        assert_true(rd == GLOW_OK || rd == GLOW_ERROR_OUT_OF_RANGE);
+    }
+    assert_true(hits > geo.triangle_count / 2);
+    assert_int_equal(glow_sample_lightmap_page(o, 3, 0.5f, 0.5f, coeffs), GLOW_ERROR_INVALID_ARGUMENT);
+    assert_int_equal(glow_sample_lightmap_detail_page(o, 3, 0.5f, 0.5f, rgb), GLOW_ERROR_INVALID_ARGUMENT);
+    free(coeffs);
+    glow_system_destroy(sys);
+    glow_bake_destroy(bake);
+    glow_context_destroy(ctx);
+    /* patched copies */
+    unsigned char *bad = malloc(size);
+    memcpy(bad, img, size);
+    const uint32_t three = 3u;
+    memcpy(bad + u64_at(entry_ptr(bad, GLOW_SECTION_TPAG) + 8) + 4u * 5u, &three, 4);
+    fuzz_fix_crcs(bad, size);
+    EXPECT_LOAD_MSG(bad, size, GLOW_ERROR_CORRUPT_DATA, "TPAG triangle 5: lightmap page 3 not below lightmap_count 3");
+    memcpy(bad, img, size);
+    memcpy(entry_ptr(bad, GLOW_SECTION_TPAG), "XPAG", 4); /* an unknown section, skipped: no pages */
+    fuzz_fix_crcs(bad, size);
+    EXPECT_LOAD_MSG(bad, size, GLOW_ERROR_CORRUPT_DATA, "missing section 'TPAG'");
+    memcpy(bad, img, size);
+    unsigned char *e = entry_ptr(bad, GLOW_SECTION_TPAG);
+    const uint64_t short_size = u64_at(e + 16) - 4u;
+    memcpy(e + 16, &short_size, 8);
+    fuzz_fix_crcs(bad, size);
+    EXPECT_LOAD_MSG(bad, size, GLOW_ERROR_CORRUPT_DATA, "section 'TPAG' is");
+    free(bad);
+    free(img);
+}
+
 static void test_golden_v1(void **state) {
     (void)state;
     test_bake tb;
@@ -1929,7 +2022,7 @@ int main(void) {
         cmocka_unit_test(test_golden_v1),
         cmocka_unit_test(test_real_v1_2_detail),
         cmocka_unit_test(test_real_v1_5_grid_fine),
-        cmocka_unit_test(test_real_v1_6_sky),
+        cmocka_unit_test(test_real_v1_6_sky), cmocka_unit_test(test_real_v1_7_pages),
     };
     return cmocka_run_group_tests(tests, setup_tmpdir, teardown_tmpdir);
 }

@@ -59,11 +59,17 @@ static void touch(const glow_bake *bake) {
         }
     const uint32_t *maps[2] = {glow__bake_grid_map(bake), glow__bake_lightmap_map(bake)};
     uint64_t counts[2] = {(uint64_t)m->grid_dims[0] * m->grid_dims[1] * m->grid_dims[2],
-                          (uint64_t)m->lightmap_width * m->lightmap_height};
+                          (uint64_t)m->lightmap_width * m->lightmap_height * m->lightmap_count};
     for (int k = 0; k < 2; k++)
         if (maps[k])
             for (uint64_t i = 0; i < counts[k]; i++)
                 if (maps[k][i] != GLOW_MAP_EMPTY) acc += glow__bake_caches(bake)[maps[k][i] & GLOW_MAP_INDEX_MASK].texel;
+    glow_bake_geometry geo; /* TPAG (1.7): the reader guarantees every page below lightmap_count */
+    if (glow_bake_get_geometry(bake, &geo) == GLOW_OK && geo.lightmap_page)
+        for (uint32_t t = 0; t < geo.triangle_count; t++) {
+            if (geo.lightmap_page[t] >= m->lightmap_count) abort();
+            acc += geo.lightmap_page[t];
+        }
     const uint8_t *sh = glow__bake_shlk_blocks(bake);
     if (sh) {
         size_t bs = glow_bake_shlk_block_size(m->sh_bands);

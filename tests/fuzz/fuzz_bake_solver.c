@@ -96,7 +96,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
                 check_finite(o->cache_sh, (uint64_t)o->cache_count * o->coeff_count);
                 check_finite(o->grid_sh,
                              (uint64_t)o->coeff_count * o->grid_dims[0] * o->grid_dims[1] * o->grid_dims[2]);
-                check_finite(o->lightmap_sh, (uint64_t)o->coeff_count * o->lightmap_width * o->lightmap_height);
+                check_finite(o->lightmap_sh,
+                             (uint64_t)o->coeff_count * o->lightmap_width * o->lightmap_height * o->lightmap_pages);
             }
             solved += u == 3;
             glow_system_destroy(sys);

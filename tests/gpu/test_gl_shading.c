@@ -9,7 +9,9 @@
  *     direction as the normal, diffuse) vs glow_sample_grid_oriented the same way, and glow_sample_lightmap at 512 random
  *     uvs vs glow_sample_lightmap: |diff| <= 1e-4 · (max |result|) — the two blend the same texels with
  *     weights renormalised in a different order; glow_sample_lightmap_detail at the same uvs on the
- *     GPU's lightmap detail vs glow_sample_lightmap_detail: |diff| <= 1e-5 · (max |result|).
+ *     GPU's lightmap detail vs glow_sample_lightmap_detail: |diff| <= 1e-5 · (max |result|);
+ *   - a lightmap of pages (glow-bake --lightmap-max-size, format 1.7): glow_sample_lightmap_page and
+ *     glow_sample_lightmap_detail_page at 512 random pages and uvs vs the C ones, the same bounds.
  * Exits 77 (skipped) without a GL 4.5 context. */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -341,6 +343,114 @@ static void test_sampling(void **state) {
     glow_context_destroy(ctx);
 }
 
+/* A lightmap of several pages (issue 16 item 5): the GPU's lightmap texture holds page g's planes at layers
+ * g · planes + p and its valid mask and detail texture the pages one above another; the GLSL lookups of a
+ * page (glow_sample_lightmap_page, glow_sample_lightmap_detail_page) on them equal the C ones on the GPU's
+ * caches and detail, read back, at random pages and uvs (so outputs.comp's placement is checked too). */
+static void test_sampling_pages(void **state) {
+    (void)state;
+    glow_context *ctx;
+    glow_bake *bake;
+    glow_system *sys;
+    glow_gl_system *gs;
+    const glow_pc_settings st = {.quality = GLOW_PC_QUALITY_LOW, .surfels = 1024, .links = 32, .bands = 3, .threads = 2,
+                                 .seed = 1, .grid_spacing = 0.5f, .lightmap_caches = 1000, .no_sky = true,
+                                 .lightmap_max_size = 28};
+    lit_cornell(&st, 3, 2, &ctx, &bake, &sys, &gs);
+    const glow_gl_outputs *go = glow_gl_system_outputs(gs);
+    glow_cache_outputs co = *glow_system_outputs(sys);
+    const uint32_t P = co.lightmap_pages;
+    printf("  %u lightmap pages of %ux%u (GL: %u), detail %ux%u a page\n", P, co.lightmap_width, co.lightmap_height,
+           go->lightmap_pages, go->detail_width, go->detail_height);
+    assert_true(P >= 3);
+    assert_int_equal(go->lightmap_pages, P);
+    assert_int_not_equal(go->lightmap_detail_texture, 0);
+    const size_t ncs = (size_t)co.cache_count * co.coeff_count;
+    float *sh = malloc(ncs * sizeof *sh);
+    assert_int_equal(glow_gl_system_read_cache_sh(gs, sh, ncs), GLOW_OK);
+    co.cache_sh = sh;
+    const size_t dn = (size_t)go->detail_width * go->detail_height * P * 4u;
+    float *det = malloc(dn * sizeof *det);
+    gl.GetTextureImage(go->lightmap_detail_texture, 0, GL_RGBA, GL_FLOAT, (GLsizei)(dn * sizeof *det), det);
+    co.lightmap_detail = det;
+    enum { N = 512 };
+    float uvs[N * 4];
+    for (int i = 0; i < N; ++i) {
+        uvs[4 * i] = frand(), uvs[4 * i + 1] = frand();
+        uvs[4 * i + 2] = (float)(uint32_t)(frand() * (float)P); /* the page */
+        uvs[4 * i + 3] = 2.0f * frand() - 1.0f;                 /* a normal's z */
+    }
+    const char *body =
+        "layout(local_size_x = 64) in;\n"
+        "layout(std430, binding = 1) readonly buffer U { vec4 uvs[]; };\n"
+        "layout(std430, binding = 2) writeonly buffer R { vec4 res[]; };\n"
+        "layout(binding = 2) uniform sampler2DArray lm; layout(binding = 3) uniform usampler2D lm_valid;\n"
+        "layout(binding = 4) uniform sampler2D det; uniform int pages;\n"
+        "void main() { uint i = gl_GlobalInvocationID.x; vec4 sh[GLOW_SH_PLANES]; int page = int(uvs[i].z);\n"
+        "  float z = uvs[i].w; vec3 n = vec3(sqrt(max(0.0, 1.0 - z * z)), 0.0, z);\n"
+        "  bool l = glow_sample_lightmap_page(lm, lm_valid, page, uvs[i].xy, sh);\n"
+        "  res[2u * i] = vec4(glow_shade_sh(sh, n, 1.0), l ? 1.0 : 0.0);\n"
+        "  res[2u * i + 1u] = vec4(glow_sample_lightmap_detail_page(det, pages, page, uvs[i].xy), 0.0); }\n";
+    GLuint p = compute_program(3, 2, body);
+    GLuint bu = ssbo(sizeof uvs, uvs), br = ssbo(N * 2 * 16, NULL);
+    gl.UseProgram(p);
+    gl.Uniform1i(gl.GetUniformLocation(p, "pages"), (GLint)go->lightmap_pages);
+    gl.BindTextureUnit(2, go->lightmap_texture);
+    gl.BindTextureUnit(3, go->lightmap_valid_texture);
+    gl.BindTextureUnit(4, go->lightmap_detail_texture);
+    gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, bu);
+    gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, br);
+    gl.DispatchCompute(N / 64, 1, 1);
+    gl.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+    static float res[N * 8];
+    gl.GetNamedBufferSubData(br, 0, sizeof res, res);
+    float *coeffs = malloc(co.coeff_count * sizeof *coeffs);
+    double worst = 0.0, scale = 0.0, dworst = 0.0, dscale = 0.0;
+    int hits = 0, dhits = 0, mismatched_ok = 0, pages_hit[64] = {0};
+    for (int i = 0; i < N; ++i) {
+        const uint32_t page = (uint32_t)uvs[4 * i + 2];
+        const float z = uvs[4 * i + 3], n[3] = {sqrtf(fmaxf(0.0f, 1.0f - z * z)), 0.0f, z};
+        const glow_result rr = glow_sample_lightmap_page(&co, page, uvs[4 * i], uvs[4 * i + 1], coeffs);
+        const float *g = res + 8 * i;
+        if ((rr == GLOW_OK) != (g[3] == 1.0f)) mismatched_ok++;
+        if (rr == GLOW_OK) {
+            hits++;
+            if (page < 64) pages_hit[page] = 1;
+            float ref[3];
+            glow_shade_sh(coeffs, 3, 2, n, 1.0f, ref);
+            for (int c = 0; c < 3; ++c) {
+                worst = fmax(worst, fabs((double)g[c] - ref[c]));
+                scale = fmax(scale, fabs(ref[c]));
+            }
+        }
+        float dref[3];
+        dhits += glow_sample_lightmap_detail_page(&co, page, uvs[4 * i], uvs[4 * i + 1], dref) == GLOW_OK;
+        for (int c = 0; c < 3; ++c) {
+            dworst = fmax(dworst, fabs((double)g[4 + c] - dref[c]));
+            dscale = fmax(dscale, fabs(dref[c]));
+        }
+    }
+    int npages_hit = 0;
+    for (int k = 0; k < 64; ++k) npages_hit += pages_hit[k];
+    printf("  paged lightmap: %d/%d lookups hit a cache on %d pages, worst |GLSL - C| %.2e (max %.3g); detail %d/%d, "
+           "worst %.2e (max %.3g)\n", hits, N, npages_hit, worst, scale, dhits, N, dworst, dscale);
+    assert_int_equal(mismatched_ok, 0);
+    assert_true(hits > N / 10 && scale > 0.0 && npages_hit == (int)(P < 64 ? P : 64));
+    assert_true(worst <= 1e-4 * scale);
+    assert_true(dhits > N / 20 && dscale > 0.0);
+    assert_true(dworst <= 1e-5 * dscale);
+    /* a page beyond the lightmap's is refused by the C lookup */
+    assert_int_equal(glow_sample_lightmap_page(&co, P, 0.5f, 0.5f, coeffs), GLOW_ERROR_INVALID_ARGUMENT);
+    free(coeffs), free(sh), free(det);
+    GLuint bufs[2] = {bu, br};
+    gl.DeleteBuffers(2, bufs);
+    gl.DeleteProgram(p);
+    glow_gl_system_destroy(gs);
+    glow_system_destroy(sys);
+    glow_bake_destroy(bake);
+    glow_context_destroy(ctx);
+}
+
 /* A refined grid (glow-bake --grid-refine 2) on the GPU: glow_sample_grid_refined (GLSL, plain and
  * oriented) at 512 random points of the built-in Cornell box (a little outside the grid too) against
  * glow_sample_grid / glow_sample_grid_oriented (C) on the same caches, read back: the brick atlas, the
@@ -466,7 +576,7 @@ int main(void) {
         return 77;
     }
     const struct CMUnitTest tests[] = {cmocka_unit_test(test_basis_and_lobes), cmocka_unit_test(test_sampling),
-                                       cmocka_unit_test(test_refined)};
+                                       cmocka_unit_test(test_sampling_pages), cmocka_unit_test(test_refined)};
     int rc = cmocka_run_group_tests(tests, NULL, NULL);
     glow_glctx_destroy(g_ctx);
     return rc;

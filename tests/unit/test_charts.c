@@ -526,6 +526,87 @@ static void test_huge_chart_reduces_density(void **state) {
     scene_free(&s);
 }
 
+/* Pages (issue 16 item 5): 40 boxes (240 charts of about 12x12 texels) do not fit one 64x64 atlas; with
+ * 64 pages allowed they go onto several 64x64 pages at the density asked for, no warning, every
+ * triangle's UVs in [0,1] of its page, and on each page the charts' footprints `padding` apart; the
+ * page count capped at 2 lowers the density (warning), and a 4096 side gives glow__charts_pack's one
+ * atlas, byte for byte. */
+static void test_pages(void **state) {
+    (void)state;
+    builder b = {0};
+    for (int i = 0; i < 40; ++i) {
+        const double x = 3.0 * (i % 8), z = -3.0 * (i / 8);
+        b_box(&b, (double[3]){x, 0, z}, (double[3]){x + 1, 1, z + 1}, true, 1);
+    }
+    glow__scene s;
+    b_finish(&b, &s);
+    capture cap = {0};
+    glow__log log = {.fn = capture_log, .user = &cap};
+    glow__chart_set cs;
+    assert_int_equal(glow__charts_segment(&s, NULL, &log, &cs), GLOW_OK);
+    const size_t n3 = 3 * (size_t)s.tri_count;
+    float(*uv)[2] = malloc(n3 * sizeof *uv), (*uv1)[2] = malloc(n3 * sizeof *uv1);
+    uint32_t *page = malloc((size_t)s.tri_count * sizeof *page);
+    assert_true(uv && uv1 && page);
+    uint32_t w, h, pages;
+    float used;
+    assert_int_equal(glow__charts_pack_pages(&cs, 10.0f, 2, 64, GLOW__CHART_MAX_PAGES, &log, uv, page, &pages, &w, &h,
+                                             &used, NULL), GLOW_OK);
+    print_message("pages: %u charts on %u pages of %ux%u at %.3g texels/m\n", cs.chart_count, pages, w, h, (double)used);
+    assert_true(pages >= 3 && w == 64 && h == 64);
+    assert_true(used == 10.0f);
+    assert_int_equal(cap.warnings, 0);
+    /* each chart on one page; its texel bounding box inside the page, and 2 texels from other charts' there */
+    double(*box)[4] = malloc((size_t)cs.chart_count * sizeof *box);
+    uint32_t *cpage = malloc((size_t)cs.chart_count * sizeof *cpage);
+    assert_true(box && cpage);
+    for (uint32_t c = 0; c < cs.chart_count; ++c) {
+        box[c][0] = box[c][1] = INFINITY, box[c][2] = box[c][3] = -INFINITY;
+        cpage[c] = page[cs.chart_tris[cs.chart_start[c]]];
+        for (uint32_t j = cs.chart_start[c]; j < cs.chart_start[c + 1]; ++j) {
+            const uint32_t t = cs.chart_tris[j];
+            assert_int_equal(page[t], cpage[c]);
+            assert_true(page[t] < pages);
+            for (int k = 0; k < 3; ++k) {
+                const float u = uv[3 * (size_t)t + k][0], v = uv[3 * (size_t)t + k][1];
+                assert_true(u >= 0.0f && u <= 1.0f && v >= 0.0f && v <= 1.0f);
+                box[c][0] = fmin(box[c][0], u * w), box[c][1] = fmin(box[c][1], v * h);
+                box[c][2] = fmax(box[c][2], u * w), box[c][3] = fmax(box[c][3], v * h);
+            }
+        }
+    }
+    uint32_t used_pages = 0;
+    for (uint32_t p = 0; p < pages; ++p) {
+        bool any = false;
+        for (uint32_t c = 0; c < cs.chart_count; ++c) any |= cpage[c] == p;
+        used_pages += any;
+    }
+    assert_int_equal(used_pages, pages);
+    for (uint32_t a = 0; a < cs.chart_count; ++a)
+        for (uint32_t c = a + 1; c < cs.chart_count; ++c) {
+            if (cpage[a] != cpage[c]) continue;
+            const double gap = fmax(fmax(box[c][0] - box[a][2], box[a][0] - box[c][2]),
+                                    fmax(box[c][1] - box[a][3], box[a][1] - box[c][3]));
+            if (!(gap >= 2.0 - 1e-3)) fail_msg("charts %u and %u on page %u are %g texels apart", a, c, cpage[a], gap);
+        }
+    /* at most 2 pages: the density is lowered, with the warning */
+    assert_int_equal(glow__charts_pack_pages(&cs, 10.0f, 2, 64, 2, &log, uv1, page, &pages, &w, &h, &used, NULL), GLOW_OK);
+    assert_true(pages <= 2 && used < 10.0f && cap.warnings == 1);
+    /* one atlas of up to 4096: glow__charts_pack's */
+    cap.warnings = 0;
+    uint32_t w1, h1;
+    float used1;
+    assert_int_equal(glow__charts_pack_pages(&cs, 10.0f, 2, 4096, GLOW__CHART_MAX_PAGES, &log, uv, page, &pages, &w, &h,
+                                             &used, NULL), GLOW_OK);
+    assert_int_equal(glow__charts_pack(&cs, 10.0f, 2, &log, uv1, &w1, &h1, &used1, NULL), GLOW_OK);
+    assert_true(pages == 1 && w == w1 && h == h1 && used == used1 && cap.warnings == 0);
+    assert_memory_equal(uv, uv1, n3 * sizeof *uv);
+    for (uint32_t t = 0; t < s.tri_count; ++t) assert_int_equal(page[t], 0);
+    free(box), free(cpage), free(uv), free(uv1), free(page);
+    glow__charts_free(&cs);
+    scene_free(&s);
+}
+
 static void test_bad_density_rejected(void **state) {
     (void)state;
     builder b = {0};
@@ -665,7 +746,7 @@ int main(void) {
         cmocka_unit_test(test_spiral_is_split),  cmocka_unit_test(test_huge_chart_reduces_density),
         cmocka_unit_test(test_bad_density_rejected), cmocka_unit_test(test_messy_topology),
         cmocka_unit_test(test_60k_triangles),    cmocka_unit_test(test_sponza),
-        cmocka_unit_test(test_small_charts_merge),
+        cmocka_unit_test(test_small_charts_merge), cmocka_unit_test(test_pages),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -467,15 +467,18 @@ static int jumps(const char *bake_path, const char *scene_path, uint32_t max_pai
     }
     const float spacing = 1.0f / s.info.texel_density;
     uint32_t cand = 0;
-    pa = malloc(sizeof(uint32_t) * 2 * (size_t)W * H);
-    pb = malloc(sizeof(uint32_t) * 2 * (size_t)W * H);
+    const uint32_t P = o->lightmap_pages ? o->lightmap_pages : 1u; /* neighbours within a page (format 1.7) */
+    pa = malloc(sizeof(uint32_t) * 2 * (size_t)W * H * P);
+    pb = malloc(sizeof(uint32_t) * 2 * (size_t)W * H * P);
     if (!pa || !pb) goto done;
+    for (uint32_t pg = 0; pg < P; ++pg)
     for (uint32_t y = 0; y < H; ++y)
         for (uint32_t x = 0; x < W; ++x)
             for (int d = 0; d < 2; ++d) {
                 uint32_t x2 = x + (d == 0), y2 = y + (d == 1);
                 if (x2 >= W || y2 >= H) continue;
-                uint32_t a = o->lightmap_map[y * W + x], b = o->lightmap_map[y2 * W + x2];
+                const uint32_t *map = o->lightmap_map + (size_t)pg * W * H;
+                uint32_t a = map[y * W + x], b = map[y2 * W + x2];
                 if (a == GLOW_MAP_EMPTY || b == GLOW_MAP_EMPTY || a == b) continue;
                 const float *na = s.caches[a].normal, *nb = s.caches[b].normal;
                 float dx = 0, dot = na[0] * nb[0] + na[1] * nb[1] + na[2] * nb[2];

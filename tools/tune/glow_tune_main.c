@@ -81,6 +81,7 @@ typedef struct surfel_probe {
     float pos[3], nrm[3], area, u, v;
     float albedo[3]; /* the material's, clamped to [0, 0.999] as the runtime does (textures not included) */
     int has_uv;
+    uint32_t page; /* its triangle's lightmap page */
 } surfel_probe;
 
 typedef struct sampler {
@@ -285,6 +286,7 @@ static int sampler_init(sampler *sm, const glow_system *sys, const glow_bake *ba
         p->u = (float)((b0 * uv[0] + b1 * uv[2] + b2 * uv[4]) / 65535.0);
         p->v = (float)((b0 * uv[1] + b1 * uv[3] + b2 * uv[5]) / 65535.0);
         p->has_uv = 1;
+        p->page = geo.lightmap_page ? geo.lightmap_page[t] : 0u;
     }
     /* the direct light the runtime receives: the host's own hook over all surfels (it ignores `worker`) */
     float *e = malloc(sizeof(float) * 3 * (view.count ? view.count : 1));
@@ -320,7 +322,7 @@ static void indirect_energy(sampler *sm, const glow_cache_outputs *o, double out
     sm->from_lightmap = sm->from_grid = sm->missed = 0;
     for (uint32_t i = 0; i < sm->count; ++i) {
         const surfel_probe *p = &sm->s[i];
-        int ok = p->has_uv && glow_sample_lightmap(o, p->u, p->v, sm->coeffs) == GLOW_OK;
+        int ok = p->has_uv && glow_sample_lightmap_page(o, p->page, p->u, p->v, sm->coeffs) == GLOW_OK;
         if (ok) sm->from_lightmap++;
         else if (o->grid_sh && glow_sample_grid(o, p->pos, sm->coeffs) == GLOW_OK) ok = 1, sm->from_grid++;
         if (!ok) {

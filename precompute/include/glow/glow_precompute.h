@@ -183,6 +183,11 @@ typedef struct glow_pc_settings {
     uint32_t sky_rays;          /* rays per surfel for the sky transfer, and 8x as many per grid cache; 0 =
                                    128 (the CPU host's sky_rays default, whose rays they are), at most 65536
                                    (--sky-rays). \since 0.2 */
+    uint32_t lightmap_max_size; /* texels a side of a lightmap atlas, a multiple of 4 in 4..4096; 0 = 4096.
+                                   Generated charts that do not fit one atlas at the density asked for go
+                                   onto several pages of this size (up to 64, bake format 1.7) rather than
+                                   to a lower density; a mesh's own second UV set stays one atlas
+                                   (--lightmap-max-size). \since 0.2 */
 } glow_pc_settings;
 
 typedef struct glow_pc_stats {
@@ -241,6 +246,8 @@ typedef struct glow_pc_stats {
                                  the coarse lattice's) \since 0.2 */
     double sky_seconds;       /* the sky transfer's share of the caches stage (0 with no_sky) \since 0.2 */
     uint32_t sky_rays;        /* its rays per surfel (8x per grid cache), 0 = none written \since 0.2 */
+    uint32_t lightmap_pages;  /* atlases of lightmap_width x lightmap_height (1 with a lightmap that fits
+                                 one; lightmap_max_size) \since 0.2 */
 } glow_pc_stats;
 
 /** Resolves presets: fills every zero field of `settings` from its quality. \since 0.1 */

@@ -59,11 +59,12 @@ extern "C" {
 /* The bake format this runtime reads and glow-bake writes: a bake of another major is refused
  * (GLOW_ERROR_VERSION_MISMATCH); a newer minor loads, its unknown sections skipped. */
 #define GLOW_BAKE_FORMAT_VERSION_MAJOR 1u
-#define GLOW_BAKE_FORMAT_VERSION_MINOR 6u /* 1.1: material UVs and texture paths (TUV0, TEXP); 1.2: lightmap detail (LDET);
+#define GLOW_BAKE_FORMAT_VERSION_MINOR 7u /* 1.1: material UVs and texture paths (TUV0, TEXP); 1.2: lightmap detail (LDET);
                                             * 1.3: leaf surfels may differ in area (an adapted density);
                                             * 1.4: systems of a world and their links to neighbours (XREF);
                                             * 1.5: the grid refined near geometry (GFIN);
-                                            * 1.6: the sky transfer (SKYT) */
+                                            * 1.6: the sky transfer (SKYT);
+                                            * 1.7: lightmap pages, a page per triangle (TPAG) */
 #define GLOW_BAKE_FORMAT_MAJOR 1 /* the bake major this runtime reads */
 
 /* GLOW_API marks the public functions. A shared build (BUILD_SHARED_LIBS) compiles the libraries with
@@ -156,7 +157,8 @@ typedef struct glow_bake_info {
     uint32_t links_per_cache, sh_bands, link_kind;
     uint32_t material_count, triangle_count;
     uint32_t grid_dims[3];
-    uint32_t lightmap_count, lightmap_width, lightmap_height;
+    uint32_t lightmap_count, lightmap_width, lightmap_height; /* count: pages of width x height (0 without a
+                                                                 lightmap; > 1 since format 1.7) */
     float bounds_min[3], bounds_max[3];
     float surfel_area, grid_spacing, texel_density; /* surfel_area: nominal, scene_area / surfel_count */
     double scene_area;
@@ -210,6 +212,9 @@ typedef struct glow_bake_geometry {
     const float *material_uv;   /* NOT strided: [triangle_count * 6] floats, the mesh's first UV set per
                                    corner (u0 v0 u1 v1 u2 v2; v = 1 is a texture's top row), or NULL
                                    (a mesh without UVs, or a bake before format 1.1) */
+    const uint32_t *lightmap_page; /* \since 0.2. NOT strided: [triangle_count] each triangle's lightmap
+                                   page (its lightmap_uv are in [0,1] within it; glow_sample_lightmap_page),
+                                   or NULL when the lightmap has one page (page 0 for all) */
 } glow_bake_geometry;
 /** Fills `out_geometry` (triangle_count 0 when the bake carries no geometry). \threadsafety Any
  * thread. \since 0.1 */
@@ -254,7 +259,8 @@ typedef struct glow_cache_info {
     float position[3]; /* m */
     float normal[3];   /* lightmap caches: the surface normal (unit); grid caches: 0 */
     uint32_t kind;     /* glow_cache_kind */
-    uint32_t texel;    /* grid: cell index (x fastest); lightmap: y * lightmap_width + x */
+    uint32_t texel;    /* grid: cell index (x fastest); lightmap: page * lightmap_width * lightmap_height +
+                          y * lightmap_width + x (page 0 with one page) */
 } glow_cache_info;
 /** Copies caches [first, first + count) (grid caches first, then lightmap caches; the order of the
  * outputs' cache indices), e.g. for debug views or to place effects at the caches.
@@ -606,6 +612,13 @@ typedef struct glow_cache_outputs {
                                     lattice, x fastest, 0xFFFFFFFF = none (inside geometry) */
     const uint8_t *grid_brick_visibility; /* [brick][R³ fine cells, x fastest][8 octants]: as
                                     grid_visibility, for the fine cells */
+    /* \since 0.2 (bake format 1.7): the lightmap's pages, atlases of lightmap_width x lightmap_height
+     * (1 when it fits one; 0 without a lightmap). With P pages lightmap_sh is [coeff_count][P][height]
+     * [width], lightmap_map [P][height][width] and lightmap_detail [P][detail_height][detail_width][4]:
+     * each coefficient plane holds the pages one after the other, so with P = 1 every field reads as
+     * before. A triangle's page: glow_bake_geometry.lightmap_page; lookups: glow_sample_lightmap_page,
+     * glow_sample_lightmap_detail_page. Gutter and seam copies stay within their page. */
+    uint32_t lightmap_pages;
 } glow_cache_outputs;
 /** The outputs, owned by the system, valid (and unchanged) until the next update or destroy.
  * NULL for a NULL system. \threadsafety Read concurrently, but not during an update. \since 0.1 */
@@ -786,6 +799,15 @@ GLOW_API glow_result glow_sample_lightmap(const glow_cache_outputs *outputs, flo
  * \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT (NULL, no detail); GLOW_ERROR_OUT_OF_RANGE when
  * none of the 4 texels covers a surface (out_rgb zeroed). \since 0.1 */
 GLOW_API glow_result glow_sample_lightmap_detail(const glow_cache_outputs *outputs, float u, float v, float out_rgb[3]);
+/** glow_sample_lightmap on page `page` of the lightmap (outputs->lightmap_pages; (u, v) in [0,1]² of
+ * that page, which bounds the lookup: it clamps to the page's edge). Page 0 is glow_sample_lightmap.
+ * \returns as glow_sample_lightmap; GLOW_ERROR_INVALID_ARGUMENT also for page >= lightmap_pages.
+ * \since 0.2 */
+GLOW_API glow_result glow_sample_lightmap_page(const glow_cache_outputs *outputs, uint32_t page, float u, float v,
+                                               float *out_coeffs);
+/** glow_sample_lightmap_detail on page `page` (as glow_sample_lightmap_page). \since 0.2 */
+GLOW_API glow_result glow_sample_lightmap_detail_page(const glow_cache_outputs *outputs, uint32_t page, float u,
+                                                      float v, float out_rgb[3]);
 
 #ifdef __cplusplus
 }

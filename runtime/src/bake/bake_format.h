@@ -44,7 +44,7 @@
 #define GLOW_SECTION_LEVL GLOW_FOURCC('L', 'E', 'V', 'L') /* uint32_t[level_count + 1] level starts */
 #define GLOW_SECTION_CACH GLOW_FOURCC('C', 'A', 'C', 'H') /* glow_bake_cache[cache_count] */
 #define GLOW_SECTION_GRID GLOW_FOURCC('G', 'R', 'I', 'D') /* uint32_t[dx*dy*dz] cell -> cache map */
-#define GLOW_SECTION_LMAP GLOW_FOURCC('L', 'M', 'A', 'P') /* uint32_t[w*h] texel -> cache map */
+#define GLOW_SECTION_LMAP GLOW_FOURCC('L', 'M', 'A', 'P') /* uint32_t[pages*w*h] texel -> cache map */
 #define GLOW_SECTION_LINK GLOW_FOURCC('L', 'I', 'N', 'K') /* glow_bake_link_block[cache_count*blocks] */
 #define GLOW_SECTION_SHLK GLOW_FOURCC('S', 'H', 'L', 'K') /* full-SH links (optional), see below */
 #define GLOW_SECTION_GEOM GLOW_FOURCC('G', 'E', 'O', 'M') /* glow_bake_triangle[triangle_count] */
@@ -71,6 +71,13 @@
 /* Since 1.6 (optional; glow-bake writes it unless --no-sky): the sky transfer, see glow_bake_sky.
  * Readers that predate it skip it (their hosts trace the sky themselves). */
 #define GLOW_SECTION_SKYT GLOW_FOURCC('S', 'K', 'Y', 'T')
+
+/* Since 1.7 (with GEOM, exactly when lightmap_count > 1; glow-bake --lightmap-max-size): the lightmap
+ * page of each GEOM triangle, uint32_t[triangle_count], each < lightmap_count. The pages are
+ * lightmap_count atlases of lightmap_width x lightmap_height, stacked: a lightmap texel's index (LMAP,
+ * CACH) is page * width * height + y * width + x, and a triangle's lm_uv are in [0,1] within its page.
+ * Readers that predate it refuse lightmap_count > 1 (GLOW_ERROR_CORRUPT_DATA). */
+#define GLOW_SECTION_TPAG GLOW_FOURCC('T', 'P', 'A', 'G')
 
 /* Cache-map entries (GRID and LMAP): the low 31 bits index the cache array. */
 #define GLOW_MAP_EMPTY 0xFFFFFFFFu   /* no cache here; samples read zero */
@@ -133,7 +140,8 @@ typedef struct glow_bake_meta {
     /*  80 */ float grid_origin[3];       /* centre of grid cell (0,0,0), m */
     /*  92 */ float grid_spacing;         /* m */
     /*  96 */ uint32_t grid_dims[3];      /* cells in x, y, z (x fastest in GRID) */
-    /* 108 */ uint32_t lightmap_count;    /* 0 or 1 atlases */
+    /* 108 */ uint32_t lightmap_count;    /* atlases (pages) of width x height: 0, 1, or (1.7, TPAG) up to
+                                             GLOW_BAKE_MAX_LIGHTMAP_PAGES; LMAP holds them stacked */
     /* 112 */ uint32_t lightmap_width;
     /* 116 */ uint32_t lightmap_height;
     /* 120 */ float texel_density;        /* texels per m */
@@ -307,7 +315,8 @@ typedef struct glow_bake_triangle {
  *     correction = sum_k weight[k] * R[surfel[k]]      k in [first[i], first[i + 1])
  * with R a leaf's radiance (flux / (pi area), as for LINK), in the units of glow_shade_sh's result
  * (cosine-lobe mean radiance about the texel's normal); weights are signed. Payload:
- *     glow_bake_detail; uint32_t texel[texel_count] (y * width + x, ascending);
+ *     glow_bake_detail; uint32_t texel[texel_count] (page * width * height + y * width + x, ascending;
+ *     width x height a page, lightmap_count pages);
  *     uint32_t first[texel_count + 1] (first[0] = 0, non-decreasing, first[texel_count] = link_count);
  *     uint32_t surfel[link_count] (< surfel_count); float weight[link_count] (finite). */
 typedef struct glow_bake_detail {
@@ -318,6 +327,7 @@ typedef struct glow_bake_detail {
     /* 20 */ uint32_t reserved[3];
 } glow_bake_detail; /* 32 */
 #define GLOW_BAKE_DETAIL_MAX_FACTOR 8u
+#define GLOW_BAKE_MAX_LIGHTMAP_PAGES 256u /* lightmap_count (glow-bake writes at most 64) */
 
 /* XREF (since 1.4): light across systems. A world (glow-bake --system-area) is split into systems, each
  * an ordinary bake; a system's links may also read nodes of its dependencies (neighbouring systems

@@ -183,7 +183,7 @@ glow_result glow_render_ddish(const glow_render_scene *sc, const char *bake_path
     glow_cache_info *caches = malloc((size_t)(n ? n : 1) * sizeof *caches);
     float *sh = calloc((size_t)(n ? n : 1) * cc, sizeof *sh);
     const size_t grid_cells = o.grid_sh ? (size_t)o.grid_dims[0] * o.grid_dims[1] * o.grid_dims[2] : 0;
-    const size_t lm_texels = o.lightmap_sh ? (size_t)o.lightmap_width * o.lightmap_height : 0;
+    const size_t lm_texels = o.lightmap_sh ? (size_t)o.lightmap_width * o.lightmap_height * o.lightmap_pages : 0;
     float *grid = grid_cells ? calloc(grid_cells * cc, sizeof *grid) : NULL;
     float *lm = lm_texels ? calloc(lm_texels * cc, sizeof *lm) : NULL;
     double *ms = calloc(frames, sizeof *ms);

@@ -73,6 +73,7 @@ typedef struct glow_view {
     glow_render_glossy glossy; /* glow_render_glow_settings.glossy */
     glow_view_ggx *ggx; /* [material_count] with the scene's GGX layers, else NULL */
     float (*lm_uv)[6]; /* [tri] the bake's lightmap UV per corner, or NULL without a lightmap */
+    const uint32_t *lm_page; /* [tri] each triangle's lightmap page (the bake's view), NULL with one page */
 } glow_view;
 /* Loads the bake (checked against the scene's mesh), creates the host and the system and runs
  * gs->bounce_iterations (0 = 192) feedback iterations. `cl` (initialised lock) must outlive the view. */

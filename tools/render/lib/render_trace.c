@@ -351,19 +351,21 @@ static void glow_indirect(const render_ctx *c, const surf *s, float *coeffs, wor
         float b0 = 1.0f - s->b1 - s->b2;
         float u = b0 * uv[0] + s->b1 * uv[2] + s->b2 * uv[4];
         float v = b0 * uv[1] + s->b1 * uv[3] + s->b2 * uv[5];
-        ok = glow_sample_lightmap(o, u, v, coeffs) == GLOW_OK;
+        const uint32_t page = c->gv->lm_page ? c->gv->lm_page[s->tri] : 0u; /* the triangle's atlas */
+        ok = glow_sample_lightmap_page(o, page, u, v, coeffs) == GLOW_OK;
         if (ok) {
             ws->lm++;
             const uint32_t W = o->lightmap_width, H = o->lightmap_height;
             const float fx = u * (float)W, fy = v * (float)H; /* the texel square holding (u, v), clamped */
             const uint32_t tx = fx > 0.0f ? (fx < (float)W ? (uint32_t)fx : W - 1u) : 0u;
-            const uint32_t ty = fy > 0.0f ? (fy < (float)H ? (uint32_t)fy : H - 1u) : 0u;
+            /* (rows of the pages stacked: the texel index page * W * H + y * W + x is ty * W + tx) */
+            const uint32_t ty = (fy > 0.0f ? (fy < (float)H ? (uint32_t)fy : H - 1u) : 0u) + page * H;
             const uint32_t cache = o->lightmap_map[(size_t)ty * W + tx];
             texel[0] = (float)(tx + 1u);
             texel[1] = (float)(ty + 1u);
             texel[2] = cache == UINT32_MAX ? 0.0f : (float)cache + 1.0f;
         }
-        if (ok && o->lightmap_detail && !c->gv->no_detail) glow_sample_lightmap_detail(o, u, v, det);
+        if (ok && o->lightmap_detail && !c->gv->no_detail) glow_sample_lightmap_detail_page(o, page, u, v, det);
     }
     if (!ok && o->grid_sh) { /* as a dynamic object's surface (with grid_only: 0.1 % of the diagonal off it) */
         float p[3];
@@ -883,6 +885,7 @@ glow_result glow__view_create(const glow_render_scene *sc, const char *bake_path
     const unsigned char *base = (const unsigned char *)geo.positions;
     const unsigned char *lmb = (const unsigned char *)geo.lightmap_uv;
     const bool has_lm = info.lightmap_width > 0 && info.lightmap_cache_count > 0;
+    gv->lm_page = has_lm ? geo.lightmap_page : NULL; /* (a view into the bake, which the view keeps) */
     if (has_lm && !(gv->lm_uv = malloc((size_t)m->tri_count * sizeof *gv->lm_uv)))
         FAIL(GLOW_ERROR_OUT_OF_MEMORY, "%s: out of memory", bake_path);
     for (uint32_t t = 0; t < m->tri_count; ++t) {

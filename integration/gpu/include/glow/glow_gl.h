@@ -43,8 +43,11 @@
  * incident radiance W/(m²·sr)), 4 per RGBA32F texel ("planes"):
  *   grid_texture      GL_TEXTURE_3D (dx, dy, dz · planes): plane p of cell (x,y,z) at (x, y, z + p·dz)
  *   grid_mask_texture GL_TEXTURE_3D RG32UI (dx, dy, dz): per cell and octant, the corners a lookup blends
- *   lightmap_texture  GL_TEXTURE_2D_ARRAY (w, h, planes); lightmap_valid_texture GL_TEXTURE_2D R8UI
- *   lightmap_detail_texture GL_TEXTURE_2D RGBA32F (bakes with a lightmap detail): RGB correction, A coverage
+ *   lightmap_texture  GL_TEXTURE_2D_ARRAY (w, h, planes · pages): plane p of page g at layer g·planes + p;
+ *                     lightmap_valid_texture GL_TEXTURE_2D R8UI (w, h · pages), the pages one above another
+ *   lightmap_detail_texture GL_TEXTURE_2D RGBA32F (bakes with a lightmap detail): RGB correction, A coverage,
+ *                     (detail_width, detail_height · pages) likewise
+ *   (pages: lightmap_pages, 1 unless the bake's lightmap has several, format 1.7; glow_sample_lightmap_page)
  *   cache_sh_buffer   SSBO float[cache_count][coeff_count] (the bounce state)
  *   flux_buffer       SSBO vec4[node_count]: node flux YCoCg, w = 1/(π area) (for debug views)
  * shaders/include/glow_shading.glsl samples them (glow_sample_grid / glow_sample_lightmap / glow_shade_sh).
@@ -118,6 +121,12 @@ typedef struct glow_gl_outputs {
      * cell and octant the corners a lookup blends (visible and holding a cache), as grid_mask_texture */
     uint32_t grid_refine, grid_fine_atlas_x;
     uint32_t grid_brick_texture, grid_fine_texture, grid_fine_mask_texture;
+    /* \since 0.2: the lightmap's pages (glow_cache_outputs.lightmap_pages; 0 without a lightmap). With P
+     * pages lightmap_texture has planes · P layers (page g's plane p at layer g · planes + p), and
+     * lightmap_valid_texture and lightmap_detail_texture are P pages high (page g's rows from g · height);
+     * lightmap_height and detail_height stay a page's. glow_shading.glsl glow_sample_lightmap_page and
+     * glow_sample_lightmap_detail_page take the page (a triangle's: glow_bake_geometry.lightmap_page). */
+    uint32_t lightmap_pages;
 } glow_gl_outputs;
 
 /* GPU time of the last update, per stage, from GL timer queries (ms). */
