@@ -7,8 +7,12 @@
  * which multi-bounce amplifies to +22 % radiosity at albedo 0.9). For lightmap caches — whose SH is
  * used with the cosine lobe around their normal — the linker therefore picks the cone's 1 - cos α so
  * that the cone's diffuse response at the cache normal, with the bake's band count, equals the
- * cluster's Σ ω_i K_L(d_i·n) exactly; the direction stays the cluster's mean direction. Grid caches
- * keep ω (their use is any direction, and ω is what the l = 0 band needs). */
+ * cluster's exact cosine-weighted response Σ ω_i max(0, d_i·n)/π; the direction stays the cluster's
+ * mean direction. The target is the exact cosine, not the band-limited kernel K_L: K_L overstates
+ * light near a cache's horizon (K_3(0.1) is 2.4x the cosine's 0.1/π), and a bright source there (the
+ * Cornell box's lamp seen edge-on from the tall block's front face) read +22 % with K_L as the
+ * target; the fit shrinks such cones until their truncated response is the true one. Grid caches keep
+ * ω (their use is any direction, and ω is what the l = 0 band needs). */
 #include <math.h>
 
 #include "cone_fit.h"
@@ -28,6 +32,8 @@ double glow__irr_kernel(uint32_t L, double t) {
     return k;
 }
 
+double glow__cos_kernel(double t) { return t > 0.0 ? t / PI_D : 0.0; }
+
 double glow__cone_irr(uint32_t L, double omc, double t) {
     double px[11], pt[10];
     if (L > 8) L = 8;
@@ -42,11 +48,13 @@ double glow__cone_irr(uint32_t L, double omc, double t) {
 }
 
 float glow__cone_fit_omc(uint32_t L, float omc, double t, double target) {
-    if (!(omc > 0.0f) || !(target > 0.0) || L == 0) return omc;
-    double lo = 0.25 * omc, hi = 4.0 * omc;
+    if (!(omc > 0.0f) || L == 0 || !(target >= 0.0)) return omc;
+    if (target == 0.0) return 0.0f; /* every leaf at or below the horizon: no light, where K_L gave some */
+    double lo = 1e-3 * omc, hi = 4.0 * omc; /* lo: a grazing cluster shrinks a lot (above) */
     if (hi > 2.0) hi = 2.0;
     double flo = glow__cone_irr(L, lo, t) - target, fhi = glow__cone_irr(L, hi, t) - target;
-    if (!(flo <= 0.0 && fhi >= 0.0)) return omc;
+    if (flo > 0.0) return (float)lo; /* a sliver above the horizon: the smallest cone tried */
+    if (!(fhi >= 0.0)) return omc;
     for (int it = 0; it < 40; ++it) {
         double mid = 0.5 * (lo + hi), fm = glow__cone_irr(L, mid, t) - target;
         if (fm < 0.0) lo = mid; else hi = mid;

@@ -102,7 +102,7 @@ typedef struct link_job {
     uint32_t workers;
     float **omega;                   /* [workers][node_count] */
     float **dirsum;                  /* [workers][node_count*3] */
-    float **kappa;                   /* [workers][node_count]: Σ ω_i K_L(d_i·n), lightmap caches */
+    float **kappa;                   /* [workers][node_count]: Σ ω_i max(0, d_i·n)/π, lightmap caches */
     float **prio;                    /* [workers][node_count]: split priority of the nodes pushed (cut_priority) */
     uint32_t **heap;                 /* [workers][node_count] */
     struct cl_runs *runs;            /* [workers]: clustered visibility's runs (cl_runs) */
@@ -346,6 +346,10 @@ static uint32_t near_field(const link_job *job, const glow__cache *cache, const 
     const float R = job->near_radius, eps = job->ray_eps;
     float t[3] = {0}, b[3] = {0};
     uint32_t front_hits = 0;
+    /* lightmap caches: the cosine response of the front-face hits as a share of every ray's, so a
+     * closed scene gives exactly the full hemisphere's 1 (E/π per unit radiance; the rays' own sum of
+     * dw cos/π is 1 only to the direction set's quadrature, 2.7e-4 off here) */
+    double k_hit = 0.0, k_all = 0.0;
     if (hemi) tangent_frame(cache->nrm, t, b);
     for (uint32_t r = 0; r < count; ++r) {
         float dir[3];
@@ -356,11 +360,13 @@ static uint32_t near_field(const link_job *job, const glow__cache *cache, const 
             memcpy(dir, job->sphere_dirs[r], sizeof dir);
         }
         glow__hit hit = glow__rt_intersect(job->rt, cache->pos, dir, eps, INFINITY);
+        const double kr = hemi ? glow__cos_kernel(glow__dot(dir, cache->nrm)) : 0.0;
+        k_all += kr;
         /* another system's surface (a bake split into systems) counts as the sky does: this system
          * links none of its light */
         if (hit.t == INFINITY || hit.back_face || hit.foreign) continue;
         front_hits++;
-        if (hemi) *out_kappa_geom += dw * glow__irr_kernel(job->out->sh_bands, glow__dot(dir, cache->nrm));
+        k_hit += kr;
         if (!(hit.t < R)) continue; /* beyond the near field: counted, not credited */
         /* a surfel more than 2R from the hit (hit.t < R) is more than R from the cache: never credited */
         const uint32_t unit = credit_hit(job, cache->pos, hemi ? cache->nrm : NULL, R, dir, &hit, runs, 4.04f * R * R);
@@ -369,6 +375,7 @@ static uint32_t near_field(const link_job *job, const glow__cache *cache, const 
             for (int k = 0; k < 3; ++k) dirsum[3 * unit + k] += dw * dir[k];
         }
     }
+    if (hemi && k_all > 0.0) *out_kappa_geom += k_hit / k_all;
     return front_hits;
 }
 
@@ -444,7 +451,7 @@ static uint32_t cut_descend(const link_job *job, cl_runs *r, float *omega, float
  * errs in direction (one cone for a spread of directions): its spread 1 − |Σ ω_i d_i| / ω_v, which is
  * (1 − cos α)/2 for a cap of half-angle α, so for such nodes the order is that of the solid angle, the
  * published priority (PIC 4.5).
- * Lightmap caches (kappa non-NULL) gather each leaf by its diffuse response κ_i = ω_i K_L(d_i · n), not
+ * Lightmap caches (kappa non-NULL) gather each leaf by its diffuse response κ_i = ω_i max(0, d_i · n)/π, not
  * its solid angle, so both the scale and D_v are taken in κ: a node seen at grazing incidence (the
  * ceiling above a wall texel) has a large ω but adds little to the texel's light, and splitting it
  * spent links the nodes the texel does gather from needed (CornellBox-Sphere under a point light near
@@ -986,7 +993,7 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
 
     /* 2. sums up the tree: children precede parents in node order (clustered: prefix sums over the
      * runs, read per node by node_vals). Lightmap caches also sum each unit's diffuse response
-     * ω K_L(d·n) for the cone fit in step 4 (cone_fit.c). */
+     * ω max(0, d·n)/π, the exact cosine response, for the cone fit in step 4 (cone_fit.c). */
     if (hemi)
         for (uint32_t i = 0; i < un; ++i) {
             uk[i] = 0.0f;
@@ -994,7 +1001,7 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
             const float *ds = &ud[3 * i];
             float len = sqrtf(glow__dot(ds, ds));
             if (!(len > 0.0f)) continue;
-            uk[i] = (float)((double)uw[i] * glow__irr_kernel(fit_bands, glow__dot(ds, cache->nrm) / len));
+            uk[i] = (float)((double)uw[i] * glow__cos_kernel(glow__dot(ds, cache->nrm) / len));
         }
     else if (cr->active)
         memset(uk, 0, un * sizeof *uk);
@@ -1002,7 +1009,7 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
         /* The leaves' directions are not spread like the geometry they stand for (what the disc and
          * near-field passes lose is mostly grazing, and the solid-angle normalisation above spreads
          * that loss over every direction), so their total response is normalised too, to the rays'
-         * Σ dw K_L(t) over the same first hits. */
+         * Σ dw max(0, t)/π over the same first hits. */
         double ksum = 0.0;
         for (uint32_t i = 0; i < un_own; ++i) ksum += uk[i];
         if (kappa_geom > 0.0 && ksum > 0.0) {
@@ -1099,7 +1106,7 @@ static void link_cache(link_job *job, uint32_t ci, uint32_t worker) {
      * lighting, the gather as the exact sum over the visible leaves against the gather through the cut:
      * a node's link applies the mean over all its leaves, where the exact sum weighs each visible leaf by
      * its own solid angle; the difference is the error of the cut alone (PIC's Fig. 9c bleeding, the
-     * energy of partly visible nodes). Lightmap caches weigh by the diffuse response (the leaves' ω K_L),
+     * energy of partly visible nodes). Lightmap caches weigh by the diffuse response (the leaves' ω cos/π),
      * grid caches by the solid angle. Also what a link could read instead of its node's mean: the
      * visible part's mean (ω-weighted: what a link could give at best; uniform over the visible leaves:
      * what a link to its node's visible leaves could give), and its visible children's or grandchildren's
