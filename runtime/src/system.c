@@ -70,6 +70,10 @@ struct glow_system {
     uint32_t *sub_nodes, sub_count; /* the internal nodes some link reads with LSUB weights, ascending */
     bool gradient;               /* LSUB holds link gradient codes (GLOW_LINK_KIND_GRADIENT): sub_ratio then
                                     holds u_x u_y u_z 0 (signed halves) of each sub_node, 0 elsewhere */
+    uint16_t *grad_uz;           /* with gradient and the interleaved radiance (not GLOW_LINK_MODE_SH): u_z of
+                                    each node ([N + P + 2], 0 but for the sub_nodes), and u_x u_y in the bits of
+                                    rad's fourth float (0 but for the sub_nodes): one gather of the record
+                                    brings the radiance and u_x u_y (cache_lighting.h); sub_ratio is unused */
     float *mom;                  /* with gradient: [3][N] luma-flux moments sum Yflux_i p_i, planar, pulled */
     float *grad_cm;              /* with gradient: [sub_count][12] the node's area centroid c (3) and
                                     M = sigma (C + 1e-3 trace(C) I)^-1 (9, row-major), from the surfels */
@@ -84,7 +88,8 @@ struct glow_system {
     float *rho_ind_max;/* [S] 0.999 π / G_s (cap of the albedo applied to indirect light) */
     /* nodes */
     float *flux; /* 3 planes of N */
-    float *rad;  /* [N][4]: Y Co Cg 0, interleaved for the gathers */
+    float *rad;  /* [N][4]: Y Co Cg 0, interleaved for the gathers (with grad_uz the fourth float holds
+                    u_x u_y of the sub_nodes) */
     float *inv_pi_area;
     float *leaf_area;         /* per surfel: its leaf node's area (equal unless the bake adapted the density) */
     /* caches and outputs */
@@ -336,13 +341,20 @@ static void sub_ratio_range(glow_system *s, uint32_t first, uint32_t end) {
         for (uint32_t k = first; k < end; ++k) {
             const uint32_t n = s->sub_nodes[k];
             const float *cm = s->grad_cm + 12 * (size_t)k, y = s->flux[n];
-            uint16_t *out = s->sub_ratio + 4 * (size_t)n;
-            out[0] = out[1] = out[2] = out[3] = 0u;
-            if (!(y > 0.0f)) continue;
-            const float inv = 1.0f / y;
-            const float d[3] = {s->mom[n] * inv - cm[0], s->mom[N + n] * inv - cm[1], s->mom[2 * N + n] * inv - cm[2]};
-            for (int i = 0; i < 3; ++i)
-                out[i] = signed_half(cm[3 + 3 * i] * d[0] + cm[4 + 3 * i] * d[1] + cm[5 + 3 * i] * d[2]);
+            uint16_t out[4] = {0u, 0u, 0u, 0u};
+            if (y > 0.0f) {
+                const float inv = 1.0f / y;
+                const float d[3] = {s->mom[n] * inv - cm[0], s->mom[N + n] * inv - cm[1], s->mom[2 * N + n] * inv - cm[2]};
+                for (int i = 0; i < 3; ++i)
+                    out[i] = signed_half(cm[3 + 3 * i] * d[0] + cm[4 + 3 * i] * d[1] + cm[5 + 3 * i] * d[2]);
+            }
+            if (s->grad_uz) { /* u_x u_y into the radiance record's fourth float, u_z beside */
+                const uint32_t xy = (uint32_t)out[0] | (uint32_t)out[1] << 16;
+                memcpy(s->rad + 4 * (size_t)n + 3, &xy, sizeof xy);
+                s->grad_uz[n] = out[2];
+            } else {
+                memcpy(s->sub_ratio + 4 * (size_t)n, out, sizeof out);
+            }
         }
         return;
     }
@@ -392,6 +404,7 @@ static void task_caches(void *data, uint32_t k, uint32_t worker) {
                        .xscale = s->xscale,
                        .subsets = s->subsets,
                        .sub_ratio = (const uint32_t *)(const void *)s->sub_ratio,
+                       .grad_uz = sh ? NULL : s->grad_uz,
                        .link_gradient = s->gradient};
     uint32_t first = k * CACHE_CHUNK, count = s->C - first < CACHE_CHUNK ? s->C - first : CACHE_CHUNK;
     glow__cl_light_caches(&a, first, count);
@@ -537,7 +550,7 @@ static void free_system(glow_system *s) {
                     s->direct, s->direct_spare, s->fb_w, s->rho_ind_max, s->flux, s->rad, s->inv_pi_area, s->leaf_area,
                     s->cache_sh, s->grid_sh, s->lm_sh, s->grid_map, s->lm_map, s->mat_emis_scale,
                     s->mat_albedo_scale, s->batch_status, s->batch_negative, s->out_index, s->out_cache,
-                    s->xblocks, s->slots, s->sub_ratio, s->sub_nodes, s->mom, s->grad_cm, s->grp_age, s->grp_delta,
+                    s->xblocks, s->slots, s->sub_ratio, s->grad_uz, s->sub_nodes, s->mom, s->grad_cm, s->grp_age, s->grp_delta,
                     s->grp_drift_at, s->grp_centre,
                     s->grp_pack, s->grp_sel, s->grp_skip, s->rad_prev, s->uv0, s->det_out, s->rad_out, s->dep_max_node,
                     s->sky_grid, s->sky_backup};
@@ -745,7 +758,9 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     s->gradient = lsub && (m->link_kind & GLOW_LINK_KIND_GRADIENT);
     if (lsub && !s->gradient)
         s->slots = alloc_array(s, N, 4 * sizeof(uint32_t), &ok);
-    if (lsub) s->sub_ratio = alloc_array(s, N + s->P, 4 * sizeof(uint16_t), &ok); /* proxies: ratio 1 (u 0) */
+    const bool grad_fold = s->gradient && link_mode != GLOW_LINK_MODE_SH; /* SH mode reads planar flux */
+    if (lsub && !grad_fold) s->sub_ratio = alloc_array(s, N + s->P, 4 * sizeof(uint16_t), &ok); /* proxies: ratio 1 (u 0) */
+    if (grad_fold) s->grad_uz = alloc_array(s, N + s->P + 2u, sizeof(uint16_t), &ok); /* proxies: u 0 */
     if (s->gradient) s->mom = alloc_array(s, N, 3 * sizeof(float), &ok);
     if (lsub && ok) { /* which internal nodes a weighted link reads (their ratios are computed each update) */
         const uint16_t *sub = glow__bake_link_subsets(desc->bake);
@@ -845,7 +860,8 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     for (size_t n = 0; n < N; ++n) s->inv_pi_area[n] = 1.0f / (PI_F * s->nodes[n].area);
     if (s->gradient) {
         s->subsets = glow__bake_link_subsets(desc->bake);
-        memset(s->sub_ratio, 0, (N + s->P) * 4 * sizeof(uint16_t)); /* u = 0: scale 1 */
+        if (s->sub_ratio) memset(s->sub_ratio, 0, (N + s->P) * 4 * sizeof(uint16_t)); /* u = 0: scale 1 */
+        if (s->grad_uz) memset(s->grad_uz, 0, (N + s->P + 2u) * sizeof(uint16_t));
         memset(s->mom, 0, N * 3 * sizeof(float));
         if (!gradient_moments(s)) {
             GLOW__LOG_ERROR(ctx, GLOW_ERROR_OUT_OF_MEMORY, "glow_system_create(%s): out of memory (link gradients)",
@@ -992,7 +1008,8 @@ uint32_t glow__system_cache_count(const glow_system *s) { return s->C; }
 static void fill_proxies(glow_system *s) {
     for (uint32_t p = 0; p < s->P; ++p) {
         const glow_system *nb = s->nbr[s->proxies[p].dependency];
-        if (nb) memcpy(s->rad + 4 * ((size_t)s->N + p), nb->rad + 4 * (size_t)s->proxies[p].node, 4 * sizeof(float));
+        if (nb) /* Y Co Cg: the fourth float stays 0 (the neighbour's may hold its node's u_x u_y) */
+            memcpy(s->rad + 4 * ((size_t)s->N + p), nb->rad + 4 * (size_t)s->proxies[p].node, 3 * sizeof(float));
     }
 }
 
