@@ -383,6 +383,44 @@ static inline __attribute__((always_inline)) void gather4_avx512(const glow__cl_
         if (w) *w = GATHER_U((const uint32_t *)(const void *)(a->rad_y + 3), idx);
     }
 }
+/* The interleaved records by 16-byte loads, one a lane, and a 4 x 4 transpose per 128-bit block
+ * (r_i's block j holds node 4 j + i, so the transposed lanes come out in natural order): 16 loads,
+ * 12 inserts and 8 unpacks instead of four qword gathers (32 element loads) and three permutes.
+ * Same floats. The kernel alone on Sponza moderate (gradients, one thread, in-process A/B):
+ * 0.871x (min 3.17 -> 2.70 ms) on a Zen 5 VM. */
+static inline __attribute__((always_inline)) void gather4_idx_avx512(const glow__cl_args *a, const uint32_t *n, glow__v16f *y,
+                                                                     glow__v16f *co, glow__v16f *cg, glow__v16u *w) {
+    if (a->rad_stride == 4u && a->rad_co == a->rad_y + 1 && a->rad_cg == a->rad_y + 2) {
+        const float *b = a->rad_y;
+#define GLOW__R(i) _mm512_insertf32x4(_mm512_insertf32x4(_mm512_insertf32x4(_mm512_castps128_ps512(_mm_loadu_ps(b + 4 * (size_t)n[i])), \
+                        _mm_loadu_ps(b + 4 * (size_t)n[4 + i]), 1), _mm_loadu_ps(b + 4 * (size_t)n[8 + i]), 2), _mm_loadu_ps(b + 4 * (size_t)n[12 + i]), 3)
+        const __m512 r0 = GLOW__R(0), r1 = GLOW__R(1), r2 = GLOW__R(2), r3 = GLOW__R(3);
+#undef GLOW__R
+        const __m512d t0 = _mm512_castps_pd(_mm512_unpacklo_ps(r0, r1)), t1 = _mm512_castps_pd(_mm512_unpackhi_ps(r0, r1));
+        const __m512d t2 = _mm512_castps_pd(_mm512_unpacklo_ps(r2, r3)), t3 = _mm512_castps_pd(_mm512_unpackhi_ps(r2, r3));
+        *y = (glow__v16f)_mm512_castpd_ps(_mm512_unpacklo_pd(t0, t2));
+        *co = (glow__v16f)_mm512_castpd_ps(_mm512_unpackhi_pd(t0, t2));
+        *cg = (glow__v16f)_mm512_castpd_ps(_mm512_unpacklo_pd(t1, t3));
+        if (w) *w = (glow__v16u)_mm512_castpd_ps(_mm512_unpackhi_pd(t1, t3));
+    } else {
+        glow__v16u node;
+        memcpy(&node, n, sizeof node);
+        gather4_avx512(a, node, y, co, cg, w);
+    }
+}
+static inline __attribute__((always_inline)) void gather3_idx_avx512(const glow__cl_args *a, const uint32_t *n, glow__v16f *y,
+                                                                     glow__v16f *co, glow__v16f *cg) {
+    gather4_idx_avx512(a, n, y, co, cg, NULL);
+}
+static inline __attribute__((always_inline)) void gather_pair_idx_avx512(const void *base, const uint32_t *n, glow__v16u *lo,
+                                                                         glow__v16u *hi) {
+    glow__v16u node;
+    memcpy(&node, n, sizeof node);
+    GATHER_PAIR(base, node, *lo, *hi);
+}
+#define GATHER3_IDX(a, n, y, co, cg) gather3_idx_avx512((a), (n), &(y), &(co), &(cg))
+#define GATHER4_IDX(a, n, y, co, cg, w) gather4_idx_avx512((a), (n), &(y), &(co), &(cg), &(w))
+#define GATHER_PAIR_IDX(base, n, lo, hi) gather_pair_idx_avx512((const void *)(base), (n), &(lo), &(hi))
 #define GATHER3(a, idx, y, co, cg) gather4_avx512((a), (idx), &(y), &(co), &(cg), NULL)
 #define GATHER4(a, idx, y, co, cg, w) gather4_avx512((a), (idx), &(y), &(co), &(cg), &(w))
 /* 32 bits at 2-byte steps: lane l's uint16 base[node[l]] in the low half */
