@@ -34,6 +34,12 @@ typedef struct glow__cl_args {
     bool link_gradient; /* with subsets: they are link gradient codes (GLOW_LINK_KIND_GRADIENT) and
                            sub_ratio holds per node u_x u_y u_z 0 as signed IEEE halves: each link reads
                            its node's radiance times max(0, 1 + (k / 15) . u) (cache_kernel.inc) */
+    const uint16_t *grad_uz; /* with link_gradient and the interleaved radiance (rad_stride 4, rad_co =
+                                rad_y + 1, rad_cg = rad_y + 2), when not NULL: u_x u_y of node n are the
+                                two halves in the bits of rad_y[4 n + 3] (u_x low) and u_z is grad_uz[n],
+                                so one gather of the record brings the radiance and u_x u_y, and u_z is a
+                                32-bit read at grad_uz + n (one uint16 past the last node is read);
+                                sub_ratio is not read. Same values as sub_ratio's u_x u_y u_z 0 */
     float xscale;       /* expanded links only: every cache coefficient times this (SHLK: the bake's
                            factor_scale, with rad_* the node flux); 0 = 1 */
 } glow__cl_args;

@@ -1033,10 +1033,24 @@ static void test_kernels(void **state) {
         const float x = (float)(rnd() * 6.0 - 3.0); /* normal halves or 0, as the system writes them */
         gu[i] = i % 4 == 3 || i % 11 == 5 || fabsf(x) < 1e-3f ? 0u : glow__half_from_float(x);
     }
+    /* the system's folded layout (a.grad_uz): u_x u_y in the bits of each record's fourth float, u_z
+     * beside, padded for the kernel's 32-bit reads */
+    float *rad4g = malloc(4 * (size_t)N * sizeof *rad4g);
+    uint16_t *guz = malloc(((size_t)N + 2) * sizeof *guz);
+    assert_true(rad4g && guz);
+    for (uint32_t i = 0; i < N; ++i) {
+        const uint32_t xy = (uint32_t)gu[4 * (size_t)i] | (uint32_t)gu[4 * (size_t)i + 1] << 16;
+        memcpy(rad4g + 4 * (size_t)i, rad4 + 4 * (size_t)i, 3 * sizeof *rad4g);
+        memcpy(rad4g + 4 * (size_t)i + 3, &xy, sizeof xy);
+        guz[i] = gu[4 * (size_t)i + 2];
+    }
+    guz[N] = guz[N + 1] = 0x7BFFu; /* past the end: must not matter */
     const uint32_t combos[][2] = {{1, 1}, {2, 1}, {3, 3}, {4, 2}, {5, 3}, {8, 8}};
-    for (size_t cw = 0; cw < 3 * sizeof combos / sizeof combos[0]; ++cw) {
-        const size_t ci = cw / 3;
-        const bool ws = cw % 3 != 0, grad = cw % 3 == 2; /* plain, subsets, gradients */
+    float *gsave[NISA] = {NULL};
+    for (size_t cw = 0; cw < 4 * sizeof combos / sizeof combos[0]; ++cw) {
+        const size_t ci = cw / 4;
+        /* plain, subsets, gradients (u in sub_ratio), gradients folded (u in the records, grad_uz) */
+        const bool ws = cw % 4 != 0, grad = cw % 4 >= 2, fold = cw % 4 == 3;
         const uint32_t L = combos[ci][0], Cb = combos[ci][1], nco = L * L + 2 * Cb * Cb, stride = nco + 3; /* padding */
         float *out[NISA];
         for (int i = 0; i < NISA; ++i) {
@@ -1048,11 +1062,13 @@ static void test_kernels(void **state) {
         assert_true(ref && scale);
         for (int i = 0; i < NISA; ++i) {
             if (!run[i]) continue;
-            glow__cl_args a = {.blocks = lb, .blocks_per_cache = bpc, .rad_y = ws ? rad4 : rad,
-                               .rad_co = ws ? rad4 + 1 : rad + N, .rad_cg = ws ? rad4 + 2 : rad + 2 * (size_t)N,
+            const float *r4 = fold ? rad4g : rad4;
+            glow__cl_args a = {.blocks = lb, .blocks_per_cache = bpc, .rad_y = ws ? r4 : rad,
+                               .rad_co = ws ? r4 + 1 : rad + N, .rad_cg = ws ? r4 + 2 : rad + 2 * (size_t)N,
                                .rad_stride = ws ? 4u : 0u, .luma = L, .chroma = Cb, .coeffs = stride,
                                .cache_sh = out[i], .isa = isas[i], .subsets = ws ? (grad ? gcode : lsub) : NULL,
-                               .sub_ratio = (const uint32_t *)(const void *)(grad ? gu : ratio),
+                               .sub_ratio = fold ? NULL : (const uint32_t *)(const void *)(grad ? gu : ratio),
+                               .grad_uz = fold ? guz : NULL,
                                .link_gradient = grad};
             /* in uneven ranges: the result must not depend on how the caches are split */
             for (uint32_t first = 0; first < C;) {
@@ -1130,10 +1146,23 @@ static void test_kernels(void **state) {
             if (!run[i]) continue;
             print_message("kernel %-14s luma %u chroma %u%s, %u caches x %u links: vs double %.2e, vs generic %.2e "
                           "(relative to Σ|R| ω)\n",
-                          glow__cl_isa_name(isas[i]), L, Cb, grad ? " gradients" : (ws ? " subsets" : ""), C, m->links_per_cache, worst_ref[i],
+                          glow__cl_isa_name(isas[i]), L, Cb, fold ? " gradients folded" : grad ? " gradients" : (ws ? " subsets" : ""), C, m->links_per_cache, worst_ref[i],
                           worst_gen[i]);
             assert_true(worst_ref[i] < 1e-5);
             assert_true(worst_gen[i] < 1e-5);
+        }
+        /* the folded layout gives the same bytes as u in sub_ratio (the pass before it), each ISA */
+        for (int i = 0; i < NISA; ++i) {
+            if (!run[i] || !grad) continue;
+            const size_t bytes = (size_t)C * stride * sizeof(float);
+            if (!fold) {
+                assert_non_null(gsave[i] = malloc(bytes));
+                memcpy(gsave[i], out[i], bytes);
+            } else {
+                assert_memory_equal(gsave[i], out[i], bytes);
+                free(gsave[i]);
+                gsave[i] = NULL;
+            }
         }
         /* a sub-range writes only its own rows */
         for (int i = 0; i < NISA; ++i) {
@@ -1159,6 +1188,8 @@ static void test_kernels(void **state) {
     assert_string_equal(glow__cl_isa_name(GLOW__CL_GENERIC), "generic");
     free(rad);
     free(rad4);
+    free(rad4g);
+    free(guz);
     free(ratio);
     free(gcode);
     free(gu);
