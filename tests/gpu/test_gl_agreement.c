@@ -363,7 +363,13 @@ static void test_converged(void **state) {
     assert_int_equal(gs.caches_skipped_converged, C);
     assert_int_equal(cs.caches_skipped_converged, C);
     assert_true(differ <= U / 10);          /* the same decisions (a group at the threshold may tip either way) */
-    assert_true(compare(&f, "converged") <= 1.0);
+    /* Where a group tipped (one backend stopped gathering it an update before the other), that
+     * backend's copy stays up to about its last relative change, below converged_epsilon, times
+     * ρ/(1 − ρ) of further bounces behind: a few 1e-3 of the group's own values, so up to ten of the
+     * compare's tolerances (1e-3 of the plane's largest value). Without a tip, one tolerance. The
+     * bake of 2026-11-29 (lightmap cones fitted to the exact cosine) tips one group of 16 at update
+     * 14 (CPU 64, GPU 48 caches gathered): 3.4 of tolerance. */
+    assert_true(compare(&f, "converged") <= (differ ? 10.0 : 1.0));
     push_light(&f, 2.0f); /* the light changed: every group again, on both */
     assert_int_equal(glow_system_update(f.cpu, &d), GLOW_OK);
     assert_int_equal(glow_gl_system_update(f.gpu, &d), GLOW_OK);
