@@ -707,6 +707,28 @@ static void test_cone_fit_response(void **state) {
     world_free(&w);
 }
 
+/* The fit's target is the exact cosine (cone_fit.c): a small cone (half-angle 8°) near a texel's
+ * horizon (cos 0.1 to the normal), whose 3-band response is 1.5x the cosine's ω · 0.1 / π, shrinks
+ * until its 3-band response is that; a cluster at or below the horizon gets no cone; one at the
+ * normal shrinks a little (K_3(1) is 1.0625 of the cosine's 1/π). */
+static void test_cone_fit_exact_cosine(void **state) {
+    (void)state;
+    const float omc = 0.01f;
+    const double omega = 2.0 * GLOW__PI * omc;
+    /* the fitted cone's omc against the solid-angle cone's: measured 0.668, 0.414 and 0.947 */
+    struct { double t, min_ratio, max_ratio; } cases[] = {{0.1, 0.55, 0.8}, {0.05, 0.3, 0.55}, {1.0, 0.9, 0.97}};
+    for (int i = 0; i < 3; ++i) {
+        const double t = cases[i].t, target = omega * glow__cos_kernel(t), k3 = glow__cone_irr(3, omc, t);
+        const float fit = glow__cone_fit_omc(3, omc, t, target);
+        const double got = glow__cone_irr(3, fit, t);
+        print_message("cos %.2f: 3-band cone %.3e, exact %.3e, fitted cone %.3e (omc %.5f -> %.5f)\n", t, k3, target, got,
+                      (double)omc, (double)fit);
+        assert_true(fabs(got / target - 1.0) < 1e-4);
+        assert_true(fit / omc > cases[i].min_ratio && fit / omc < cases[i].max_ratio);
+    }
+    assert_true(glow__cone_fit_omc(3, omc, -0.01, 0.0) == 0.0f); /* at or below the horizon: no cone */
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_sh_orthonormal),
@@ -722,6 +744,7 @@ int main(void) {
         cmocka_unit_test(test_foreign_occluders),
         cmocka_unit_test(test_normalise_keeps_cosine_moment),
         cmocka_unit_test(test_cone_fit_response),
+        cmocka_unit_test(test_cone_fit_exact_cosine),
         cmocka_unit_test(test_links_deterministic_across_threads),
         cmocka_unit_test(test_clustered_matches_exact),
     };
