@@ -23,15 +23,6 @@
 
 static double lobe(uint32_t l) { return glow_sh_lobe_factor(l, 1.0f); } /* s_l of the cosine lobe */
 
-double glow__irr_kernel(uint32_t L, double t) {
-    double p[10];
-    if (L > 8) L = 8;
-    glow__legendre_all(L, t, p);
-    double k = 0.0;
-    for (uint32_t l = 0; l < L; ++l) k += lobe(l) * (2.0 * l + 1.0) / (4.0 * PI_D) * p[l];
-    return k;
-}
-
 double glow__cos_kernel(double t) { return t > 0.0 ? t / PI_D : 0.0; }
 
 double glow__cone_irr(uint32_t L, double omc, double t) {

@@ -3,14 +3,11 @@
 #define GLOW_CONE_FIT_H
 #include <stdint.h>
 
-/* The truncated diffuse kernel: K_L(t) = Σ_{l<L} s_l (2l+1)/(4π) P_l(t), s_l the cosine-lobe factors
- * (1, 2/3, 1/4, 0, -1/24, ...). A leaf of solid angle ω in a direction at cos t to the cache normal
- * adds ω K_L(t) to the cache's diffuse response (E/π per unit radiance) with L SH bands. */
-double glow__irr_kernel(uint32_t bands, double t);
 /* The exact diffuse response per unit solid angle, max(0, t)/π: the fit's target (cone_fit.c). */
 double glow__cos_kernel(double t);
-/* The same response for a cone of 1 - cos α = omc around an axis at cos t to the normal, projected
- * with the cone factors k_l: Σ_{l<L} s_l k_l(1 - omc) (2l+1)/(4π) P_l(t). */
+/* The L-band diffuse response (E/π per unit radiance) of a cone of 1 - cos α = omc around an axis at
+ * cos t to the normal, projected with the cone factors k_l and the cosine-lobe factors s_l:
+ * Σ_{l<L} s_l k_l(1 - omc) (2l+1)/(4π) P_l(t). */
 double glow__cone_irr(uint32_t bands, double omc, double t);
 /* The omc in [omc/1000, min(2, 4 omc)] whose cone response equals `target` (bisection); 0 when the
  * target is 0 (every leaf at or below the horizon), omc/1000 when even that cone responds more,

@@ -1706,17 +1706,28 @@ static unsigned char *read_file_all(const char *path, size_t *size) {
     return buf;
 }
 
+/* A stored seed bake of format 1.MINOR: read, loaded in a fresh context, its info checked for the minor. */
+static glow_bake *load_seed(const char *name, uint32_t minor, test_log *log, glow_context **ctx, unsigned char **img,
+                            size_t *size, glow_bake_info *info) {
+    char path[512];
+    snprintf(path, sizeof path, "%s/%s", GLOW_TEST_DATA_DIR, name);
+    *img = read_file_all(path, size);
+    *ctx = make_ctx(log);
+    glow_bake *bake = NULL;
+    assert_int_equal(glow_bake_load(*ctx, *img, *size, &bake), GLOW_OK);
+    assert_int_equal(glow_bake_get_info(bake, info), GLOW_OK);
+    assert_int_equal(info->format_minor, minor);
+    return bake;
+}
+
 static void test_real_v1_5_grid_fine(void **state) {
     (void)state;
     size_t size = 0;
-    unsigned char *img = read_file_all(GLOW_TEST_DATA_DIR "/seed_cornell_tiny_gfin.glow", &size);
+    unsigned char *img = NULL;
     test_log log;
-    glow_context *ctx = make_ctx(&log);
-    glow_bake *bake = NULL;
-    assert_int_equal(glow_bake_load(ctx, img, size, &bake), GLOW_OK);
+    glow_context *ctx = NULL;
     glow_bake_info info;
-    assert_int_equal(glow_bake_get_info(bake, &info), GLOW_OK);
-    assert_int_equal(info.format_minor, 5);
+    glow_bake *bake = load_seed("seed_cornell_tiny_gfin.glow", 5, &log, &ctx, &img, &size, &info);
     const glow_bake_grid_fine *gf = glow__bake_grid_fine(bake);
     assert_non_null(gf);
     assert_int_equal(gf->refine, 2);
@@ -1784,14 +1795,11 @@ static void test_real_v1_5_grid_fine(void **state) {
 static void test_real_v1_6_sky(void **state) {
     (void)state;
     size_t size = 0;
-    unsigned char *img = read_file_all(GLOW_TEST_DATA_DIR "/seed_court_tiny_skyt.glow", &size);
+    unsigned char *img = NULL;
     test_log log;
-    glow_context *ctx = make_ctx(&log);
-    glow_bake *bake = NULL;
-    assert_int_equal(glow_bake_load(ctx, img, size, &bake), GLOW_OK);
+    glow_context *ctx = NULL;
     glow_bake_info info;
-    assert_int_equal(glow_bake_get_info(bake, &info), GLOW_OK);
-    assert_int_equal(info.format_minor, 6);
+    glow_bake *bake = load_seed("seed_court_tiny_skyt.glow", 6, &log, &ctx, &img, &size, &info);
     glow_bake_sky_transfer st;
     assert_int_equal(glow_bake_get_sky_transfer(bake, &st), GLOW_OK);
     assert_int_equal(st.surfel_count, info.surfel_count);
@@ -1856,14 +1864,11 @@ static void test_real_v1_6_sky(void **state) {
 static void test_real_v1_7_pages(void **state) {
     (void)state;
     size_t size = 0;
-    unsigned char *img = read_file_all(GLOW_TEST_DATA_DIR "/seed_cornell_tiny_pages.glow", &size);
+    unsigned char *img = NULL;
     test_log log;
-    glow_context *ctx = make_ctx(&log);
-    glow_bake *bake = NULL;
-    assert_int_equal(glow_bake_load(ctx, img, size, &bake), GLOW_OK);
+    glow_context *ctx = NULL;
     glow_bake_info info;
-    assert_int_equal(glow_bake_get_info(bake, &info), GLOW_OK);
-    assert_int_equal(info.format_minor, 7);
+    glow_bake *bake = load_seed("seed_cornell_tiny_pages.glow", 7, &log, &ctx, &img, &size, &info);
     assert_int_equal(info.lightmap_count, 3);
     assert_int_equal(info.lightmap_width, 16);
     assert_int_equal(info.lightmap_height, 16);
