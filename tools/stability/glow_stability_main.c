@@ -244,6 +244,7 @@ typedef struct session {
     glow_surfel_view surfels;  /* positions, normals */
     const uint32_t *feedback;  /* [surfels] each surfel's feedback cache (glow_backend.h) */
     glow_bake_info info;
+    uint32_t iterations;       /* feedback iterations per update after session_converge */
 } session;
 
 static void session_free(session *s) {
@@ -296,12 +297,18 @@ static int session_open(session *s, const char *bake_path, const char *scene_pat
     if (glow_system_get_surfels(s->sys, &s->surfels) != GLOW_OK || glow_system_get_solver_tables(s->sys, &tab) != GLOW_OK)
         return 0;
     s->feedback = tab.feedback;
+    s->iterations = iterations;
+    return 1;
+}
+
+/* the bounce converged (3 updates of 64 feedback iterations), then `iterations` per update */
+static int session_converge(session *s) {
     glow_system_set_params(s->sys, &(glow_system_params){.bounce_intensity = 1.0f, .emission_scale = s->scene.emission_scale,
                                                          .bounce_iterations = 64});
     for (int u = 0; u < 3; ++u)
         if (glow_system_update(s->sys, NULL) != GLOW_OK) return 0;
     glow_system_set_params(s->sys, &(glow_system_params){.bounce_intensity = 1.0f, .emission_scale = s->scene.emission_scale,
-                                                         .bounce_iterations = iterations});
+                                                         .bounce_iterations = s->iterations});
     return 1;
 }
 
@@ -339,7 +346,7 @@ static int flicker(const char *bake_path, const char *scene_path, uint32_t frame
     int rc = 1;
     float *pts = NULL, *eg = NULL, *er = NULL, *pg = NULL, *pr = NULL;
     FILE *csv = NULL;
-    if (!session_open(&s, bake_path, scene_path, iterations, true)) goto done;
+    if (!session_open(&s, bake_path, scene_path, iterations, true) || !session_converge(&s)) goto done;
     const uint32_t lm = s.info.lightmap_cache_count, first = s.info.grid_cache_count;
     if (nprobes > lm) nprobes = lm;
     pts = malloc(sizeof(float) * 6 * nprobes);
@@ -458,7 +465,7 @@ static int jumps(const char *bake_path, const char *scene_path, uint32_t max_pai
     float *pts = NULL, *er = NULL;
     double *jg = NULL, *jr = NULL;
     FILE *csv = NULL;
-    if (!session_open(&s, bake_path, scene_path, 64, false)) goto done;
+    if (!session_open(&s, bake_path, scene_path, 64, false) || !session_converge(&s)) goto done;
     const glow_cache_outputs *o = glow_system_outputs(s.sys);
     const uint32_t W = o->lightmap_width, H = o->lightmap_height;
     if (!W || !H) {
@@ -574,7 +581,7 @@ static int audit(const char *bake_path, const char *scene_path, uint32_t nprobes
     double *ratio = NULL;
     uint32_t *pick = NULL;
     FILE *csv = NULL;
-    if (!session_open(&s, bake_path, scene_path, 64, false)) goto done;
+    if (!session_open(&s, bake_path, scene_path, 64, false)) goto done; /* converged once --caches is checked */
     const uint32_t lm = s.info.lightmap_cache_count, first = s.info.grid_cache_count;
     if (nprobes > lm) nprobes = lm;
     for (uint32_t i = 0; i < only_count; ++i)
@@ -588,6 +595,7 @@ static int audit(const char *bake_path, const char *scene_path, uint32_t nprobes
         fprintf(stderr, "glow-stability: %s: the bake has no lightmap caches to audit\n", bake_path);
         goto done;
     }
+    if (!session_converge(&s)) goto done;
     pts = malloc(sizeof(float) * 6 * nprobes);
     er1 = malloc(sizeof(float) * 3 * nprobes);
     erc = malloc(sizeof(float) * 3 * nprobes);
