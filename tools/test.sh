@@ -2,7 +2,7 @@
 # The README's test command: installs dependencies, builds with warnings as errors, runs the test
 # suite under ASan+UBSan (all but the "slow" tests), the libFuzzer smoke (bake reader; load + updates;
 # scene JSON; mesh import; two at a time on two cores), then the test suite on the optimised build (all
-# but the CLI scripts, which ran under the sanitizers: label asan-only) and the installed SDK's consumer
+# but the CLI scripts and GL tests, which ran under the sanitizers: label asan-only) and the installed SDK's consumer
 # test (tools/consumer-test.sh). The sanitizer build is -O1 (CMakeLists.txt, GLOW_SANITIZE: about half the
 # -O0 test time; the cache-lighting kernel with -g1, which GCC compiles in about a minute). Every stage
 # runs even when an earlier one failed (a red sanitizer pass must not hide what the fuzzer or the
@@ -34,7 +34,7 @@ release_pass() {
     cmake --build build -j "$jobs" &&
     ctest --test-dir build --output-on-failure -j "$jobs" "${release_skip[@]}"
 }
-# The CLI scripts run once, in the sanitizer pass (label asan-only, tests/CMakeLists.txt); with that pass
+# The CLI scripts and GL tests run once, in the sanitizer pass (label asan-only, tests/CMakeLists.txt); with that pass
 # skipped the release pass runs them.
 release_skip=(-LE asan-only)
 [ "${GLOW_SKIP_ASAN:-0}" != 1 ] || release_skip=()

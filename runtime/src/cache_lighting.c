@@ -20,6 +20,26 @@
 
 #include "cache_lighting.h"
 
+/* Three translation units in the runtime library (GLOW_CL_SPLIT, runtime/CMakeLists.txt): this file
+ * compiled as part 0 (the portable kernel, the dispatcher, output planes, expansion) and included by
+ * cache_lighting_avx2.c (part 1) and cache_lighting_avx512.c (part 2), so the build compiles the three
+ * kernels in parallel (one file took 51 s at -O2 on the 2-core machine, on every build's critical
+ * path). Without GLOW_CL_SPLIT this file is the whole kernel in one unit, as tools/kernel_ab.sh and the
+ * fuzz build include it. */
+#ifdef GLOW_CL_SPLIT
+#define GLOW__CL_PART_GENERIC (GLOW_CL_PART == 0)
+#define GLOW__CL_PART_AVX2 (GLOW_CL_PART == 1)
+#define GLOW__CL_PART_AVX512 (GLOW_CL_PART == 2)
+#define GLOW__CL_KLINK /* external: part 0's dispatcher calls them */
+#define light_range_avx2 glow__cl_light_range_avx2
+#define light_range_avx512 glow__cl_light_range_avx512
+#else
+#define GLOW__CL_PART_GENERIC 1
+#define GLOW__CL_PART_AVX2 1
+#define GLOW__CL_PART_AVX512 1
+#define GLOW__CL_KLINK static
+#endif
+
 /* The helpers below pass 32-byte vectors by value; they are static and always inlined, so no ABI
  * boundary exists and GCC's note about the AVX calling convention does not apply. */
 #if defined(__clang__)
@@ -50,6 +70,7 @@
  * cache_kernel.inc); this is the constant per output coefficient that makes it R k_l y_lm:
  * y_lm / ỹ_lm times t_l = k_l / k̃_l (t_0 = 2π, t_l = 2π σ(l, 1) / (l (l + 1))). Luma² then Co
  * chroma², Cg chroma², as in cache_sh. */
+#if GLOW__CL_PART_GENERIC
 #define GLOW__TWO_PI 6.283185307179586476925
 void glow__cl_coeff_scale(uint32_t L, uint32_t C, float *scale) {
     for (uint32_t i = 0; i < GLOW__CL_SCALE_FLOATS; ++i) scale[i] = 0.0f;
@@ -63,6 +84,7 @@ void glow__cl_coeff_scale(uint32_t L, uint32_t C, float *scale) {
             if (l < C) scale[L * L + k] = scale[L * L + C * C + k] = v;
         }
 }
+#endif
 
 /* ------------------------------------------------------------------------------ portable */
 static inline glow__v8u load_u32_generic(const uint32_t *p) {
@@ -115,6 +137,7 @@ static inline glow__v8f sqrt8_generic(glow__v8f x) {
     return x;
 }
 
+#if GLOW__CL_PART_GENERIC
 #define VF glow__v8f
 #define VU glow__v8u
 #define VI glow__v8i
@@ -140,6 +163,7 @@ static inline glow__v8f sqrt8_generic(glow__v8f x) {
 #define GATHER_UZ(base, idx) gather_uz_generic((base), (idx))
 #define RSQRT(x) (1.0f / sqrt8_generic(x))
 #include "cache_kernel.inc"
+#endif /* GLOW__CL_PART_GENERIC */
 #undef KFN
 #undef KATTR
 #undef LOAD_U32
@@ -166,6 +190,7 @@ static inline glow__v8f sqrt8_generic(glow__v8f x) {
 #if (defined(__x86_64__) || defined(__i386__)) && defined(__GNUC__) && !defined(__clang__)
 #include <immintrin.h>
 #define GLOW__HAVE_AVX2_KERNEL 1
+#if GLOW__CL_PART_AVX2
 #define VF glow__v8f
 #define VU glow__v8u
 #define VI glow__v8i
@@ -297,7 +322,9 @@ static inline glow__v8f rsqrt_avx2(glow__v8f x) {
 #undef LANES
 #undef SH_EVAL
 #undef SH_EVAL_U
+#endif /* GLOW__CL_PART_AVX2 */
 
+#if GLOW__CL_PART_AVX512
 /* AVX-512: a whole 16-link block per step, and 32 vector registers, so the luma² + 2 chroma²
  * accumulators of l = 3 stay in registers instead of spilling (the AVX2 build's main cost). */
 #pragma GCC push_options
@@ -429,7 +456,16 @@ static inline __attribute__((always_inline)) void gather_pair_idx_avx512(const v
 #define RSQRT(x) rsqrt_avx512(x)
 #include "cache_kernel.inc"
 #pragma GCC pop_options
+#endif /* GLOW__CL_PART_AVX512 */
 #define GLOW__HAVE_AVX512_KERNEL 1
+#endif
+
+#if GLOW__CL_PART_GENERIC
+#ifdef GLOW_CL_SPLIT
+#ifdef GLOW__HAVE_AVX2_KERNEL
+void glow__cl_light_range_avx2(const glow__cl_args *a, uint32_t first, uint32_t count);
+void glow__cl_light_range_avx512(const glow__cl_args *a, uint32_t first, uint32_t count);
+#endif
 #endif
 
 /* ------------------------------------------------------------------------------ output planes */
@@ -582,3 +618,4 @@ void glow__cl_expand(const glow_bake_link_block *blocks, uint32_t bpc, uint32_t 
         }
     }
 }
+#endif /* GLOW__CL_PART_GENERIC */

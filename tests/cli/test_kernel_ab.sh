@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
-# The paired kernel A/B harness (docs/benchmarks.md): the prebuilt build/bin/kernel_ab (the working
-# tree's kernel, built by CMake exactly as tools/kernel_ab.sh builds revisions, timed as two versions) on a small bake
-# must give identical outputs (difference 0) and the report lines; tools/kernel_ab.sh refuses bad input
-# (exit 2) and a missing bake (exit 1) before it compiles anything. Nothing is compiled at test time.
+# The paired kernel A/B harness (docs/benchmarks.md): the prebuilt build/bin/kernel_ab (the harness with the
+# library's kernel, timed as two versions) on a small bake must give identical outputs (difference 0) and
+# the report lines; tools/kernel_ab.sh refuses bad input (exit 2) and a missing bake (exit 1) before it
+# compiles anything. Nothing is compiled at test time.
 #   usage: test_kernel_ab.sh BIN_DIR SHARED_DIR
 set -u
 BIN=$1
