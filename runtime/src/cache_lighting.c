@@ -20,20 +20,23 @@
 
 #include "cache_lighting.h"
 
-/* Three translation units in the runtime library (GLOW_CL_SPLIT, runtime/CMakeLists.txt): this file
- * compiled as part 0 (the portable kernel, the dispatcher, output planes, expansion) and included by
- * cache_lighting_avx2.c (part 1) and cache_lighting_avx512.c (part 2), so the build compiles the three
- * kernels in parallel (one file took 51 s at -O2 on the 2-core machine, on every build's critical
- * path). Without GLOW_CL_SPLIT this file is the whole kernel in one unit, as tools/kernel_ab.sh and the
- * fuzz build include it. */
+/* Four translation units in the runtime library (GLOW_CL_SPLIT, runtime/CMakeLists.txt): this file
+ * compiled as part 0 (the dispatcher, output planes, expansion) and included by cache_lighting_avx2.c
+ * (part 1), cache_lighting_avx512.c (part 2) and cache_lighting_generic.c (part 3, the portable kernel),
+ * so the build compiles the three kernels in parallel (one file took 51 s at -O2 on the 2-core machine,
+ * on every build's critical path). Without GLOW_CL_SPLIT this file is the whole kernel in one unit, as
+ * tools/kernel_ab.sh and the fuzz build include it. */
 #ifdef GLOW_CL_SPLIT
-#define GLOW__CL_PART_GENERIC (GLOW_CL_PART == 0)
+#define GLOW__CL_PART_MAIN (GLOW_CL_PART == 0)
 #define GLOW__CL_PART_AVX2 (GLOW_CL_PART == 1)
 #define GLOW__CL_PART_AVX512 (GLOW_CL_PART == 2)
+#define GLOW__CL_PART_GENERIC (GLOW_CL_PART == 3)
 #define GLOW__CL_KLINK /* external: part 0's dispatcher calls them */
 #define light_range_avx2 glow__cl_light_range_avx2
 #define light_range_avx512 glow__cl_light_range_avx512
+#define light_range_generic glow__cl_light_range_generic
 #else
+#define GLOW__CL_PART_MAIN 1
 #define GLOW__CL_PART_GENERIC 1
 #define GLOW__CL_PART_AVX2 1
 #define GLOW__CL_PART_AVX512 1
@@ -70,7 +73,7 @@
  * cache_kernel.inc); this is the constant per output coefficient that makes it R k_l y_lm:
  * y_lm / ỹ_lm times t_l = k_l / k̃_l (t_0 = 2π, t_l = 2π σ(l, 1) / (l (l + 1))). Luma² then Co
  * chroma², Cg chroma², as in cache_sh. */
-#if GLOW__CL_PART_GENERIC
+#if GLOW__CL_PART_MAIN
 #define GLOW__TWO_PI 6.283185307179586476925
 void glow__cl_coeff_scale(uint32_t L, uint32_t C, float *scale) {
     for (uint32_t i = 0; i < GLOW__CL_SCALE_FLOATS; ++i) scale[i] = 0.0f;
@@ -460,12 +463,13 @@ static inline __attribute__((always_inline)) void gather_pair_idx_avx512(const v
 #define GLOW__HAVE_AVX512_KERNEL 1
 #endif
 
-#if GLOW__CL_PART_GENERIC
+#if GLOW__CL_PART_MAIN
 #ifdef GLOW_CL_SPLIT
 #ifdef GLOW__HAVE_AVX2_KERNEL
 void glow__cl_light_range_avx2(const glow__cl_args *a, uint32_t first, uint32_t count);
 void glow__cl_light_range_avx512(const glow__cl_args *a, uint32_t first, uint32_t count);
 #endif
+void glow__cl_light_range_generic(const glow__cl_args *a, uint32_t first, uint32_t count);
 #endif
 
 /* ------------------------------------------------------------------------------ output planes */
@@ -618,4 +622,4 @@ void glow__cl_expand(const glow_bake_link_block *blocks, uint32_t bpc, uint32_t 
         }
     }
 }
-#endif /* GLOW__CL_PART_GENERIC */
+#endif /* GLOW__CL_PART_MAIN */
