@@ -693,9 +693,28 @@ static uint64_t light_packet(const glow_host *h, const glow_surfel_batch *batch,
     return traced;
 }
 
+/* All lanes of a packet as idle rays (ray_lane_idle for k = 0..15, in loops the compiler vectorises). */
+static void ray_packet_idle(struct RTCRay16 *ray) {
+    for (uint32_t k = 0; k < PACKET; ++k) {
+        ray->org_x[k] = ray->org_y[k] = ray->org_z[k] = 0.0f;
+        ray->dir_x[k] = ray->dir_y[k] = 0.0f;
+        ray->dir_z[k] = 1.0f;
+        ray->tnear[k] = 0.0f;
+        ray->tfar[k] = 0.0f;
+        ray->time[k] = 0.0f;
+        ray->mask[k] = 0xFFFFFFFFu;
+        ray->id[k] = k;
+        ray->flags[k] = 0;
+    }
+}
+
 /* light_packet with footprints (h->foot): per light, rounds of up to 16 rays (one per surfel: all K
  * points of surfels not yet filled, else the one point each call re-traces), then V = the fraction of
- * the surfel's K points that the light reaches. Each ray is the one foot_visibility would trace. */
+ * the surfel's K points that the light reaches. Each ray is the one foot_visibility would trace.
+ * The surfels the light faces are listed first (lit[]) and every later loop runs over that list: a
+ * test of f > 0 per lane and loop mispredicted about half the time on a sunlit scene (about half the
+ * surfels face away), and with four such loops the bookkeeping cost more than the rays (Sponza, 32k
+ * surfels, a turning sun: see docs/benchmarks.md). Lanes keep their positions in the packet. */
 static uint64_t light_packet_foot(glow_host *h, const glow_surfel_batch *batch, uint32_t i0, uint32_t count, float *out) {
     foot_frame fr[PACKET];
     uint32_t reach[PACKET]; /* 0 until a ray of the surfel needs its frame and reach (then FOOT_REACH_DONE | ...) */
@@ -709,28 +728,33 @@ static uint64_t light_packet_foot(glow_host *h, const glow_surfel_batch *batch, 
         const float *pw = power_of(&hl->l);
         if (pw[0] == 0.0f && pw[1] == 0.0f && pw[2] == 0.0f) continue;
         float f[PACKET], l[PACKET][3];
-        foot_state *st[PACKET];
+        uint32_t lit[PACKET], n = 0; /* the lanes the light faces (f > 0), ascending */
         for (uint32_t k = 0; k < count; ++k) {
-            const float *p = batch->positions + 4 * (size_t)(i0 + k), *n = batch->normals + 4 * (size_t)(i0 + k);
+            const float *p = batch->positions + 4 * (size_t)(i0 + k), *nr = batch->normals + 4 * (size_t)(i0 + k);
             float dist;
-            f[k] = light_term(hl, p, n, l[k], &dist);
-            st[k] = &h->foot[(size_t)li * h->surfel_count + batch->first + i0 + k];
-            if (f[k] > 0.0f) foot_begin(hl, st[k]);
+            f[k] = light_term(hl, p, nr, l[k], &dist);
+            lit[n] = k;
+            n += f[k] > 0.0f;
         }
+        if (!n) continue;
+        foot_state *st[PACKET]; /* of lane lit[j] */
         bool unfilled = false;
-        for (uint32_t k = 0; k < count; ++k) unfilled |= f[k] > 0.0f && !st[k]->filled;
+        foot_state *const st0 = h->foot + (size_t)li * h->surfel_count + batch->first + i0;
+        for (uint32_t j = 0; j < n; ++j) {
+            st[j] = st0 + lit[j];
+            foot_begin(hl, st[j]);
+            unfilled |= !st[j]->filled;
+        }
         for (uint32_t r = 0; r < (unfilled ? h->samples : 1u); ++r) {
             struct RTCRay16 ray;
-            RTC_ALIGN(64) int valid[PACKET]; /* Embree reads the mask as one vector: 64-byte aligned */
+            RTC_ALIGN(64) int valid[PACKET] = {0}; /* Embree reads the mask as one vector: 64-byte aligned */
             uint32_t pick[PACKET];
             bool any = false, picked = false;
-            for (uint32_t k = 0; k < PACKET; ++k) {
-                valid[k] = 0;
-                pick[k] = k < count && f[k] > 0.0f ? foot_pick(h, st[k], r) : UINT32_MAX;
-                if (pick[k] == UINT32_MAX) {
-                    ray_lane_idle(&ray, k);
-                    continue;
-                }
+            ray_packet_idle(&ray);
+            for (uint32_t j = 0; j < n; ++j) {
+                const uint32_t k = lit[j];
+                pick[j] = foot_pick(h, st[j], r);
+                if (pick[j] == UINT32_MAX) continue;
                 picked = true;
                 if (!reach[k]) {
                     const uint32_t surfel = batch->first + i0 + k;
@@ -739,11 +763,8 @@ static uint64_t light_packet_foot(glow_host *h, const glow_surfel_batch *batch, 
                     reach[k] = foot_reach(h, &fr[k], surfel);
                 }
                 float org[3], dir[3], tfar;
-                if (!foot_ray(h, hl, &fr[k], reach[k], pick[k], l[k], org, dir, &tfar)) {
-                    ray_lane_idle(&ray, k);
-                    continue; /* the light at the point: lit, no ray */
-                }
-                ray_lane_idle(&ray, k); /* tnear, time, mask, id, flags */
+                if (!foot_ray(h, hl, &fr[k], reach[k], pick[j], l[k], org, dir, &tfar))
+                    continue; /* the light at the point: lit, no ray (the lane stays idle) */
                 ray.org_x[k] = org[0];
                 ray.org_y[k] = org[1];
                 ray.org_z[k] = org[2];
@@ -761,16 +782,17 @@ static uint64_t light_packet_foot(glow_host *h, const glow_surfel_batch *batch, 
                 ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
                 rtcOccluded16(valid, h->scene, &ctx, &ray);
             }
-            for (uint32_t k = 0; k < count; ++k) {
-                if (pick[k] == UINT32_MAX) continue;
+            for (uint32_t j = 0; j < n; ++j) {
+                if (pick[j] == UINT32_MAX) continue;
+                const uint32_t k = lit[j];
                 traced += valid[k] != 0;
-                foot_record(h, st[k], pick[k], !(valid[k] && ray.tfar[k] < 0.0f)); /* Embree: tfar = -inf on a hit */
+                foot_record(h, st[j], pick[j], !(valid[k] && ray.tfar[k] < 0.0f)); /* Embree: tfar = -inf on a hit */
             }
         }
-        for (uint32_t k = 0; k < count; ++k) {
-            if (!(f[k] > 0.0f)) continue;
-            foot_end(h, hl, st[k]);
-            const float v = f[k] * foot_fraction(h, st[k]);
+        for (uint32_t j = 0; j < n; ++j) {
+            const uint32_t k = lit[j];
+            foot_end(h, hl, st[j]);
+            const float v = f[k] * foot_fraction(h, st[j]);
             for (int c = 0; c < 3; ++c) out[3 * (size_t)(i0 + k) + c] += v * pw[c];
         }
     }
