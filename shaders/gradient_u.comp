@@ -32,16 +32,17 @@ float glow_signed_half(float x) {
 void main() {
     uint k = glow_global_index(GLOW_GRADIENT_GROUP);
     if (k >= glow_gradient_count) return;
-    uint n = glow_grad_nodes[k], b = 12u * k;
+    /* value q of node k at 48 (k / 4) + 4 q + k % 4 (blocks of four nodes, glow_backend.h) */
+    uint n = glow_grad_nodes[k], b = 48u * (k / 4u) + k % 4u;
     float y = glow_flux[n].x;
     vec3 u = vec3(0.0);
     if (y > 0.0) {
         float inv = 1.0 / y;
         vec3 m = glow_mom[n].xyz;
-        vec3 d = vec3(m.x * inv - glow_grad_cm[b], m.y * inv - glow_grad_cm[b + 1u], m.z * inv - glow_grad_cm[b + 2u]);
+        vec3 d = vec3(m.x * inv - glow_grad_cm[b], m.y * inv - glow_grad_cm[b + 4u], m.z * inv - glow_grad_cm[b + 8u]);
         for (uint i = 0u; i < 3u; ++i) {
-            uint r = b + 3u + 3u * i;
-            u[i] = glow_signed_half(glow_grad_cm[r] * d.x + glow_grad_cm[r + 1u] * d.y + glow_grad_cm[r + 2u] * d.z);
+            uint r = b + 12u + 12u * i;
+            u[i] = glow_signed_half(glow_grad_cm[r] * d.x + glow_grad_cm[r + 4u] * d.y + glow_grad_cm[r + 8u] * d.z);
         }
     }
     glow_grad_u[n] = vec4(u, 0.0);

@@ -533,7 +533,7 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
         s->buf[B_MOM] = make_buffer(s, (size_t)s->N * 16u, NULL, 0);
         s->buf[B_GRAD_U] = make_buffer(s, ((size_t)s->N + s->P) * 16u, NULL, 0); /* 0: scale 1 */
         s->buf[B_GRAD_NODES] = make_buffer(s, (size_t)gn * 4u, gn ? t->gradient_nodes : NULL, 0);
-        s->buf[B_GRAD_CM] = make_buffer(s, (size_t)gn * 48u, gn ? t->gradient_cm : NULL, 0);
+        s->buf[B_GRAD_CM] = make_buffer(s, ((size_t)gn + 3u) / 4u * 192u, gn ? t->gradient_cm : NULL, 0); /* blocks of 4 */
         const float zero = 0.0f;
         gl->ClearNamedBufferData(s->buf[B_MOM], GL_R32F, GL_RED, GL_FLOAT, &zero);
         gl->ClearNamedBufferData(s->buf[B_GRAD_U], GL_R32F, GL_RED, GL_FLOAT, &zero);

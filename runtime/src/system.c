@@ -75,8 +75,9 @@ struct glow_system {
                                     rad's fourth float (0 but for the sub_nodes): one gather of the record
                                     brings the radiance and u_x u_y (cache_lighting.h); sub_ratio is unused */
     float *mom;                  /* with gradient: [3][N] luma-flux moments sum Yflux_i p_i, planar, pulled */
-    float *grad_cm;              /* with gradient: [sub_count][12] the node's area centroid c (3) and
-                                    M = sigma (C + 1e-3 trace(C) I)^-1 (9, row-major), from the surfels */
+    float *grad_cm;              /* with gradient: per sub_node k its area centroid c (3) and
+                                    M = sigma (C + 1e-3 trace(C) I)^-1 (9, row-major), from the surfels, in
+                                    blocks of four nodes: value q of node k at GRAD_CM(k, q) */
     uint64_t memory_bytes;
     /* surfels */
     float *pos4, *nrm4;
@@ -275,6 +276,11 @@ static void task_flux(void *data, uint32_t k, uint32_t worker) {
     }
 }
 
+/* Where value q (0..11: c, then M row-major) of sub_node k sits in grad_cm: blocks of four nodes, each
+ * value's four in a row, so that gradient_u_range reads a value of four nodes with one 16-byte load
+ * (glow_backend.h glow_solver_tables.gradient_cm) */
+#define GRAD_CM(k, q) (48u * ((size_t)(k) / 4u) + 4u * (size_t)(q) + (size_t)(k) % 4u)
+
 /* A ratio Y[slot] / Y[node] as an IEEE half, rounded to nearest: values below the smallest normal
  * half (6.1e-5) become 0, above the largest (65504) 65504, NaN 0. The kernel decodes normals only. */
 static inline uint16_t ratio_half(float x) {
@@ -303,13 +309,14 @@ static inline uint16_t signed_half(float x) {
  * over its luma flux y; into the radiance record's fourth float and grad_uz, or sub_ratio */
 static inline __attribute__((always_inline)) void gradient_u(glow_system *s, uint32_t k, uint32_t n, float y, float mx,
                                                              float my, float mz) {
-    const float *cm = s->grad_cm + 12 * (size_t)k;
+    const float *cm = s->grad_cm;
     uint16_t out[4] = {0u, 0u, 0u, 0u};
     if (y > 0.0f) {
         const float inv = 1.0f / y;
-        const float d[3] = {mx * inv - cm[0], my * inv - cm[1], mz * inv - cm[2]};
+        const float d[3] = {mx * inv - cm[GRAD_CM(k, 0)], my * inv - cm[GRAD_CM(k, 1)], mz * inv - cm[GRAD_CM(k, 2)]};
         for (int i = 0; i < 3; ++i)
-            out[i] = signed_half(cm[3 + 3 * i] * d[0] + cm[4 + 3 * i] * d[1] + cm[5 + 3 * i] * d[2]);
+            out[i] = signed_half(cm[GRAD_CM(k, 3 + 3 * i)] * d[0] + cm[GRAD_CM(k, 4 + 3 * i)] * d[1] +
+                                 cm[GRAD_CM(k, 5 + 3 * i)] * d[2]);
     }
     if (s->grad_uz) { /* u_x u_y into the radiance record's fourth float, u_z beside */
         const uint32_t xy = (uint32_t)out[0] | (uint32_t)out[1] << 16;
@@ -340,6 +347,10 @@ static void gradient_u_range(glow_system *s, uint32_t k0, uint32_t k1) {
     const float *restrict fy = s->flux, *restrict mo = s->mom, *restrict gcm = s->grad_cm;
     const uint32_t *restrict sub = s->sub_nodes;
     uint32_t k = k0;
+    for (; k < k1 && k % 4u; ++k) { /* to the first whole block of grad_cm */
+        const uint32_t n = sub[k];
+        gradient_u(s, k, n, fy[n], mo[n], mo[N + n], mo[2 * N + n]);
+    }
     if (s->grad_uz)
         for (; k + 4u <= k1; k += 4u) {
             const uint32_t n0 = sub[k], n1 = sub[k + 1u], n2 = sub[k + 2u], n3 = sub[k + 3u];
@@ -347,9 +358,9 @@ static void gradient_u_range(glow_system *s, uint32_t k0, uint32_t k1) {
             const glow__g4f m0 = {mo[n0], mo[n1], mo[n2], mo[n3]};
             const glow__g4f m1 = {mo[N + n0], mo[N + n1], mo[N + n2], mo[N + n3]};
             const glow__g4f m2 = {mo[2 * N + n0], mo[2 * N + n1], mo[2 * N + n2], mo[2 * N + n3]};
-            const float *c = gcm + 12 * (size_t)k;
+            const float *c = gcm + GRAD_CM(k, 0);
             glow__g4f cm[12];
-            for (int q = 0; q < 12; ++q) cm[q] = (glow__g4f){c[q], c[12 + q], c[24 + q], c[36 + q]};
+            for (int q = 0; q < 12; ++q) memcpy(&cm[q], c + 4 * q, sizeof cm[q]); /* the four nodes' value q */
             const glow__g4u pos = (glow__g4u)(y > 0.0f); /* else u = 0 */
             const glow__g4f inv = 1.0f / y;
             const glow__g4f d0 = m0 * inv - cm[0], d1 = m1 * inv - cm[1], d2 = m2 * inv - cm[2];
@@ -624,6 +635,27 @@ static void free_system(glow_system *s) {
     glow__ctx_free(ctx, s);
 }
 
+/* c and M (gradient_moments) of a node from its area moments o (A, A p, A p p^T); left 0 where
+ * there are none */
+static void gradient_cm_of(const double *o, float cm[12]) {
+    if (!(o[0] > 0.0)) return;
+    const double c[3] = {o[1] / o[0], o[2] / o[0], o[3] / o[0]};
+    const double C[6] = {o[4] / o[0] - c[0] * c[0], o[5] / o[0] - c[0] * c[1], o[6] / o[0] - c[0] * c[2],
+                         o[7] / o[0] - c[1] * c[1], o[8] / o[0] - c[1] * c[2], o[9] / o[0] - c[2] * c[2]};
+    for (int q = 0; q < 3; ++q) cm[q] = (float)c[q];
+    const double tr = C[0] + C[3] + C[5];
+    if (!(tr > 0.0)) return; /* M = 0: u = 0 */
+    const double eps = 1e-3 * tr + 1e-30;
+    const double m00 = C[0] + eps, m01 = C[1], m02 = C[2], m11 = C[3] + eps, m12 = C[4], m22 = C[5] + eps;
+    const double i00 = m11 * m22 - m12 * m12, i01 = m02 * m12 - m01 * m22, i02 = m01 * m12 - m02 * m11;
+    const double i11 = m00 * m22 - m02 * m02, i12 = m01 * m02 - m00 * m12, i22 = m00 * m11 - m01 * m01;
+    const double det = m00 * i00 + m01 * i01 + m02 * i02;
+    if (!(fabs(det) > 0.0)) return;
+    const double f = sqrt(tr) / det;
+    const double M[9] = {i00, i01, i02, i01, i11, i12, i02, i12, i22};
+    for (int q = 0; q < 9; ++q) cm[3 + q] = (float)(f * M[q]);
+}
+
 /* Link gradients: each sub_node's area centroid c and M = sigma (C + 1e-3 trace(C) I)^-1 (C the
  * area-weighted covariance of its leaves' positions, sigma = sqrt(trace C)), as the bake's
  * link_gradient and audit_gradient (precompute/src/links.c) take them: area moments of the surfels
@@ -646,26 +678,11 @@ static bool gradient_moments(glow_system *s) {
             const double *a = mo + 10 * (size_t)s->nodes[n].child[0], *b = mo + 10 * (size_t)s->nodes[n].child[1];
             for (int k = 0; k < 10; ++k) mo[10 * (size_t)n + k] = a[k] + b[k];
         }
+    memset(s->grad_cm, 0, ((size_t)s->sub_count + 3u) / 4u * 48u * sizeof(float)); /* with a last block's padding */
     for (uint32_t k = 0; k < s->sub_count; ++k) {
-        const double *o = mo + 10 * (size_t)s->sub_nodes[k];
-        float *cm = s->grad_cm + 12 * (size_t)k;
-        memset(cm, 0, 12 * sizeof *cm);
-        if (!(o[0] > 0.0)) continue;
-        const double c[3] = {o[1] / o[0], o[2] / o[0], o[3] / o[0]};
-        const double C[6] = {o[4] / o[0] - c[0] * c[0], o[5] / o[0] - c[0] * c[1], o[6] / o[0] - c[0] * c[2],
-                             o[7] / o[0] - c[1] * c[1], o[8] / o[0] - c[1] * c[2], o[9] / o[0] - c[2] * c[2]};
-        for (int q = 0; q < 3; ++q) cm[q] = (float)c[q];
-        const double tr = C[0] + C[3] + C[5];
-        if (!(tr > 0.0)) continue; /* M = 0: u = 0 */
-        const double eps = 1e-3 * tr + 1e-30;
-        const double m00 = C[0] + eps, m01 = C[1], m02 = C[2], m11 = C[3] + eps, m12 = C[4], m22 = C[5] + eps;
-        const double i00 = m11 * m22 - m12 * m12, i01 = m02 * m12 - m01 * m22, i02 = m01 * m12 - m02 * m11;
-        const double i11 = m00 * m22 - m02 * m02, i12 = m01 * m02 - m00 * m12, i22 = m00 * m11 - m01 * m01;
-        const double det = m00 * i00 + m01 * i01 + m02 * i02;
-        if (!(fabs(det) > 0.0)) continue;
-        const double f = sqrt(tr) / det;
-        const double M[9] = {i00, i01, i02, i01, i11, i12, i02, i12, i22};
-        for (int q = 0; q < 9; ++q) cm[3 + q] = (float)(f * M[q]);
+        float cm[12] = {0}; /* 0 where the moments give none */
+        gradient_cm_of(mo + 10 * (size_t)s->sub_nodes[k], cm);
+        for (uint32_t q = 0; q < 12u; ++q) s->grad_cm[GRAD_CM(k, q)] = cm[q];
     }
     glow__ctx_free(s->ctx, mo);
     return true;
@@ -850,7 +867,8 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
                 for (size_t n = S; n < N; ++n)
                     if (mark[n]) s->sub_nodes[marked++] = (uint32_t)n;
             }
-            if (s->gradient) s->grad_cm = alloc_array(s, marked ? marked : 1u, 12 * sizeof(float), &ok);
+            if (s->gradient) /* whole blocks of four (GRAD_CM) */
+                s->grad_cm = alloc_array(s, (marked + 3u) / 4u * 4u + (marked ? 0u : 4u), 12 * sizeof(float), &ok);
             glow__ctx_free(ctx, mark);
         }
     }

@@ -88,8 +88,10 @@ typedef struct glow_solver_tables {
      * links' gradient codes (LSUB, one per link in link_blocks' order: 0 = none, else bit 15 and
      * k_x + 15, k_y + 15, k_z + 15 in bits 0-4, 5-9, 10-14; docs/bake-format.md "LSUB"); the
      * gradient_node_count internal nodes some coded link reads (ascending); per such node k,
-     * gradient_cm[12 k ...] its area centroid c (3) and M = sigma (C + 1e-3 trace(C) I)^-1 (9,
-     * row-major), computed once at load. Each update the CPU solver pulls the luma-flux moments
+     * its area centroid c (3) and M = sigma (C + 1e-3 trace(C) I)^-1 (9, row-major), computed once
+     * at load, as values q = 0..11 in blocks of four nodes: value q of node k at
+     * gradient_cm[48 (k / 4) + 4 q + k % 4], the node count rounded up to 4 (the CPU solver reads a
+     * value of four nodes at once). Each update the CPU solver pulls the luma-flux moments
      * m = sum of the leaves' Yflux p (p the surfel position) and sets u = M (m / Yflux - c) (0 where
      * Yflux <= 0), rounded to IEEE halves (|u| < 2^-14: 0, above 65504: 65504); a coded link reads
      * its node's radiance times max(0, 1 + ((k_x u_x + k_y u_y) + k_z u_z) / 15) */
