@@ -71,7 +71,7 @@ static void usage(FILE *f) {
             "  --link-mode     links projected every update (compact, default), expanded at create (more memory),\n"
             "                  or the bake's full-SH links (sh: needs glow-bake --sh-links)\n"
             "  --probe X,Y,Z   print the indirect light at this point (repeatable; default: 3 points)\n"
-            "  --no-machine    skip the STREAM-triad and FMA-peak probes\n"
+            "  --no-machine    skip the STREAM-triad, FMA-peak and cache-line round-trip probes\n"
             "  --backend gl    the GL 4.5 solver (glow_gl.h) on a headless context (EGL, else OSMesa; GLOW_GLCTX=egl|osmesa),\n"
             "                  surfels lit by the GPU shadow-map hook (glow_gl_lights.h); per-stage GPU times from timer\n"
             "                  queries (--threads, --host and --link-mode do not apply)\n"
@@ -818,11 +818,12 @@ int main(int argc, char **argv) {
     const double gbs = links ? link_bytes / (m_cache * 1e-3) * 1e-9 : 0.0; /* links 0: a converged budget */
     const double fpl = flops_per_link(out->sh_bands_luma, out->sh_bands_chroma);
     const double gflops = links ? (double)links * fpl / (m_cache * 1e-3) * 1e-9 : 0.0;
-    double triad = -1.0, peak = -1.0;
+    double triad = -1.0, peak = -1.0, line_rt = -1.0;
     const char *fma_isa = "-";
     if (!o.no_probe_machine && !o.gl) { /* the CPU's limits say nothing about a GPU */
         triad = glow_probe_stream_triad(threads, (size_t)1 << 23, 8); /* 3 x 64 MiB */
         peak = glow_probe_fma_peak(threads, 300.0, &fma_isa);
+        if (threads > 1) line_rt = glow_probe_line_round_trip(200000u); /* ~0.1 s on this VM */
     }
     /* probes: indirect light (diffuse, normal +Y) from the grid */
     if (o.probe_count == 0 && out->grid_sh) {
@@ -906,6 +907,7 @@ int main(int argc, char **argv) {
         jmach = cJSON_AddObjectToObject(jo, "machine");
         glow_json_num(jmach, "stream_triad_gb_per_s", triad);
         glow_json_num(jmach, "fma_peak_gflop_per_s", peak);
+        glow_json_num(jmach, "line_round_trip_ns", line_rt);
         cJSON_AddStringToObject(jmach, "fma_isa", fma_isa);
         glow_json_num(jmach, "fraction_of_triad", frac_bw);
         glow_json_num(jmach, "fraction_of_fma_peak", frac_fma);
@@ -971,6 +973,10 @@ int main(int argc, char **argv) {
             printf("machine (%u threads): STREAM triad %.2f GB/s, fp32 FMA peak %.1f GFLOP/s [%s]\n"
                    "  cache lighting reaches %.1f %% of triad and %.1f %% of FMA peak; %s sets the floor\n",
                    threads, triad, peak, fma_isa, 100.0 * frac_bw, 100.0 * frac_fma, bound);
+        if (line_rt > 0)
+            printf("machine: a cache line between two threads %.0f ns there and back (the other core's writes "
+                   "cost about half that per line)\n",
+                   line_rt);
         for (uint32_t k = 0; k < o.probe_count; ++k)
             printf("indirect light at (%.3g, %.3g, %.3g), diffuse facing +Y: %s%.4g %.4g %.4g W/(m^2 sr)\n",
                    o.probes[k][0], o.probes[k][1], o.probes[k][2], probe_ok[k] ? "" : "(no grid cache near) ",

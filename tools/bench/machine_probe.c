@@ -1,7 +1,8 @@
-/* machine_probe.c — STREAM triad and FMA peak (see machine_probe.h). */
+/* machine_probe.c — STREAM triad, FMA peak and core-to-core latency (see machine_probe.h). */
 #include "machine_probe.h"
 
 #include <pthread.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -193,5 +194,43 @@ double glow_probe_fma_peak(uint32_t threads, double ms, const char **isa) {
         }
     }
 #endif
+    return best;
+}
+
+/* ---------------------------------------------------------------------- line round trip */
+typedef struct pingpong {
+    _Alignas(64) atomic_uint turn; /* odd: the other thread's move */
+    uint32_t rounds;
+} pingpong;
+
+static void *pong_thread(void *p) {
+    pingpong *g = p;
+    for (uint32_t i = 0; i < g->rounds; ++i) {
+        while (atomic_load_explicit(&g->turn, memory_order_acquire) != 2u * i + 1u) {
+        }
+        atomic_store_explicit(&g->turn, 2u * i + 2u, memory_order_release);
+    }
+    return NULL;
+}
+
+double glow_probe_line_round_trip(uint32_t rounds) {
+    double best = -1.0;
+    for (int run = 0; run < 3; ++run) {
+        pingpong g;
+        atomic_init(&g.turn, 0u);
+        g.rounds = rounds;
+        pthread_t th;
+        if (pthread_create(&th, NULL, pong_thread, &g) != 0) return -1.0;
+        const double t0 = now_s();
+        for (uint32_t i = 0; i < rounds; ++i) {
+            atomic_store_explicit(&g.turn, 2u * i + 1u, memory_order_release);
+            while (atomic_load_explicit(&g.turn, memory_order_acquire) != 2u * i + 2u) {
+            }
+        }
+        const double dt = now_s() - t0;
+        pthread_join(th, NULL);
+        const double ns = dt / rounds * 1e9;
+        if (best < 0.0 || ns < best) best = ns;
+    }
     return best;
 }

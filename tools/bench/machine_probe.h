@@ -1,5 +1,6 @@
 /* machine_probe.h — what this machine can do, measured in the same run as the benchmark:
- * STREAM triad bandwidth and fp32 FMA peak, both with `threads` threads. */
+ * STREAM triad bandwidth and fp32 FMA peak, both with `threads` threads, and what a cache line costs
+ * between two threads. */
 #ifndef GLOW_MACHINE_PROBE_H
 #define GLOW_MACHINE_PROBE_H
 #include <stddef.h>
@@ -14,5 +15,12 @@ double glow_probe_stream_triad(uint32_t threads, size_t doubles, uint32_t reps);
  * else the compiler's best) for about `ms` milliseconds. Returns GFLOP/s (an FMA = 2 FLOPs) and
  * the instruction set used in *isa. */
 double glow_probe_fma_peak(uint32_t threads, double ms, const char **isa);
+
+/* Core-to-core latency: two threads hand a cache line back and forth `rounds` times (each waits for
+ * the other's store, then stores); returns the mean round trip in ns (two one-way transfers), the
+ * best of 3 runs, or a negative value when a thread cannot start. What a stage pays per line that
+ * the other core wrote last (runtime/src/pool.c's shares keep work on its core for that reason).
+ * The threads are not pinned: the OS places them, as it places the runtime's workers. */
+double glow_probe_line_round_trip(uint32_t rounds);
 
 #endif
