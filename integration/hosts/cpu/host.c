@@ -693,19 +693,9 @@ static uint64_t light_packet(const glow_host *h, const glow_surfel_batch *batch,
     return traced;
 }
 
-/* All lanes of a packet as idle rays (ray_lane_idle for k = 0..15, in loops the compiler vectorises). */
+/* All lanes of a packet as idle rays (GCC inlines ray_lane_idle and vectorises the loop). */
 static void ray_packet_idle(struct RTCRay16 *ray) {
-    for (uint32_t k = 0; k < PACKET; ++k) {
-        ray->org_x[k] = ray->org_y[k] = ray->org_z[k] = 0.0f;
-        ray->dir_x[k] = ray->dir_y[k] = 0.0f;
-        ray->dir_z[k] = 1.0f;
-        ray->tnear[k] = 0.0f;
-        ray->tfar[k] = 0.0f;
-        ray->time[k] = 0.0f;
-        ray->mask[k] = 0xFFFFFFFFu;
-        ray->id[k] = k;
-        ray->flags[k] = 0;
-    }
+    for (uint32_t k = 0; k < PACKET; ++k) ray_lane_idle(ray, k);
 }
 
 /* light_packet with footprints (h->foot): per light, rounds of up to 16 rays (one per surfel: all K
