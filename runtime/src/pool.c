@@ -35,7 +35,6 @@ typedef struct pool_share {
 typedef struct pool_job {
     glow_task_fn fn;
     void *data;
-    uint32_t count;
     uint32_t shares;     /* the pool's threads (1: the serial path) */
     pool_share *share;   /* [shares] */
 } pool_job;
@@ -168,7 +167,7 @@ void glow__taskpool_run(glow__taskpool *pool, glow_task_fn fn, void *data, uint3
         return;
     }
     pthread_mutex_lock(&pool->submit);
-    pool_job j = {.fn = fn, .data = data, .count = count, .shares = pool->threads, .share = pool->share};
+    pool_job j = {.fn = fn, .data = data, .shares = pool->threads, .share = pool->share};
     for (uint32_t w = 0; w < pool->threads; ++w) { /* the workers wait on generation: not yet reading */
         atomic_store_explicit(&pool->share[w].next, (uint32_t)((uint64_t)count * w / pool->threads), memory_order_relaxed);
         pool->share[w].end = (uint32_t)((uint64_t)count * (w + 1u) / pool->threads);

@@ -868,7 +868,7 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
                     if (mark[n]) s->sub_nodes[marked++] = (uint32_t)n;
             }
             if (s->gradient) /* whole blocks of four (GRAD_CM) */
-                s->grad_cm = alloc_array(s, (marked + 3u) / 4u * 4u + (marked ? 0u : 4u), 12 * sizeof(float), &ok);
+                s->grad_cm = alloc_array(s, ((marked ? marked : 1u) + 3u) / 4u * 4u, 12 * sizeof(float), &ok);
             glow__ctx_free(ctx, mark);
         }
     }
