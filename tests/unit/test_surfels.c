@@ -209,6 +209,16 @@ static void test_kdtree_matches_brute_force(void **state) {
     }
     glow__kdtree *tree = glow__kdtree_build((const float (*)[3])p, n);
     assert_non_null(tree);
+    /* the uniform grid gives the same answers (glow__pointgrid): cells of several sizes, the last so
+     * fine that the cell cap coarsens it, over the points' box while a third of the queries lie
+     * outside it */
+    const float box_lo[3] = {0.0f, 0.0f, 0.0f}, box_hi[3] = {10.0f, 4.0f, 3.0f};
+    const float cells[] = {0.3f, 1.7f, 20.0f, 1e-4f};
+    glow__pointgrid *grids[4];
+    for (uint32_t gi = 0; gi < 4; ++gi) {
+        grids[gi] = glow__pointgrid_build((const float (*)[3])p, n, box_lo, box_hi, cells[gi]);
+        assert_non_null(grids[gi]);
+    }
     uint32_t idx[40];
     float d2[40];
     const uint32_t ks[] = {1, 6, 17, 40};
@@ -240,6 +250,13 @@ static void test_kdtree_matches_brute_force(void **state) {
                 assert_int_equal(idx[j], all[j].i);
                 assert_true(d2[j] == all[j].d2);
             }
+            for (uint32_t gi = 0; gi < 4; ++gi) {
+                assert_int_equal(glow__pointgrid_knn(grids[gi], qp, k, exclude, idx, d2), k);
+                for (uint32_t j = 0; j < k; ++j) {
+                    assert_int_equal(idx[j], all[j].i);
+                    assert_true(d2[j] == all[j].d2);
+                }
+            }
             /* within a radius: the brute-force list's prefix up to the radius (inclusive), at most k;
              * the radius is one of the distances (a tie at the bound is kept) or between two */
             const float radii[] = {all[k / 2].d2, 0.5f * (all[k].d2 + all[k + 1].d2), 0.0f, 1e30f};
@@ -256,6 +273,11 @@ static void test_kdtree_matches_brute_force(void **state) {
         }
     }
     glow__kdtree_free(tree);
+    for (uint32_t gi = 0; gi < 4; ++gi) glow__pointgrid_free(grids[gi]);
+    glow__pointgrid *g3 = glow__pointgrid_build((const float (*)[3])p, 3, box_lo, box_hi, 0.5f);
+    assert_non_null(g3);
+    assert_int_equal(glow__pointgrid_knn(g3, p[0], 10, 0, idx, d2), 2); /* fewer points than k */
+    glow__pointgrid_free(g3);
 
     /* small and empty trees */
     glow__kdtree *t3 = glow__kdtree_build((const float (*)[3])p, 3);
