@@ -149,6 +149,19 @@ static float box_dist2(const kd_node *nd, const float q[3]) {
 /* (d2, index) lexicographic: true when a ranks before b */
 static int before(float da, uint32_t ia, float db, uint32_t ib) { return da < db || (da == db && ia < ib); }
 
+/* a candidate into the sorted list of the k best so far (the tree's and the grid's queries) */
+static void offer(float d2, uint32_t id, uint32_t k, uint32_t *found, uint32_t *out_index, float *out_dist2) {
+    if (*found == k && !before(d2, id, out_dist2[k - 1], out_index[k - 1])) return;
+    uint32_t j = *found < k ? (*found)++ : k - 1;
+    while (j > 0 && before(d2, id, out_dist2[j - 1], out_index[j - 1])) {
+        out_dist2[j] = out_dist2[j - 1];
+        out_index[j] = out_index[j - 1];
+        --j;
+    }
+    out_dist2[j] = d2;
+    out_index[j] = id;
+}
+
 uint32_t glow__kdtree_knn(const glow__kdtree *tree, const float q[3], uint32_t k, uint32_t exclude,
                           uint32_t *out_index, float *out_dist2) {
     return glow__kdtree_knn_within(tree, q, k, exclude, INFINITY, out_index, out_dist2);
@@ -179,15 +192,7 @@ uint32_t glow__kdtree_knn_within(const glow__kdtree *tree, const float q[3], uin
                 float dx = p[0] - q[0], dy = p[1] - q[1], dz = p[2] - q[2];
                 float d2 = dx * dx + dy * dy + dz * dz;
                 if (d2 > max_dist2) continue;
-                if (found == k && !before(d2, id, out_dist2[k - 1], out_index[k - 1])) continue;
-                uint32_t j = found < k ? found++ : k - 1;
-                while (j > 0 && before(d2, id, out_dist2[j - 1], out_index[j - 1])) {
-                    out_dist2[j] = out_dist2[j - 1];
-                    out_index[j] = out_index[j - 1];
-                    --j;
-                }
-                out_dist2[j] = d2;
-                out_index[j] = id;
+                offer(d2, id, k, &found, out_index, out_dist2);
             }
             continue;
         }
@@ -296,15 +301,7 @@ static void grid_scan(const glow__pointgrid *g, size_t c, const float q[3], uint
         const float *p = g->pts[i];
         float dx = p[0] - q[0], dy = p[1] - q[1], dz = p[2] - q[2];
         float d2 = dx * dx + dy * dy + dz * dz;
-        if (*found == k && !before(d2, id, out_dist2[k - 1], out_index[k - 1])) continue;
-        uint32_t j = *found < k ? (*found)++ : k - 1;
-        while (j > 0 && before(d2, id, out_dist2[j - 1], out_index[j - 1])) {
-            out_dist2[j] = out_dist2[j - 1];
-            out_index[j] = out_index[j - 1];
-            --j;
-        }
-        out_dist2[j] = d2;
-        out_index[j] = id;
+        offer(d2, id, k, found, out_index, out_dist2);
     }
 }
 
