@@ -232,28 +232,30 @@ static int32_t grid_coord(const glow__pointgrid *g, const float p[3], int a) {
     return f >= (float)g->dim[a] ? g->dim[a] - 1 : (int32_t)f;
 }
 
+/* cells of side h over [lo, hi] plus one spare a side (at most 65536 an axis, clamped into the last);
+ * returns how many */
+static double grid_dims(glow__pointgrid *g, const float lo[3], const float hi[3], float h) {
+    double cells = 1.0;
+    for (int a = 0; a < 3; ++a) {
+        const double ext = (double)hi[a] - lo[a];
+        const double d = ext > 0.0 ? ceil(ext / h) + 1.0 : 1.0;
+        g->dim[a] = !(d >= 1.0) ? 1 : (d > 65536.0 ? 65536 : (int32_t)d);
+        cells *= g->dim[a];
+    }
+    return cells;
+}
+
 glow__pointgrid *glow__pointgrid_build(const float (*points)[3], uint32_t count, const float lo[3], const float hi[3],
                                        float cell) {
     glow__pointgrid *g = calloc(1, sizeof *g);
     if (!g) return NULL;
-    double cells = 1.0;
-    for (int a = 0; a < 3; ++a) {
-        const double ext = (double)hi[a] - lo[a];
-        const double d = ext > 0.0 && cell > 0.0 ? ceil(ext / cell) + 1.0 : 1.0;
-        g->dim[a] = d < 1.0 ? 1 : (d > 65536.0 ? 65536 : (int32_t)d);
-        cells *= g->dim[a];
-    }
     /* no more than 8 cells a point (plus a floor for tiny sets): a coarser cell keeps it exact */
     float h = cell > 0.0f ? cell : 1.0f;
     const double cap = 8.0 * (double)count + 4096.0;
+    double cells = grid_dims(g, lo, hi, h);
     while (cells > cap) {
         h *= 1.25f;
-        cells = 1.0;
-        for (int a = 0; a < 3; ++a) {
-            const double d = ceil(((double)hi[a] - lo[a]) / h) + 1.0;
-            g->dim[a] = d < 1.0 ? 1 : (int32_t)d;
-            cells *= g->dim[a];
-        }
+        cells = grid_dims(g, lo, hi, h);
     }
     memcpy(g->lo, lo, sizeof g->lo);
     g->h = h;
