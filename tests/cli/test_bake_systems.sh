@@ -27,7 +27,9 @@ assert m["glow_world"] == 1 and m["source"] == "builtin:pillar-hall" and m["syst
 s = m["systems"]
 assert len(s) == int(sys.argv[2]), len(s)
 assert abs(sum(x["area"] for x in s) - 306.33) < 0.01, sum(x["area"] for x in s)
-assert sum(x["triangles"] for x in s) == 236
+# the hall's 236 triangles, of which the 88 with an edge longer than a quarter of sqrt(100) m are cut
+# in four (pipeline.c, split_large_triangles): 236 + 3 x 88
+assert sum(x["triangles"] for x in s) == 500, sum(x["triangles"] for x in s)
 import re
 for i, x in enumerate(s):
     assert x["index"] == i and re.fullmatch(r"hall\.s[0-9]+-[0-9a-f]+-[0-9a-f]{16}\.glow", x["file"]), x
@@ -190,16 +192,43 @@ OBJ
 mkdir -p "$T/gw"
 expect 0 "a 40 x 40 m ground quad and a wall across it in systems of 100 m²" "$BIN/glow-bake" "$T/ground.obj" --system-area 100 --surfels 256 \
   --links 16 --lightmap-caches 64 --lightmap-detail 1 -q -o "$T/gw/g.json"
-python3 - "$T/gw/g.json" <<'PY' && pass "  the ground's 800 m² triangles cut into pieces of 3.125 m², at least 16 systems of at most 100 m², linking neighbours" \
+python3 - "$T/gw/g.json" <<'PY' && pass "  the ground's and the wall's long triangles cut into pieces of at most 6.25 m² and 2.5 m a side, at least 16 systems of at most 100 m², linking neighbours" \
   || fail "  the ground's pieces"
 import json, sys
 s = json.load(open(sys.argv[1]))["systems"]
-# the ground's 2 triangles cut into 2 x 256, the wall's 10 (at most 30 m² each) into 4 or 16 pieces each
-assert sum(x["triangles"] for x in s) >= 512 + 10 * 4, sum(x["triangles"] for x in s)
+# pieces of at most 100/16 m² and edges of at most sqrt(100)/4 m (each cut in four halves the edges):
+# the ground's 2 triangles (800 m², a 56.6 m diagonal) into 4^5 each, by their diagonal (by their area
+# alone, 4^4); the wall's two 30 x 2 m sides and its 30 x 1 m top, 6 triangles, into 4^4 each by their
+# 30 m edges (by area, 4^2 and 4); its two 1 x 2 m ends, 4 triangles, stay whole
+assert sum(x["triangles"] for x in s) == 2 * 1024 + 6 * 256 + 4, sum(x["triangles"] for x in s)
 assert abs(sum(x["area"] for x in s) - (1600 + 2 * 60 + 30 + 2 * 2)) < 0.01, sum(x["area"] for x in s)
 assert all(0 < x["area"] <= 100.0 for x in s), [x["area"] for x in s]
 assert len(s) >= 16, len(s)
 assert all(len(x["dependencies"]) > 0 for x in s) and sum(x["proxies"] > 0 for x in s) >= len(s) // 2  # the texels by the wall see its other systems' parts
+PY
+# A cell is cut where at least a quarter of its surface lies on either side, not in the middle half of
+# its centroids' range: a 20 x 10 m floor and a 0.5 m² triangle 180 m away were cut at x = 100 (the
+# range's middle, where nothing is crossed), a system of the lone triangle beside two of the floor
+cat > "$T/far.obj" <<'OBJ'
+v 0 0 0
+v 20 0 0
+v 20 0 10
+v 0 0 10
+v 200 0 0
+v 201 0 0
+v 200 0 1
+f 1 4 3 2
+f 5 7 6
+OBJ
+mkdir -p "$T/fw"
+expect 0 "a floor and a far triangle in systems of 100 m²" "$BIN/glow-bake" "$T/far.obj" --system-area 100 --surfels 256 \
+  --links 16 --lightmap-caches 64 --lightmap-detail 1 -q -o "$T/fw/f.json"
+python3 - "$T/fw/f.json" <<'PY' && pass "  no system below a quarter of 100 m² (the far triangle goes with a part of the floor)" \
+  || fail "  the partition's halves"
+import json, sys
+s = json.load(open(sys.argv[1]))["systems"]
+a = [x["area"] for x in s]
+assert abs(sum(a) - 200.5) < 0.01 and all(25.0 <= v <= 100.0 for v in a), a
 PY
 expect 0 "one system when the area is above the scene's" "$BIN/glow-bake" builtin:pillar-hall --system-area 1000 "${BUDGET[@]}" \
   -o "$T/one/hall.json"
