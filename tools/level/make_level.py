@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """make_level.py — a synthetic big level for the world-scale bake (issue 16, item 6): an OBJ mesh tiled
-N x M times on the ground plane with streets between the copies, over one ground quad.
+N x M times on the ground plane with a ground of streets between the copies.
 
     tools/level/make_level.py ../shared/scenes/sponza/dabrovic/sponza.obj 4 4 --street 6 -o /tmp/level4x4
 
@@ -8,8 +8,13 @@ writes OUT/level.obj, OUT/level.mtl (the source's materials plus "street") and, 
 beside the source OBJ (its textures), a symbolic link in OUT, so textures resolve as they do for the
 source. Copy (i, j) is the source moved by (i (dx + street), 0, j (dz + street)), dx and dz the source's
 extents; vertex, UV and normal lists are repeated per copy (indices stay valid; relative indices are
-made absolute). The ground quad spans the whole level at the source's lowest y, facing up. Standard
-library only; the output is deterministic (same bytes for the same arguments)."""
+made absolute). The ground lies at the source's lowest y, facing up: by default (`--ground streets`)
+rectangles that cover the streets and a border of one street around the level but not the copies'
+footprints, where it would lie under each copy's own floor (coplanar with it where the floor is at the
+lowest y, as Sponza's courtyard is: a doubled surface that z-fights in any renderer and reflects its
+light twice, and elsewhere buried under the copy); `--ground full` is one quad under the whole level,
+as before 2026-11-30. Standard library only; the output is deterministic (same bytes for the same
+arguments)."""
 import argparse
 import os
 import sys
@@ -26,6 +31,8 @@ def main():
     ap.add_argument("nx", type=int, help="copies along x (1..64)")
     ap.add_argument("nz", type=int, help="copies along z (1..64)")
     ap.add_argument("--street", type=float, default=6.0, help="gap between copies, in the mesh's units (default 6)")
+    ap.add_argument("--ground", choices=("streets", "full"), default="streets",
+                    help="streets (default): the ground between and around the copies only; full: one quad under all")
     ap.add_argument("-o", "--out", required=True, help="output folder (created; level.obj is written there)")
     a = ap.parse_args()
     if not (1 <= a.nx <= 64 and 1 <= a.nz <= 64):
@@ -118,15 +125,30 @@ def main():
                         refs.append("/".join(parts))
                     out.append(t[0] + " " + " ".join(refs))
             copy += 1
-    # the ground: one quad under the whole level, facing up (counter-clockwise seen from above)
+    # the ground, facing up (each rectangle counter-clockwise seen from above)
     g = copy * nv
-    x0, x1 = lo[0] - a.street, lo[0] + (a.nx - 1) * dx + (hi[0] - lo[0]) + a.street
-    z0, z1 = lo[2] - a.street, lo[2] + (a.nz - 1) * dz + (hi[2] - lo[2]) + a.street
+    ex, ez = hi[0] - lo[0], hi[2] - lo[2]
+    x0, x1 = lo[0] - a.street, lo[0] + (a.nx - 1) * dx + ex + a.street
+    z0, z1 = lo[2] - a.street, lo[2] + (a.nz - 1) * dz + ez + a.street
     y = lo[1]
-    out += ["o ground", "usemtl street",
-            "v %.6g %.6g %.6g" % (x0, y, z0), "v %.6g %.6g %.6g" % (x0, y, z1),
-            "v %.6g %.6g %.6g" % (x1, y, z1), "v %.6g %.6g %.6g" % (x1, y, z0),
-            "f %d %d %d %d" % (g + 1, g + 2, g + 3, g + 4)]
+    if a.ground == "full":
+        rects = [(x0, x1, z0, z1)]
+    else:  # the bands between the rows of copies (and the border), then the gaps within each row
+        rects = []
+        zs = [z0] + [v for j in range(a.nz) for v in (lo[2] + j * dz, lo[2] + j * dz + ez)] + [z1]
+        xs = [x0] + [v for i in range(a.nx) for v in (lo[0] + i * dx, lo[0] + i * dx + ex)] + [x1]
+        for b in range(0, len(zs), 2):
+            rects.append((x0, x1, zs[b], zs[b + 1]))
+        for j in range(a.nz):
+            for b in range(0, len(xs), 2):
+                rects.append((xs[b], xs[b + 1], zs[2 * j + 1], zs[2 * j + 2]))
+        rects = [r for r in rects if r[1] > r[0] and r[3] > r[2]]
+    out += ["o ground", "usemtl street"]
+    for k, (ra, rb, rc, rd) in enumerate(rects):
+        out += ["v %.6g %.6g %.6g" % (ra, y, rc), "v %.6g %.6g %.6g" % (ra, y, rd),
+                "v %.6g %.6g %.6g" % (rb, y, rd), "v %.6g %.6g %.6g" % (rb, y, rc)]
+    for k in range(len(rects)):
+        out.append("f %d %d %d %d" % (g + 4 * k + 1, g + 4 * k + 2, g + 4 * k + 3, g + 4 * k + 4))
     with open(os.path.join(a.out, "level.obj"), "w", encoding="utf-8") as f:
         f.write("\n".join(out) + "\n")
     print("make_level.py: %s: %d x %d copies of %s (%d vertices each), %.1f x %.1f units" %
