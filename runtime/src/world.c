@@ -235,8 +235,12 @@ static void add_stats(glow_update_stats *sum, const glow_update_stats *st) {
  * within a system (glow_update_desc); ties by order added. The first always updates, with the whole
  * budget as its own; each next one only when the part of its last update that a budget cannot cut
  * (all but the cache gathers) fits what is left, with what is left as its budget (its gathers take
- * the rest). A member never updated has no time yet and updates. The others keep their outputs and
- * count as skipped (their caches in caches_skipped_budget). */
+ * the rest). A member never updated (just streamed in: no light yet) comes first, before any
+ * priority, and is held to the same rule with its time estimated from the members that have one (the
+ * mean of their times per cache, times its caches); while no member has a time (the world's first
+ * update) every member updates. Before 2026-11-30 a member never updated always updated wherever it
+ * stood, so a system streamed in under a time budget added its whole fixed part to a budget already
+ * spent. The others keep their outputs and count as skipped (their caches in caches_skipped_budget). */
 static void schedule(glow_world *w, const glow_update_desc *desc) {
     double r = desc->focus_radius > 0.0f ? desc->focus_radius : 0.1 * w->diag;
     if (!(r > 0.0)) r = 1.0;
@@ -251,7 +255,7 @@ static void schedule(glow_world *w, const glow_update_desc *desc) {
             }
             f = fmax(f, 1.0 / (1.0 + d2 / (r * r)));
         }
-        w->prio[i] = (w->ms[i].stale + 1.0) * (1.0 + 4.0 * f);
+        w->prio[i] = w->ms[i].est_ms == 0.0 ? INFINITY : (w->ms[i].stale + 1.0) * (1.0 + 4.0 * f);
         w->order[i] = i;
     }
     for (uint32_t i = 1; i < w->count; ++i) { /* insertion sort: stable, no allocation */
@@ -281,13 +285,21 @@ glow_result glow_world_update(glow_world *w, const glow_update_desc *desc) {
     const bool timed = desc && desc->budget_ms > 0.0f;
     if (timed) schedule(w, desc);
     double left = timed ? desc->budget_ms : 0.0;
+    double known_ms = 0.0, known_caches = 0.0; /* the members with a time: a fresh member's estimate */
+    for (uint32_t i = 0; timed && i < w->count; ++i)
+        if (w->ms[i].est_ms > 0.0) {
+            known_ms += w->ms[i].est_ms;
+            known_caches += glow__system_cache_count(w->sys[i]);
+        }
     w->updated = 0;
     for (uint32_t n = 0; n < w->count; ++n) {
         const uint32_t i = timed ? w->order[n] : n;
         glow_update_desc d = desc ? *desc : (glow_update_desc){0};
         if (timed) {
-            const bool fresh = w->ms[i].est_ms == 0.0; /* never updated: no time yet, and no light */
-            if (n > 0 && !fresh && (left <= 0.0 || w->ms[i].est_ms > left)) { /* does not fit: keeps its outputs */
+            double est = w->ms[i].est_ms;
+            if (est == 0.0) /* never updated: no time yet (and no light), estimated from the others' */
+                est = known_ms > 0.0 ? known_ms / fmax(known_caches, 1.0) * glow__system_cache_count(w->sys[i]) : 0.0;
+            if (n > 0 && est > 0.0 && (left <= 0.0 || est > left)) { /* does not fit: keeps its outputs */
                 w->ms[i].stale++;
                 sum.caches_skipped_budget += glow__system_cache_count(w->sys[i]);
                 continue;

@@ -310,11 +310,14 @@ static void test_world_api(void **state) {
     assert_int_equal(glow_world_get_stats(W, &ws), GLOW_OK);
     assert_int_equal(ws.dependencies_attached, deps);
     assert_int_equal(ws.dependencies_missing, 0);
-    /* a system never updated updates under any time budget (it has no light yet) */
+    /* a system never updated updates under any time budget (it has no light yet), first, and under a
+     * budget that it spends alone, alone (until 2026-11-30 it updated besides the members' first) */
     assert_int_equal(glow_world_update(W, &(glow_update_desc){.budget_ms = 1e-3f}), GLOW_OK);
     glow_update_stats fresh;
     glow_system_get_stats(w.sys[1], &fresh);
     assert_int_equal(fresh.updates, 1);
+    assert_int_equal(glow_world_get_stats(W, &ws), GLOW_OK);
+    assert_int_equal(ws.systems_updated, 1);
     for (uint32_t r = 0; r < 3; ++r) assert_int_equal(glow_world_update(W, NULL), GLOW_OK);
     const double e_back = run(&w, 0);
     print_message("streamed out and in again: %.6f\n", e_back);
@@ -351,6 +354,27 @@ static void test_world_api(void **state) {
         glow_update_stats us;
         glow_system_get_stats(w.sys[i], &us);
         assert_true(us.updates > seen[i]); /* every member got its turn */
+    }
+    /* two systems streamed in at once under that budget: one a frame, in the order added, each before
+     * any member that has light; so a stream-in never adds a second system's fixed cost to a frame */
+    assert_int_equal(glow_world_remove(W, w.sys[3]), GLOW_OK);
+    assert_int_equal(glow_world_remove(W, w.sys[0]), GLOW_OK);
+    assert_int_equal(glow_world_add(W, w.sys[3]), GLOW_OK);
+    assert_int_equal(glow_world_add(W, w.sys[0]), GLOW_OK);
+    for (uint32_t i = 0; i < w.n; ++i) {
+        glow_update_stats us;
+        glow_system_get_stats(w.sys[i], &us);
+        seen[i] = us.updates;
+    }
+    for (uint32_t f = 0; f < 2; ++f) {
+        assert_int_equal(glow_world_update(W, &tiny), GLOW_OK);
+        assert_int_equal(glow_world_get_stats(W, &ws), GLOW_OK);
+        assert_int_equal(ws.systems_updated, 1);
+        for (uint32_t i = 0; i < w.n; ++i) {
+            glow_update_stats us;
+            glow_system_get_stats(w.sys[i], &us);
+            assert_int_equal(us.updates, seen[i] + ((i == 3) || (f == 1 && i == 0) ? 1u : 0u));
+        }
     }
     assert_int_equal(glow_world_update(W, &(glow_update_desc){.budget_ms = -1.0f}), GLOW_ERROR_INVALID_ARGUMENT);
     glow_world_destroy(W); /* detaches everything: the systems can go */
