@@ -83,6 +83,24 @@ assert a["median_update_ms"] > 0 and a["median_caches_gathered"] == a["caches"],
 assert b["systems"] == n and b["median_systems_updated"] == 1 and b["median_caches_gathered"] < b["caches"], b
 assert b["budget"]["luma_error_mean"] > 0 and "walk_near_error_mean" in b["budget"], b
 PY
+# --stream R: only the systems within R of the walking focus loaded; the rest streamed in (a new system,
+# its host prepared) and out (destroyed) between updates; each streamed-in system's first update counted
+expect 0 "the world streamed along the walk (glow-bench --budget-ms 0.001 --walk --stream 2)" "$BIN/glow-bench" \
+  "$T/w/hall.json" "$ROOT/scenes/pillar-hall.json" --frames 24 --warmup 1 --threads 1 --no-machine -q --json \
+  --budget-ms 0.001 --walk --stream 2
+python3 - "$T/out" "$nsys" <<'PY' && pass "  systems streamed in and out; each streamed-in one updated first and alone (one system a frame)" \
+  || fail "  glow-bench's stream report is wrong"
+import json, sys
+t = open(sys.argv[1]).read()
+b, n = json.loads(t[t.index("{"):]), int(sys.argv[2])
+st = b["budget"]["stream"]
+assert st["streamed_in"] >= 1 and st["streamed_out"] >= 1 and st["median_systems_loaded"] < n, st
+assert 1 <= st["first_updates"] <= st["streamed_in"] and b["median_systems_updated"] == 1, b
+assert b["budget"]["updates_over_1_25x_budget"] >= 0 and b["budget"]["max_update_ms"] > 0, b
+PY
+expect 2 "--stream without --walk" "$BIN/glow-bench" "$T/w/hall.json" "$ROOT/scenes/pillar-hall.json" --budget-ms 1 \
+  --stream 2 --no-machine -q
+err_has "--stream"
 printf '{"glow_world": 1, "systems": []}' > "$T/empty.json"
 expect 1 "glow-bench on a manifest with no systems" "$BIN/glow-bench" "$T/empty.json" "$ROOT/scenes/pillar-hall.json" \
   --frames 1 --no-machine -q

@@ -46,6 +46,7 @@ typedef struct options {
     uint32_t budget_caches;
     int has_focus, still, walk, keep_lighting;
     float focus[3];
+    float stream; /* worlds, with --walk: only the systems within this distance of the focus are loaded */
 } options;
 
 static const char *link_mode_name(uint32_t mode) {
@@ -58,6 +59,7 @@ static void usage(FILE *f) {
             "                  [--iterations K] [--host exact|shadow-map] [--surfel-samples K] [--link-mode compact|expanded|sh]\n"
             "                  [--probe X,Y,Z]... [--no-machine] [--backend cpu|gl]\n"
             "                  [--budget-ms MS] [--budget-caches N] [--converge EPS] [--focus X,Y,Z] [--still [--keep-lighting]]\n"
+            "                  [--walk [--stream R]]\n"
             "                  [--json] [-q]\n"
             "  BAKE   a bake written by glow-bake, or a world manifest (glow-bake --system-area: every system in one\n"
             "         glow_world, one host each shadowed by its neighbours too, CPU backend);  SCENE  its scene description JSON (docs/scene-format.md)\n"
@@ -88,7 +90,11 @@ static void usage(FILE *f) {
             "                  (GLOW_UPDATE_FLAG_KEEP_LIGHTING: the host hook is not called)\n"
             "  --walk          with a budget: the focus walks across the scene's longest horizontal extent\n"
             "                  over the run (at the scene camera's height), and the report adds the error of\n"
-            "                  the caches within a tenth of the scene's diagonal of it (the camera's view)\n");
+            "                  the caches within a tenth of the scene's diagonal of it (the camera's view)\n"
+            "  --stream R      a world, with --walk and --budget-ms: only the systems whose bounds lie within R\n"
+            "                  of the focus are loaded; as it walks, the others are streamed in (a new system from\n"
+            "                  its bake, added; untimed, as an engine's loader would) and out (removed, destroyed)\n"
+            "                  between updates, and the report adds the updates that followed a stream-in\n");
 }
 
 
@@ -156,13 +162,14 @@ static int parse_args(int argc, char **argv, options *o) {
             }
             o->gl_finish = !strcmp(v, "finish");
             ++i;
-        } else if (!strcmp(a, "--budget-ms") || !strcmp(a, "--converge")) {
+        } else if (!strcmp(a, "--budget-ms") || !strcmp(a, "--converge") || !strcmp(a, "--stream")) {
             float x;
             if (!v || !glow_cli_float(v, &x) || !(x > 0.0f)) {
                 fprintf(stderr, "glow-bench: %s needs a positive number\n", a);
                 return 0;
             }
             if (!strcmp(a, "--budget-ms")) o->budget_ms = x;
+            else if (!strcmp(a, "--stream")) o->stream = x;
             else o->converge = x;
             ++i;
         } else if (!strcmp(a, "--budget-caches")) {
@@ -198,6 +205,10 @@ static int parse_args(int argc, char **argv, options *o) {
     }
     if (o->keep_lighting && !o->still) {
         fprintf(stderr, "glow-bench: --keep-lighting goes with --still (a moving light must be relit)\n");
+        return 0;
+    }
+    if (o->stream > 0.0f && !(o->walk && o->budget_ms > 0.0f)) {
+        fprintf(stderr, "glow-bench: --stream measures a walk under a time budget: give --walk and --budget-ms\n");
         return 0;
     }
     if (o->walk && !(o->budget_ms > 0.0f || o->budget_caches || o->converge > 0.0f)) {
@@ -288,9 +299,52 @@ typedef struct world_set {
     glow_cache_info *cinfo[WORLD_MAX];
 } world_set;
 
+/* Against a time budget: of the updates, the 95th percentile, the largest and how many took more than
+ * 1.25x the budget (issue 17's limit for streaming); with --stream the same of the updates that gave a
+ * streamed-in system its first update (in[i] > 0) */
+typedef struct stream_figs {
+    uint32_t frames, over, in_frames, in_over;
+    double p95, max, in_median, in_max;
+} stream_figs;
+
+static bool stream_figures(const double *wall, const double *in, uint32_t n, double budget_ms, stream_figs *out) {
+    stream_figs f = {0};
+    double *scratch = malloc(((size_t)n + 1) * sizeof *scratch);
+    if (!scratch) return false;
+    uint32_t m = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        f.over += wall[i] > 1.25 * budget_ms;
+        f.max = fmax(f.max, wall[i]);
+        if (in[i] > 0.0) {
+            f.in_frames++;
+            f.in_over += wall[i] > 1.25 * budget_ms;
+            f.in_max = fmax(f.in_max, wall[i]);
+            scratch[m++] = wall[i];
+        }
+    }
+    f.frames = n;
+    f.in_median = m ? glow_cli_median(scratch, m) : 0.0;
+    memcpy(scratch, wall, n * sizeof *scratch);
+    qsort(scratch, n, sizeof *scratch, glow_cli_cmp_double);
+    f.p95 = n ? scratch[(uint32_t)fmin((double)n - 1.0, ceil(0.95 * n) - 1.0)] : 0.0;
+    free(scratch);
+    *out = f;
+    return true;
+}
+
 static int is_world(const char *path) {
     const size_t n = strlen(path);
     return n > 5 && strcmp(path + n - 5, ".json") == 0;
+}
+
+/* System i of the world (its bake loaded), lit by `host`, with the run's params */
+static glow_result world_system(const options *o, glow_context *ctx, const world_set *ws, const cJSON *systems, uint32_t i,
+                                glow_host *host, const glow_system_params *params, glow_system **out) {
+    const cJSON *file = cJSON_GetObjectItemCaseSensitive(cJSON_GetArrayItem(systems, (int)i), "file");
+    const glow_system_desc sd = {.bake = ws->bake[i], .lighting = glow_host_hooks(host), .sh_bands_luma = o->luma,
+                                 .sh_bands_chroma = o->chroma, .label = file->valuestring, .link_mode = o->link_mode};
+    glow_result r = glow_system_create(ctx, &sd, out);
+    return r == GLOW_OK ? glow_system_set_params(*out, params) : r;
 }
 
 static int run_world(options *o, glow_scene_desc *scene, glow_logger logger) {
@@ -302,6 +356,7 @@ static int run_world(options *o, glow_scene_desc *scene, glow_logger logger) {
     glow_context *ctx = NULL;
     glow_world *W = NULL, *T = NULL;
     double *v_total = NULL, *v_wall = NULL, *v_upd = NULL, *v_err = NULL, *v_errn = NULL, *v_gath = NULL;
+    double *v_in = NULL, *v_loaded = NULL; /* --stream: systems streamed in before each update, loaded */
     if (!ws) goto done;
     FILE *f = fopen(o->bake, "rb");
     if (!f) {
@@ -384,23 +439,18 @@ static int run_world(options *o, glow_scene_desc *scene, glow_logger logger) {
         hd.surfel_samples = o->surfel_samples;
         if ((r = glow_host_create(&hd, &ws->host[i])) != GLOW_OK) goto done;
         if (budget && (r = glow_host_create(&hd, &ws->twin_host[i])) != GLOW_OK) goto done;
-        const cJSON *file = cJSON_GetObjectItemCaseSensitive(cJSON_GetArrayItem(systems, (int)i), "file");
-        glow_system_desc sd = {.bake = ws->bake[i], .lighting = glow_host_hooks(ws->host[i]), .sh_bands_luma = o->luma,
-                               .sh_bands_chroma = o->chroma, .label = file->valuestring, .link_mode = o->link_mode};
-        if ((r = glow_system_create(ctx, &sd, &ws->sys[i])) != GLOW_OK ||
-            (r = glow_system_set_params(ws->sys[i], &params)) != GLOW_OK)
-            goto done;
-        sd.lighting = budget ? glow_host_hooks(ws->twin_host[i]) : sd.lighting;
-        if (budget && ((r = glow_system_create(ctx, &sd, &ws->twin[i])) != GLOW_OK ||
-                       (r = glow_system_set_params(ws->twin[i], &params)) != GLOW_OK))
+        if ((r = world_system(o, ctx, ws, systems, i, ws->host[i], &params, &ws->sys[i])) != GLOW_OK ||
+            (budget && (r = world_system(o, ctx, ws, systems, i, ws->twin_host[i], &params, &ws->twin[i])) != GLOW_OK))
             goto done;
         ws->cinfo[i] = malloc(((size_t)bi.cache_count + 1) * sizeof *ws->cinfo[i]);
         if (!ws->cinfo[i] || (r = glow_bake_get_caches(ws->bake[i], 0, bi.cache_count, ws->cinfo[i])) != GLOW_OK) goto done;
     }
     if ((r = glow_world_create(ctx, ws->n, &W)) != GLOW_OK || (budget && (r = glow_world_create(ctx, ws->n, &T)) != GLOW_OK))
         goto done;
+    const bool stream = o->stream > 0.0f; /* the walk's start decides who is loaded first (below) */
     for (uint32_t i = 0; i < ws->n; ++i)
-        if ((r = glow_world_add(W, ws->sys[i])) != GLOW_OK || (T && (r = glow_world_add(T, ws->twin[i])) != GLOW_OK)) goto done;
+        if ((!stream && (r = glow_world_add(W, ws->sys[i])) != GLOW_OK) || (T && (r = glow_world_add(T, ws->twin[i])) != GLOW_OK))
+            goto done;
     glow_world_stats wst;
     glow_world_get_stats(W, &wst);
     float diag = 0.0f;
@@ -409,7 +459,8 @@ static int run_world(options *o, glow_scene_desc *scene, glow_logger logger) {
     const uint32_t n = o->frames, total = o->warmup + o->frames;
     v_total = calloc(n, sizeof(double)); v_wall = calloc(n, sizeof(double)); v_upd = calloc(n, sizeof(double));
     v_err = calloc(n, sizeof(double)); v_errn = calloc(n, sizeof(double)); v_gath = calloc(n, sizeof(double));
-    if (!v_total || !v_wall || !v_upd || !v_err || !v_errn || !v_gath) goto done;
+    v_in = calloc(n, sizeof(double)); v_loaded = calloc(n, sizeof(double));
+    if (!v_total || !v_wall || !v_upd || !v_err || !v_errn || !v_gath || !v_in || !v_loaded) goto done;
     glow_update_desc ud = {0};
     if (!o->has_focus && scene->has_camera) {
         memcpy(o->focus, scene->camera.position, sizeof o->focus);
@@ -426,11 +477,70 @@ static int run_world(options *o, glow_scene_desc *scene, glow_logger logger) {
         ud.focus_count = 1;
     }
     const float near_r = 0.1f * diag;
+    bool member[WORLD_MAX] = {false}, pending[WORLD_MAX] = {false}; /* pending: streamed in, not updated yet */
+    uint32_t n_in = 0, n_out = 0;
     for (uint32_t fr = 0; fr < total; ++fr) {
         if (walk) {
             const float u = total > 1 ? (float)fr / (float)(total - 1) : 0.0f;
             for (int k = 0; k < 3; ++k) o->focus[k] = walk_a[k] + u * (walk_b[k] - walk_a[k]);
         }
+        uint32_t in_now = 0;
+        for (uint32_t i = 0; stream && i < ws->n; ++i) { /* --stream: load what is near the focus, unload the rest */
+            glow_bake_info bi;
+            glow_bake_get_info(ws->bake[i], &bi);
+            float d2 = 0.0f;
+            for (int k = 0; k < 3; ++k) {
+                const float x = o->focus[k], e = x < bi.bounds_min[k] ? bi.bounds_min[k] - x : x > bi.bounds_max[k] ? x - bi.bounds_max[k] : 0.0f;
+                d2 += e * e;
+            }
+            const bool want = d2 <= o->stream * o->stream;
+            if (member[i] && !want) { /* out: detached both ways, then freed, as an engine unloads it */
+                if ((r = glow_world_remove(W, ws->sys[i])) != GLOW_OK) goto done;
+                glow_system_destroy(ws->sys[i]);
+                ws->sys[i] = NULL;
+                member[i] = false;
+                n_out += fr > 0;
+            } else if (!member[i] && want) { /* in: a new system from its bake (the first frame's are loaded already) */
+                if (!ws->sys[i]) {
+                    if ((r = world_system(o, ctx, ws, systems, i, ws->host[i], &params, &ws->sys[i])) != GLOW_OK) goto done;
+                    /* The loader's share of the host, which it would otherwise do on its first call, inside
+                     * the update: each surfel's sky visibility (a constant sky's S, 128 rays a surfel) and
+                     * the exact host's footprint samples for the current light (all K points of every lit
+                     * surfel; later calls re-trace one). Half-tile systems of the 4x4 Sponza level: 130 ms
+                     * and then 5-6.5 ms of a 2 ms budget's first update without this. */
+                    glow_surfel_view sv;
+                    float *S = NULL;
+                    if ((r = glow_system_get_surfels(ws->sys[i], &sv)) != GLOW_OK || !(S = malloc(((size_t)sv.count + 1) * 3 * sizeof *S)) ||
+                        (r = glow_host_sky_visibility(ws->host[i], &sv, S, sv.count)) != GLOW_OK) {
+                        free(S);
+                        if (r == GLOW_OK) r = GLOW_ERROR_OUT_OF_MEMORY;
+                        goto done;
+                    }
+                    const glow_lighting_hooks hk = glow_host_hooks(ws->host[i]);
+                    for (uint32_t b = 0; b < sv.count && r == GLOW_OK; b += 256) {
+                        const glow_surfel_batch batch = {.first = b, .count = sv.count - b < 256 ? sv.count - b : 256,
+                                                         .positions = sv.positions + 4 * (size_t)b,
+                                                         .normals = sv.normals + 4 * (size_t)b,
+                                                         .materials = sv.materials ? sv.materials + b : NULL};
+                        r = hk.light_surfels(hk.user, &batch, S, 0);
+                    }
+                    free(S);
+                    if (r != GLOW_OK) goto done;
+                }
+                if ((r = glow_world_add(W, ws->sys[i])) != GLOW_OK) goto done;
+                member[i] = true;
+                if (fr > 0) {
+                    n_in++;
+                    pending[i] = true;
+                }
+            }
+        }
+        if (stream && fr == 0)
+            for (uint32_t i = 0; i < ws->n; ++i)
+                if (!member[i]) { /* not loaded at the start */
+                    glow_system_destroy(ws->sys[i]);
+                    ws->sys[i] = NULL;
+                }
         if (!o->still && scene->light_count > 0) {
             glow_scene_light l;
             animate(&scene->lights[0], &l, fr, total, 0.05f * diag);
@@ -446,15 +556,25 @@ static int run_world(options *o, glow_scene_desc *scene, glow_logger logger) {
         const double t1 = now_ms();
         if (T && (r = glow_world_update(T, NULL)) != GLOW_OK) goto done; /* untimed reference */
         glow_world_get_stats(W, &wst);
+        for (uint32_t s = 0; stream && s < ws->n; ++s) { /* a system streamed in had its first update now */
+            glow_update_stats us;
+            if (pending[s] && ws->sys[s] && glow_system_get_stats(ws->sys[s], &us) == GLOW_OK && us.updates > 0) {
+                pending[s] = false;
+                in_now++;
+            }
+        }
         if (fr < o->warmup) continue;
         const uint32_t i = fr - o->warmup;
         v_wall[i] = t1 - t0;
+        v_in[i] = in_now;
+        v_loaded[i] = wst.systems;
         v_total[i] = wst.last_update.total_ms;
         v_upd[i] = wst.systems_updated;
         v_gath[i] = wst.last_update.caches_gathered;
         if (!T) continue;
         double num = 0.0, den = 0.0, numn = 0.0, denn = 0.0;
         for (uint32_t s = 0; s < ws->n; ++s) {
+            if (!ws->sys[s]) continue; /* streamed out */
             const glow_cache_outputs *a = glow_system_outputs(ws->sys[s]), *b = glow_system_outputs(ws->twin[s]);
             for (uint32_t c = 0; c < a->cache_count; ++c) {
                 const double x = a->cache_sh[(size_t)c * a->coeff_count], y = b->cache_sh[(size_t)c * b->coeff_count];
@@ -478,6 +598,9 @@ static int run_world(options *o, glow_scene_desc *scene, glow_logger logger) {
         en_mean += v_errn[i] / n;
         if (i >= q0) en_last += v_errn[i] / (double)(n - q0);
     }
+    stream_figs sf = {0}; /* before the medians, which sort v_wall in place */
+    if (o->budget_ms > 0.0f && !stream_figures(v_wall, v_in, n, o->budget_ms, &sf)) goto done;
+    const double m_loaded = glow_cli_median(v_loaded, n);
     const double m_wall = glow_cli_median(v_wall, n), m_total = glow_cli_median(v_total, n),
                  m_upd = glow_cli_median(v_upd, n), m_gath = glow_cli_median(v_gath, n);
     const double e_med = glow_cli_median(v_err, n), en_med = glow_cli_median(v_errn, n);
@@ -501,6 +624,22 @@ static int run_world(options *o, glow_scene_desc *scene, glow_logger logger) {
             cJSON_AddNumberToObject(jb, "budget_caches", o->budget_caches);
             glow_json_num(jb, "luma_error_mean", e_mean);
             glow_json_num(jb, "luma_error_median", e_med);
+            if (o->budget_ms > 0.0f) {
+                glow_json_num(jb, "p95_update_ms", sf.p95);
+                glow_json_num(jb, "max_update_ms", sf.max);
+                cJSON_AddNumberToObject(jb, "updates_over_1_25x_budget", sf.over);
+            }
+            if (stream) {
+                cJSON *js = cJSON_AddObjectToObject(jb, "stream");
+                glow_json_num(js, "radius", o->stream);
+                cJSON_AddNumberToObject(js, "streamed_in", n_in);
+                cJSON_AddNumberToObject(js, "streamed_out", n_out);
+                glow_json_num(js, "median_systems_loaded", m_loaded);
+                cJSON_AddNumberToObject(js, "first_updates", sf.in_frames);
+                glow_json_num(js, "first_updates_median_ms", sf.in_median);
+                glow_json_num(js, "first_updates_max_ms", sf.in_max);
+                cJSON_AddNumberToObject(js, "first_updates_over_1_25x_budget", sf.in_over);
+            }
             if (walk) {
                 glow_json_num(jb, "walk_near_radius", near_r);
                 glow_json_num(jb, "walk_near_error_mean", en_mean);
@@ -525,6 +664,14 @@ static int run_world(options *o, glow_scene_desc *scene, glow_logger logger) {
             printf("walk: the focus crosses the world (%.3g, %.3g, %.3g) -> (%.3g, %.3g, %.3g); caches within %.3g of it: "
                    "error mean %.4f, median %.4f, last quarter of the walk %.4f\n",
                    walk_a[0], walk_a[1], walk_a[2], walk_b[0], walk_b[1], walk_b[2], (double)near_r, en_mean, en_med, en_last);
+        if (o->budget_ms > 0.0f)
+            printf("updates against the %.3g ms budget: p95 %.3f ms, largest %.3f ms, %u of %u over 1.25x\n",
+                   (double)o->budget_ms, sf.p95, sf.max, sf.over, sf.frames);
+        if (stream)
+            printf("stream: systems within %.3g of the focus loaded (median %.0f of %u); %u streamed in, %u out; the %u "
+                   "world updates that gave a streamed-in system its first update: median %.3f ms, largest %.3f ms, %u "
+                   "over 1.25x the budget\n",
+                   (double)o->stream, m_loaded, ws->n, n_in, n_out, sf.in_frames, sf.in_median, sf.in_max, sf.in_over);
     }
     rc = 0;
 done:
@@ -539,7 +686,7 @@ done:
         free(ws->cinfo[i]);
     }
     for (uint32_t i = 0; ws && i < ws->n; ++i) glow_bake_destroy(ws->bake[i]);
-    free(v_total); free(v_wall); free(v_upd); free(v_err); free(v_errn); free(v_gath);
+    free(v_total); free(v_wall); free(v_upd); free(v_err); free(v_errn); free(v_gath); free(v_in); free(v_loaded);
     glow_context_destroy(ctx);
     cJSON_Delete(man);
     free(text);
