@@ -1447,13 +1447,13 @@ uint32_t glow_budget_choose(const float *centre, uint32_t *age, const uint8_t *s
     return k;
 }
 
-/* Chooses the groups this update gathers (s->grp_sel[0..sel_count), in index order). No allocation. */
 /* Only selections large enough to amortise the dispatch teach the cost per group (below, after the
  * update): an eighth of the groups, at least 32 (or all, when fewer). */
 static uint32_t teach_groups(const glow_system *s) {
     return s->groups / 8u > 32u ? s->groups / 8u : (s->groups < 32u ? s->groups : 32u);
 }
 
+/* Chooses the groups this update gathers (s->grp_sel[0..sel_count), in index order). No allocation. */
 static void schedule(glow_system *s, const glow_update_desc *d, glow_update_stats *st) {
     const uint32_t G = s->groups;
     /* the input drift: relative L1 change of the node luma since the last update */
