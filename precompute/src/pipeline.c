@@ -219,8 +219,8 @@ static void add_section(sections *ss, uint32_t fourcc, void *data, uint64_t size
 
 static glow_result serialise(const glow_pc_settings *set, const glow__scene *sc, const glow__surfels *sf,
                              const glow__hierarchy *h, const glow__caches *ca, const glow__links *lk, uint8_t *gvis,
-                             void *xref, uint64_t xref_size, const float *sky_surfel, const float *sky_grid,
-                             sections *ss, glow__log *log) {
+                             void *xref, uint64_t xref_size, void *ptre, uint64_t ptre_size, const float *sky_surfel,
+                             const float *sky_grid, sections *ss, glow__log *log) {
     const uint32_t nl = lk->per_cache;
     const uint32_t blocks = (nl + GLOW_LINK_BLOCK - 1) / GLOW_LINK_BLOCK;
     /* LINK stores 24-bit node indices. --surfels <= 2^22 keeps node_count < 2^23; this guards the
@@ -490,6 +490,7 @@ static glow_result serialise(const glow_pc_settings *set, const glow__scene *sc,
         uint8_t *buf = calloc(1, (size_t)size);
         if (!buf) {
             if (xref) add_section(ss, GLOW_SECTION_XREF, xref, xref_size); /* freed with the sections */
+            if (ptre) add_section(ss, GLOW_SECTION_PTRE, ptre, ptre_size);
             glow__errorf(log, "write: out of memory for the sky transfer");
             return GLOW_ERROR_OUT_OF_MEMORY;
         }
@@ -504,6 +505,7 @@ static glow_result serialise(const glow_pc_settings *set, const glow__scene *sc,
         add_section(ss, GLOW_SECTION_SKYT, buf, size);
     }
     if (xref) add_section(ss, GLOW_SECTION_XREF, xref, xref_size); /* the sections own it now */
+    if (ptre) add_section(ss, GLOW_SECTION_PTRE, ptre, ptre_size); /* 1.8: PTRE, likewise */
     return GLOW_OK;
 }
 
@@ -645,6 +647,18 @@ typedef struct sys_base {
     double seconds[2]; /* surfels, hierarchy */
 } sys_base;
 
+/* A tree as a system's links see it (a neighbour's coarsened, PTRE; or a system's own, whole): leaves
+ * [0, leaf_count) with their surfels, then internal nodes, children before parents; source: the node
+ * of the full tree each stands for. */
+typedef struct sys_tree {
+    uint32_t leaf_count, node_count, root;
+    glow__node *nodes;
+    glow__surfel *leaves;
+    uint32_t *source;
+} sys_tree;
+
+static void *sys_tree_pack(const sys_tree *t, uint64_t key, uint64_t *size); /* PTRE's payload, below */
+
 #define SYS_DEP_JOIN 0xFFFFFFFEu /* map_dep of a join */
 #define SYS_DEP_OWN 0xFFFFFFFFu  /* map_dep of the system's own nodes */
 
@@ -659,6 +673,7 @@ typedef struct sys_links_in {
     uint32_t own_leaves, own_nodes;
     float trace_lo[3], trace_hi[3];
     uint64_t key;           /* the system's own key (XREF system_key) */
+    const sys_tree *proxy;  /* its tree as its neighbours see it (PTRE) */
     uint32_t deps;
     const uint64_t *dep_keys; /* the dependencies' own keys */
 } sys_links_in;
@@ -682,7 +697,8 @@ static glow_result bake_system(const glow_pc_settings *setp, uint32_t grid_targe
     float *audit_radiance = NULL;
     glow_result res = GLOW_OK;
     double t0;
-    void *xref = NULL;
+    void *xref = NULL, *ptre = NULL; /* XREF and PTRE, for a system of a world */
+    uint64_t ptre_size = 0;
     uint32_t *proxy_of = NULL;
     progress_ctx pc = {.s = setp};
     const glow__surfels *SF = &surfels;
@@ -877,10 +893,18 @@ static glow_result bake_system(const glow_pc_settings *setp, uint32_t grid_targe
     if (!writer) goto done; /* every rank holds the whole link table now; rank 0 writes it */
 
     STAGE_BEGIN(ST_WRITE);
-    res = serialise(&set, sc, SF, H, &caches, &links, gvis, xref, xref_size, sky_surfel, sky_grid, &ss, log);
+    if (w && w->proxy && !(ptre = sys_tree_pack(w->proxy, w->key, &ptre_size))) {
+        glow__errorf(log, "write: out of memory for the system's tree (PTRE)");
+        res = GLOW_ERROR_OUT_OF_MEMORY;
+        goto done;
+    }
+    res = serialise(&set, sc, SF, H, &caches, &links, gvis, xref, xref_size, ptre, ptre_size, sky_surfel, sky_grid, &ss,
+                    log);
     gvis = NULL; /* the sections own it now */
-    for (uint32_t i = 0; i < ss.n; ++i)
-        if (ss.owned[i] == xref) xref = NULL; /* ... and this, once serialise got that far */
+    for (uint32_t i = 0; i < ss.n; ++i) {
+        if (ss.owned[i] == xref) xref = NULL; /* ... and these, once serialise got that far */
+        if (ss.owned[i] == ptre) ptre = NULL;
+    }
     if (res == GLOW_OK) res = glow__bake_write_file(out_path, ss.s, ss.n, log, &stats->file_size);
     STAGE_END(ST_WRITE);
     if (res != GLOW_OK) goto done;
@@ -897,6 +921,7 @@ done:
     free(sky_surfel);
     free(sky_grid);
     free(xref);
+    free(ptre);
     free(proxy_of);
     for (uint32_t i = 0; i < ss.n; ++i) free(ss.owned[i]);
     glow__links_free(&links);
@@ -1625,6 +1650,42 @@ static void sys_base_free(sys_base *b) {
     memset(b, 0, sizeof *b);
 }
 
+/* forward: sys_tree_make and sys_tree_read are below, with the trees' merge */
+static bool sys_tree_make(const sys_base *b, bool coarsen, sys_tree *t);
+static bool sys_tree_read(const char *path, uint64_t key, sys_tree *t);
+
+/* Neighbour d's tree as the links see it (tree key `key`), once: from the PTRE of a previous bake of
+ * the same tree when the previous world (prev) has one (counted in *read), else placed and clustered
+ * (sys_base_of) and coarsened. An edit re-bakes the systems around it; their unchanged neighbours'
+ * trees are read, not built again. */
+static glow_result sys_tree_of(const sys_world *W, uint32_t d, uint64_t key, const cJSON *prev, const char *out_path,
+                               sys_base *b, sys_tree *t, uint32_t *read) {
+    if (t->nodes) return GLOW_OK;
+    if (prev && !b->done) {
+        char hex[20], path[4200];
+        snprintf(hex, sizeof hex, "%016llx", (unsigned long long)key);
+        const cJSON *e;
+        cJSON_ArrayForEach(e, cJSON_GetObjectItem(prev, "systems")) {
+            const cJSON *ke = cJSON_GetObjectItem(e, "system_key"), *fe = cJSON_GetObjectItem(e, "file"),
+                        *be = cJSON_GetObjectItem(e, "bytes");
+            if (!cJSON_IsString(ke) || strcmp(ke->valuestring, hex) != 0 || !cJSON_IsString(fe) || !cJSON_IsNumber(be) ||
+                strchr(fe->valuestring, '/'))
+                continue;
+            beside(out_path, fe->valuestring, path, sizeof path);
+            if (file_has_size(path, be->valuedouble) && sys_tree_read(path, key, t)) {
+                (*read)++;
+                return GLOW_OK;
+            }
+        }
+    }
+    glow_result res = sys_base_of(W, d, b);
+    if (res == GLOW_OK && !sys_tree_make(b, true, t)) {
+        glow__errorf(W->log, "%s: out of memory for system %u's tree", W->w->source, d);
+        res = GLOW_ERROR_OUT_OF_MEMORY;
+    }
+    return res;
+}
+
 static void sys_links_free(sys_links_in *x) {
     free(x->surfels.s);
     free(x->hier.nodes);
@@ -1649,132 +1710,268 @@ static uint32_t *leaf_counts(const glow__hierarchy *h) {
     return c;
 }
 
-/* The tree a system's links see: its own (b[0]) whole and its neighbours' (b[1..nb]) coarsened,
- * joined. Merged order: leaves (own, then each neighbour's), internal nodes (likewise), the joins. */
-static bool sys_links_merge(const sys_base *const *b, uint32_t nb, sys_links_in *x) {
-    uint32_t *cnt[SYS_MAX_DEPS + 1] = {0}, *idx[SYS_MAX_DEPS + 1] = {0};
-    uint32_t nLt[SYS_MAX_DEPS + 1], nIt[SYS_MAX_DEPS + 1];
+static void sys_tree_free(sys_tree *t) {
+    free(t->nodes);
+    free(t->leaves);
+    free(t->source);
+    memset(t, 0, sizeof *t);
+}
+
+/* A system's tree as the links see it: whole (coarsen false: its own) or as a neighbour's links see it
+ * (nodes of at most SYS_PROXY_LEAVES leaves whose parent has more become leaves). */
+static bool sys_tree_make(const sys_base *b, bool coarsen, sys_tree *t) {
+    const glow__hierarchy *h = &b->hier;
+    const uint32_t N = h->node_count;
+    memset(t, 0, sizeof *t);
+    uint32_t *cnt = leaf_counts(h), *idx = malloc(((size_t)N + 1) * sizeof *idx);
+    uint32_t *first = malloc(((size_t)N + 1) * sizeof *first), *at = calloc((size_t)h->leaf_count + 1, sizeof *at);
+    bool ok = cnt && idx && first && at && N > 0;
     uint32_t nL = 0, nI = 0;
-    bool ok = true;
-    /* which nodes each tree keeps, and their new indices (leaves then internal, in node order) */
-    for (uint32_t t = 0; t <= nb && ok; ++t) {
-        const glow__hierarchy *h = &b[t]->hier;
-        cnt[t] = leaf_counts(h);
-        idx[t] = malloc(((size_t)h->node_count + 1) * sizeof *idx[t]);
-        if (!cnt[t] || !idx[t]) { ok = false; break; }
-        nLt[t] = nIt[t] = 0;
+    if (ok) {
         /* the leaves in depth-first order (each subtree's leaves contiguous, as links.c needs): a
          * coarsened leaf's place is that of its first original leaf, which the tree's leaf order gives */
-        uint32_t *first = malloc(((size_t)h->node_count + 1) * sizeof *first), *at = calloc((size_t)h->leaf_count + 1, sizeof *at);
-        if (!first || !at) { free(first); free(at); ok = false; break; }
-        for (uint32_t v = 0; v < h->node_count; ++v) {
+        for (uint32_t v = 0; v < N; ++v) {
             if (v < h->leaf_count) { first[v] = v; continue; }
             const uint32_t a = first[h->nodes[v].child[0]], c = first[h->nodes[v].child[1]];
             first[v] = a < c ? a : c;
         }
-        for (uint32_t v = 0; v < h->node_count; ++v) {
+        for (uint32_t v = 0; v < N; ++v) {
             const uint32_t par = h->nodes[v].parent;
-            const bool leaf = t == 0 ? v < h->leaf_count
-                                     : cnt[t][v] <= SYS_PROXY_LEAVES && (par == GLOW_NODE_NONE || cnt[t][par] > SYS_PROXY_LEAVES);
-            const bool kept = t == 0 || leaf || cnt[t][v] > SYS_PROXY_LEAVES;
-            idx[t][v] = !kept ? GLOW_NODE_NONE : leaf ? 0x80000000u : nIt[t]++;
+            const bool leaf = !coarsen ? v < h->leaf_count
+                                       : cnt[v] <= SYS_PROXY_LEAVES && (par == GLOW_NODE_NONE || cnt[par] > SYS_PROXY_LEAVES);
+            const bool kept = !coarsen || leaf || cnt[v] > SYS_PROXY_LEAVES;
+            idx[v] = !kept ? GLOW_NODE_NONE : leaf ? 0x80000000u : nI++;
             if (leaf) at[first[v]] = v + 1;
         }
         for (uint32_t i = 0; i < h->leaf_count; ++i)
-            if (at[i]) idx[t][at[i] - 1] = nLt[t]++ | 0x80000000u;
-        free(first);
-        free(at);
-        nL += nLt[t];
-        nI += nIt[t];
+            if (at[i]) idx[at[i] - 1] = nL++ | 0x80000000u;
+        const uint32_t M = nL + nI;
+        t->nodes = malloc((size_t)M * sizeof *t->nodes);
+        t->leaves = calloc(nL, sizeof *t->leaves);
+        t->source = malloc((size_t)M * sizeof *t->source);
+        ok = t->nodes && t->leaves && t->source;
+    }
+    if (ok) {
+        t->leaf_count = nL;
+        t->node_count = nL + nI;
+#define SYS_MAP(u) ((idx[u] & 0x80000000u) ? (idx[u] & 0x7FFFFFFFu) : nL + idx[u])
+        for (uint32_t u = 0; u < N; ++u) {
+            if (idx[u] == GLOW_NODE_NONE) continue;
+            const uint32_t m = SYS_MAP(u);
+            glow__node nd = h->nodes[u];
+            if (idx[u] & 0x80000000u) { /* a leaf: the surfel, or a node as one disc */
+                glow__surfel *sf = &t->leaves[m];
+                if (u < h->leaf_count) {
+                    *sf = b->surfels.s[u];
+                } else {
+                    memcpy(sf->pos, nd.pos, sizeof sf->pos);
+                    memcpy(sf->nrm, nd.nrm, sizeof sf->nrm);
+                    sf->area = nd.area;
+                }
+                nd.child[0] = nd.child[1] = GLOW_NODE_NONE;
+                nd.level = 0;
+            } else {
+                for (int c = 0; c < 2; ++c) nd.child[c] = SYS_MAP(nd.child[c]);
+            }
+            if (nd.parent != GLOW_NODE_NONE) nd.parent = SYS_MAP(nd.parent);
+            t->nodes[m] = nd;
+            t->source[m] = u;
+        }
+        t->root = SYS_MAP(N - 1);
+#undef SYS_MAP
+        /* levels above the coarsened leaves: 1 + the children's */
+        for (uint32_t m = nL; m < t->node_count; ++m) {
+            const glow__node *a = &t->nodes[t->nodes[m].child[0]], *c = &t->nodes[t->nodes[m].child[1]];
+            t->nodes[m].level = 1 + (a->level > c->level ? a->level : c->level);
+        }
+    } else {
+        sys_tree_free(t);
+    }
+    free(cnt);
+    free(idx);
+    free(first);
+    free(at);
+    return ok;
+}
+
+/* PTRE's payload for tree t of key `key` (bake_format.h glow_bake_ptree), or NULL (out of memory) */
+static void *sys_tree_pack(const sys_tree *t, uint64_t key, uint64_t *size) {
+    *size = sizeof(glow_bake_ptree) + (uint64_t)t->node_count * sizeof(glow_bake_ptree_node) +
+            (uint64_t)t->leaf_count * sizeof(glow_bake_ptree_leaf);
+    uint8_t *buf = calloc(1, (size_t)*size);
+    if (!buf) return NULL;
+    const glow_bake_ptree ph = {.tree_key = key, .node_count = t->node_count, .leaf_count = t->leaf_count, .root = t->root};
+    memcpy(buf, &ph, sizeof ph);
+    uint8_t *q = buf + sizeof ph;
+    for (uint32_t i = 0; i < t->node_count; ++i, q += sizeof(glow_bake_ptree_node)) {
+        const glow__node *n = &t->nodes[i];
+        glow_bake_ptree_node o = {.child = {n->child[0], n->child[1]}, .parent = n->parent, .level = n->level,
+                                  .source = t->source[i], .area = n->area};
+        memcpy(o.pos, n->pos, sizeof o.pos);
+        memcpy(o.nrm, n->nrm, sizeof o.nrm);
+        memcpy(q, &o, sizeof o);
+    }
+    for (uint32_t i = 0; i < t->leaf_count; ++i, q += sizeof(glow_bake_ptree_leaf)) {
+        const glow__surfel *f = &t->leaves[i];
+        glow_bake_ptree_leaf o = {.triangle = f->tri, .material = f->material, .area = f->area};
+        memcpy(o.pos, f->pos, sizeof o.pos);
+        memcpy(o.nrm, f->nrm, sizeof o.nrm);
+        memcpy(o.albedo, f->albedo, sizeof o.albedo);
+        memcpy(o.emission, f->emission, sizeof o.emission);
+        memcpy(o.bary, f->bary, sizeof o.bary);
+        memcpy(q, &o, sizeof o);
+    }
+    return buf;
+}
+
+/* The tree of key `key` from the PTRE of the bake at `path` (a previous bake of a system whose tree is
+ * that key's): false when the file, its section or its key is not that, or it is not a tree as
+ * sys_tree_make makes them (the caller builds the tree instead). */
+static bool sys_tree_read(const char *path, uint64_t key, sys_tree *t) {
+    memset(t, 0, sizeof *t);
+    FILE *f = fopen(path, "rb");
+    if (!f) return false;
+    glow_bake_header h;
+    glow_bake_section sec = {0};
+    bool found = false;
+    uint8_t *buf = NULL;
+    if (fread(&h, sizeof h, 1, f) == 1 && memcmp(h.magic, "GLOW", 4) == 0 && h.major == GLOW_BAKE_FORMAT_VERSION_MAJOR &&
+        h.section_count < 4096u) {
+        for (uint32_t i = 0; i < h.section_count && !found; ++i)
+            found = fread(&sec, sizeof sec, 1, f) == 1 && sec.fourcc == GLOW_SECTION_PTRE;
+    }
+    found = found && sec.size >= sizeof(glow_bake_ptree) && sec.size <= (1ull << 32) &&
+            fseek(f, (long)sec.offset, SEEK_SET) == 0 && (buf = malloc((size_t)sec.size)) &&
+            fread(buf, 1, (size_t)sec.size, f) == (size_t)sec.size && glow__crc32(0, buf, (size_t)sec.size) == sec.crc32;
+    fclose(f);
+    glow_bake_ptree ph;
+    if (found) memcpy(&ph, buf, sizeof ph);
+    bool ok = found && ph.tree_key == key && ph.leaf_count >= 1 && ph.leaf_count <= ph.node_count &&
+              ph.root < ph.node_count &&
+              sec.size == sizeof ph + (uint64_t)ph.node_count * sizeof(glow_bake_ptree_node) +
+                              (uint64_t)ph.leaf_count * sizeof(glow_bake_ptree_leaf);
+    if (ok) {
+        t->nodes = malloc((size_t)ph.node_count * sizeof *t->nodes);
+        t->leaves = calloc(ph.leaf_count, sizeof *t->leaves);
+        t->source = malloc((size_t)ph.node_count * sizeof *t->source);
+        ok = t->nodes && t->leaves && t->source;
+    }
+    if (ok) {
+        t->node_count = ph.node_count;
+        t->leaf_count = ph.leaf_count;
+        t->root = ph.root;
+        const uint8_t *q = buf + sizeof ph;
+        for (uint32_t i = 0; i < ph.node_count && ok; ++i, q += sizeof(glow_bake_ptree_node)) {
+            glow_bake_ptree_node o;
+            memcpy(&o, q, sizeof o);
+            glow__node *n = &t->nodes[i];
+            const bool leaf = i < ph.leaf_count;
+            /* children before parents, leaves childless, one root: what the links' walks rely on */
+            ok = (leaf ? o.child[0] == GLOW_NODE_NONE && o.child[1] == GLOW_NODE_NONE && o.level == 0
+                       : o.child[0] < i && o.child[1] < i && o.child[0] != o.child[1] &&
+                             o.level == 1 + (t->nodes[o.child[0]].level > t->nodes[o.child[1]].level
+                                                 ? t->nodes[o.child[0]].level
+                                                 : t->nodes[o.child[1]].level)) &&
+                 (i == ph.root ? o.parent == GLOW_NODE_NONE : o.parent > i && o.parent < ph.node_count) &&
+                 isfinite(o.area);
+            n->child[0] = o.child[0];
+            n->child[1] = o.child[1];
+            n->parent = o.parent;
+            n->level = o.level;
+            memcpy(n->pos, o.pos, sizeof n->pos);
+            memcpy(n->nrm, o.nrm, sizeof n->nrm);
+            n->area = o.area;
+            t->source[i] = o.source;
+        }
+        for (uint32_t i = 0; i < ph.leaf_count && ok; ++i, q += sizeof(glow_bake_ptree_leaf)) {
+            glow_bake_ptree_leaf o;
+            memcpy(&o, q, sizeof o);
+            glow__surfel *sf = &t->leaves[i];
+            memcpy(sf->pos, o.pos, sizeof sf->pos);
+            memcpy(sf->nrm, o.nrm, sizeof sf->nrm);
+            memcpy(sf->albedo, o.albedo, sizeof sf->albedo);
+            memcpy(sf->emission, o.emission, sizeof sf->emission);
+            memcpy(sf->bary, o.bary, sizeof sf->bary);
+            sf->tri = o.triangle;
+            sf->material = o.material;
+            sf->area = o.area;
+        }
+        ok = ok && (ph.root == ph.node_count - 1 || (ph.node_count == 1 && ph.root == 0));
+    }
+    free(buf);
+    if (!ok) sys_tree_free(t);
+    return ok;
+}
+
+/* The tree a system's links see: its own (t[0]) whole and its neighbours' (t[1..nb]) coarsened,
+ * joined. Merged order: leaves (own, then each neighbour's), internal nodes (likewise), the joins. */
+static bool sys_links_merge(const sys_tree *const *t, uint32_t nb, const sys_base *own, sys_links_in *x) {
+    uint32_t nL = 0, nI = 0;
+    for (uint32_t k = 0; k <= nb; ++k) {
+        nL += t[k]->leaf_count;
+        nI += t[k]->node_count - t[k]->leaf_count;
     }
     const uint32_t N = nL + nI + nb;
-    if (ok) {
-        x->surfels.s = calloc((size_t)nL + 1, sizeof *x->surfels.s);
-        x->hier.nodes = malloc(((size_t)N + 1) * sizeof *x->hier.nodes);
-        x->join = calloc((size_t)N + 1, 1);
-        x->map_dep = malloc(((size_t)N + 1) * sizeof *x->map_dep);
-        x->map_node = malloc(((size_t)N + 1) * sizeof *x->map_node);
-        ok = x->surfels.s && x->hier.nodes && x->join && x->map_dep && x->map_node;
-    }
-    if (ok) {
-        x->surfels.count = nL;
-        x->surfels.area = b[0]->surfels.area;
-        x->surfels.adapted = b[0]->surfels.adapted;
-        x->hier.leaf_count = nL;
-        x->hier.node_count = N;
-        x->own_leaves = b[0]->hier.leaf_count;
-        x->own_nodes = b[0]->hier.node_count;
-        uint32_t bL = 0, bI = nL, prev = 0;
-        for (uint32_t t = 0; t <= nb; ++t) {
-            const glow__hierarchy *h = &b[t]->hier;
-            const uint32_t *ix = idx[t];
-#define SYS_MAP(u) ((ix[u] & 0x80000000u) ? bL + (ix[u] & 0x7FFFFFFFu) : bI + ix[u])
-            for (uint32_t u = 0; u < h->node_count; ++u) {
-                if (ix[u] == GLOW_NODE_NONE) continue;
-                const uint32_t m = SYS_MAP(u);
-                glow__node nd = h->nodes[u];
-                const bool leaf = (ix[u] & 0x80000000u) != 0;
-                if (leaf) { /* a leaf: the surfel, or a neighbour's node as one disc */
-                    glow__surfel *sf = &x->surfels.s[m];
-                    if (u < h->leaf_count) {
-                        *sf = b[t]->surfels.s[u];
-                    } else {
-                        memcpy(sf->pos, nd.pos, sizeof sf->pos);
-                        memcpy(sf->nrm, nd.nrm, sizeof sf->nrm);
-                        sf->area = nd.area;
-                        sf->tri = 0;
-                    }
-                    nd.child[0] = nd.child[1] = GLOW_NODE_NONE;
-                    nd.level = 0;
-                } else {
-                    for (int c = 0; c < 2; ++c) nd.child[c] = SYS_MAP(nd.child[c]);
-                }
-                if (nd.parent != GLOW_NODE_NONE) nd.parent = SYS_MAP(nd.parent);
-                x->hier.nodes[m] = nd;
-                x->map_dep[m] = t == 0 ? SYS_DEP_OWN : t - 1;
-                x->map_node[m] = u;
-            }
-            const uint32_t root = SYS_MAP(h->node_count - 1);
-#undef SYS_MAP
-            /* levels above the coarsened leaves: 1 + the children's */
-            for (uint32_t m = bI; m < bI + nIt[t]; ++m) {
-                const glow__node *a = &x->hier.nodes[x->hier.nodes[m].child[0]], *c = &x->hier.nodes[x->hier.nodes[m].child[1]];
-                x->hier.nodes[m].level = 1 + (a->level > c->level ? a->level : c->level);
-            }
-            if (t == 0) {
-                prev = root;
-            } else { /* join the trees so far with this one */
-                const uint32_t j = nL + nI + t - 1;
-                glow__node *a = &x->hier.nodes[prev], *c = &x->hier.nodes[root], *J = &x->hier.nodes[j];
-                J->child[0] = prev;
-                J->child[1] = root;
-                J->parent = GLOW_NODE_NONE;
-                a->parent = c->parent = j;
-                J->level = 1 + (a->level > c->level ? a->level : c->level);
-                J->area = a->area + c->area;
-                float nrm[3];
-                for (int k = 0; k < 3; ++k) {
-                    J->pos[k] = J->area > 0.0f ? (a->pos[k] * a->area + c->pos[k] * c->area) / J->area : 0.5f * (a->pos[k] + c->pos[k]);
-                    nrm[k] = a->nrm[k] * a->area + c->nrm[k] * c->area;
-                }
-                const float nl = sqrtf(glow__dot(nrm, nrm));
-                for (int k = 0; k < 3; ++k) J->nrm[k] = nl > 0.0f ? nrm[k] / nl : 0.0f;
-                x->join[j] = 1;
-                x->map_dep[j] = SYS_DEP_JOIN;
-                x->map_node[j] = 0;
-                prev = j;
-            }
-            bL += nLt[t];
-            bI += nIt[t];
+    x->surfels.s = calloc((size_t)nL + 1, sizeof *x->surfels.s);
+    x->hier.nodes = malloc(((size_t)N + 1) * sizeof *x->hier.nodes);
+    x->join = calloc((size_t)N + 1, 1);
+    x->map_dep = malloc(((size_t)N + 1) * sizeof *x->map_dep);
+    x->map_node = malloc(((size_t)N + 1) * sizeof *x->map_node);
+    if (!(x->surfels.s && x->hier.nodes && x->join && x->map_dep && x->map_node)) return false;
+    x->surfels.count = nL;
+    x->surfels.area = own->surfels.area;
+    x->surfels.adapted = own->surfels.adapted;
+    x->hier.leaf_count = nL;
+    x->hier.node_count = N;
+    x->own_leaves = own->hier.leaf_count;
+    x->own_nodes = own->hier.node_count;
+    uint32_t bL = 0, bI = nL, prev = 0;
+    for (uint32_t k = 0; k <= nb; ++k) {
+        const sys_tree *T = t[k];
+        const uint32_t tl = T->leaf_count;
+#define SYS_MAP(u) ((u) < tl ? bL + (u) : bI + (u) - tl)
+        for (uint32_t u = 0; u < T->node_count; ++u) {
+            const uint32_t m = SYS_MAP(u);
+            glow__node nd = T->nodes[u];
+            if (u < tl) x->surfels.s[m] = T->leaves[u];
+            else
+                for (int c = 0; c < 2; ++c) nd.child[c] = SYS_MAP(nd.child[c]);
+            if (nd.parent != GLOW_NODE_NONE) nd.parent = SYS_MAP(nd.parent);
+            x->hier.nodes[m] = nd;
+            x->map_dep[m] = k == 0 ? SYS_DEP_OWN : k - 1;
+            x->map_node[m] = T->source[u];
         }
-        x->hier.level_count = x->hier.nodes[N - 1].level + 1;
-        x->hier.level_start = NULL; /* the links read no level table */
+        const uint32_t root = SYS_MAP(T->root);
+#undef SYS_MAP
+        if (k == 0) {
+            prev = root;
+        } else { /* join the trees so far with this one */
+            const uint32_t j = nL + nI + k - 1;
+            glow__node *a = &x->hier.nodes[prev], *c = &x->hier.nodes[root], *J = &x->hier.nodes[j];
+            J->child[0] = prev;
+            J->child[1] = root;
+            J->parent = GLOW_NODE_NONE;
+            a->parent = c->parent = j;
+            J->level = 1 + (a->level > c->level ? a->level : c->level);
+            J->area = a->area + c->area;
+            float nrm[3];
+            for (int q = 0; q < 3; ++q) {
+                J->pos[q] = J->area > 0.0f ? (a->pos[q] * a->area + c->pos[q] * c->area) / J->area : 0.5f * (a->pos[q] + c->pos[q]);
+                nrm[q] = a->nrm[q] * a->area + c->nrm[q] * c->area;
+            }
+            const float nl = sqrtf(glow__dot(nrm, nrm));
+            for (int q = 0; q < 3; ++q) J->nrm[q] = nl > 0.0f ? nrm[q] / nl : 0.0f;
+            x->join[j] = 1;
+            x->map_dep[j] = SYS_DEP_JOIN;
+            x->map_node[j] = 0;
+            prev = j;
+        }
+        bL += tl;
+        bI += T->node_count - tl;
     }
-    for (uint32_t t = 0; t <= nb; ++t) {
-        free(cnt[t]);
-        free(idx[t]);
-    }
-    return ok;
+    x->hier.level_count = x->hier.nodes[N - 1].level + 1;
+    x->hier.level_start = NULL; /* the links read no level table */
+    return true;
 }
 
 /* Triangles larger than a sixteenth of the system area, or with an edge longer than a quarter of its
@@ -1931,6 +2128,8 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
     uint64_t *own_key = NULL, *full_key = NULL, *tree_key = NULL, *src_key = NULL;
     uint32_t *dep_count = NULL, *deps = NULL, *occ_count = NULL, *sys_of = NULL, *last_use = NULL;
     sys_base *bases = NULL;
+    sys_tree *trees = NULL; /* each system's tree as its neighbours see it, kept until the last that links it */
+    uint32_t trees_read = 0;
     if (!tri_area_v || !cent || !sp.order || !sp.tmp || !foreign || !root) {
         glow__errorf(log, "%s: out of memory for the systems", world->source);
         res = GLOW_ERROR_OUT_OF_MEMORY;
@@ -2011,8 +2210,9 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
     occ_count = calloc(sp.n + 1, sizeof *occ_count);
     sys_of = malloc(((size_t)n + 1) * sizeof *sys_of);
     bases = calloc(sp.n + 1, sizeof *bases);
+    trees = calloc(sp.n + 1, sizeof *trees);
     last_use = calloc(sp.n + 1, sizeof *last_use);
-    if (!own_key || !full_key || !tree_key || !src_key || !dep_count || !deps || !occ_count || !sys_of || !bases || !last_use) {
+    if (!own_key || !full_key || !tree_key || !src_key || !dep_count || !deps || !occ_count || !sys_of || !bases || !trees || !last_use) {
         glow__errorf(log, "%s: out of memory for the systems", world->source);
         res = GLOW_ERROR_OUT_OF_MEMORY;
         goto done;
@@ -2167,9 +2367,12 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
             glow__rt *rt = NULL;
             sys_links_in win = {0};
             uint64_t dkeys[SYS_MAX_DEPS];
-            const sys_base *bl[SYS_MAX_DEPS + 1];
-            /* the neighbours' trees first: each is placed with its own rays, made and dropped in turn */
-            for (uint32_t q = 0; !other && q < nd && res == GLOW_OK; ++q) res = sys_base_of(&W, d[q], &bases[d[q]]);
+            const sys_tree *tl[SYS_MAX_DEPS + 1];
+            sys_tree own = {0};
+            /* the neighbours' trees first: each read from a previous bake of it, or placed with its own
+             * rays, made and dropped in turn */
+            for (uint32_t q = 0; !other && q < nd && res == GLOW_OK; ++q)
+                res = sys_tree_of(&W, d[q], tree_key[d[q]], prev, out_path, &bases[d[q]], &trees[d[q]], &trees_read);
             if (!sys_prepare(&W, s, &sub, &nf, olo, ohi, NULL, NULL)) {
                 glow__errorf(log, "%s: out of memory for system %u", world->source, s);
                 if (res == GLOW_OK) res = GLOW_ERROR_OUT_OF_MEMORY;
@@ -2179,16 +2382,20 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
             } else if (res == GLOW_OK) {
                 res = glow__rt_create_system(&sub, foreign, nf, log, &rt);
                 if (res == GLOW_OK) res = sys_base_build(&W, s, &sub, rt, &bases[s]);
-                bl[0] = &bases[s];
+                tl[0] = &own;
                 for (uint32_t q = 0; q < nd; ++q) {
-                    bl[q + 1] = &bases[d[q]];
+                    tl[q + 1] = &trees[d[q]];
                     dkeys[q] = tree_key[d[q]];
                 }
-                if (res == GLOW_OK && !sys_links_merge(bl, nd, &win)) {
+                if (res == GLOW_OK &&
+                    (!sys_tree_make(&bases[s], false, &own) || (!trees[s].nodes && !sys_tree_make(&bases[s], true, &trees[s])) ||
+                     !sys_links_merge(tl, nd, &bases[s], &win))) {
                     glow__errorf(log, "%s: out of memory for system %u's links to its neighbours", world->source, s);
                     res = GLOW_ERROR_OUT_OF_MEMORY;
                 }
+                sys_tree_free(&own);
                 win.key = tree_key[s];
+                win.proxy = &trees[s];
                 win.deps = nd;
                 win.dep_keys = dkeys;
                 memcpy(win.trace_lo, olo, sizeof olo);
@@ -2201,6 +2408,7 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
                 const bool mine = dist || writer;
                 if (res == GLOW_OK)
                     res = bake_system(&sset, grid_target, &sub, rt, path, mine, pool, log, NULL, &ss, &bases[s], &win);
+                sys_base_free(&bases[s]); /* the systems that link it read trees[s] */
                 if (res == GLOW_OK) {
                     if (mine && !(made[nmade++] = strdup(path))) res = GLOW_ERROR_OUT_OF_MEMORY;
                     const bool big = ss.surfels > largest;
@@ -2245,7 +2453,10 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
             sys_scene_free(&sub);
         }
         for (uint32_t k = 0; k < sp.n; ++k) /* the trees no later system links */
-            if (last_use[k] == s && bases[k].done) sys_base_free(&bases[k]);
+            if (last_use[k] == s) {
+                if (bases[k].done) sys_base_free(&bases[k]);
+                sys_tree_free(&trees[k]);
+            }
         if (o) cJSON_AddItemToArray(list, o);
     }
     if (res == GLOW_OK && dist && to_bake) { /* every rank's figures for the systems it baked */
@@ -2296,12 +2507,15 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
     }
     stats->systems = sp.n;
     stats->systems_reused = reused;
+    stats->systems_trees_read = trees_read;
     if (res == GLOW_OK)
         glow__infof(log, "systems: %u baked, %u unchanged (%u of them re-indexed); %.1f other systems' triangles per "
                     "system traced as occluders (within %.0f %% of its diagonal), whose %.1f systems on average its caches "
                     "link (light across systems)", sp.n - reused, reused, stats->systems_patched,
                     sp.n ? (double)nf_total / sp.n : 0.0, 100.0 * W.reach,
                     sp.n ? (double)dep_total / sp.n : 0.0);
+    if (res == GLOW_OK && trees_read)
+        glow__infof(log, "systems: %u neighbours' trees read from their previous bakes (PTRE), not built again", trees_read);
     for (uint32_t i = 0; i < stats->section_count && i < 16; ++i)
         if (stats->section_fourcc[i] == GLOW_SECTION_LINK && stats->links)
             stats->bytes_per_link = (double)stats->section_size[i] / (double)stats->links;
@@ -2342,6 +2556,8 @@ done:
     free(rec);
     for (uint32_t s = 0; bases && s < sp.n; ++s) sys_base_free(&bases[s]);
     free(bases);
+    for (uint32_t s = 0; trees && s < sp.n; ++s) sys_tree_free(&trees[s]);
+    free(trees);
     free(own_key);
     free(full_key);
     free(tree_key);

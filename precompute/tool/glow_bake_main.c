@@ -270,6 +270,7 @@ static void print_summary(const char *scene, const char *out, const glow_pc_stat
         cJSON_AddNumberToObject(x, "area", s->scene_area);
         cJSON_AddNumberToObject(o, "systems", s->systems);
         cJSON_AddNumberToObject(o, "systems_reused", s->systems_reused);
+        cJSON_AddNumberToObject(o, "systems_trees_read", s->systems_trees_read);
         cJSON_AddNumberToObject(o, "dependencies", s->dependencies);
         cJSON_AddNumberToObject(o, "proxies", (double)s->proxies);
         cJSON_AddNumberToObject(o, "surfels", s->surfels);
@@ -365,7 +366,8 @@ static void print_summary(const char *scene, const char *out, const glow_pc_stat
            (unsigned long long)s->links, s->links_per_cache, s->bands, lsub_mode, s->bytes_per_link);
     if (s->systems > 1 && s->systems > s->systems_reused)
         printf("  across    the caches of the baked systems link the light of %u neighbouring systems through %llu "
-               "proxy nodes\n", s->dependencies, (unsigned long long)s->proxies);
+               "proxy nodes; %u neighbours' trees read from their previous bakes (PTRE), not built again\n",
+               s->dependencies, (unsigned long long)s->proxies, s->systems_trees_read);
     if (s->detail_factor)
         printf("  detail    %u texels of %.3g units (%u per lightmap texel side) cover a surface; %u of them correct "
                "the near light with %llu links (%.1f each)\n",

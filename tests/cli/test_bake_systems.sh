@@ -150,6 +150,19 @@ assert 1 <= len(changed_tree) < len(new) and len(baked) < len(new), (changed_tre
 print("  (%d systems' trees changed, %d of %d baked again)" % (len(changed_tree), len(baked), len(new)))
 summary = open(sys.argv[3]).read()
 assert re.search(r"systems   %d, %d of them baked and %d unchanged" % (len(new), len(baked), len(new) - len(baked)), summary), summary[:300]
+# the trees those systems link that did not change are read from their previous bakes (PTRE), not built
+# again: in index order, each neighbour's tree once, unless the old world lacks it or it was baked (and
+# so built) before
+have, read = set(), 0
+for x in sorted(baked, key=lambda x: x["index"]):
+    for d in x["dependencies"]:
+        if d not in have and d in old_tree:
+            read += 1
+        have.add(d)
+    have.add(x["system_key"])
+m = re.search(r"proxy nodes; (\d+) neighbours' trees read from their previous bakes", summary)
+assert m and int(m.group(1)) == read >= 1, (m and m.group(0), read)
+print("  (%d neighbours' trees read from their previous bakes)" % read)
 PY
 expect 0 "boxes: a full bake of the edited scene" "$BIN/glow-bake" "$T/a.obj" "${SMALL[@]}" -o "$T/full/w.json"
 [ "$(ls "$T/inc" | tr '\n' ' ')" = "$(ls "$T/full" | tr '\n' ' ')" ] && pass "  the same files (the moved box's old one removed)" \

@@ -1942,6 +1942,64 @@ static void test_real_v1_7_pages(void **state) {
     free(img);
 }
 
+/* A 1.8 bake: one system of a world of two boxes 0.5 m apart (glow-bake two.obj --system-area 6 --surfels 48
+ * --links 8 --lightmap-caches 24 --lightmap-detail 1 --grid-spacing 1 --sky-rays 8), with XREF and PTRE.
+ * The runtime skips PTRE (the linker's); its contract is checked here from the bytes: the key is XREF's,
+ * children precede parents, the root is last, the leaves hold the system's whole surface. */
+static void test_real_v1_8_ptre(void **state) {
+    (void)state;
+    size_t size = 0;
+    unsigned char *img = NULL;
+    test_log log;
+    glow_context *ctx = NULL;
+    glow_bake_info info;
+    glow_bake *bake = load_seed("seed_two_boxes_system_ptre.glow", 8, &log, &ctx, &img, &size, &info);
+    const unsigned char *xe = entry_ptr(img, GLOW_SECTION_XREF), *pe = entry_ptr(img, GLOW_SECTION_PTRE);
+    assert_non_null(xe);
+    assert_non_null(pe);
+    glow_bake_xref xh;
+    glow_bake_ptree ph;
+    memcpy(&xh, img + u64_at(xe + 8), sizeof xh);
+    memcpy(&ph, img + u64_at(pe + 8), sizeof ph);
+    assert_true(xh.system_key == ph.tree_key && ph.tree_key != 0);
+    assert_int_equal(xh.dependency_count, 1);
+    assert_true(ph.leaf_count >= 1 && ph.leaf_count < ph.node_count && ph.root == ph.node_count - 1);
+    assert_true(ph.leaf_count < info.surfel_count); /* coarsened: 24 surfels, nodes of <= 16 leaves */
+    assert_int_equal(u64_at(pe + 16), sizeof ph + (uint64_t)ph.node_count * sizeof(glow_bake_ptree_node) +
+                                          (uint64_t)ph.leaf_count * sizeof(glow_bake_ptree_leaf));
+    const unsigned char *q = img + u64_at(pe + 8) + sizeof ph;
+    double leaf_area = 0.0;
+    uint32_t *lv = calloc(ph.node_count, sizeof *lv);
+    for (uint32_t i = 0; i < ph.node_count; ++i) {
+        glow_bake_ptree_node n;
+        memcpy(&n, q + (size_t)i * sizeof n, sizeof n);
+        assert_true(n.source < info.node_count);
+        if (i < ph.leaf_count) {
+            assert_true(n.child[0] == GLOW_NODE_NONE && n.child[1] == GLOW_NODE_NONE && n.level == 0);
+        } else {
+            assert_true(n.child[0] < i && n.child[1] < i);
+            lv[i] = 1 + (lv[n.child[0]] > lv[n.child[1]] ? lv[n.child[0]] : lv[n.child[1]]);
+            assert_int_equal(n.level, lv[i]);
+        }
+        assert_true(i == ph.root ? n.parent == GLOW_NODE_NONE : (n.parent > i && n.parent < ph.node_count));
+    }
+    free(lv);
+    q += (size_t)ph.node_count * sizeof(glow_bake_ptree_node);
+    for (uint32_t i = 0; i < ph.leaf_count; ++i) {
+        glow_bake_ptree_leaf f;
+        memcpy(&f, q + (size_t)i * sizeof f, sizeof f);
+        leaf_area += f.area;
+    }
+    assert_true(fabs(leaf_area - info.scene_area) <= 1e-3 * info.scene_area);
+    glow_system *sys = NULL;
+    assert_int_equal(glow_system_create(ctx, &(glow_system_desc){.bake = bake}, &sys), GLOW_OK);
+    assert_int_equal(glow_system_update(sys, NULL), GLOW_OK);
+    glow_system_destroy(sys);
+    glow_bake_destroy(bake);
+    glow_context_destroy(ctx);
+    free(img);
+}
+
 static void test_golden_v1(void **state) {
     (void)state;
     test_bake tb;
@@ -2028,6 +2086,7 @@ int main(void) {
         cmocka_unit_test(test_real_v1_2_detail),
         cmocka_unit_test(test_real_v1_5_grid_fine),
         cmocka_unit_test(test_real_v1_6_sky), cmocka_unit_test(test_real_v1_7_pages),
+        cmocka_unit_test(test_real_v1_8_ptre),
     };
     return cmocka_run_group_tests(tests, setup_tmpdir, teardown_tmpdir);
 }

@@ -248,6 +248,9 @@ typedef struct glow_pc_stats {
     uint32_t sky_rays;        /* its rays per surfel (8x per grid cache), 0 = none written \since 0.2 */
     uint32_t lightmap_pages;  /* atlases of lightmap_width x lightmap_height (1 with a lightmap that fits
                                  one; lightmap_max_size) \since 0.2 */
+    uint32_t systems_trees_read; /* neighbours' trees an incremental re-bake read from their previous bakes
+                                 (bake format 1.8, PTRE) instead of placing and clustering their surfels
+                                 again \since 0.2 */
 } glow_pc_stats;
 
 /** Resolves presets: fills every zero field of `settings` from its quality. \since 0.1 */

@@ -59,12 +59,13 @@ extern "C" {
 /* The bake format this runtime reads and glow-bake writes: a bake of another major is refused
  * (GLOW_ERROR_VERSION_MISMATCH); a newer minor loads, its unknown sections skipped. */
 #define GLOW_BAKE_FORMAT_VERSION_MAJOR 1u
-#define GLOW_BAKE_FORMAT_VERSION_MINOR 7u /* 1.1: material UVs and texture paths (TUV0, TEXP); 1.2: lightmap detail (LDET);
+#define GLOW_BAKE_FORMAT_VERSION_MINOR 8u /* 1.1: material UVs and texture paths (TUV0, TEXP); 1.2: lightmap detail (LDET);
                                             * 1.3: leaf surfels may differ in area (an adapted density);
                                             * 1.4: systems of a world and their links to neighbours (XREF);
                                             * 1.5: the grid refined near geometry (GFIN);
                                             * 1.6: the sky transfer (SKYT);
-                                            * 1.7: lightmap pages, a page per triangle (TPAG) */
+                                            * 1.7: lightmap pages, a page per triangle (TPAG);
+                                            * 1.8: a system's tree as its neighbours link it (PTRE) */
 #define GLOW_BAKE_FORMAT_MAJOR 1 /* the bake major this runtime reads */
 
 /* GLOW_API marks the public functions. A shared build (BUILD_SHARED_LIBS) compiles the libraries with

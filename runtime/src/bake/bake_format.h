@@ -79,6 +79,11 @@
  * Readers that predate it refuse lightmap_count > 1 (GLOW_ERROR_CORRUPT_DATA). */
 #define GLOW_SECTION_TPAG GLOW_FOURCC('T', 'P', 'A', 'G')
 
+/* Since 1.8 (optional; written for the systems of a world): the system's tree as its neighbours' links
+ * see it, see glow_bake_ptree. The linker's, not the runtime's: a re-bake of a neighbour reads it
+ * instead of placing and clustering this system's surfels again. Runtime readers skip it. */
+#define GLOW_SECTION_PTRE GLOW_FOURCC('P', 'T', 'R', 'E')
+
 /* Cache-map entries (GRID and LMAP): the low 31 bits index the cache array. */
 #define GLOW_MAP_EMPTY 0xFFFFFFFFu   /* no cache here; samples read zero */
 #define GLOW_MAP_COPY_BIT 0x80000000u /* not a cache of its own: a dilated copy of cache (v & ~bit) */
@@ -376,6 +381,42 @@ typedef struct glow_bake_sky {
 #define GLOW_BAKE_SKY_COEFFS 9u
 #define GLOW_BAKE_SKY_MAX 16.0f
 _Static_assert(sizeof(glow_bake_sky) == 32, "sky header is 32 bytes");
+
+/* PTRE: the system's hierarchy as a neighbour's links see it: each node of at most 16 leaves whose
+ * parent has more becomes a leaf (a disc of the node's area, centre and mean normal; a node that is a
+ * surfel keeps the surfel's fields), the nodes below it go. Leaves first, in the order of the full
+ * tree's leaves, then the kept internal nodes in the full tree's order (children before parents).
+ * Payload: glow_bake_ptree; glow_bake_ptree_node node[node_count]; glow_bake_ptree_leaf
+ * leaf[leaf_count]. The floats are the linker's own, bit for bit (not quantised like NODE). */
+typedef struct glow_bake_ptree {
+    /*  0 */ uint64_t tree_key;   /* XREF system_key: what the surfels and tree follow from */
+    /*  8 */ uint32_t node_count; /* >= 1 */
+    /* 12 */ uint32_t leaf_count; /* >= 1; nodes [0, leaf_count) are leaves */
+    /* 16 */ uint32_t root;       /* < node_count: node_count - 1, or 0 when it is the one leaf */
+    /* 20 */ uint32_t reserved[3];
+} glow_bake_ptree; /* 32 */
+typedef struct glow_bake_ptree_node {
+    /*  0 */ uint32_t child[2]; /* GLOW_NODE_NONE for leaves; else < this node's index */
+    /*  8 */ uint32_t parent;   /* GLOW_NODE_NONE for the root; else > this node's index */
+    /* 12 */ uint32_t level;    /* 0 for leaves, 1 + the children's highest */
+    /* 16 */ uint32_t source;   /* the node of NODE it stands for */
+    /* 20 */ float pos[3];
+    /* 32 */ float nrm[3];
+    /* 44 */ float area;
+} glow_bake_ptree_node; /* 48 */
+typedef struct glow_bake_ptree_leaf {
+    /*  0 */ float pos[3];
+    /* 12 */ float nrm[3];
+    /* 24 */ float albedo[3];   /* 0 for a node's disc */
+    /* 36 */ float emission[3]; /* 0 for a node's disc */
+    /* 48 */ uint32_t triangle; /* GEOM triangle of a surfel; 0 for a node's disc */
+    /* 52 */ float bary[2];
+    /* 60 */ uint32_t material;
+    /* 64 */ float area;
+} glow_bake_ptree_leaf; /* 68 */
+_Static_assert(sizeof(glow_bake_ptree) == 32, "ptree header is 32 bytes");
+_Static_assert(sizeof(glow_bake_ptree_node) == 48, "ptree node is 48 bytes");
+_Static_assert(sizeof(glow_bake_ptree_leaf) == 68, "ptree leaf is 68 bytes");
 
 typedef struct glow_bake_xref_proxy {
     uint32_t dependency;
