@@ -216,8 +216,11 @@ uint32_t glow__kdtree_knn_within(const glow__kdtree *tree, const float q[3], uin
  * k candidates are held and the k-th lies nearer than any cell not yet scanned can be, (r - margin) h.
  * Candidates are ranked by (squared distance, index) exactly as the tree ranks them, from the same
  * float arithmetic, so both give the same answer. For queries that come by the million (the surfels'
- * Voronoi areas): on surface points with h about two spacings a query reads ~27 cells and ~40
- * points instead of descending a tree. */
+ * Voronoi areas): on surface points with h about two spacings a query reads ~27 cells and ~52
+ * points instead of descending a tree (Sponza's 524,288 surfels, 32 queries each, k = 8). Rings 0
+ * and 1 go first as 9 rows of 3 cells, each row's points one run (a row's cells are consecutive),
+ * the rows nearest the query first, and a point is offered only when it beats the k-th: 25 % less
+ * time than cell by cell in grid order (9.4 s to 7.0 s a thread for those 16.8M queries). */
 struct glow__pointgrid {
     float lo[3], h, inv_h;
     int32_t dim[3];
@@ -295,15 +298,28 @@ void glow__pointgrid_free(glow__pointgrid *g) {
     free(g);
 }
 
-static void grid_scan(const glow__pointgrid *g, size_t c, const float q[3], uint32_t k, uint32_t exclude,
-                      uint32_t *found, uint32_t *out_index, float *out_dist2) {
-    for (uint32_t i = g->start[c]; i < g->start[c + 1]; ++i) {
+/* how far q (on axis a) lies from slab i of the cells on that axis, the slab grown by a tenth of a side
+ * against binning's rounding; 0 beyond a border slab, which holds the points outside the box */
+static inline float axis_gap(const glow__pointgrid *g, int a, int32_t i, float q) {
+    const float lo = g->lo[a] + ((float)i - 0.1f) * g->h, hi = g->lo[a] + ((float)i + 1.1f) * g->h;
+    if (q < lo) return i > 0 ? lo - q : 0.0f;
+    if (q > hi) return i < g->dim[a] - 1 ? q - hi : 0.0f;
+    return 0.0f;
+}
+
+/* the points [i0, i1) of the grid's order (a row's consecutive cells are consecutive) */
+static void grid_span(const glow__pointgrid *g, uint32_t i0, uint32_t i1, const float q[3], uint32_t k,
+                      uint32_t exclude, uint32_t *found, uint32_t *out_index, float *out_dist2) {
+    float worst = *found == k ? out_dist2[k - 1] : INFINITY;
+    for (uint32_t i = i0; i < i1; ++i) {
+        const float *p = g->pts[i];
+        const float dx = p[0] - q[0], dy = p[1] - q[1], dz = p[2] - q[2];
+        const float d2 = dx * dx + dy * dy + dz * dz;
+        if (d2 > worst) continue;
         const uint32_t id = g->index[i];
         if (id == exclude) continue;
-        const float *p = g->pts[i];
-        float dx = p[0] - q[0], dy = p[1] - q[1], dz = p[2] - q[2];
-        float d2 = dx * dx + dy * dy + dz * dz;
         offer(d2, id, k, found, out_index, out_dist2);
+        if (*found == k) worst = out_dist2[k - 1];
     }
 }
 
@@ -317,7 +333,32 @@ uint32_t glow__pointgrid_knn(const glow__pointgrid *g, const float q[3], uint32_
         rmax = far > rmax ? far : rmax;
     }
     uint32_t found = 0;
-    for (int32_t r = 0; r <= rmax; ++r) {
+    { /* rings 0 and 1 first, as one block of up to 9 rows of 3 cells (consecutive in the grid's order), the
+       * rows nearest q first: their points set the k-th distance early, so that fewer of the others' are
+       * offered, and a row farther than the k-th is not read */
+        const int32_t z0 = c[2] - 1 < 0 ? 0 : c[2] - 1, z1 = c[2] + 1 >= g->dim[2] ? g->dim[2] - 1 : c[2] + 1;
+        const int32_t y0 = c[1] - 1 < 0 ? 0 : c[1] - 1, y1 = c[1] + 1 >= g->dim[1] ? g->dim[1] - 1 : c[1] + 1;
+        const int32_t x0 = c[0] - 1 < 0 ? 0 : c[0] - 1, x1 = c[0] + 1 >= g->dim[0] ? g->dim[0] - 1 : c[0] + 1;
+        struct { float d2; uint32_t i0, i1; } rows[9];
+        int nr = 0;
+        for (int32_t z = z0; z <= z1; ++z) {
+            const float dz = axis_gap(g, 2, z, q[2]);
+            for (int32_t y = y0; y <= y1; ++y) {
+                const float dy = axis_gap(g, 1, y, q[1]), d2 = dz * dz + dy * dy;
+                const size_t row = ((size_t)z * g->dim[1] + y) * g->dim[0];
+                int j = nr++;
+                for (; j > 0 && rows[j - 1].d2 > d2; --j) rows[j] = rows[j - 1];
+                rows[j].d2 = d2;
+                rows[j].i0 = g->start[row + x0];
+                rows[j].i1 = g->start[row + x1 + 1];
+            }
+        }
+        for (int j = 0; j < nr; ++j) {
+            if (found == k && rows[j].d2 > out_dist2[k - 1]) break;
+            grid_span(g, rows[j].i0, rows[j].i1, q, k, exclude, &found, out_index, out_dist2);
+        }
+    }
+    for (int32_t r = 2; r <= rmax; ++r) {
         /* rings 0 .. r - 1 are scanned, a block of cells around q's: every other point lies beyond
          * one of its faces (or in no cell: a point outside the box is binned into a border cell, which
          * only brings it nearer). A tenth of a cell covers binning's rounding. */
@@ -342,11 +383,13 @@ uint32_t glow__pointgrid_knn(const glow__pointgrid *g, const float q[3], uint32_
         for (int32_t z = z0; z <= z1; ++z)
             for (int32_t y = y0; y <= y1; ++y) {
                 const size_t row = ((size_t)z * g->dim[1] + y) * g->dim[0];
-                if (r == 0 || z == c[2] - r || z == c[2] + r || y == c[1] - r || y == c[1] + r) {
-                    for (int32_t x = x0; x <= x1; ++x) grid_scan(g, row + x, q, k, exclude, &found, out_index, out_dist2);
+                if (z == c[2] - r || z == c[2] + r || y == c[1] - r || y == c[1] + r) {
+                    grid_span(g, g->start[row + x0], g->start[row + x1 + 1], q, k, exclude, &found, out_index, out_dist2);
                 } else { /* inside the ring's y-z cross only its two x ends belong to it */
-                    if (c[0] - r >= 0) grid_scan(g, row + (c[0] - r), q, k, exclude, &found, out_index, out_dist2);
-                    if (c[0] + r < g->dim[0]) grid_scan(g, row + (c[0] + r), q, k, exclude, &found, out_index, out_dist2);
+                    const size_t lo = row + (size_t)(c[0] - r), hi = row + (size_t)(c[0] + r);
+                    if (c[0] - r >= 0) grid_span(g, g->start[lo], g->start[lo + 1], q, k, exclude, &found, out_index, out_dist2);
+                    if (c[0] + r < g->dim[0])
+                        grid_span(g, g->start[hi], g->start[hi + 1], q, k, exclude, &found, out_index, out_dist2);
                 }
             }
     }
