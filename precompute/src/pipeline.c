@@ -1650,6 +1650,28 @@ static void sys_base_free(sys_base *b) {
     memset(b, 0, sizeof *b);
 }
 
+/* The path of system `part`'s bake of file key `key`: STEM.sDEPTH-PATH-KEY.glow (or STEM.GROUP-KEY.glow)
+ * beside the manifest, STEM: out_path less a ".json" or ".glow" ending */
+static void sys_file_path(const char *out_path, const glow_pc_settings *set, const sys_part *part, uint64_t key,
+                          char *path, size_t n) {
+    char keyhex[20], name[4200];
+    snprintf(keyhex, sizeof keyhex, "%016llx", (unsigned long long)key);
+    size_t len = strlen(out_path), st = 0;
+    if (len > 5 && (strcmp(out_path + len - 5, ".json") == 0 || strcmp(out_path + len - 5, ".glow") == 0)) len -= 5;
+    for (size_t i = 0; i < len; ++i)
+        if (out_path[i] == '/') st = i + 1;
+    const int sl = (int)(len - st);
+    if (part->group >= 0) {
+        const char *g = set->system_groups[part->group];
+        snprintf(name, sizeof name, "%.*s.%.*s-%s.glow", sl < 4000 ? sl : 4000, out_path + st, (int)(strchr(g, '=') - g), g,
+                 keyhex);
+    } else {
+        snprintf(name, sizeof name, "%.*s.s%u-%llx-%s.glow", sl < 4000 ? sl : 4000, out_path + st, part->depth,
+                 (unsigned long long)part->path, keyhex);
+    }
+    beside(out_path, name, path, n);
+}
+
 /* forward: sys_tree_make and sys_tree_read are below, with the trees' merge */
 static bool sys_tree_make(const sys_base *b, bool coarsen, sys_tree *t);
 static bool sys_tree_read(const char *path, uint64_t key, sys_tree *t);
@@ -2296,23 +2318,7 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
         snprintf(keyhex, sizeof keyhex, "%016llx", (unsigned long long)key);
         snprintf(contenthex, sizeof contenthex, "%016llx", (unsigned long long)full_key[s]);
         snprintf(ownhex, sizeof ownhex, "%016llx", (unsigned long long)tree_key[s]);
-        {
-            size_t len = strlen(out_path), st = 0;
-            if (len > 5 && (strcmp(out_path + len - 5, ".json") == 0 || strcmp(out_path + len - 5, ".glow") == 0)) len -= 5;
-            for (size_t i = 0; i < len; ++i)
-                if (out_path[i] == '/') st = i + 1;
-            const int sl = (int)(len - st);
-            char name[4200];
-            if (part->group >= 0) {
-                const char *g = set->system_groups[part->group];
-                snprintf(name, sizeof name, "%.*s.%.*s-%s.glow", sl < 4000 ? sl : 4000, out_path + st,
-                         (int)(strchr(g, '=') - g), g, keyhex);
-            } else {
-                snprintf(name, sizeof name, "%.*s.s%u-%llx-%s.glow", sl < 4000 ? sl : 4000, out_path + st, part->depth,
-                         (unsigned long long)part->path, keyhex);
-            }
-            beside(out_path, name, path, sizeof path);
-        }
+        sys_file_path(out_path, set, part, key, path, sizeof path);
         const char *base = strrchr(path, '/');
         base = base ? base + 1 : path;
         const cJSON *old = prev ? previous_entry(prev, base, path) : NULL;
@@ -2515,7 +2521,7 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
                     sp.n ? (double)nf_total / sp.n : 0.0, 100.0 * W.reach,
                     sp.n ? (double)dep_total / sp.n : 0.0);
     if (res == GLOW_OK && trees_read)
-        glow__infof(log, "systems: %u neighbours' trees read from their previous bakes (PTRE), not built again", trees_read);
+        glow__infof(log, "systems: %u neighbours' trees read from their bakes (PTRE), not built again", trees_read);
     for (uint32_t i = 0; i < stats->section_count && i < 16; ++i)
         if (stats->section_fourcc[i] == GLOW_SECTION_LINK && stats->links)
             stats->bytes_per_link = (double)stats->section_size[i] / (double)stats->links;

@@ -366,7 +366,7 @@ static void print_summary(const char *scene, const char *out, const glow_pc_stat
            (unsigned long long)s->links, s->links_per_cache, s->bands, lsub_mode, s->bytes_per_link);
     if (s->systems > 1 && s->systems > s->systems_reused)
         printf("  across    the caches of the baked systems link the light of %u neighbouring systems through %llu "
-               "proxy nodes; %u neighbours' trees read from their previous bakes (PTRE), not built again\n",
+               "proxy nodes; %u neighbours' trees read from their bakes (PTRE), not built again\n",
                s->dependencies, (unsigned long long)s->proxies, s->systems_trees_read);
     if (s->detail_factor)
         printf("  detail    %u texels of %.3g units (%u per lightmap texel side) cover a surface; %u of them correct "

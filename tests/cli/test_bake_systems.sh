@@ -160,7 +160,7 @@ for x in sorted(baked, key=lambda x: x["index"]):
             read += 1
         have.add(d)
     have.add(x["system_key"])
-m = re.search(r"proxy nodes; (\d+) neighbours' trees read from their previous bakes", summary)
+m = re.search(r"proxy nodes; (\d+) neighbours' trees read from their bakes", summary)
 assert m and int(m.group(1)) == read >= 1, (m and m.group(0), read)
 print("  (%d neighbours' trees read from their previous bakes)" % read)
 PY
