@@ -1453,21 +1453,29 @@ out:
     return r;
 }
 
+/* The previous manifest's next system entry after `from` (NULL: from the first) whose string `field`
+ * is `value` and whose file is still there at the size it recorded, or NULL; *path gets that file's
+ * path. */
+static const cJSON *previous_with(const cJSON *prev, const char *field, const char *value, const cJSON *from,
+                                  const char *out_path, char *path, size_t n) {
+    const cJSON *list = cJSON_GetObjectItem(prev, "systems");
+    for (const cJSON *e = from ? from->next : list ? list->child : NULL; e; e = e->next) {
+        const cJSON *ve = cJSON_GetObjectItem(e, field), *fe = cJSON_GetObjectItem(e, "file"),
+                    *be = cJSON_GetObjectItem(e, "bytes");
+        if (!cJSON_IsString(ve) || strcmp(ve->valuestring, value) != 0 || !cJSON_IsString(fe) || !cJSON_IsNumber(be) ||
+            strchr(fe->valuestring, '/'))
+            continue;
+        beside(out_path, fe->valuestring, path, n);
+        if (file_has_size(path, be->valuedouble)) return e;
+    }
+    return NULL;
+}
+
 /* The previous manifest's entry with this content key (the file key less the triangles' indices) whose
  * file is still there at the size it recorded, or NULL; *old_path gets that file's path. */
 static const cJSON *previous_content(const cJSON *prev, const char *content, const char *out_path, char *old_path,
                                      size_t n) {
-    const cJSON *e;
-    cJSON_ArrayForEach(e, cJSON_GetObjectItem(prev, "systems")) {
-        const cJSON *ce = cJSON_GetObjectItem(e, "content_key"), *fe = cJSON_GetObjectItem(e, "file"),
-                    *be = cJSON_GetObjectItem(e, "bytes");
-        if (!cJSON_IsString(ce) || strcmp(ce->valuestring, content) != 0 || !cJSON_IsString(fe) || !cJSON_IsNumber(be) ||
-            strchr(fe->valuestring, '/'))
-            continue;
-        beside(out_path, fe->valuestring, old_path, n);
-        if (file_has_size(old_path, be->valuedouble)) return e;
-    }
-    return NULL;
+    return previous_with(prev, "content_key", content, NULL, out_path, old_path, n);
 }
 
 /* The previous manifest at out_path, when it is one of ours (else NULL: everything is baked). */
@@ -1686,19 +1694,12 @@ static glow_result sys_tree_of(const sys_world *W, uint32_t d, uint64_t key, con
     if (prev && !b->done) {
         char hex[20], path[4200];
         snprintf(hex, sizeof hex, "%016llx", (unsigned long long)key);
-        const cJSON *e;
-        cJSON_ArrayForEach(e, cJSON_GetObjectItem(prev, "systems")) {
-            const cJSON *ke = cJSON_GetObjectItem(e, "system_key"), *fe = cJSON_GetObjectItem(e, "file"),
-                        *be = cJSON_GetObjectItem(e, "bytes");
-            if (!cJSON_IsString(ke) || strcmp(ke->valuestring, hex) != 0 || !cJSON_IsString(fe) || !cJSON_IsNumber(be) ||
-                strchr(fe->valuestring, '/'))
-                continue;
-            beside(out_path, fe->valuestring, path, sizeof path);
-            if (file_has_size(path, be->valuedouble) && sys_tree_read(path, key, t)) {
+        for (const cJSON *e = previous_with(prev, "system_key", hex, NULL, out_path, path, sizeof path); e;
+             e = previous_with(prev, "system_key", hex, e, out_path, path, sizeof path))
+            if (sys_tree_read(path, key, t)) {
                 (*read)++;
                 return GLOW_OK;
             }
-        }
     }
     glow_result res = sys_base_of(W, d, b);
     if (res == GLOW_OK && !sys_tree_make(b, true, t)) {
