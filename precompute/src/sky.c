@@ -34,6 +34,8 @@ typedef struct sky_job {
     const glow__surfels *sf;
     const glow__caches *ca;
     const float (*hemi)[3], (*sphere)[3];
+    const uint32_t *order; /* the hemisphere's rays by azimuth: packets of 16 that look the same way */
+    uint8_t *occ;          /* [worker][rays]: which rays of the surfel are blocked */
     uint32_t rays, grid_rays;
     float eps;
     float *surfel_out, *grid_out;
@@ -54,20 +56,34 @@ static void sky_origin(const sky_job *j, const float p[3], const float n[3], flo
     for (int i = 0; i < 3; ++i) o[i] += step * v[i];
 }
 
+
 static void surfel_range(void *user, uint32_t first, uint32_t end, uint32_t worker) {
-    (void)worker;
     const sky_job *j = user;
+    uint8_t *occ = j->occ + (size_t)worker * j->rays;
     for (uint32_t s = first; s < end; ++s) {
         const glow__surfel *sv = &j->sf->s[s];
         float tx[3], ty[3], o[3];
         double acc[GLOW_BAKE_SKY_COEFFS] = {0};
         glow__seam_onb(sv->nrm, tx, ty);
         sky_origin(j, sv->pos, sv->nrm, o);
+        /* traced in packets of 16 neighbouring directions, summed in the rays' own order */
+        for (uint32_t k0 = 0; k0 < j->rays; k0 += 16) {
+            const uint32_t m = j->rays - k0 < 16 ? j->rays - k0 : 16;
+            float d[16][3], tfar[16];
+            uint8_t o16[16];
+            for (uint32_t q = 0; q < m; ++q) {
+                const float *h = j->hemi[j->order[k0 + q]];
+                for (int i = 0; i < 3; ++i) d[q][i] = h[0] * tx[i] + h[1] * ty[i] + h[2] * sv->nrm[i];
+                tfar[q] = INFINITY;
+            }
+            glow__rt_occluded16(j->rt, o, (const float(*)[3])d, tfar, m, 0.0f, o16);
+            for (uint32_t q = 0; q < m; ++q) occ[j->order[k0 + q]] = o16[q];
+        }
         for (uint32_t k = 0; k < j->rays; ++k) {
+            if (occ[k]) continue;
             const float *h = j->hemi[k];
             float d[3], y[GLOW_BAKE_SKY_COEFFS];
             for (int i = 0; i < 3; ++i) d[i] = h[0] * tx[i] + h[1] * ty[i] + h[2] * sv->nrm[i];
-            if (glow__rt_occluded(j->rt, o, d, 0.0f, INFINITY)) continue;
             glow__sh_eval(3, d, y);
             for (uint32_t q = 0; q < GLOW_BAKE_SKY_COEFFS; ++q) acc[q] += y[q];
         }
@@ -101,22 +117,43 @@ glow_result glow__sky_transfer(const glow__rt *rt, const glow__scene *sc, const 
     if (!rt || !sc || !sf || !ca || !out_surfel || (ca->grid_cache_count && !out_grid) || rays == 0 || grid_rays == 0)
         return GLOW_ERROR_INVALID_ARGUMENT;
     float(*hemi)[3] = malloc((size_t)rays * sizeof *hemi), (*sphere)[3] = malloc((size_t)grid_rays * sizeof *sphere);
-    if (!hemi || !sphere) {
+    uint32_t *order = malloc((size_t)rays * sizeof *order);
+    float *az = malloc((size_t)rays * sizeof *az);
+    uint8_t *occ = malloc((size_t)glow__pool_threads(pool) * rays);
+    if (!hemi || !sphere || !order || !az || !occ) {
         free(hemi);
         free(sphere);
+        free(order);
+        free(az);
+        free(occ);
         return GLOW_ERROR_OUT_OF_MEMORY;
     }
     glow__sky_dirs(rays, hemi);
+    /* the rays by azimuth (ties by index): consecutive Hammersley rays alternate sides (bit-reversed
+     * azimuth), so packets of them in index order were no faster than single rays */
+    for (uint32_t k = 0; k < rays; ++k) {
+        const float a = atan2f(hemi[k][1], hemi[k][0]);
+        uint32_t q = k;
+        for (; q > 0 && az[q - 1] > a; --q) {
+            az[q] = az[q - 1];
+            order[q] = order[q - 1];
+        }
+        az[q] = a;
+        order[q] = k;
+    }
+    free(az);
     glow__fibonacci_sphere(grid_rays, sphere);
     float ext[3];
     glow__sub(sc->bounds_max, sc->bounds_min, ext);
     float diag = sqrtf(glow__dot(ext, ext));
     if (!(diag > 0.0f)) diag = 1.0f;
     sky_job j = {.rt = rt, .sf = sf, .ca = ca, .hemi = (const float(*)[3])hemi, .sphere = (const float(*)[3])sphere,
- .rays = rays, .grid_rays = grid_rays, .eps = 1e-4f * diag, .surfel_out = out_surfel, .grid_out = out_grid};
+ .order = order, .occ = occ, .rays = rays, .grid_rays = grid_rays, .eps = 1e-4f * diag, .surfel_out = out_surfel, .grid_out = out_grid};
     glow__parallel_for(pool, sf->count, 64, surfel_range, &j);
     if (ca->grid_cache_count) glow__parallel_for(pool, ca->grid_cache_count, 16, grid_range, &j);
     free(hemi);
     free(sphere);
+    free(order);
+    free(occ);
     return GLOW_OK;
 }
