@@ -309,8 +309,8 @@ static inline float axis_gap(const glow__pointgrid *g, int a, int32_t i, float q
 
 /* the points [i0, i1) of the grid's order (a row's consecutive cells are consecutive) */
 static void grid_span(const glow__pointgrid *g, uint32_t i0, uint32_t i1, const float q[3], uint32_t k,
-                      uint32_t exclude, uint32_t *found, uint32_t *out_index, float *out_dist2) {
-    float worst = *found == k ? out_dist2[k - 1] : INFINITY;
+                      uint32_t exclude, float limit, uint32_t *found, uint32_t *out_index, float *out_dist2) {
+    float worst = *found == k ? out_dist2[k - 1] : limit; /* nothing beyond the limit is offered */
     for (uint32_t i = i0; i < i1; ++i) {
         const float *p = g->pts[i];
         const float dx = p[0] - q[0], dy = p[1] - q[1], dz = p[2] - q[2];
@@ -325,6 +325,11 @@ static void grid_span(const glow__pointgrid *g, uint32_t i0, uint32_t i1, const 
 
 uint32_t glow__pointgrid_knn(const glow__pointgrid *g, const float q[3], uint32_t k, uint32_t exclude,
                              uint32_t *out_index, float *out_dist2) {
+    return glow__pointgrid_knn_within(g, q, k, exclude, INFINITY, out_index, out_dist2);
+}
+
+uint32_t glow__pointgrid_knn_within(const glow__pointgrid *g, const float q[3], uint32_t k, uint32_t exclude,
+                                    float max_dist2, uint32_t *out_index, float *out_dist2) {
     if (!g || k == 0) return 0;
     const int32_t c[3] = {grid_coord(g, q, 0), grid_coord(g, q, 1), grid_coord(g, q, 2)};
     int32_t rmax = 0; /* the ring that reaches every cell */
@@ -354,15 +359,16 @@ uint32_t glow__pointgrid_knn(const glow__pointgrid *g, const float q[3], uint32_
             }
         }
         for (int j = 0; j < nr; ++j) {
-            if (found == k && rows[j].d2 > out_dist2[k - 1]) break;
-            grid_span(g, rows[j].i0, rows[j].i1, q, k, exclude, &found, out_index, out_dist2);
+            if ((found == k && rows[j].d2 > out_dist2[k - 1]) || rows[j].d2 > max_dist2) break;
+            grid_span(g, rows[j].i0, rows[j].i1, q, k, exclude, max_dist2, &found, out_index, out_dist2);
         }
     }
     for (int32_t r = 2; r <= rmax; ++r) {
         /* rings 0 .. r - 1 are scanned, a block of cells around q's: every other point lies beyond
          * one of its faces (or in no cell: a point outside the box is binned into a border cell, which
-         * only brings it nearer). A tenth of a cell covers binning's rounding. */
-        if (found == k && r >= 1) {
+         * only brings it nearer). A tenth of a cell covers binning's rounding. Done when the k-th
+         * found, or the radius, is nearer than that. */
+        if (found == k || max_dist2 < INFINITY) {
             float bound = INFINITY;
             for (int a = 0; a < 3; ++a) {
                 if (c[a] - (r - 1) > 0) {
@@ -375,7 +381,8 @@ uint32_t glow__pointgrid_knn(const glow__pointgrid *g, const float q[3], uint32_
                 }
             }
             bound -= 0.1f * g->h;
-            if (bound > 0.0f && out_dist2[k - 1] < bound * bound) break;
+            if (bound > 0.0f && found == k && out_dist2[k - 1] < bound * bound) break;
+            if (bound > 0.0f && max_dist2 < bound * bound) break;
         }
         const int32_t z0 = c[2] - r < 0 ? 0 : c[2] - r, z1 = c[2] + r >= g->dim[2] ? g->dim[2] - 1 : c[2] + r;
         const int32_t y0 = c[1] - r < 0 ? 0 : c[1] - r, y1 = c[1] + r >= g->dim[1] ? g->dim[1] - 1 : c[1] + r;
@@ -384,12 +391,12 @@ uint32_t glow__pointgrid_knn(const glow__pointgrid *g, const float q[3], uint32_
             for (int32_t y = y0; y <= y1; ++y) {
                 const size_t row = ((size_t)z * g->dim[1] + y) * g->dim[0];
                 if (z == c[2] - r || z == c[2] + r || y == c[1] - r || y == c[1] + r) {
-                    grid_span(g, g->start[row + x0], g->start[row + x1 + 1], q, k, exclude, &found, out_index, out_dist2);
+                    grid_span(g, g->start[row + x0], g->start[row + x1 + 1], q, k, exclude, max_dist2, &found, out_index, out_dist2);
                 } else { /* inside the ring's y-z cross only its two x ends belong to it */
                     const size_t lo = row + (size_t)(c[0] - r), hi = row + (size_t)(c[0] + r);
-                    if (c[0] - r >= 0) grid_span(g, g->start[lo], g->start[lo + 1], q, k, exclude, &found, out_index, out_dist2);
+                    if (c[0] - r >= 0) grid_span(g, g->start[lo], g->start[lo + 1], q, k, exclude, max_dist2, &found, out_index, out_dist2);
                     if (c[0] + r < g->dim[0])
-                        grid_span(g, g->start[hi], g->start[hi + 1], q, k, exclude, &found, out_index, out_dist2);
+                        grid_span(g, g->start[hi], g->start[hi + 1], q, k, exclude, max_dist2, &found, out_index, out_dist2);
                 }
             }
     }

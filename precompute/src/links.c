@@ -111,7 +111,8 @@ typedef struct link_job {
                                       * (link_gradient; sigma 0: the node has no gradient) */
     float ray_eps;                   /* scene-scale offset for ray starts and ends */
     float near_radius;               /* NEAR_RADII surfel radii */
-    glow__kdtree *surfel_tree;       /* over surfel positions, for the near-field credit */
+    glow__pointgrid *surfel_grid;    /* over this system's surfel positions: the near-field and detail
+                                      * credit's k-nearest (a k-d tree until 2026-11-30: same answers) */
     float sphere_dirs[NEAR_RAYS][3]; /* uniform in solid angle */
     float hemi_dirs[NEAR_RAYS / 2][3]; /* uniform in solid angle, z up */
     /* per-worker scratch */
@@ -329,7 +330,7 @@ static uint32_t credit_hit(const link_job *job, const float origin[3], const flo
     /* the NEAR_KNN surfels nearest to the hit point; when none of them may take the credit, the next ones */
     uint32_t idx[NEAR_KNN_MORE];
     float dist2[NEAR_KNN_MORE];
-    uint32_t found = glow__kdtree_knn_within(job->surfel_tree, p, NEAR_KNN, UINT32_MAX, max_d2, idx, dist2);
+    uint32_t found = glow__pointgrid_knn_within(job->surfel_grid, p, NEAR_KNN, UINT32_MAX, max_d2, idx, dist2);
     for (uint32_t q = 0, round = 0; q < found; ++q) {
         const glow__surfel *s = &S->s[idx[q]];
         float d[3];
@@ -351,7 +352,7 @@ static uint32_t credit_hit(const link_job *job, const float origin[3], const flo
         if (ok) return unit;
         if (q + 1 == found && round == 0 && found == NEAR_KNN) {
             round = 1;
-            found = glow__kdtree_knn_within(job->surfel_tree, p, NEAR_KNN_MORE, UINT32_MAX, max_d2, idx, dist2);
+            found = glow__pointgrid_knn_within(job->surfel_grid, p, NEAR_KNN_MORE, UINT32_MAX, max_d2, idx, dist2);
         }
     }
     return CREDIT_NONE;
@@ -1634,7 +1635,7 @@ static bool detail_sees_relief(const detail_job *dj, const float pd[3], const fl
     uint32_t idx[DETAIL_RELIEF_KNN];
     float dist2[DETAIL_RELIEF_KNN];
     const float rho2 = dj->rho * dj->rho, tol = job->near_radius / NEAR_RADII; /* a surfel's radius */
-    const uint32_t found = glow__kdtree_knn_within(job->surfel_tree, pd, DETAIL_RELIEF_KNN, UINT32_MAX, rho2, idx, dist2);
+    const uint32_t found = glow__pointgrid_knn_within(job->surfel_grid, pd, DETAIL_RELIEF_KNN, UINT32_MAX, rho2, idx, dist2);
     for (uint32_t q = 0; q < found; ++q) {
         if (dist2[q] >= rho2) return false; /* nearest first: the rest are beyond the radius */
         const glow__surfel *s = &job->surfels->s[idx[q]];
@@ -2149,10 +2150,12 @@ glow_result glow__links_build(const glow__scene *scene, const glow__rt *rt, cons
             /* this system's surfels only: the near field and the detail credit no neighbour's */
             const uint32_t own = settings->own_leaves ? settings->own_leaves : surfels->count;
             for (uint32_t i = 0; i < own; ++i) memcpy(pts[i], surfels->s[i].pos, sizeof pts[i]);
-            job.surfel_tree = glow__kdtree_build((const float(*)[3])pts, own);
+            /* cells of two spacings: a credit's 8 nearest lie within one ring */
+            job.surfel_grid = glow__pointgrid_build((const float(*)[3])pts, own, scene->bounds_min, scene->bounds_max,
+                                                    2.0f * sqrtf(surfels->area));
             free(pts);
         }
-        if (!job.surfel_tree) {
+        if (!job.surfel_grid) {
             glow__errorf(log, "links: out of memory for the surfel search tree");
             res = GLOW_ERROR_OUT_OF_MEMORY;
             goto done;
@@ -2233,7 +2236,7 @@ glow_result glow__links_build(const glow__scene *scene, const glow__rt *rt, cons
                         scene->source, scaled, caches->count, (double)lo, (double)hi, clamped, NORM_MIN, NORM_MAX);
     }
 done:
-    glow__kdtree_free(job.surfel_tree);
+    glow__pointgrid_free(job.surfel_grid);
     for (uint32_t w = 0; w < job.workers; ++w) {
         if (job.omega) free(job.omega[w]);
         if (job.dirsum) free(job.dirsum[w]);

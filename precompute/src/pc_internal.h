@@ -97,6 +97,10 @@ glow__pointgrid *glow__pointgrid_build(const float (*points)[3], uint32_t count,
 void glow__pointgrid_free(glow__pointgrid *grid);
 uint32_t glow__pointgrid_knn(const glow__pointgrid *grid, const float q[3], uint32_t k, uint32_t exclude,
                              uint32_t *out_index, float *out_dist2);
+/* The same among the points within max_dist2 of q only (squared, inclusive), as glow__kdtree_knn_within:
+ * the rings stop at the radius. */
+uint32_t glow__pointgrid_knn_within(const glow__pointgrid *grid, const float q[3], uint32_t k, uint32_t exclude,
+                                    float max_dist2, uint32_t *out_index, float *out_dist2);
 
 /* ---------------------------------------------------------------- hierarchy (hierarchy.c) */
 typedef struct glow__node {

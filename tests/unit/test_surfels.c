@@ -275,6 +275,14 @@ static void test_kdtree_matches_brute_force(void **state) {
                     assert_int_equal(idx[j], all[j].i);
                     assert_true(d2[j] <= radii[ri]);
                 }
+                for (uint32_t gi = 0; gi < 4; ++gi) { /* the grid's, the same */
+                    got = glow__pointgrid_knn_within(grids[gi], qp, k, exclude, radii[ri], idx, d2);
+                    assert_int_equal(got, want);
+                    for (uint32_t j = 0; j < got; ++j) {
+                        assert_int_equal(idx[j], all[j].i);
+                        assert_true(d2[j] == all[j].d2);
+                    }
+                }
             }
         }
     }
