@@ -829,6 +829,24 @@ static uint32_t cluster_split(const trav_node *T, uint32_t t, uint32_t K, uint32
     return ns;
 }
 
+/* How a node beyond the near field looks from the cache (the descent's tests, clustered_runs and
+ * mixed_part), with dv = its centre minus the cache's position and dist = |dv|: NODE_HIDDEN when it
+ * lies wholly below a lightmap cache's horizon or every normal of its cone faces away; NODE_WHOLE
+ * when every normal faces the cache and all of it is above the horizon; else NODE_MIXED. *up: how
+ * far its centre lies above the horizon (INFINITY for grid caches). */
+enum { NODE_HIDDEN, NODE_WHOLE, NODE_MIXED };
+static inline int node_view(const trav_node *tn, const glow__cache *cache, float eps, const float dv[3], float dist,
+                            float *up) {
+    const float half_pi = (float)(0.5 * GLOW__PI), rad = tn->radius;
+    *up = cache->kind == GLOW_CACHE_KIND_LIGHTMAP ? glow__dot(cache->nrm, dv) : INFINITY;
+    if (*up + rad < -1.5f * eps) return NODE_HIDDEN; /* wholly below the horizon */
+    const float facing = -glow__dot(tn->nrm, dv) / dist; /* cos of the axis against the way back */
+    const float th = acosf(facing < -1.0f ? -1.0f : (facing > 1.0f ? 1.0f : facing));
+    const float rho = asinf(rad < dist ? rad / dist : 1.0f), cone = tn->cone;
+    if (th - cone - rho > half_pi) return NODE_HIDDEN; /* every normal faces away */
+    return th + cone + rho < half_pi && *up - rad > 0.5f * eps ? NODE_WHOLE : NODE_MIXED;
+}
+
 /* leaf_solid_angle for leaves [a, a + n) of a cluster that lies wholly where the system's rays see
  * every occluder (so its leaves pass the own_leaves test), by plane from job->leaf_soa: w[j] the
  * solid angle (0 where leaf_solid_angle gives 0) and (x, y, z)[j] the unit direction. The same
@@ -909,7 +927,7 @@ static void mixed_part(const link_job *job, const glow__cache *cache, uint32_t t
     const trav_node *T = job->trav;
     const glow__surfels *S = job->surfels;
     const bool hemi = cache->kind == GLOW_CACHE_KIND_LIGHTMAP;
-    const float eps = job->ray_eps, half_pi = (float)(0.5 * GLOW__PI);
+    const float eps = job->ray_eps;
     float best = INFINITY;
     mix_run m = {0};
     const uint32_t stop = T[t].skip;
@@ -934,8 +952,9 @@ static void mixed_part(const link_job *job, const glow__cache *cache, uint32_t t
         float dv[3];
         glow__sub(tu->pos, cache->pos, dv);
         const float dist = sqrtf(glow__dot(dv, dv)), rad = tu->radius;
-        const float up = hemi ? glow__dot(cache->nrm, dv) : INFINITY;
-        if (up + rad < -1.5f * eps) continue; /* wholly below the horizon */
+        float up;
+        const int view = node_view(tu, cache, eps, dv, dist, &up);
+        if (view == NODE_HIDDEN) continue;
         if (hemi) { /* in the plane of the cache's own surface, facing as it does: leaf_solid_angle
                      * gives every leaf 0 (up to 0.5 eps below the horizon, normals within ~25°) */
             const float ca = glow__dot(tu->nrm, cache->nrm), cc = cosf(tu->cone);
@@ -943,11 +962,7 @@ static void mixed_part(const link_job *job, const glow__cache *cache, uint32_t t
             /* up_i <= up + cos a lift + sin a rad for every leaf, a the angle between the normals */
             if (ca > 0.0f && ca * cc - sa * sc >= 0.9f && up + ca * job->lift[u] + sa * rad <= -0.75f * eps) continue;
         }
-        const float facing = -glow__dot(tu->nrm, dv) / dist;
-        const float th = acosf(facing < -1.0f ? -1.0f : (facing > 1.0f ? 1.0f : facing));
-        const float rho = asinf(rad < dist ? rad / dist : 1.0f), cone = tu->cone;
-        if (th - cone - rho > half_pi) continue; /* every normal faces away */
-        if (th + cone + rho < half_pi && up - rad > 0.5f * eps) { /* wholly facing: the aggregate */
+        if (view == NODE_WHOLE) { /* wholly facing: the aggregate */
             const float wu = S->area * -glow__dot(tu->nsum, dv) / (dist * dist * dist);
             if (!(wu > 0.0f)) continue;
             mix_add(&m, r, R, tu->first, tu->end, wu, dv[0] / dist, dv[1] / dist, dv[2] / dist);
@@ -966,10 +981,8 @@ static void mixed_part(const link_job *job, const glow__cache *cache, uint32_t t
 static uint32_t clustered_runs(link_job *job, const glow__cache *cache, uint32_t worker, cl_runs *r) {
     const glow__hierarchy *h = job->h;
     const glow__surfels *S = job->surfels;
-    const bool hemi = cache->kind == GLOW_CACHE_KIND_LIGHTMAP;
     const float eps = job->ray_eps, tau = job->settings->cluster_tau;
     const uint32_t K = job->settings->cluster_samples;
-    const float half_pi = (float)(0.5 * GLOW__PI);
     uint32_t R = 0;
     uint64_t nrays = 0, ncl = 0; /* visibility rays, and those for clusters */
     ray_packet pk = {0};
@@ -1010,16 +1023,13 @@ static uint32_t clustered_runs(link_job *job, const glow__cache *cache, uint32_t
         glow__sub(tn->pos, cache->pos, dv);
         const float dist = sqrtf(glow__dot(dv, dv)), rad = tn->radius;
         if (dist - rad > job->near_radius) { /* wholly beyond the near field: cull or cluster */
-            const float up = hemi ? glow__dot(cache->nrm, dv) : INFINITY;
-            if (up + rad < -1.5f * eps) continue; /* wholly below the horizon */
-            const float facing = -glow__dot(tn->nrm, dv) / dist; /* cos of the axis against the way back */
-            const float th = acosf(facing < -1.0f ? -1.0f : (facing > 1.0f ? 1.0f : facing));
-            const float rho = asinf(rad < dist ? rad / dist : 1.0f), cone = tn->cone;
-            if (th - cone - rho > half_pi) continue; /* every normal faces away */
+            float up;
+            const int view = node_view(tn, cache, eps, dv, dist, &up);
+            if (view == NODE_HIDDEN) continue;
             const uint32_t m = tn->end - tn->first;
             /* every normal faces the cache and all of it is above the horizon: the aggregate; else
-             * (a node small enough to sum) each run sums its leaves' own solid angles, or open it */
-            const bool whole = th + cone + rho < half_pi && up - rad > 0.5f * eps;
+             * each part's stretches of leaves that add (mixed_part) */
+            const bool whole = view == NODE_WHOLE;
             if (traceable && m >= 2u * K && rad <= tau * dist && !(tn->id & TRAV_EMISSIVE)) {
                 /* the runs: K subtrees of v (split the one with the most leaves until there are K),
                  * in leaf order */

@@ -118,30 +118,19 @@ glow_result glow__sky_transfer(const glow__rt *rt, const glow__scene *sc, const 
         return GLOW_ERROR_INVALID_ARGUMENT;
     float(*hemi)[3] = malloc((size_t)rays * sizeof *hemi), (*sphere)[3] = malloc((size_t)grid_rays * sizeof *sphere);
     uint32_t *order = malloc((size_t)rays * sizeof *order);
-    float *az = malloc((size_t)rays * sizeof *az);
+    uint64_t *keys = malloc((size_t)rays * sizeof *keys);
     uint8_t *occ = malloc((size_t)glow__pool_threads(pool) * rays);
-    if (!hemi || !sphere || !order || !az || !occ) {
+    if (!hemi || !sphere || !order || !keys || !occ) {
         free(hemi);
         free(sphere);
         free(order);
-        free(az);
+        free(keys);
         free(occ);
         return GLOW_ERROR_OUT_OF_MEMORY;
     }
     glow__sky_dirs(rays, hemi);
-    /* the rays by azimuth (ties by index): consecutive Hammersley rays alternate sides (bit-reversed
-     * azimuth), so packets of them in index order were no faster than single rays */
-    for (uint32_t k = 0; k < rays; ++k) {
-        const float a = atan2f(hemi[k][1], hemi[k][0]);
-        uint32_t q = k;
-        for (; q > 0 && az[q - 1] > a; --q) {
-            az[q] = az[q - 1];
-            order[q] = order[q - 1];
-        }
-        az[q] = a;
-        order[q] = k;
-    }
-    free(az);
+    glow__seam_sky_order(rays, keys, order); /* packets of 16 that look the same way */
+    free(keys);
     glow__fibonacci_sphere(grid_rays, sphere);
     float ext[3];
     glow__sub(sc->bounds_max, sc->bounds_min, ext);

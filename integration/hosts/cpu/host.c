@@ -1206,15 +1206,15 @@ glow_result glow_host_create(const glow_host_desc *desc, glow_host **out_host) {
         }
     }
     make_sky_dirs(h->sky_dirs, h->sky_rays);
-    for (uint32_t k = 0; k < h->sky_rays; ++k) { /* by azimuth, ties by index (insertion: once, at creation) */
-        const float a = atan2f(h->sky_dirs[3 * (size_t)k + 1], h->sky_dirs[3 * (size_t)k]);
-        uint32_t q = k;
-        for (; q > 0; --q) {
-            const uint32_t j = h->sky_order[q - 1];
-            if (!(atan2f(h->sky_dirs[3 * (size_t)j + 1], h->sky_dirs[3 * (size_t)j]) > a)) break;
-            h->sky_order[q] = j;
+    {
+        uint64_t *keys = malloc((size_t)h->sky_rays * sizeof *keys);
+        if (!keys) {
+            const uint32_t rays = h->sky_rays;
+            glow_host_destroy(h);
+            return HOST_FAIL(lg, GLOW_ERROR_OUT_OF_MEMORY, "out of memory for %u sky rays", rays);
         }
-        h->sky_order[q] = k;
+        glow__seam_sky_order(h->sky_rays, keys, h->sky_order);
+        free(keys);
     }
     for (uint32_t i = 0; i < h->surfel_count; ++i) {
         uint32_t bits = SKY_UNSET;

@@ -8,6 +8,7 @@
 
 #include <math.h>
 #include <stdint.h>
+#include <stdlib.h>
 #include <string.h>
 
 /* Orthonormal basis (x, y) around unit z (Duff et al. 2017, "Building an orthonormal basis, revisited"). */
@@ -27,14 +28,17 @@ static inline void glow__seam_onb(const float z[3], float x[3], float y[3]) {
  * and the base-2 radical inverse, lifted from the unit disk onto the hemisphere (Malley's method),
  * turned by an irrational-looking angle so that no direction lies exactly in the tangent frame's axis
  * planes (in axis-aligned scenes such a ray would run inside a neighbouring face's plane). */
+static inline uint32_t glow__seam_bitrev32(uint32_t b) {
+    b = (b << 16) | (b >> 16);
+    b = ((b & 0x55555555u) << 1) | ((b & 0xAAAAAAAAu) >> 1);
+    b = ((b & 0x33333333u) << 2) | ((b & 0xCCCCCCCCu) >> 2);
+    b = ((b & 0x0F0F0F0Fu) << 4) | ((b & 0xF0F0F0F0u) >> 4);
+    b = ((b & 0x00FF00FFu) << 8) | ((b & 0xFF00FF00u) >> 8);
+    return b;
+}
 static inline void glow__seam_sky_dirs(uint32_t n, float *dirs) {
     for (uint32_t i = 0; i < n; ++i) {
-        uint32_t b = i;
-        b = (b << 16) | (b >> 16);
-        b = ((b & 0x55555555u) << 1) | ((b & 0xAAAAAAAAu) >> 1);
-        b = ((b & 0x33333333u) << 2) | ((b & 0xCCCCCCCCu) >> 2);
-        b = ((b & 0x0F0F0F0Fu) << 4) | ((b & 0xF0F0F0F0u) >> 4);
-        b = ((b & 0x00FF00FFu) << 8) | ((b & 0xFF00FF00u) >> 8);
+        const uint32_t b = glow__seam_bitrev32(i);
         double u1 = ((double)i + 0.5) / n, u2 = (double)b * (1.0 / 4294967296.0);
         double r = sqrt(u1), phi = 2.0 * 3.14159265358979323846 * (u2 + 0.1234567);
         dirs[3 * (size_t)i + 0] = (float)(r * cos(phi));
@@ -91,6 +95,22 @@ static inline void glow__seam_closest_on_tri(const float p[3], const float a[3],
     }
     float denom = 1.0f / (va + vb + vc), v = vb * denom, w = vc * denom;
     for (int i = 0; i < 3; ++i) out[i] = a[i] + ab[i] * v + ac[i] * w;
+}
+
+/* The rays of glow__seam_sky_dirs(n) in azimuth order (a turn starting at 0.1234567 of one), into
+ * order[n]: ray i's azimuth grows with its bit-reversed index, so sorting by that needs no trigonometry.
+ * Rays next to each other by index point to opposite sides; traced 16 at a time in this order, a
+ * packet looks into a sixteenth of the turn and shares most of its BVH walk (the linker's SKYT and
+ * the CPU host). The order only groups rays into packets: results are summed in index order. keys is
+ * the caller's scratch of n entries. */
+static inline int glow__seam_cmp_u64(const void *a, const void *b) {
+    const uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return (x > y) - (x < y);
+}
+static inline void glow__seam_sky_order(uint32_t n, uint64_t *keys, uint32_t *order) {
+    for (uint32_t i = 0; i < n; ++i) keys[i] = (uint64_t)glow__seam_bitrev32(i) << 32 | i;
+    qsort(keys, n, sizeof *keys, glow__seam_cmp_u64);
+    for (uint32_t i = 0; i < n; ++i) order[i] = (uint32_t)keys[i];
 }
 
 #endif /* GLOW_SKY_RAYS_H */
