@@ -100,6 +100,8 @@ typedef struct cluster {
     double nnd;      /* distance to nn */
     uint32_t child[2];
     uint32_t nn;     /* best partner */
+    uint32_t since;  /* clusters created after nn was found have indices from here on */
+    uint32_t rec;    /* its record in hac.rec (NONE: inserted since the last rebuild, in its leaf's list) */
     uint32_t leaf;   /* k-d tree leaf holding the cluster (while alive) */
     uint32_t next;   /* next cluster in that leaf's list */
     uint32_t alive;
@@ -115,12 +117,26 @@ typedef struct tnode {
     uint32_t alive;
     uint32_t parent;
     uint32_t child[2];     /* NONE for leaves */
-    uint32_t head;         /* leaves: first cluster of the list */
+    uint32_t head;         /* leaves: first cluster inserted since the last rebuild (a list) */
+    uint32_t rbegin, rend; /* leaves: their clusters at the last rebuild, hac.rec[rbegin, rend) */
     uint32_t min_id;       /* smallest cluster index ever in the node (exact ties stay cheap) */
+    uint32_t max_id;       /* largest cluster index ever in the node (the re-check's search) */
 } tnode;
+
+/* What the search reads of a cluster, copied into its leaf's run at each rebuild (a cluster never
+ * changes once made): a leaf's clusters were scattered over the cluster array (merged clusters are
+ * appended), and their loads were 40 % of the search's samples at 524,288 surfels. One cache line. */
+typedef struct crec {
+    double pos[3], m[3], area;
+    uint32_t id;           /* NONE once dead */
+    uint16_t emissive;
+    uint16_t leaf;         /* a surfel (hac_occluded) */
+} crec;
 
 typedef struct hac {
     cluster *c;
+    crec *rec;             /* the leaves' runs (tree_rebuild) */
+    uint32_t rcount;
     uint32_t cluster_count;
     double inv_e2;
     const glow__rt *rt;    /* visibility-aware build (NULL: the published metric alone) */
@@ -136,13 +152,18 @@ typedef struct hac {
 } hac;
 
 /* ------------------------------------------------------------------ metric */
-static double hac_dist(const hac *h, const cluster *a, const cluster *b) {
-    double dx = a->pos[0] - b->pos[0], dy = a->pos[1] - b->pos[1], dz = a->pos[2] - b->pos[2];
+static inline double hac_metric(const hac *h, const double apos[3], const double am[3], double aarea, uint32_t aem,
+                                const double bpos[3], const double bm[3], double barea, uint32_t bem) {
+    double dx = apos[0] - bpos[0], dy = apos[1] - bpos[1], dz = apos[2] - bpos[2];
     double p = (dx * dx + dy * dy + dz * dz) * h->inv_e2;
-    double dot = a->m[0] * b->m[0] + a->m[1] * b->m[1] + a->m[2] * b->m[2];
+    double dot = am[0] * bm[0] + am[1] * bm[1] + am[2] * bm[2];
     if (dot > 1.0) dot = 1.0;
-    double amax = a->area > b->area ? a->area : b->area;
-    return p + HAC_CN * (1.0 - dot) + HAC_CB * fabs(a->area - b->area) / amax + (a->emissive != b->emissive ? HAC_CE : 0.0);
+    double amax = aarea > barea ? aarea : barea;
+    return p + HAC_CN * (1.0 - dot) + HAC_CB * fabs(aarea - barea) / amax + (aem != bem ? HAC_CE : 0.0);
+}
+
+static double hac_dist(const hac *h, const cluster *a, const cluster *b) {
+    return hac_metric(h, a->pos, a->m, a->area, a->emissive, b->pos, b->m, b->area, b->emissive);
 }
 
 /* Visibility of two clusters (visibility-aware builds). Each cluster is represented by its centre
@@ -165,12 +186,14 @@ static bool hac_segment_blocked(const hac *h, const float pa[3], const float pb[
     return hit.t != INFINITY && !hit.back_face;
 }
 
-static bool hac_occluded(const hac *h, const cluster *a, const cluster *b) {
+/* a and b by their centres, mean normals and whether they are leaves (surfels) */
+static bool hac_occluded(const hac *h, const double apos[3], const double am[3], bool aleaf, const double bpos[3],
+                         const double bm[3], bool bleaf) {
     float pa[3], pb[3], d[3];
     const double lift = 2.0 * h->ray_eps;
     for (int k = 0; k < 3; ++k) {
-        pa[k] = (float)(a->pos[k] + lift * a->m[k]);
-        pb[k] = (float)(b->pos[k] + lift * b->m[k]);
+        pa[k] = (float)(apos[k] + lift * am[k]);
+        pb[k] = (float)(bpos[k] + lift * bm[k]);
     }
     glow__sub(pb, pa, d);
     float len = sqrtf(glow__dot(d, d));
@@ -184,11 +207,11 @@ static bool hac_occluded(const hac *h, const cluster *a, const cluster *b) {
      * leaves (surfels: child[0] == child[1], both 0 from the allocation), such a segment is also
      * cast HAC_SIDE ray epsilons to either side (across the segment, within the ends' mean tangent
      * plane); a front face across either side counts. Clusters' centres are not on edges. */
-    if (a->child[0] != a->child[1] || b->child[0] != b->child[1]) return false; /* only between leaves */
-    const float fa = (float)(a->m[0] * d[0] + a->m[1] * d[1] + a->m[2] * d[2]);
-    const float fb = (float)(b->m[0] * d[0] + b->m[1] * d[1] + b->m[2] * d[2]);
+    if (!aleaf || !bleaf) return false; /* only between leaves */
+    const float fa = (float)(am[0] * d[0] + am[1] * d[1] + am[2] * d[2]);
+    const float fb = (float)(bm[0] * d[0] + bm[1] * d[1] + bm[2] * d[2]);
     if (fabsf(fa) > HAC_GRAZE || fabsf(fb) > HAC_GRAZE) return false;
-    float m[3] = {(float)(a->m[0] + b->m[0]), (float)(a->m[1] + b->m[1]), (float)(a->m[2] + b->m[2])}, side[3];
+    float m[3] = {(float)(am[0] + bm[0]), (float)(am[1] + bm[1]), (float)(am[2] + bm[2])}, side[3];
     glow__cross(d, m, side);
     const float sl = sqrtf(glow__dot(side, side));
     if (!(sl > 1e-3f)) return false; /* opposite normals or none: no tangent plane */
@@ -237,11 +260,14 @@ static void node_reset(tnode *nd, uint32_t parent) {
     nd->parent = parent;
     nd->child[0] = nd->child[1] = NONE;
     nd->head = NONE;
+    nd->rbegin = nd->rend = 0;
     nd->min_id = NONE;
+    nd->max_id = 0;
 }
 
 static void node_grow(tnode *nd, const cluster *c, uint32_t id) {
     if (id < nd->min_id) nd->min_id = id;
+    if (id > nd->max_id) nd->max_id = id;
     for (int k = 0; k < 3; ++k) {
         if (c->pos[k] < nd->lo[k]) nd->lo[k] = c->pos[k];
         if (c->pos[k] > nd->hi[k]) nd->hi[k] = c->pos[k];
@@ -293,12 +319,20 @@ static uint32_t tree_build_rec(hac *h, uint32_t *ids, uint32_t count, uint32_t p
     for (uint32_t i = 0; i < count; ++i) node_grow(nd, &h->c[ids[i]], ids[i]);
     nd->alive = count;
     if (count <= HAC_LEAF_MAX || depth >= HAC_MAX_DEPTH) {
-        for (uint32_t i = count; i-- > 0;) {
+        nd->rbegin = h->rcount;
+        for (uint32_t i = 0; i < count; ++i) {
             cluster *c = &h->c[ids[i]];
-            c->next = nd->head;
+            crec *r = &h->rec[h->rcount];
+            memcpy(r->pos, c->pos, sizeof r->pos);
+            memcpy(r->m, c->m, sizeof r->m);
+            r->area = c->area;
+            r->id = ids[i];
+            r->emissive = (uint16_t)c->emissive;
+            r->leaf = c->child[0] == c->child[1];
+            c->rec = h->rcount++;
             c->leaf = ni;
-            nd->head = ids[i];
         }
+        nd->rend = h->rcount;
         return ni;
     }
     /* The axis along which the node's clusters differ most in the metric: a centre coordinate's
@@ -331,6 +365,7 @@ static void tree_rebuild(hac *h) {
     for (uint32_t i = 0; i < h->cluster_count; ++i)
         if (h->c[i].alive) h->ids[n++] = i;
     h->tcount = 0;
+    h->rcount = 0;
     tree_build_rec(h, h->ids, n, NONE, 0);
     h->inserted = 0;
 }
@@ -339,7 +374,9 @@ static void tree_remove(hac *h, uint32_t id) {
     cluster *c = &h->c[id];
     c->alive = 0;
     tnode *leaf = &h->t[c->leaf];
-    if (leaf->head == id) {
+    if (c->rec != NONE) {
+        h->rec[c->rec].id = NONE;
+    } else if (leaf->head == id) {
         leaf->head = c->next;
     } else {
         uint32_t p = leaf->head;
@@ -360,6 +397,7 @@ static void tree_insert(hac *h, uint32_t id) {
         ni = axis_key(c, nd->axis) < nd->split ? nd->child[0] : nd->child[1];
     }
     c->leaf = ni;
+    c->rec = NONE;
     c->next = h->t[ni].head;
     h->t[ni].head = id;
     h->inserted++;
@@ -368,15 +406,17 @@ static void tree_insert(hac *h, uint32_t id) {
 /* (d, id) lexicographic order: true when (da, ia) ranks before (db, ib). */
 static int ranks_before(double da, uint32_t ia, double db, uint32_t ib) { return da < db || (da == db && ia < ib); }
 
-/* Nearest live cluster to q under hac_dist, ties to the smaller index. A subtree is searched only
- * when (its lower bound, its smallest index) ranks before the best so far. */
-static uint32_t tree_nearest(const hac *h, uint32_t qid, double *out_d) {
+/* Nearest live cluster to q under hac_dist among those of index `since` or more, and (bd, best) on
+ * entry (NONE, INFINITY: none yet), ties to the smaller index. A subtree is searched only when (its
+ * lower bound, its smallest index) ranks before the best so far and it has held an index from
+ * `since` on. */
+static uint32_t tree_nearest_since(const hac *h, uint32_t qid, uint32_t since, uint32_t best, double bd,
+                                   double *out_d) {
     const cluster *q = &h->c[qid];
-    uint32_t best = NONE;
-    double bd = INFINITY;
+    const bool qleaf = q->child[0] == q->child[1];
     struct { uint32_t node; double bound; } stack[HAC_MAX_DEPTH + 4];
     int sp = 0;
-    if (h->tcount == 0 || h->t[0].alive == 0) { *out_d = bd; return best; }
+    if (h->tcount == 0 || h->t[0].alive == 0 || h->t[0].max_id < since) { *out_d = bd; return best; }
     stack[0].node = 0;
     stack[0].bound = node_bound(h, &h->t[0], q);
     sp = 1;
@@ -385,13 +425,27 @@ static uint32_t tree_nearest(const hac *h, uint32_t qid, double *out_d) {
         const tnode *nd = &h->t[stack[sp].node];
         if (best != NONE && !ranks_before(stack[sp].bound, nd->min_id, bd, best)) continue;
         if (nd->child[0] == NONE) {
+            for (uint32_t ri = nd->rbegin; ri < nd->rend; ++ri) {
+                const crec *r = &h->rec[ri];
+                const uint32_t ci = r->id;
+                if (ci == NONE || ci == qid || ci < since) continue;
+                double d = hac_metric(h, q->pos, q->m, q->area, q->emissive, r->pos, r->m, r->area, r->emissive);
+                if (best != NONE && !ranks_before(d, ci, bd, best)) continue;
+                if (h->rt && hac_occluded(h, q->pos, q->m, qleaf, r->pos, r->m, r->leaf)) { /* as below */
+                    d += HAC_CV;
+                    if (best != NONE && !ranks_before(d, ci, bd, best)) continue;
+                }
+                bd = d;
+                best = ci;
+            }
             for (uint32_t ci = nd->head; ci != NONE; ci = h->c[ci].next) {
-                if (ci == qid) continue;
+                if (ci == qid || ci < since) continue;
                 double d = hac_dist(h, q, &h->c[ci]);
                 if (best != NONE && !ranks_before(d, ci, bd, best)) continue;
                 /* the occlusion penalty only ever raises d, so the bounds stay lower bounds and
                  * rays are cast only for candidates that would otherwise win */
-                if (h->rt && hac_occluded(h, q, &h->c[ci])) {
+                const cluster *x = &h->c[ci];
+                if (h->rt && hac_occluded(h, q->pos, q->m, qleaf, x->pos, x->m, x->child[0] == x->child[1])) {
                     d += HAC_CV;
                     if (best != NONE && !ranks_before(d, ci, bd, best)) continue;
                 }
@@ -404,8 +458,8 @@ static uint32_t tree_nearest(const hac *h, uint32_t qid, double *out_d) {
         const tnode *l = &h->t[li], *r = &h->t[ri];
         double bl = l->alive ? node_bound(h, l, q) : INFINITY;
         double br = r->alive ? node_bound(h, r, q) : INFINITY;
-        int lgo = l->alive && (best == NONE || ranks_before(bl, l->min_id, bd, best));
-        int rgo = r->alive && (best == NONE || ranks_before(br, r->min_id, bd, best));
+        int lgo = l->alive && l->max_id >= since && (best == NONE || ranks_before(bl, l->min_id, bd, best));
+        int rgo = r->alive && r->max_id >= since && (best == NONE || ranks_before(br, r->min_id, bd, best));
         /* farther first, so the nearer child is searched first */
         if (bl <= br) {
             if (rgo) { stack[sp].node = ri; stack[sp].bound = br; ++sp; }
@@ -417,6 +471,11 @@ static uint32_t tree_nearest(const hac *h, uint32_t qid, double *out_d) {
     }
     *out_d = bd;
     return best;
+}
+
+/* Nearest live cluster to q under hac_dist, ties to the smaller index. */
+static uint32_t tree_nearest(const hac *h, uint32_t qid, double *out_d) {
+    return tree_nearest_since(h, qid, 0, NONE, INFINITY, out_d);
 }
 
 /* ------------------------------------------------------------------ heap of (distance, cluster) */
@@ -481,13 +540,17 @@ typedef struct nn_ctx {
 static void initial_nn_range(void *vctx, uint32_t begin, uint32_t end, uint32_t worker) {
     (void)worker;
     hac *h = ((nn_ctx *)vctx)->h;
-    for (uint32_t i = begin; i < end; ++i) h->c[i].nn = tree_nearest(h, i, &h->c[i].nnd);
+    for (uint32_t i = begin; i < end; ++i) {
+        h->c[i].nn = tree_nearest(h, i, &h->c[i].nnd);
+        h->c[i].since = h->cluster_count;
+    }
 }
 
 static void hac_free(hac *h) {
     free(h->c);
     free(h->t);
     free(h->ids);
+    free(h->rec);
     free(h->hkey);
     free(h->hid);
     memset(h, 0, sizeof *h);
@@ -527,9 +590,10 @@ static glow_result hac_cluster(hac *h, uint32_t n, double inv_e2, const glow__rt
     h->tcap = 2u * (n / (HAC_LEAF_MAX / 2u) + 1u) + 1u;
     h->t = malloc((size_t)h->tcap * sizeof *h->t);
     h->ids = malloc((size_t)n * sizeof *h->ids);
+    h->rec = malloc((size_t)n * sizeof *h->rec);
     h->hkey = malloc((size_t)n * sizeof *h->hkey);
     h->hid = malloc((size_t)n * sizeof *h->hid);
-    if (!h->c || !h->t || !h->ids || !h->hkey || !h->hid) return GLOW_ERROR_OUT_OF_MEMORY;
+    if (!h->c || !h->t || !h->ids || !h->rec || !h->hkey || !h->hid) return GLOW_ERROR_OUT_OF_MEMORY;
     for (uint32_t i = 0; i < n; ++i) {
         cluster *c = &h->c[i];
         c->child[0] = c->child[1] = NONE;
@@ -552,15 +616,21 @@ static glow_result hac_cluster(hac *h, uint32_t n, double inv_e2, const glow__rt
         uint32_t B = ca->nn;
         if (B == NONE || !h->c[B].alive) {
             ca->nn = tree_nearest(h, A, &ca->nnd);
+            ca->since = h->cluster_count;
             heap_push(h, ca->nnd, A);
             continue;
         }
-        /* re-check: a newer cluster may be nearer than B (the metric is not reducible) */
+        /* re-check: a newer cluster may be nearer than B (the metric is not reducible). Only a newer
+         * one: every cluster alive when B was found, and alive still, is as far from A as it was, so
+         * it still ranks after B; the search weighs the clusters created since, against B (about
+         * half the bake's searches, each of them until 2026-11-30 over every live cluster; the
+         * same tree). */
         double d;
-        uint32_t best = tree_nearest(h, A, &d);
+        uint32_t best = tree_nearest_since(h, A, ca->since, B, ca->nnd, &d);
         if (best != B) {
             ca->nn = best;
             ca->nnd = d;
+            ca->since = h->cluster_count;
             heap_push(h, d, A);
             continue;
         }
@@ -585,6 +655,7 @@ static glow_result hac_cluster(hac *h, uint32_t n, double inv_e2, const glow__rt
         if (h->live > 1) {
             if (h->inserted > h->live / 2) tree_rebuild(h);
             cc->nn = tree_nearest(h, C, &cc->nnd);
+            cc->since = h->cluster_count;
             heap_push(h, cc->nnd, C);
         }
     }
@@ -639,9 +710,11 @@ static void chunk_range(void *vctx, uint32_t begin, uint32_t end, uint32_t worke
         /* keep the clusters, free the search structures now (the other chunks still run) */
         free(h->t);
         free(h->ids);
+        free(h->rec);
         free(h->hkey);
         free(h->hid);
         h->t = NULL;
+        h->rec = NULL;
         h->ids = h->hid = NULL;
         h->hkey = NULL;
     }

@@ -323,6 +323,76 @@ static void grid_span(const glow__pointgrid *g, uint32_t i0, uint32_t i1, const 
     }
 }
 
+/* The smallest (d2, index) among the points [i0, i1) and (*bd, *bi): the squared distances of up to 64
+ * points at a time first (a running minimum without branches), then the smallest index among those at
+ * the minimum, from the same stored values. */
+static void nearest_span(const glow__pointgrid *g, uint32_t i0, uint32_t i1, const float q[3], float *bd,
+                         uint32_t *bi) {
+    float d2[64];
+    for (uint32_t b = i0; b < i1; b += 64) {
+        const uint32_t e = i1 - b < 64 ? i1 - b : 64;
+        float m = INFINITY;
+        for (uint32_t i = 0; i < e; ++i) {
+            const float *p = g->pts[b + i];
+            const float dx = p[0] - q[0], dy = p[1] - q[1], dz = p[2] - q[2];
+            d2[i] = dx * dx + dy * dy + dz * dz;
+            m = d2[i] < m ? d2[i] : m;
+        }
+        if (!(m <= *bd)) continue;
+        uint32_t best = m == *bd ? *bi : UINT32_MAX;
+        for (uint32_t i = 0; i < e; ++i)
+            if (d2[i] == m && g->index[b + i] < best) best = g->index[b + i];
+        *bd = m;
+        *bi = best;
+    }
+}
+
+uint32_t glow__pointgrid_nearest(const glow__pointgrid *g, const float q[3], float *out_dist2) {
+    *out_dist2 = INFINITY;
+    if (!g) return UINT32_MAX;
+    const int32_t c[3] = {grid_coord(g, q, 0), grid_coord(g, q, 1), grid_coord(g, q, 2)};
+    const int32_t z0 = c[2] - 1 < 0 ? 0 : c[2] - 1, z1 = c[2] + 1 >= g->dim[2] ? g->dim[2] - 1 : c[2] + 1;
+    const int32_t y0 = c[1] - 1 < 0 ? 0 : c[1] - 1, y1 = c[1] + 1 >= g->dim[1] ? g->dim[1] - 1 : c[1] + 1;
+    const int32_t x0 = c[0] - 1 < 0 ? 0 : c[0] - 1, x1 = c[0] + 1 >= g->dim[0] ? g->dim[0] - 1 : c[0] + 1;
+    float bd = INFINITY;
+    uint32_t bi = UINT32_MAX;
+    /* rings 0 and 1: q's own row of 3 cells, then the 8 rows around it that can hold a nearer point */
+    size_t row = ((size_t)c[2] * g->dim[1] + c[1]) * g->dim[0];
+    nearest_span(g, g->start[row + x0], g->start[row + x1 + 1], q, &bd, &bi);
+    float gy[3];
+    for (int32_t y = y0; y <= y1; ++y) gy[y - y0] = axis_gap(g, 1, y, q[1]);
+    for (int32_t z = z0; z <= z1; ++z) {
+        const float dz = axis_gap(g, 2, z, q[2]);
+        for (int32_t y = y0; y <= y1; ++y) {
+            if (z == c[2] && y == c[1]) continue;
+            const float dy = gy[y - y0];
+            if (dz * dz + dy * dy > bd) continue;
+            row = ((size_t)z * g->dim[1] + y) * g->dim[0];
+            nearest_span(g, g->start[row + x0], g->start[row + x1 + 1], q, &bd, &bi);
+        }
+    }
+    /* every other point lies beyond a face of that block (glow__pointgrid_knn_within's ring test) */
+    float bound = INFINITY;
+    for (int a = 0; a < 3; ++a) {
+        if (c[a] - 1 > 0) {
+            const float d = q[a] - (g->lo[a] + (float)(c[a] - 1) * g->h);
+            bound = d < bound ? d : bound;
+        }
+        if (c[a] + 1 < g->dim[a] - 1) {
+            const float d = g->lo[a] + (float)(c[a] + 2) * g->h - q[a];
+            bound = d < bound ? d : bound;
+        }
+    }
+    if (bound == INFINITY || (bi != UINT32_MAX && bound - 0.1f * g->h > 0.0f &&
+                              bd < (bound - 0.1f * g->h) * (bound - 0.1f * g->h))) {
+        *out_dist2 = bd;
+        return bi;
+    }
+    /* a point farther out may be nearer: the rings' search */
+    uint32_t id = UINT32_MAX;
+    return glow__pointgrid_knn_within(g, q, 1, UINT32_MAX, INFINITY, &id, out_dist2) ? id : UINT32_MAX;
+}
+
 uint32_t glow__pointgrid_knn(const glow__pointgrid *g, const float q[3], uint32_t k, uint32_t exclude,
                              uint32_t *out_index, float *out_dist2) {
     return glow__pointgrid_knn_within(g, q, k, exclude, INFINITY, out_index, out_dist2);

@@ -101,6 +101,9 @@ uint32_t glow__pointgrid_knn(const glow__pointgrid *grid, const float q[3], uint
  * the rings stop at the radius. */
 uint32_t glow__pointgrid_knn_within(const glow__pointgrid *grid, const float q[3], uint32_t k, uint32_t exclude,
                                     float max_dist2, uint32_t *out_index, float *out_dist2);
+/* The nearest point alone (what glow__pointgrid_knn gives with k = 1, the same index), or UINT32_MAX
+ * for an empty grid; *out_dist2 its squared distance. Cheaper: no list, q's own row of cells first. */
+uint32_t glow__pointgrid_nearest(const glow__pointgrid *grid, const float q[3], float *out_dist2);
 
 /* ---------------------------------------------------------------- hierarchy (hierarchy.c) */
 typedef struct glow__node {

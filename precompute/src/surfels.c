@@ -92,8 +92,9 @@ static void surfel_texture(const glow__scene *scene, uint32_t t, int tex, double
     glow__texture_sample(&scene->textures[tex], (float)u, (float)v, (float)footprint, out);
 }
 
-static void surfel_eval(const glow__scene *scene, double surfel_area, glow__surfel *s) {
-    s->area = (float)surfel_area;
+/* A surfel's position, normal and material from its triangle and barycentrics (surfel_eval less the
+ * textures, which the adaptive draw's candidates do not need). */
+static void surfel_geom(const glow__scene *scene, glow__surfel *s) {
     uint32_t t = s->tri;
     double b1 = s->bary[0], b2 = s->bary[1], b0 = 1.0 - b1 - b2;
     const float *p0 = scene->pos[3 * t], *p1 = scene->pos[3 * t + 1], *p2 = scene->pos[3 * t + 2];
@@ -117,10 +118,15 @@ static void surfel_eval(const glow__scene *scene, double surfel_area, glow__surf
         if (!(len > 0.0)) { n[0] = 0.0; n[1] = 0.0; n[2] = 1.0; len = 1.0; }
     }
     for (int k = 0; k < 3; ++k) s->nrm[k] = (float)(n[k] / len);
+    s->material = scene->tri_material[t];
+}
 
-    uint32_t m = scene->tri_material[t];
-    s->material = m;
-    const glow__material *mat = &scene->materials[m];
+static void surfel_eval(const glow__scene *scene, double surfel_area, glow__surfel *s) {
+    s->area = (float)surfel_area;
+    surfel_geom(scene, s);
+    const uint32_t t = s->tri;
+    const double b1 = s->bary[0], b2 = s->bary[1], b0 = 1.0 - b1 - b2;
+    const glow__material *mat = &scene->materials[s->material];
     float tex[3] = {1.0f, 1.0f, 1.0f}, etex[3] = {1.0f, 1.0f, 1.0f};
     surfel_texture(scene, t, mat->texture, b0, b1, b2, surfel_area, tex);
     surfel_texture(scene, t, mat->emission_texture, b0, b1, b2, surfel_area, etex);
@@ -328,7 +334,6 @@ typedef struct adapt_ctx {
     const uint32_t *cand_tri;
     float (*cand_bary)[2];
     float *w;
-    double area;              /* nominal surfel area (texture footprint of the candidates) */
     double rot[2];
     float reach, eps, adapt;
     uint32_t hash;
@@ -359,7 +364,7 @@ static void adapt_range(void *vctx, uint32_t begin, uint32_t end, uint32_t worke
         memset(&t, 0, sizeof t);
         t.tri = c->cand_tri[i];
         halton_bary(&t, i, c->rot);
-        surfel_eval(c->scene, c->area, &t);
+        surfel_geom(c->scene, &t);
         c->cand_bary[i][0] = t.bary[0];
         c->cand_bary[i][1] = t.bary[1];
         const double n[3] = {t.nrm[0], t.nrm[1], t.nrm[2]};
@@ -395,9 +400,28 @@ static int cmp_cand_key(const void *a, const void *b) {
     return x->idx < y->idx ? -1 : (x->idx > y->idx);
 }
 
-static int cmp_u32(const void *a, const void *b) {
-    const uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
-    return x < y ? -1 : (x > y);
+/* Quickselect by (key, index): afterwards k[r] has rank r, lower ranks before it. */
+static void select_cand(cand_key *k, uint32_t count, uint32_t r) {
+    uint32_t lo = 0, hi = count - 1;
+    while (hi > lo) {
+        const uint32_t mid = lo + (hi - lo) / 2;
+        cand_key t;
+        if (cmp_cand_key(&k[mid], &k[lo]) < 0) { t = k[mid]; k[mid] = k[lo]; k[lo] = t; }
+        if (cmp_cand_key(&k[hi], &k[lo]) < 0) { t = k[hi]; k[hi] = k[lo]; k[lo] = t; }
+        if (cmp_cand_key(&k[hi], &k[mid]) < 0) { t = k[hi]; k[hi] = k[mid]; k[mid] = t; }
+        const cand_key pivot = k[mid];
+        uint32_t i = lo, j = hi;
+        for (;;) {
+            while (cmp_cand_key(&k[i], &pivot) < 0) ++i;
+            while (cmp_cand_key(&pivot, &k[j]) < 0) --j;
+            if (i >= j) break;
+            t = k[i]; k[i] = k[j]; k[j] = t;
+            ++i;
+            --j;
+        }
+        if (r <= j) hi = j;
+        else lo = j + 1;
+    }
 }
 
 /* The adaptive draw (above): fills s[0, n) with tri, bary and evaluated fields at their own area,
@@ -432,7 +456,7 @@ static glow_result place_adaptive(const glow__scene *scene, const glow__surfel_s
     /* the candidates sit on a grid ADAPT_OVERSAMPLE times as fine: their Halton points are those of
      * their own index, rotated by the same seed */
     adapt_ctx ac = {.scene = scene, .rt = settings->rt, .cand_tri = cand_tri, .cand_bary = cand_bary, .w = w,
-                    .area = a / ADAPT_OVERSAMPLE, .rot = {rot[0], rot[1]},
+                    .rot = {rot[0], rot[1]},
                     .reach = (float)(ADAPT_RADII * sqrt(a / GLOW__PI)), .eps = 1e-4f * (diag > 0.0f ? diag : 1.0f),
                     .adapt = adapt, .hash = hash32(settings->seed ^ 0x3c6ef372u)};
     glow__parallel_for(pool, M, 0, adapt_range, &ac);
@@ -451,17 +475,30 @@ static glow_result place_adaptive(const glow__scene *scene, const glow__surfel_s
             glow__errorf(log, "%s: out of memory for %u surfel candidates", src, M);
             return GLOW_ERROR_OUT_OF_MEMORY;
         }
+        double *kv = malloc((size_t)M * sizeof *kv);
+        if (!kv) {
+            free(keys);
+            free(cand_tri); free(cand_bary); free(w); free(p); free(areas); free(pick);
+            glow__errorf(log, "%s: out of memory for %u surfel candidates", src, M);
+            return GLOW_ERROR_OUT_OF_MEMORY;
+        }
         const uint32_t hk = hash32(settings->seed ^ 0x1b873593u);
         for (uint32_t i = 0; i < M; ++i) {
             const double u = ((double)hash32(i * 0x9e3779b9u ^ hk ^ hash32(i)) + 0.5) / 4294967296.0;
-            keys[i].key = u / (double)w[i];
+            kv[i] = u / (double)w[i];
+            keys[i].key = kv[i];
             keys[i].idx = i;
         }
-        qsort(keys, M, sizeof *keys, cmp_cand_key);
-        const double tau = keys[n - 1].key;
-        for (uint32_t j = 0; j < n; ++j) pick[j] = keys[j].idx;
+        /* the n smallest by (key, index), in index order: a selection of the n-th, not a sort of all
+         * (a sort of the 2M candidates and one of the picks took 0.4 s of 524,288 surfels' placement) */
+        select_cand(keys, M, n - 1);
+        const cand_key last = keys[n - 1];
         free(keys);
-        qsort(pick, n, sizeof *pick, cmp_u32);
+        const double tau = last.key;
+        uint32_t taken = 0;
+        for (uint32_t i = 0; i < M && taken < n; ++i)
+            if (kv[i] < last.key || (kv[i] == last.key && i <= last.idx)) pick[taken++] = i;
+        free(kv);
         for (uint32_t j = 0; j < n; ++j) {
             const double q = (double)w[pick[j]] * tau;
             p[j] = q < 1.0 ? q : 1.0;
@@ -540,6 +577,12 @@ static void area_range(void *vctx, uint32_t begin, uint32_t end, uint32_t worker
         const uint32_t m = scene->tri_material[t];
         uint32_t best = UINT32_MAX, facing = UINT32_MAX, first = UINT32_MAX;
         const float nl = 0.5f * sqrtf(glow__dot(nrm, nrm));
+        /* Most points lie on the surface of their nearest surfel: when that one faces the point's way
+         * and has its material, it is what the k-nearest scan below would pick first, and a 1-nearest
+         * query (whose bound shrinks at once) finds it for a fraction of the cost. */
+        float d0;
+        const uint32_t near0 = glow__pointgrid_nearest(c->grid, pos, &d0);
+        if (near0 != UINT32_MAX && glow__dot(c->s[near0].nrm, nrm) > nl && c->s[near0].material == m) best = near0;
         for (uint32_t k_want = AREA_KNN; best == UINT32_MAX && k_want <= AREA_KNN_MORE; k_want *= 4) {
             const uint32_t found = glow__pointgrid_knn(c->grid, pos, k_want, UINT32_MAX, nb, nd2);
             if (found) first = nb[0];

@@ -248,6 +248,12 @@ static void test_kdtree_matches_brute_force(void **state) {
             ++m;
         }
         qsort(all, m, sizeof *all, cand_cmp);
+        if (exclude == UINT32_MAX) /* the nearest alone (the surfels' areas): the first of the list */
+            for (uint32_t gi = 0; gi < 4; ++gi) {
+                float nd = -1.0f;
+                assert_int_equal(glow__pointgrid_nearest(grids[gi], qp, &nd), all[0].i);
+                assert_true(nd == all[0].d2);
+            }
         for (uint32_t ki = 0; ki < sizeof ks / sizeof ks[0]; ++ki) {
             uint32_t k = ks[ki];
             uint32_t got = glow__kdtree_knn(tree, qp, k, exclude, idx, d2);
@@ -292,6 +298,45 @@ static void test_kdtree_matches_brute_force(void **state) {
     assert_non_null(g3);
     assert_int_equal(glow__pointgrid_knn(g3, p[0], 10, 0, idx, d2), 2); /* fewer points than k */
     glow__pointgrid_free(g3);
+    { /* ties across rows of cells: a lattice of points (several at each place, the indices shuffled)
+       * and queries halfway between them, where the nearest is the smallest index among 2-8 places
+       * at the same distance in neighbouring cells */
+        float lat[256][3];
+        for (uint32_t i = 0; i < 256; ++i) {
+            const uint32_t c = (i * 37u) % 64u; /* 4 points at each of 64 places */
+            lat[i][0] = (float)(c % 4u);
+            lat[i][1] = (float)((c / 4u) % 4u);
+            lat[i][2] = (float)(c / 16u);
+        }
+        const float llo[3] = {0.0f, 0.0f, 0.0f}, lhi[3] = {3.0f, 3.0f, 3.0f};
+        const float lcells[] = {0.6f, 0.45f, 1.0f};
+        for (uint32_t gi = 0; gi < 3; ++gi) {
+            glow__pointgrid *lg = glow__pointgrid_build((const float (*)[3])lat, 256, llo, lhi, lcells[gi]);
+            assert_non_null(lg);
+            for (uint32_t qi = 0; qi < 343; ++qi) {
+                const float qp[3] = {0.5f * (float)(qi % 7u), 0.5f * (float)((qi / 7u) % 7u), 0.5f * (float)(qi / 49u)};
+                float bd = INFINITY;
+                uint32_t bi = UINT32_MAX;
+                for (uint32_t i = 0; i < 256; ++i) {
+                    const float dx = lat[i][0] - qp[0], dy = lat[i][1] - qp[1], dz = lat[i][2] - qp[2];
+                    const float dd = dx * dx + dy * dy + dz * dz;
+                    if (dd < bd || (dd == bd && i < bi)) { bd = dd; bi = i; }
+                }
+                float nd = -1.0f;
+                assert_int_equal(glow__pointgrid_nearest(lg, qp, &nd), bi);
+                assert_true(nd == bd);
+                assert_int_equal(glow__pointgrid_knn(lg, qp, 1, UINT32_MAX, idx, d2), 1);
+                assert_int_equal(idx[0], bi);
+            }
+            glow__pointgrid_free(lg);
+        }
+    }
+    glow__pointgrid *g0 = glow__pointgrid_build((const float (*)[3])p, 0, box_lo, box_hi, 0.5f);
+    assert_non_null(g0);
+    float nd0 = 0.0f;
+    assert_int_equal(glow__pointgrid_nearest(g0, p[0], &nd0), UINT32_MAX); /* no points */
+    assert_true(nd0 == INFINITY);
+    glow__pointgrid_free(g0);
 
     /* small and empty trees */
     glow__kdtree *t3 = glow__kdtree_build((const float (*)[3])p, 3);
