@@ -512,6 +512,139 @@ static void test_close_to_exact_greedy(void **state) {
     }
 }
 
+/* ------------------------------------------------------------------ the locally-ordered algorithm, by brute force
+ * hierarchy.c's clustering written out with an O(n) nearest-neighbour scan and no k-d tree: every live
+ * cluster keeps (nearest, distance), ties by the smaller index; the live cluster of least (distance,
+ * index) is taken; a dead partner is searched again; a partner still alive is checked against a
+ * fresh search (a newer cluster may be nearer), and merged with when it stands. The tree it builds
+ * must be the library's exactly, whatever the library's search does to find the same answers. */
+typedef struct lo_cluster { double pos[3], nsum[3], m[3], area, nnd; uint32_t nn, alive, leaves; uint64_t sig; } lo_cluster;
+
+static double lo_dist(const lo_cluster *a, const lo_cluster *b, double inv_e2) {
+    double d2 = 0.0, dot = 0.0;
+    for (int k = 0; k < 3; ++k) {
+        d2 += (a->pos[k] - b->pos[k]) * (a->pos[k] - b->pos[k]);
+        dot += a->m[k] * b->m[k];
+    }
+    if (dot > 1.0) dot = 1.0;
+    return d2 * inv_e2 + 0.01 * (1.0 - dot) + 0.02 * fabs(a->area - b->area) / (a->area > b->area ? a->area : b->area);
+}
+
+static uint32_t lo_nearest(const lo_cluster *c, uint32_t count, uint32_t q, double inv_e2, double *out_d) {
+    uint32_t best = UINT32_MAX;
+    double bd = INFINITY;
+    for (uint32_t j = 0; j < count; ++j) {
+        if (j == q || !c[j].alive) continue;
+        const double d = lo_dist(&c[q], &c[j], inv_e2);
+        if (d < bd || (d == bd && j < best)) { bd = d; best = j; }
+    }
+    *out_d = bd;
+    return best;
+}
+
+static uint64_t leaf_sig(uint32_t id) { /* a set of leaves is the sum of its members' */
+    uint64_t x = (uint64_t)id * 0x9E3779B97F4A7C15ull + 0x632BE59BD9B4E019ull;
+    x ^= x >> 31;
+    x *= 0xBF58476D1CE4E5B9ull;
+    return x ^ (x >> 29);
+}
+
+static int cmp_u64(const void *a, const void *b) {
+    const uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return x < y ? -1 : (x > y);
+}
+
+static void test_matches_locally_ordered_reference(void **state) {
+    (void)state;
+    for (uint32_t trial = 0; trial < 3; ++trial) {
+        float lo[3], hi[3];
+        glow__surfels s;
+        rng_state = 777u + trial;
+        const uint32_t n = 400 + 300 * trial;
+        box_scene_surfels(&s, n, lo, hi);
+        for (uint32_t i = 0; i < n; ++i) {
+            s.s[i].tri = i; /* which surfel each leaf is, after the build reorders them */
+            if (trial > 0) s.s[i].area = s.area * (float)(0.25 + 1.5 * rnd()); /* the balance term at work */
+        }
+        double e2 = 0.0;
+        for (int k = 0; k < 3; ++k) e2 += ((double)hi[k] - lo[k]) * ((double)hi[k] - lo[k]);
+        const double inv_e2 = 1.0 / e2;
+        lo_cluster *c = calloc(2u * n, sizeof *c);
+        assert_non_null(c);
+        for (uint32_t i = 0; i < n; ++i) {
+            const double a = s.s[i].area;
+            for (int k = 0; k < 3; ++k) {
+                c[i].pos[k] = s.s[i].pos[k];
+                c[i].nsum[k] = a * s.s[i].nrm[k];
+            }
+            c[i].area = a;
+            c[i].alive = 1;
+            c[i].leaves = 1;
+            c[i].sig = leaf_sig(i);
+            const double l = sqrt(c[i].nsum[0] * c[i].nsum[0] + c[i].nsum[1] * c[i].nsum[1] + c[i].nsum[2] * c[i].nsum[2]);
+            for (int k = 0; k < 3; ++k) c[i].m[k] = l > 1e-6 * a ? c[i].nsum[k] / l : 0.0;
+        }
+        uint32_t count = n, live = n;
+        for (uint32_t i = 0; i < n; ++i) c[i].nn = lo_nearest(c, count, i, inv_e2, &c[i].nnd);
+        while (live > 1) {
+            uint32_t A = UINT32_MAX;
+            for (uint32_t j = 0; j < count; ++j)
+                if (c[j].alive && (A == UINT32_MAX || c[j].nnd < c[A].nnd || (c[j].nnd == c[A].nnd && j < A))) A = j;
+            const uint32_t B = c[A].nn;
+            double d;
+            const uint32_t best = lo_nearest(c, count, A, inv_e2, &d);
+            if (!c[B].alive || best != B) {
+                c[A].nn = best;
+                c[A].nnd = d;
+                continue;
+            }
+            lo_cluster *m = &c[count];
+            m->area = c[A].area + c[B].area;
+            for (int k = 0; k < 3; ++k) {
+                m->pos[k] = (c[A].area * c[A].pos[k] + c[B].area * c[B].pos[k]) / m->area;
+                m->nsum[k] = c[A].nsum[k] + c[B].nsum[k];
+            }
+            const double l = sqrt(m->nsum[0] * m->nsum[0] + m->nsum[1] * m->nsum[1] + m->nsum[2] * m->nsum[2]);
+            for (int k = 0; k < 3; ++k) m->m[k] = l > 1e-6 * m->area ? m->nsum[k] / l : 0.0;
+            m->alive = 1;
+            m->leaves = c[A].leaves + c[B].leaves;
+            m->sig = c[A].sig + c[B].sig;
+            c[A].alive = c[B].alive = 0;
+            ++count;
+            --live;
+            if (live > 1) m->nn = lo_nearest(c, count, count - 1, inv_e2, &m->nnd);
+        }
+        assert_int_equal(count, 2u * n - 1u);
+        /* the library's tree: its internal nodes' leaf sets, by the same signature */
+        glow__hierarchy h;
+        assert_int_equal(glow__hierarchy_build(&s, lo, hi, NULL, NULL, &h), GLOW_OK);
+        assert_int_equal(h.node_count, 2u * n - 1u);
+        uint64_t *sig = malloc((size_t)h.node_count * sizeof *sig), *want = malloc((size_t)n * sizeof *want),
+                 *got = malloc((size_t)n * sizeof *got);
+        assert_non_null(sig);
+        assert_non_null(want);
+        assert_non_null(got);
+        for (uint32_t i = 0; i < h.node_count; ++i) /* children come before their parents */
+            sig[i] = i < h.leaf_count ? leaf_sig(s.s[i].tri) : sig[h.nodes[i].child[0]] + sig[h.nodes[i].child[1]];
+        for (uint32_t i = 0; i + 1 < n; ++i) {
+            want[i] = c[n + i].sig;
+            got[i] = sig[h.leaf_count + i];
+        }
+        qsort(want, n - 1, sizeof *want, cmp_u64);
+        qsort(got, n - 1, sizeof *got, cmp_u64);
+        uint32_t same = 0;
+        for (uint32_t i = 0; i + 1 < n; ++i) same += want[i] == got[i];
+        print_message("n %u: %u of %u internal nodes as the brute-force reference builds them\n", n, same, n - 1);
+        assert_memory_equal(want, got, (size_t)(n - 1) * sizeof *want);
+        free(sig);
+        free(want);
+        free(got);
+        free(c);
+        glow__hierarchy_free(&h);
+        glow__surfels_free(&s);
+    }
+}
+
 static void test_deterministic_across_threads(void **state) {
     (void)state;
     float lo[3], hi[3];
@@ -622,6 +755,7 @@ int main(void) {
         cmocka_unit_test(test_plane_structure_and_compactness),
         cmocka_unit_test(test_thin_wall_keeps_sides_apart),
         cmocka_unit_test(test_close_to_exact_greedy),
+        cmocka_unit_test(test_matches_locally_ordered_reference),
         cmocka_unit_test(test_deterministic_across_threads),
         cmocka_unit_test(test_chunked),
         cmocka_unit_test(test_timing_box_scene),
