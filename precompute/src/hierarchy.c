@@ -162,10 +162,6 @@ static inline double hac_metric(const hac *h, const double apos[3], const double
     return p + HAC_CN * (1.0 - dot) + HAC_CB * fabs(aarea - barea) / amax + (aem != bem ? HAC_CE : 0.0);
 }
 
-static double hac_dist(const hac *h, const cluster *a, const cluster *b) {
-    return hac_metric(h, a->pos, a->m, a->area, a->emissive, b->pos, b->m, b->area, b->emissive);
-}
-
 /* Visibility of two clusters (visibility-aware builds). Each cluster is represented by its centre
  * lifted 2 ray_eps along its mean normal (a flat cluster's point just in front of its surface). The
  * pair is occluded when the segment between the two points, cast from either end, first hits a
@@ -227,7 +223,7 @@ static bool hac_occluded(const hac *h, const double apos[3], const double am[3],
     return false;
 }
 
-/* Lower bound of hac_dist(q, x) over all clusters x inside node nd. */
+/* Lower bound of hac_metric(q, x) over all clusters x inside node nd. */
 static double node_bound(const hac *h, const tnode *nd, const cluster *q) {
     double p = 0.0, ub = 0.0;
     for (int k = 0; k < 3; ++k) {
@@ -406,7 +402,22 @@ static void tree_insert(hac *h, uint32_t id) {
 /* (d, id) lexicographic order: true when (da, ia) ranks before (db, ib). */
 static int ranks_before(double da, uint32_t ia, double db, uint32_t ib) { return da < db || (da == db && ia < ib); }
 
-/* Nearest live cluster to q under hac_dist among those of index `since` or more, and (bd, best) on
+/* Candidate ci (its centre, mean normal, area, emitter flag, whether it is a leaf) against the best so
+ * far (*bi, *bd) of the search for q. The occlusion penalty only ever raises d, so the bounds stay
+ * lower bounds and rays are cast only for candidates that would otherwise win. */
+static inline void hac_consider(const hac *h, const cluster *q, bool qleaf, uint32_t ci, const double pos[3],
+                                const double m[3], double area, uint32_t emissive, bool leaf, uint32_t *bi, double *bd) {
+    double d = hac_metric(h, q->pos, q->m, q->area, q->emissive, pos, m, area, emissive);
+    if (*bi != NONE && !ranks_before(d, ci, *bd, *bi)) return;
+    if (h->rt && hac_occluded(h, q->pos, q->m, qleaf, pos, m, leaf)) {
+        d += HAC_CV;
+        if (*bi != NONE && !ranks_before(d, ci, *bd, *bi)) return;
+    }
+    *bd = d;
+    *bi = ci;
+}
+
+/* Nearest live cluster to q under hac_metric among those of index `since` or more, and (bd, best) on
  * entry (NONE, INFINITY: none yet), ties to the smaller index. A subtree is searched only when (its
  * lower bound, its smallest index) ranks before the best so far and it has held an index from
  * `since` on. */
@@ -425,32 +436,15 @@ static uint32_t tree_nearest_since(const hac *h, uint32_t qid, uint32_t since, u
         const tnode *nd = &h->t[stack[sp].node];
         if (best != NONE && !ranks_before(stack[sp].bound, nd->min_id, bd, best)) continue;
         if (nd->child[0] == NONE) {
-            for (uint32_t ri = nd->rbegin; ri < nd->rend; ++ri) {
+            for (uint32_t ri = nd->rbegin; ri < nd->rend; ++ri) { /* the leaf's records */
                 const crec *r = &h->rec[ri];
-                const uint32_t ci = r->id;
-                if (ci == NONE || ci == qid || ci < since) continue;
-                double d = hac_metric(h, q->pos, q->m, q->area, q->emissive, r->pos, r->m, r->area, r->emissive);
-                if (best != NONE && !ranks_before(d, ci, bd, best)) continue;
-                if (h->rt && hac_occluded(h, q->pos, q->m, qleaf, r->pos, r->m, r->leaf)) { /* as below */
-                    d += HAC_CV;
-                    if (best != NONE && !ranks_before(d, ci, bd, best)) continue;
-                }
-                bd = d;
-                best = ci;
+                if (r->id == NONE || r->id == qid || r->id < since) continue;
+                hac_consider(h, q, qleaf, r->id, r->pos, r->m, r->area, r->emissive, r->leaf, &best, &bd);
             }
-            for (uint32_t ci = nd->head; ci != NONE; ci = h->c[ci].next) {
+            for (uint32_t ci = nd->head; ci != NONE; ci = h->c[ci].next) { /* inserted since the rebuild */
                 if (ci == qid || ci < since) continue;
-                double d = hac_dist(h, q, &h->c[ci]);
-                if (best != NONE && !ranks_before(d, ci, bd, best)) continue;
-                /* the occlusion penalty only ever raises d, so the bounds stay lower bounds and
-                 * rays are cast only for candidates that would otherwise win */
                 const cluster *x = &h->c[ci];
-                if (h->rt && hac_occluded(h, q->pos, q->m, qleaf, x->pos, x->m, x->child[0] == x->child[1])) {
-                    d += HAC_CV;
-                    if (best != NONE && !ranks_before(d, ci, bd, best)) continue;
-                }
-                bd = d;
-                best = ci;
+                hac_consider(h, q, qleaf, ci, x->pos, x->m, x->area, x->emissive, x->child[0] == x->child[1], &best, &bd);
             }
             continue;
         }
@@ -473,7 +467,7 @@ static uint32_t tree_nearest_since(const hac *h, uint32_t qid, uint32_t since, u
     return best;
 }
 
-/* Nearest live cluster to q under hac_dist, ties to the smaller index. */
+/* Nearest live cluster to q under hac_metric, ties to the smaller index. */
 static uint32_t tree_nearest(const hac *h, uint32_t qid, double *out_d) {
     return tree_nearest_since(h, qid, 0, NONE, INFINITY, out_d);
 }
@@ -623,8 +617,8 @@ static glow_result hac_cluster(hac *h, uint32_t n, double inv_e2, const glow__rt
         /* re-check: a newer cluster may be nearer than B (the metric is not reducible). Only a newer
          * one: every cluster alive when B was found, and alive still, is as far from A as it was, so
          * it still ranks after B; the search weighs the clusters created since, against B (about
-         * half the bake's searches, each of them until 2026-11-30 over every live cluster; the
-         * same tree). */
+         * a quarter of the bake's searches, each of them until 2026-11-30 over every live cluster;
+         * the same tree). */
         double d;
         uint32_t best = tree_nearest_since(h, A, ca->since, B, ca->nnd, &d);
         if (best != B) {

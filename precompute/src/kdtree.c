@@ -323,6 +323,25 @@ static void grid_span(const glow__pointgrid *g, uint32_t i0, uint32_t i1, const 
     }
 }
 
+/* How far q lies inside the block of rings 0 .. r - 1 around its cell c: every point outside that block
+ * is at least this far away (a point outside the box is binned into a border cell, which only brings
+ * it nearer), less a tenth of a cell for binning's rounding. INFINITY when the block reaches every
+ * cell. */
+static float block_bound(const glow__pointgrid *g, const int32_t c[3], const float q[3], int32_t r) {
+    float bound = INFINITY;
+    for (int a = 0; a < 3; ++a) {
+        if (c[a] - (r - 1) > 0) {
+            const float d = q[a] - (g->lo[a] + (float)(c[a] - (r - 1)) * g->h);
+            bound = d < bound ? d : bound;
+        }
+        if (c[a] + (r - 1) < g->dim[a] - 1) {
+            const float d = g->lo[a] + (float)(c[a] + r) * g->h - q[a];
+            bound = d < bound ? d : bound;
+        }
+    }
+    return bound == INFINITY ? bound : bound - 0.1f * g->h;
+}
+
 /* The smallest (d2, index) among the points [i0, i1) and (*bd, *bi): the squared distances of up to 64
  * points at a time first (a running minimum without branches), then the smallest index among those at
  * the minimum, from the same stored values. */
@@ -371,20 +390,9 @@ uint32_t glow__pointgrid_nearest(const glow__pointgrid *g, const float q[3], flo
             nearest_span(g, g->start[row + x0], g->start[row + x1 + 1], q, &bd, &bi);
         }
     }
-    /* every other point lies beyond a face of that block (glow__pointgrid_knn_within's ring test) */
-    float bound = INFINITY;
-    for (int a = 0; a < 3; ++a) {
-        if (c[a] - 1 > 0) {
-            const float d = q[a] - (g->lo[a] + (float)(c[a] - 1) * g->h);
-            bound = d < bound ? d : bound;
-        }
-        if (c[a] + 1 < g->dim[a] - 1) {
-            const float d = g->lo[a] + (float)(c[a] + 2) * g->h - q[a];
-            bound = d < bound ? d : bound;
-        }
-    }
-    if (bound == INFINITY || (bi != UINT32_MAX && bound - 0.1f * g->h > 0.0f &&
-                              bd < (bound - 0.1f * g->h) * (bound - 0.1f * g->h))) {
+    /* every other point lies beyond a face of that block */
+    const float bound = block_bound(g, c, q, 2);
+    if (bound == INFINITY || (bi != UINT32_MAX && bound > 0.0f && bd < bound * bound)) {
         *out_dist2 = bd;
         return bi;
     }
@@ -439,18 +447,7 @@ uint32_t glow__pointgrid_knn_within(const glow__pointgrid *g, const float q[3], 
          * only brings it nearer). A tenth of a cell covers binning's rounding. Done when the k-th
          * found, or the radius, is nearer than that. */
         if (found == k || max_dist2 < INFINITY) {
-            float bound = INFINITY;
-            for (int a = 0; a < 3; ++a) {
-                if (c[a] - (r - 1) > 0) {
-                    const float d = q[a] - (g->lo[a] + (float)(c[a] - (r - 1)) * g->h);
-                    bound = d < bound ? d : bound;
-                }
-                if (c[a] + (r - 1) < g->dim[a] - 1) {
-                    const float d = g->lo[a] + (float)(c[a] + r) * g->h - q[a];
-                    bound = d < bound ? d : bound;
-                }
-            }
-            bound -= 0.1f * g->h;
+            const float bound = block_bound(g, c, q, r);
             if (bound > 0.0f && found == k && out_dist2[k - 1] < bound * bound) break;
             if (bound > 0.0f && max_dist2 < bound * bound) break;
         }
