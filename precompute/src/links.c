@@ -1544,6 +1544,7 @@ static void link_range(void *ctx, uint32_t begin, uint32_t end, uint32_t worker)
  * is not what limits it. 256 / 128 costs 2.6 s of a 2-thread bake there (5.1 s at 512 / 256). */
 #define DETAIL_CACHE_RAYS 256u
 #define DETAIL_RAYS 128u
+#define DETAIL_MAX_LINKS 256u /* --detail-links' range (pipeline.c) */
 
 typedef struct detail_hit {
     uint32_t surfel;
@@ -1567,7 +1568,7 @@ typedef struct detail_job {
     uint32_t *out_s;               /* [detail_count][K] */
     float *out_w;
     uint32_t *out_n;               /* [detail_count] */
-    double *dropped, *kept;        /* [detail_count] */
+    double *merged, *total;        /* [detail_count]: |weight| given to a group's member, and all of it */
     uint32_t K;
     bool oom;
 } detail_job;
@@ -1615,18 +1616,6 @@ static void detail_cache_range(void *p, uint32_t begin, uint32_t end, uint32_t w
         dj->hits[li] = h;
         dj->hit_count[li] = h ? n : 0;
     }
-}
-
-typedef struct detail_pick {
-    float mag;
-    uint32_t surfel;
-} detail_pick;
-
-/* larger magnitude first, ties by surfel */
-static int cmp_detail_pick(const void *a, const void *b) {
-    const detail_pick *x = a, *y = b;
-    if (x->mag != y->mag) return x->mag < y->mag ? 1 : -1;
-    return x->surfel < y->surfel ? -1 : (x->surfel > y->surfel);
 }
 
 static int cmp_u32(const void *a, const void *b) {
@@ -1709,7 +1698,7 @@ static void detail_texel_range(void *p, uint32_t begin, uint32_t end, uint32_t w
         const float *pd = ca->detail_pos[d], *nd = ca->detail_nrm[d];
         uint32_t n = 0;
         dj->out_n[d] = 0;
-        dj->kept[d] = dj->dropped[d] = 0.0;
+        dj->total[d] = dj->merged[d] = 0.0;
         if (!dj->relief[d]) continue; /* only its own plane near it: nothing to correct */
 #define DETAIL_TOUCH(s)                                      \
     do {                                                     \
@@ -1753,9 +1742,9 @@ static void detail_texel_range(void *p, uint32_t begin, uint32_t end, uint32_t w
             accf[s] += wr * l[2];
         }
 #undef DETAIL_TOUCH
-        /* the difference; the K largest in magnitude, then by surfel */
+        /* the difference, by surfel */
         uint32_t m = 0;
-        double all = 0.0;
+        double all = 0.0, merged = 0.0;
         for (uint32_t i = 0; i < n; ++i) {
             const uint32_t s = touched[i];
             mark[s] = 0;
@@ -1764,24 +1753,53 @@ static void detail_texel_range(void *p, uint32_t begin, uint32_t end, uint32_t w
             all += fabs((double)v);
             if (fabsf(v) > 1e-6f) touched[m++] = s;
         }
+        qsort(touched, m, sizeof *touched, cmp_u32);
         if (m > dj->K) {
-            /* at most DETAIL_RAYS surfels from d's rays and 4 caches' hit lists */
-            detail_pick pick[DETAIL_RAYS + 4u * DETAIL_CACHE_RAYS];
-            for (uint32_t i = 0; i < m; ++i) pick[i] = (detail_pick){fabsf(accf[touched[i]]), touched[i]};
-            qsort(pick, m, sizeof *pick, cmp_detail_pick);
-            for (uint32_t i = 0; i < dj->K; ++i) touched[i] = pick[i].surfel;
+            /* More surfels than links (a dense bake puts many surfels where the rays of a moderate one
+             * meet a few): group them by the hierarchy's subtrees of at most T leaves, for the least
+             * power of two T that leaves at most K groups, and give each group's summed weight to its
+             * member of the largest |weight| (ties: the lower index). A small subtree is a compact
+             * cluster of like-facing surfels, so its members' radiance is alike. Subtrees own
+             * contiguous leaf ranges, so in index order a group's members are consecutive. Before
+             * (2026-11-30: the K largest kept, the rest dropped), Sponza at 524,288 surfels left 37 %
+             * of the weight out, and its block error against the referee was 0.096 instead of 0.080. */
+            const glow__node *nodes = job->h->nodes;
+            uint32_t grp[DETAIL_RAYS + 4u * DETAIL_CACHE_RAYS];
+            for (uint32_t i = 0; i < m; ++i) grp[i] = touched[i];
+            uint32_t groups = m;
+            for (uint32_t T = 2; groups > dj->K; T *= 2) {
+                groups = 0;
+                for (uint32_t i = 0; i < m; ++i) {
+                    uint32_t g = grp[i], up;
+                    while ((up = nodes[g].parent) != GLOW_NODE_NONE && job->leaf_end[up] - job->leaf_first[up] <= T) g = up;
+                    grp[i] = g;
+                    groups += i == 0 || g != grp[i - 1];
+                }
+            }
+            uint32_t k = 0;
+            for (uint32_t i = 0; i < m;) {
+                uint32_t rep = touched[i], j = i;
+                double sum = 0.0, mag = 0.0;
+                for (; j < m && grp[j] == grp[i]; ++j) {
+                    const float v = accf[touched[j]];
+                    sum += (double)v;
+                    mag += fabs((double)v);
+                    if (fabsf(v) > fabsf(accf[rep])) rep = touched[j];
+                }
+                merged += mag - fabs((double)accf[rep]);
+                accf[rep] = (float)sum;
+                touched[k++] = rep;
+                i = j;
+            }
+            m = k;
         }
-        const uint32_t keep = m < dj->K ? m : dj->K;
-        qsort(touched, keep, sizeof *touched, cmp_u32);
-        double kept = 0.0;
-        for (uint32_t i = 0; i < keep; ++i) {
+        for (uint32_t i = 0; i < m; ++i) {
             dj->out_s[(size_t)d * dj->K + i] = touched[i];
             dj->out_w[(size_t)d * dj->K + i] = accf[touched[i]];
-            kept += fabs((double)accf[touched[i]]);
         }
-        dj->out_n[d] = keep;
-        dj->kept[d] = kept;
-        dj->dropped[d] = all - kept;
+        dj->out_n[d] = m;
+        dj->total[d] = all;
+        dj->merged[d] = merged;
     }
 }
 
@@ -1790,7 +1808,7 @@ static glow_result detail_build(const link_job *job, glow__pool *pool, glow__log
     const glow__link_settings *set = job->settings;
     const uint32_t S = set->own_leaves ? set->own_leaves : job->surfels->count, Dn = ca->detail_count,
                    L = ca->lm_cache_count;
-    detail_job dj = {.lj = job, .K = set->detail_links ? set->detail_links : 16u};
+    detail_job dj = {.lj = job, .K = !set->detail_links ? 16u : set->detail_links < DETAIL_MAX_LINKS ? set->detail_links : DETAIL_MAX_LINKS};
     dj.rho = set->detail_radius / ca->texel_density;
     /* a detail texel reads caches up to about 1.5 texels away on its chart */
     dj.reach = dj.rho + 2.0f / ca->texel_density + job->near_radius;
@@ -1824,10 +1842,10 @@ static glow_result detail_build(const link_job *job, glow__pool *pool, glow__log
     dj.out_s = malloc(((size_t)Dn * dj.K + 1) * sizeof *dj.out_s);
     dj.out_w = malloc(((size_t)Dn * dj.K + 1) * sizeof *dj.out_w);
     dj.out_n = calloc((size_t)Dn + 1, sizeof *dj.out_n);
-    dj.dropped = calloc((size_t)Dn + 1, sizeof *dj.dropped);
-    dj.kept = calloc((size_t)Dn + 1, sizeof *dj.kept);
+    dj.merged = calloc((size_t)Dn + 1, sizeof *dj.merged);
+    dj.total = calloc((size_t)Dn + 1, sizeof *dj.total);
     bool ok = dj.hits && dj.hit_count && dj.acc_f && dj.acc_c && dj.touched && dj.mark && dj.out_s && dj.out_w &&
-              dj.out_n && dj.dropped && dj.kept;
+              dj.out_n && dj.merged && dj.total;
     for (uint32_t w = 0; ok && w < W; ++w) {
         dj.acc_f[w] = malloc(((size_t)S + 1) * 3 * sizeof(float));
         dj.acc_c[w] = malloc(((size_t)S + 1) * sizeof(float));
@@ -1857,8 +1875,8 @@ static glow_result detail_build(const link_job *job, glow__pool *pool, glow__log
         if ((res = rank_share(dist, dj.out_s, Dn, dj.K * sizeof *dj.out_s, log, "the detail links")) != GLOW_OK ||
             (res = rank_share(dist, dj.out_w, Dn, dj.K * sizeof *dj.out_w, log, "the detail weights")) != GLOW_OK ||
             (res = rank_share(dist, dj.out_n, Dn, sizeof *dj.out_n, log, "the detail link counts")) != GLOW_OK ||
-            (res = rank_share(dist, dj.dropped, Dn, sizeof *dj.dropped, log, "the detail weight sums")) != GLOW_OK ||
-            (res = rank_share(dist, dj.kept, Dn, sizeof *dj.kept, log, "the detail weight sums")) != GLOW_OK)
+            (res = rank_share(dist, dj.merged, Dn, sizeof *dj.merged, log, "the detail weight sums")) != GLOW_OK ||
+            (res = rank_share(dist, dj.total, Dn, sizeof *dj.total, log, "the detail weight sums")) != GLOW_OK)
             ok = false;
     }
     if (ok) {
@@ -1876,16 +1894,16 @@ static glow_result detail_build(const link_job *job, glow__pool *pool, glow__log
                 memcpy(out->detail_weight + k, dj.out_w + (size_t)d * dj.K, dj.out_n[d] * sizeof(float));
                 k += dj.out_n[d];
                 with += dj.out_n[d] > 0;
-                out->detail_kept += dj.kept[d];
-                out->detail_dropped += dj.dropped[d];
+                out->detail_total += dj.total[d];
+                out->detail_merged += dj.merged[d];
             }
             out->detail_first[Dn] = k;
             out->detail_count = Dn;
             glow__infof(log, "%s: links: lightmap detail: %u of %u detail texels correct their caches' near light "
-                        "(surfels within %.3g units), %.1f links each (at most %u; %.1f %% of the weight left out)",
+                        "(surfels within %.3g units), %.1f links each (at most %u; %.1f %% of the weight given to a "
+                        "neighbour in its subtree)",
                         job->scene->source, with, Dn, (double)dj.rho, with ? (double)k / with : 0.0, dj.K,
-                        out->detail_kept + out->detail_dropped > 0.0
-                            ? 100.0 * out->detail_dropped / (out->detail_kept + out->detail_dropped) : 0.0);
+                        out->detail_total > 0.0 ? 100.0 * out->detail_merged / out->detail_total : 0.0);
         }
     }
     if (!ok && res == GLOW_OK) {
@@ -1900,7 +1918,7 @@ static glow_result detail_build(const link_job *job, glow__pool *pool, glow__log
         if (dj.mark) free(dj.mark[w]);
     }
     free(dj.hits); free(dj.hit_count); free(dj.acc_f); free(dj.acc_c); free(dj.touched); free(dj.mark);
-    free(dj.out_s); free(dj.out_w); free(dj.out_n); free(dj.dropped); free(dj.kept); free(dj.relief); free(dj.need);
+    free(dj.out_s); free(dj.out_w); free(dj.out_n); free(dj.merged); free(dj.total); free(dj.relief); free(dj.need);
     return res;
 }
 

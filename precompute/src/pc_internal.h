@@ -307,8 +307,8 @@ typedef struct glow__links {
     uint32_t *detail_first;   /* [detail_count + 1] */
     uint32_t *detail_surfel;
     float *detail_weight;
-    double detail_dropped;    /* sum of |weight| left out by the detail_links cap, over all texels */
-    double detail_kept;       /* sum of |weight| kept */
+    double detail_merged;     /* sum of |weight| the detail_links cap gave to a neighbour, over all texels */
+    double detail_total;      /* sum of |weight| before the cap */
 } glow__links;
 enum { GLOW__AUDIT_FIELDS = 10 };
 
