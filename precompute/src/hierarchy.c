@@ -38,10 +38,11 @@
  * conservative.
  *
  * Scale of the terms: the balance term is 0.01 for a single surfel joining a pair, as much as the
- * position term of two centres 0.14 scene diagonals apart, whatever the surfel count; so the low levels
- * are shaped mostly by balance, and a few leftover surfels pair with distant ones (64x64 plane in the
- * tests: clusters of <= 16 surfels have a mean radius of 1.1 spacings, 2.6% are wider than 4). That is
- * the paper's metric as published; HAC_CB below is the knob if it ever needs to change.
+ * position term of two centres 0.14 scene diagonals apart; so the low levels are shaped mostly by
+ * balance, and a few leftover surfels pair with distant ones (64x64 plane in the tests: clusters of
+ * <= 16 surfels have a mean radius of 1.1 spacings, 2.6% are wider than 4). That is the paper's metric
+ * as published, up to the moderate preset's surfel count; above it the balance term's weight falls
+ * with the surfels' squared spacing (hac_balance).
  *
  * Visibility (glow__hierarchy_build_rt, which the pipeline uses): PIC 5.2 traces its light bleeding
  * (Fig. 9c) to this metric merging clusters that cannot see each other — two rooms' coplanar ceiling
@@ -70,6 +71,17 @@
 
 #define HAC_CN 0.01 /* the paper has 0.1: see the top of the file */
 #define HAC_CB 0.02
+/* The balance term's weight for n surfels: HAC_CB up to HAC_CB_FROM surfels (the moderate preset's
+ * count: every bake at or below it as published), HAC_CB x HAC_CB_FROM / n above. The position term
+ * of two neighbouring surfels falls as 1/n on a given scene (their squared spacing over the squared
+ * extent), the balance term does not: at 16x the surfels a 10 % difference in area weighed as much as
+ * 2 m on Sponza, the low levels paired surfels of like area across metres, and the loose clusters
+ * cost the clustered visibility 3x the rays (docs/linker.md, "Hierarchy"). Scaled, the balance term
+ * weighs against the spacing as it does at HAC_CB_FROM. */
+#define HAC_CB_FROM 32768u
+static double hac_balance(uint32_t n) {
+    return n > HAC_CB_FROM ? HAC_CB * (double)HAC_CB_FROM / (double)n : HAC_CB;
+}
 /* Added to d(a,b) when a and b cannot see each other (visibility-aware builds only, see below):
  * more than the normal and balance terms together (0.22) plus a quarter of the squared diagonal, so
  * an occluded pair merges only after every visible pair within about half a scene diagonal. */
@@ -139,6 +151,7 @@ typedef struct hac {
     uint32_t rcount;
     uint32_t cluster_count;
     double inv_e2;
+    double cb;             /* the balance term's weight (hac_balance) */
     const glow__rt *rt;    /* visibility-aware build (NULL: the published metric alone) */
     float ray_eps;         /* ray offsets, 1e-4 x the scene diagonal (as links.c) */
     tnode *t;
@@ -159,7 +172,7 @@ static inline double hac_metric(const hac *h, const double apos[3], const double
     double dot = am[0] * bm[0] + am[1] * bm[1] + am[2] * bm[2];
     if (dot > 1.0) dot = 1.0;
     double amax = aarea > barea ? aarea : barea;
-    return p + HAC_CN * (1.0 - dot) + HAC_CB * fabs(aarea - barea) / amax + (aem != bem ? HAC_CE : 0.0);
+    return p + HAC_CN * (1.0 - dot) + h->cb * fabs(aarea - barea) / amax + (aem != bem ? HAC_CE : 0.0);
 }
 
 /* Visibility of two clusters (visibility-aware builds). Each cluster is represented by its centre
@@ -237,7 +250,7 @@ static double node_bound(const hac *h, const tnode *nd, const cluster *q) {
     double A = q->area, b = 0.0;
     if (A < nd->alo) b = (nd->alo - A) / nd->alo;
     else if (A > nd->ahi) b = (A - nd->ahi) / A;
-    return p * h->inv_e2 + HAC_CN * (1.0 - ub) + HAC_CB * b;
+    return p * h->inv_e2 + HAC_CN * (1.0 - ub) + h->cb * b;
 }
 
 /* ------------------------------------------------------------------ dynamic k-d tree */
@@ -344,7 +357,7 @@ static uint32_t tree_build_rec(hac *h, uint32_t *ids, uint32_t count, uint32_t p
         const double e = nd->hi[k] - nd->lo[k], sk = e * e * h->inv_e2;
         if (sk > spread) { spread = sk; axis = k; }
     }
-    if (nd->ahi > 0.0 && HAC_CB * (1.0 - nd->alo / nd->ahi) > spread) axis = HAC_AXIS_AREA;
+    if (nd->ahi > 0.0 && h->cb * (1.0 - nd->alo / nd->ahi) > spread) axis = HAC_AXIS_AREA;
     uint32_t half = count / 2;
     select_kth(h->c, ids, count, half, axis);
     nd->axis = axis;
@@ -551,10 +564,11 @@ static void hac_free(hac *h) {
 }
 
 /* Runs the clustering; clusters [0, n) are the surfels, the root is cluster 2n-2. */
-static glow_result hac_cluster(hac *h, uint32_t n, double inv_e2, const glow__rt *rt, float ray_eps, glow__pool *pool);
+static glow_result hac_cluster(hac *h, uint32_t n, double inv_e2, double cb, const glow__rt *rt, float ray_eps,
+                               glow__pool *pool);
 
-static glow_result hac_run(hac *h, const glow__surfels *surfels, double inv_e2, const glow__rt *rt, float ray_eps,
-                           glow__pool *pool) {
+static glow_result hac_run(hac *h, const glow__surfels *surfels, double inv_e2, double cb, const glow__rt *rt,
+                           float ray_eps, glow__pool *pool) {
     const uint32_t n = surfels->count;
     const uint32_t total = 2 * n - 1;
     h->c = calloc(total, sizeof *h->c);
@@ -570,14 +584,16 @@ static glow_result hac_run(hac *h, const glow__surfels *surfels, double inv_e2, 
         c->area = a;
         c->emissive = s->emission[0] > 0.0f || s->emission[1] > 0.0f || s->emission[2] > 0.0f;
     }
-    return hac_cluster(h, n, inv_e2, rt, ray_eps, pool);
+    return hac_cluster(h, n, inv_e2, cb, rt, ray_eps, pool);
 }
 
 /* Clusters h->c[0, n) (allocated for 2n - 1, with pos, nsum, area and emissive set) into one tree:
  * clusters [0, n) are the leaves, the root is cluster 2n-2. */
-static glow_result hac_cluster(hac *h, uint32_t n, double inv_e2, const glow__rt *rt, float ray_eps, glow__pool *pool) {
+static glow_result hac_cluster(hac *h, uint32_t n, double inv_e2, double c_b, const glow__rt *rt, float ray_eps,
+                               glow__pool *pool) {
     const uint32_t total = 2 * n - 1;
     h->inv_e2 = inv_e2;
+    h->cb = c_b;
     h->rt = rt;
     h->ray_eps = ray_eps;
     /* median splits: leaves hold > HAC_LEAF_MAX/2 clusters when split, so < 2*(n/(LEAF/2)+1) nodes */
@@ -676,7 +692,7 @@ typedef struct chunk_job {
     const uint32_t *start;
     hac *sub;              /* per chunk */
     glow_result *res;      /* per chunk */
-    double inv_e2;
+    double inv_e2, cb;
     const glow__rt *rt;
     float ray_eps;
 } chunk_job;
@@ -700,7 +716,7 @@ static void chunk_range(void *vctx, uint32_t begin, uint32_t end, uint32_t worke
             cl->area = a;
             cl->emissive = s->emission[0] > 0.0f || s->emission[1] > 0.0f || s->emission[2] > 0.0f;
         }
-        j->res[c] = hac_cluster(h, m, j->inv_e2, j->rt, j->ray_eps, NULL);
+        j->res[c] = hac_cluster(h, m, j->inv_e2, j->cb, j->rt, j->ray_eps, NULL);
         /* keep the clusters, free the search structures now (the other chunks still run) */
         free(h->t);
         free(h->ids);
@@ -750,8 +766,8 @@ static void chunk_split(const glow__surfels *S, uint32_t *idx, key_index *keys, 
 
 /* The chunked clustering into out->c (2n - 1 clusters: the surfels, then internal clusters children
  * first, the root last), as hac_run leaves it. */
-static glow_result hac_run_chunked(hac *out, const glow__surfels *surfels, double inv_e2, const glow__rt *rt, float ray_eps,
-                                   uint32_t chunk, glow__pool *pool, glow__log *log) {
+static glow_result hac_run_chunked(hac *out, const glow__surfels *surfels, double inv_e2, double cb, const glow__rt *rt,
+                                   float ray_eps, uint32_t chunk, glow__pool *pool, glow__log *log) {
     const uint32_t n = surfels->count, total = 2u * n - 1u;
     const uint32_t max_chunks = 2u * (n / (chunk / 2u) + 1u);
     key_index *keys = malloc((size_t)n * sizeof *keys);
@@ -771,7 +787,7 @@ static glow_result hac_run_chunked(hac *out, const glow__surfels *surfels, doubl
     keys = NULL;
     start[P] = n;
     chunk_job job = {.surfels = surfels, .chunk = chunk, .idx = idx, .start = start, .sub = sub, .res = res, .inv_e2 = inv_e2,
-                     .rt = rt, .ray_eps = ray_eps};
+                     .cb = cb, .rt = rt, .ray_eps = ray_eps};
     glow__parallel_for(pool, P, 1, chunk_range, &job);
     for (uint32_t c = 0; c < P; ++c)
         if (res[c] != GLOW_OK) { r = res[c]; goto done; }
@@ -806,7 +822,7 @@ static glow_result hac_run_chunked(hac *out, const glow__surfels *surfels, doubl
         top.c[c].area = x->area;
         top.c[c].emissive = x->emissive;
     }
-    r = hac_cluster(&top, P, inv_e2, rt, ray_eps, pool);
+    r = hac_cluster(&top, P, inv_e2, cb, rt, ray_eps, pool);
     if (r != GLOW_OK) goto done;
     for (uint32_t l = P; l < 2u * P - 1u; ++l) {
         cluster x = top.c[l];
@@ -901,8 +917,10 @@ glow_result glow__hierarchy_build_chunked(glow__surfels *surfels, const float sc
     glow_result res = GLOW_OK;
 
     if (n > 1) {
-        res = n > chunk_from && n > chunk ? hac_run_chunked(&h, surfels, 1.0 / e2, rt, (float)(1e-4 * sqrt(e2)), chunk, pool, log)
-                                 : hac_run(&h, surfels, 1.0 / e2, rt, (float)(1e-4 * sqrt(e2)), pool);
+        const double cb = hac_balance(n);
+        res = n > chunk_from && n > chunk
+                  ? hac_run_chunked(&h, surfels, 1.0 / e2, cb, rt, (float)(1e-4 * sqrt(e2)), chunk, pool, log)
+                  : hac_run(&h, surfels, 1.0 / e2, cb, rt, (float)(1e-4 * sqrt(e2)), pool);
         if (res != GLOW_OK) {
             if (res == GLOW_ERROR_OUT_OF_MEMORY) glow__errorf(log, "hierarchy: out of memory clustering %u surfels", n);
             else glow__errorf(log, "hierarchy: clustering of %u surfels stopped early", n);

@@ -354,6 +354,67 @@ static void test_plane_structure_and_compactness(void **state) {
     glow__surfels_free(&s);
 }
 
+/* Mean radius (in grid spacings) of the clusters of at most 16 leaves of a side x side plane whose
+ * surfels' areas vary by 3x (0.5-1.5 of the nominal, as the adapted density makes them); *loose: how
+ * many are wider than 4 spacings, of *small. */
+static double varied_plane_radius(uint32_t side, uint32_t *loose, uint32_t *small) {
+    const uint32_t n = side * side;
+    rng_state = 31u;
+    glow__surfels s = make_plane_grid(side, 0.6);
+    for (uint32_t i = 0; i < n; ++i) s.s[i].area = (float)(s.area * (0.5 + rnd()));
+    float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 0};
+    glow__hierarchy h;
+    assert_int_equal(glow__hierarchy_build(&s, lo, hi, NULL, NULL, &h), GLOW_OK);
+    const double spacing = 1.0 / side;
+    double sum_radius = 0.0;
+    *small = *loose = 0;
+    uint32_t *stack = malloc((size_t)h.node_count * sizeof *stack), *leaves = malloc((size_t)h.node_count * sizeof *leaves);
+    assert_non_null(stack);
+    assert_non_null(leaves);
+    for (uint32_t i = 0; i < h.node_count; ++i) /* internal nodes follow their children (sorted by level) */
+        leaves[i] = i < n ? 1u : leaves[h.nodes[i].child[0]] + leaves[h.nodes[i].child[1]];
+    for (uint32_t i = n; i < h.node_count; ++i) {
+        if (leaves[i] > 16u) continue;
+        double radius = 0.0;
+        uint32_t sp = 0;
+        stack[sp++] = i;
+        while (sp > 0) {
+            uint32_t x = stack[--sp];
+            if (x < n) {
+                double dx = (double)s.s[x].pos[0] - h.nodes[i].pos[0], dy = (double)s.s[x].pos[1] - h.nodes[i].pos[1];
+                double d = sqrt(dx * dx + dy * dy) / spacing;
+                if (d > radius) radius = d;
+                continue;
+            }
+            stack[sp++] = h.nodes[x].child[0];
+            stack[sp++] = h.nodes[x].child[1];
+        }
+        ++*small;
+        sum_radius += radius;
+        *loose += radius > 4.0;
+    }
+    free(stack);
+    free(leaves);
+    glow__hierarchy_free(&h);
+    glow__surfels_free(&s);
+    print_message("%u surfels, areas 0.5-1.5x: clusters of <= 16 surfels have a mean radius of %.2f spacings, %u of %u "
+                  "wider than 4\n", n, sum_radius / *small, *loose, *small);
+    return sum_radius / *small;
+}
+
+/* Above the moderate preset's 32,768 surfels the balance term's weight falls as 1/n (hierarchy.c,
+ * hac_balance), so that in spacings the small clusters of a denser bake are as compact as at 32,768:
+ * the same plane at 32,761 and at 65,536 surfels. With the published weight at both counts the
+ * denser plane's clusters come out looser (the balance term weighs twice the spacings there). */
+static void test_dense_plane_as_compact(void **state) {
+    (void)state;
+    uint32_t loose_m, small_m, loose_d, small_d;
+    const double moderate = varied_plane_radius(181, &loose_m, &small_m);
+    const double dense = varied_plane_radius(256, &loose_d, &small_d);
+    assert_true(dense < 1.05 * moderate);
+    assert_true((double)loose_d / small_d < 1.05 * (double)loose_m / small_m);
+}
+
 /* Two parallel planes 1 mm apart with opposite normals (both sides of a thin wall), without the
  * visibility penalty: the normal term alone keeps the sides apart while the clusters are narrower
  * than E·sqrt(2 Cn) = 0.14 of the unit square (Cn = 0.01); clusters of 1/64 of a side are 0.125
@@ -753,6 +814,7 @@ int main(void) {
         cmocka_unit_test(test_invalid_input),
         cmocka_unit_test(test_coincident_surfels),
         cmocka_unit_test(test_plane_structure_and_compactness),
+        cmocka_unit_test(test_dense_plane_as_compact),
         cmocka_unit_test(test_thin_wall_keeps_sides_apart),
         cmocka_unit_test(test_close_to_exact_greedy),
         cmocka_unit_test(test_matches_locally_ordered_reference),
