@@ -296,6 +296,27 @@ static void test_coincident_surfels(void **state) {
     glow__surfels_free(&s);
 }
 
+/* The largest distance in the plane (x, y), in units of `spacing`, from node i's centre to its leaves;
+ * stack: scratch of node_count entries. */
+static double cluster_radius(const glow__hierarchy *h, const glow__surfels *s, uint32_t i, double spacing, uint32_t *stack) {
+    const uint32_t n = s->count;
+    double radius = 0.0;
+    uint32_t sp = 0;
+    stack[sp++] = i;
+    while (sp > 0) {
+        const uint32_t x = stack[--sp];
+        if (x < n) {
+            const double dx = (double)s->s[x].pos[0] - h->nodes[i].pos[0], dy = (double)s->s[x].pos[1] - h->nodes[i].pos[1];
+            const double d = sqrt(dx * dx + dy * dy) / spacing;
+            if (d > radius) radius = d;
+            continue;
+        }
+        stack[sp++] = h->nodes[x].child[0];
+        stack[sp++] = h->nodes[x].child[1];
+    }
+    return radius;
+}
+
 static void test_plane_structure_and_compactness(void **state) {
     (void)state;
     const uint32_t side = 64, n = side * side;
@@ -319,20 +340,7 @@ static void test_plane_structure_and_compactness(void **state) {
     assert_non_null(stack);
     for (uint32_t i = n; i < h.node_count; ++i) {
         if (h.nodes[i].area > 16.5f * s.area) continue;
-        double radius = 0.0;
-        uint32_t sp = 0;
-        stack[sp++] = i;
-        while (sp > 0) {
-            uint32_t x = stack[--sp];
-            if (x < n) {
-                double dx = (double)s.s[x].pos[0] - h.nodes[i].pos[0], dy = (double)s.s[x].pos[1] - h.nodes[i].pos[1];
-                double d = sqrt(dx * dx + dy * dy) / spacing;
-                if (d > radius) radius = d;
-                continue;
-            }
-            stack[sp++] = h.nodes[x].child[0];
-            stack[sp++] = h.nodes[x].child[1];
-        }
+        const double radius = cluster_radius(&h, &s, i, spacing, stack);
         ++small;
         sum_radius += radius;
         loose += radius > 4.0;
@@ -375,20 +383,7 @@ static double varied_plane_radius(uint32_t side, uint32_t *loose, uint32_t *smal
         leaves[i] = i < n ? 1u : leaves[h.nodes[i].child[0]] + leaves[h.nodes[i].child[1]];
     for (uint32_t i = n; i < h.node_count; ++i) {
         if (leaves[i] > 16u) continue;
-        double radius = 0.0;
-        uint32_t sp = 0;
-        stack[sp++] = i;
-        while (sp > 0) {
-            uint32_t x = stack[--sp];
-            if (x < n) {
-                double dx = (double)s.s[x].pos[0] - h.nodes[i].pos[0], dy = (double)s.s[x].pos[1] - h.nodes[i].pos[1];
-                double d = sqrt(dx * dx + dy * dy) / spacing;
-                if (d > radius) radius = d;
-                continue;
-            }
-            stack[sp++] = h.nodes[x].child[0];
-            stack[sp++] = h.nodes[x].child[1];
-        }
+        const double radius = cluster_radius(&h, &s, i, spacing, stack);
         ++*small;
         sum_radius += radius;
         *loose += radius > 4.0;
