@@ -893,6 +893,21 @@ LEAF_BATCH_ATTR static void leaf_batch(const float *soa, uint32_t count, uint32_
  * squared distance); otherwise its two children in turn. Leaves that add nothing (facing away, below
  * the horizon) end a run, so they take no share of the part's solid angle: a wall's far face in
  * the same cluster as its near face is not linked (test_stability_leak). */
+/* Where a neighbour's node lies against the box in which a system's rays see every occluder
+ * (glow__link_settings trace_lo/hi; bounded by its centre and radius): wholly beyond it, wholly inside
+ * or across its border. A system's own nodes are always inside. */
+enum { TRACE_OUT, TRACE_IN, TRACE_ACROSS };
+static int trace_box(const link_job *job, const trav_node *tn) {
+    const glow__link_settings *set = job->settings;
+    if (!set->own_leaves || tn->first < set->own_leaves) return TRACE_IN;
+    bool out = false, in = true;
+    for (int k = 0; k < 3; ++k) {
+        out = out || tn->pos[k] + tn->radius < set->trace_lo[k] || tn->pos[k] - tn->radius > set->trace_hi[k];
+        in = in && tn->pos[k] - tn->radius >= set->trace_lo[k] && tn->pos[k] + tn->radius <= set->trace_hi[k];
+    }
+    return out ? TRACE_OUT : in ? TRACE_IN : TRACE_ACROSS;
+}
+
 typedef struct mix_run {
     uint32_t a, b; /* the open stretch [a, b), none while a == b */
     float w, d[3];
@@ -923,7 +938,7 @@ static void mix_add(mix_run *m, cl_runs *r, uint32_t *R, uint32_t a, uint32_t b,
     m->d[2] += w * dz;
 }
 static void mixed_part(const link_job *job, const glow__cache *cache, uint32_t t, float mid, uint32_t *pick,
-                       cl_runs *r, uint32_t *R) {
+                       cl_runs *r, uint32_t *R, bool boxed) {
     const trav_node *T = job->trav;
     const glow__surfels *S = job->surfels;
     const bool hemi = cache->kind == GLOW_CACHE_KIND_LIGHTMAP;
@@ -934,11 +949,21 @@ static void mixed_part(const link_job *job, const glow__cache *cache, uint32_t t
     for (uint32_t u = t, nx; u < stop; u = nx) {
         const trav_node *tu = &T[u];
         nx = tu->skip;
+        const int where = boxed ? trace_box(job, tu) : TRACE_IN;
+        if (where == TRACE_OUT) continue; /* beyond the traced box: hidden, as its leaves */
         if (tu->end - tu->first <= CLUSTER_SUM_LEAVES) {
             float lw[CLUSTER_SUM_LEAVES], lx[CLUSTER_SUM_LEAVES], ly[CLUSTER_SUM_LEAVES], lz[CLUSTER_SUM_LEAVES];
             const uint32_t n = tu->end - tu->first;
             leaf_batch(job->leaf_soa, S->count, tu->first, n, cache->pos, cache->nrm, hemi, eps,
                        job->near_radius * job->near_radius, lw, lx, ly, lz);
+            if (where == TRACE_ACROSS) { /* leaf_solid_angle's test, leaf by leaf */
+                const glow__link_settings *set = job->settings;
+                const float *px = job->leaf_soa + tu->first, *py = px + S->count, *pz = py + S->count;
+                for (uint32_t j = 0; j < n; ++j)
+                    if (!(px[j] >= set->trace_lo[0] && px[j] <= set->trace_hi[0] && py[j] >= set->trace_lo[1] &&
+                          py[j] <= set->trace_hi[1] && pz[j] >= set->trace_lo[2] && pz[j] <= set->trace_hi[2]))
+                        lw[j] = 0.0f;
+            }
             for (uint32_t j = 0; j < n; ++j) { /* in leaf order */
                 const float wi = lw[j];
                 if (!(wi > 0.0f)) continue;
@@ -962,7 +987,7 @@ static void mixed_part(const link_job *job, const glow__cache *cache, uint32_t t
             /* up_i <= up + cos a lift + sin a rad for every leaf, a the angle between the normals */
             if (ca > 0.0f && ca * cc - sa * sc >= 0.9f && up + ca * job->lift[u] + sa * rad <= -0.75f * eps) continue;
         }
-        if (view == NODE_WHOLE) { /* wholly facing: the aggregate */
+        if (view == NODE_WHOLE && where == TRACE_IN) { /* wholly facing: the aggregate */
             const float wu = S->area * -glow__dot(tu->nsum, dv) / (dist * dist * dist);
             if (!(wu > 0.0f)) continue;
             mix_add(&m, r, R, tu->first, tu->end, wu, dv[0] / dist, dv[1] / dist, dv[2] / dist);
@@ -1009,16 +1034,12 @@ static uint32_t clustered_runs(link_job *job, const glow__cache *cache, uint32_t
             R++;
             continue;
         }
-        bool traceable = true; /* wholly where the system's rays see every occluder */
-        if (job->settings->own_leaves && tn->first >= job->settings->own_leaves) {
-            const glow__link_settings *set = job->settings;
-            bool out = false;
-            for (int k = 0; k < 3; ++k) {
-                out = out || tn->pos[k] + tn->radius < set->trace_lo[k] || tn->pos[k] - tn->radius > set->trace_hi[k];
-                traceable = traceable && tn->pos[k] - tn->radius >= set->trace_lo[k] && tn->pos[k] + tn->radius <= set->trace_hi[k];
-            }
-            if (out) continue; /* a neighbour's subtree wholly beyond them: hidden, as its leaves */
-        }
+        /* where the system's rays see every occluder: a neighbour's subtree wholly beyond them is hidden,
+         * as its leaves; one across their border is read as a mixed cluster whose leaves beyond add
+         * nothing (before 2026-11-30 it was opened down to single leaves: 500-900 of a level system's
+         * rays a cache went to its neighbours' leaves along the border) */
+        const int where = trace_box(job, tn);
+        if (where == TRACE_OUT) continue;
         float dv[3];
         glow__sub(tn->pos, cache->pos, dv);
         const float dist = sqrtf(glow__dot(dv, dv)), rad = tn->radius;
@@ -1029,8 +1050,8 @@ static uint32_t clustered_runs(link_job *job, const glow__cache *cache, uint32_t
             const uint32_t m = tn->end - tn->first;
             /* every normal faces the cache and all of it is above the horizon: the aggregate; else
              * each part's stretches of leaves that add (mixed_part) */
-            const bool whole = view == NODE_WHOLE;
-            if (traceable && m >= 2u * K && rad <= tau * dist && !(tn->id & TRAV_EMISSIVE)) {
+            const bool whole = view == NODE_WHOLE && where == TRACE_IN;
+            if (m >= 2u * K && rad <= tau * dist && !(tn->id & TRAV_EMISSIVE)) {
                 /* the runs: K subtrees of v (split the one with the most leaves until there are K),
                  * in leaf order */
                 const trav_node *T = job->trav;
@@ -1069,7 +1090,7 @@ static uint32_t clustered_runs(link_job *job, const glow__cache *cache, uint32_t
                         memcpy(&r->d[3 * R], dsum, sizeof dsum);
                         R++;
                     } else { /* its stretches of leaves that add to the solid angle, one run each */
-                        mixed_part(job, cache, sub[k], 0.5f * (float)(sa + sb - 1), &pick, r, &R);
+                        mixed_part(job, cache, sub[k], 0.5f * (float)(sa + sb - 1), &pick, r, &R, where == TRACE_ACROSS);
                         if (R == R0) continue;
                     }
                     const glow__surfel *mid = &S->s[pick];
