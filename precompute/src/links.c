@@ -883,16 +883,6 @@ LEAF_BATCH_ATTR static void leaf_batch(const float *soa, uint32_t count, uint32_
     }
 }
 
-/* A mixed cluster's part (not every normal faces the cache, or it straddles the horizon): the
- * stretches of its leaves (preorder subtree t) that add to the solid angle, each appended to r as a
- * run with its solid angle and direction, and the leaf the part's one ray goes to (pick: the one that
- * adds nearest the middle of the part's leaf range, mid). A subtree of at most CLUSTER_SUM_LEAVES
- * leaves sums its leaves' own solid angles; a larger one is read as the descent reads clusters:
- * wholly below the horizon, in the plane of the cache's own surface or facing away, nothing; wholly
- * facing and above the horizon, its aggregate (area x cosine of its normal sum over its centre's
- * squared distance); otherwise its two children in turn. Leaves that add nothing (facing away, below
- * the horizon) end a run, so they take no share of the part's solid angle: a wall's far face in
- * the same cluster as its near face is not linked (test_stability_leak). */
 /* Where a neighbour's node lies against the box in which a system's rays see every occluder
  * (glow__link_settings trace_lo/hi; bounded by its centre and radius): wholly beyond it, wholly inside
  * or across its border. A system's own nodes are always inside. */
@@ -908,6 +898,18 @@ static int trace_box(const link_job *job, const trav_node *tn) {
     return out ? TRACE_OUT : in ? TRACE_IN : TRACE_ACROSS;
 }
 
+/* A mixed cluster's part (not every normal faces the cache, or it straddles the horizon): the
+ * stretches of its leaves (preorder subtree t) that add to the solid angle, each appended to r as a
+ * run with its solid angle and direction, and the leaf the part's one ray goes to (pick: the one that
+ * adds nearest the middle of the part's leaf range, mid). A subtree of at most CLUSTER_SUM_LEAVES
+ * leaves sums its leaves' own solid angles; a larger one is read as the descent reads clusters:
+ * wholly below the horizon, in the plane of the cache's own surface or facing away, nothing; wholly
+ * facing and above the horizon, its aggregate (area x cosine of its normal sum over its centre's
+ * squared distance); otherwise its two children in turn. Leaves that add nothing (facing away, below
+ * the horizon) end a run, so they take no share of the part's solid angle: a wall's far face in
+ * the same cluster as its near face is not linked (test_stability_leak). boxed (a neighbour's
+ * cluster across the traced box, trace_box): leaves beyond the box add nothing either, and only a
+ * subtree wholly inside it gives its aggregate. */
 typedef struct mix_run {
     uint32_t a, b; /* the open stretch [a, b), none while a == b */
     float w, d[3];
