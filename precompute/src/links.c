@@ -743,6 +743,13 @@ static uint16_t link_lsub(const link_job *job, cl_runs *r, bool hemi, float *ome
     return link_subsets_of(job, r, hemi, omega, dirsum, kappa, v);
 }
 
+/* Is the point inside the box in which a system's rays see every occluder (trace_lo/hi, inclusive;
+ * false for NaN)? */
+static inline bool in_trace_box(const glow__link_settings *set, float x, float y, float z) {
+    return x >= set->trace_lo[0] && x <= set->trace_hi[0] && y >= set->trace_lo[1] && y <= set->trace_hi[1] &&
+           z >= set->trace_lo[2] && z <= set->trace_hi[2];
+}
+
 /* A leaf's solid angle seen from the cache before visibility (0: back-facing, below a lightmap
  * cache's horizon, in the near field or degenerate), with its unit direction and distance. */
 static float leaf_solid_angle(const link_job *job, const glow__cache *cache, const glow__surfel *s, float dir[3],
@@ -750,9 +757,9 @@ static float leaf_solid_angle(const link_job *job, const glow__cache *cache, con
     const bool hemi = cache->kind == GLOW_CACHE_KIND_LIGHTMAP;
     const float eps = job->ray_eps;
     const glow__link_settings *set = job->settings;
-    if (set->own_leaves && (uint32_t)(s - job->surfels->s) >= set->own_leaves)
-        for (int k = 0; k < 3; ++k) /* a neighbour's leaf beyond the occluders this system traces */
-            if (!(s->pos[k] >= set->trace_lo[k] && s->pos[k] <= set->trace_hi[k])) return 0.0f;
+    if (set->own_leaves && (uint32_t)(s - job->surfels->s) >= set->own_leaves &&
+        !in_trace_box(set, s->pos[0], s->pos[1], s->pos[2]))
+        return 0.0f; /* a neighbour's leaf beyond the occluders this system traces */
     float d[3];
     glow__sub(s->pos, cache->pos, d);
     float d2 = glow__dot(d, d);
@@ -962,9 +969,7 @@ static void mixed_part(const link_job *job, const glow__cache *cache, uint32_t t
                 const glow__link_settings *set = job->settings;
                 const float *px = job->leaf_soa + tu->first, *py = px + S->count, *pz = py + S->count;
                 for (uint32_t j = 0; j < n; ++j)
-                    if (!(px[j] >= set->trace_lo[0] && px[j] <= set->trace_hi[0] && py[j] >= set->trace_lo[1] &&
-                          py[j] <= set->trace_hi[1] && pz[j] >= set->trace_lo[2] && pz[j] <= set->trace_hi[2]))
-                        lw[j] = 0.0f;
+                    if (!in_trace_box(set, px[j], py[j], pz[j])) lw[j] = 0.0f;
             }
             for (uint32_t j = 0; j < n; ++j) { /* in leaf order */
                 const float wi = lw[j];
