@@ -119,6 +119,10 @@ void glow__bake_release(const glow_bake *bake);
 const glow_bake *glow__system_bake(const glow_system *system);
 const char *glow__system_label(const glow_system *system);
 uint32_t glow__system_cache_count(const glow_system *system);
+uint32_t glow__system_surfel_count(const glow_system *system);
+/* The part of the system's last update that a time budget cannot cut: all but the cache gathers and
+ * the hook's batches beyond its fewest (system.c, order_batches). */
+double glow__system_uncut_ms(const glow_system *system);
 /* The context the bake was loaded with. */
 glow_context *glow__bake_context(const glow_bake *bake);
 

@@ -43,7 +43,7 @@
 #define MAX_ITERATIONS 64u
 #define ALBEDO_MAX 0.999f
 
-enum { ST_OK = 0, ST_HOOK_FAILED = 1, ST_NONFINITE = 2 };
+enum { ST_OK = 0, ST_HOOK_FAILED = 1, ST_NONFINITE = 2, ST_SKIPPED = 3 /* a time budget's deadline */ };
 
 struct glow_system {
     atomic_int updating; /* 1 while glow_system_update runs: misuse is refused, not raced (issue 15 D4, D5) */
@@ -145,9 +145,22 @@ struct glow_system {
                               skip the output stage when it and the caches are unchanged) */
     bool out_written;
     double drift;          /* Σ over updates of the node luma's relative L1 change */
-    double ema_other_ms, ema_cache_ms_per_group; /* recent stage times, for budget_ms (0 = none yet) */
+    double ema_other_ms, ema_cache_ms_per_group; /* recent stage times, for budget_ms (0 = none yet): the
+                              stages a budget cannot cut (all but the hook and the cache gathers), and a group */
     double first_other_ms; /* the first budgeted update's other stages (first touches included): the estimate
                               until ema_other_ms has a sample */
+    /* a time budget also cuts the host's hook (order_batches): batches of surfels lit by priority, as groups */
+    uint32_t *bat_age;     /* [nbatches] updates since the batch was last lit */
+    float *bat_centre;     /* [nbatches][3] mean surfel position */
+    uint64_t *bat_pack;    /* scratch, as grp_pack */
+    uint32_t *bat_sel;     /* [nbatches] the batches in the order this update's hook claims them */
+    uint32_t bat_count;    /* how many it lit (nbatches: all) */
+    float *bat_ms;         /* [nbatches] the hook's time for the batch when last lit, ms (< 0: never) */
+    atomic_uint bat_next;  /* the next of bat_sel to claim */
+    uint32_t bat_min;      /* the first bat_min claimed are lit whatever the deadline */
+    double bat_deadline;   /* now_ms() by which a batch must end to start (0: none) */
+    float bat_mean_ms;     /* a batch never lit counts this (the mean of those lit) */
+    double hook_ms;        /* this update's hook time (0: not called) */
     float scene_diag;
     /* a system of a world (XREF): proxy node p (index N + p) reads node proxies[p].node of the system
      * attached as dependency proxies[p].dependency (glow_system_set_neighbour); rad holds N + P nodes */
@@ -172,6 +185,7 @@ static uint32_t div_up(uint32_t a, uint32_t b) { return (a + b - 1u) / b; }
 /* surfel lighting: one hook call per batch, into the spare buffer, checked */
 static void task_hook(void *data, uint32_t b, uint32_t worker) {
     glow_system *s = data;
+    const double t0 = now_ms();
     uint32_t first = b * s->batch, count = s->S - first < s->batch ? s->S - first : s->batch;
     glow_surfel_batch batch = {.first = first,
                                .count = count,
@@ -199,6 +213,24 @@ static void task_hook(void *data, uint32_t b, uint32_t worker) {
     }
     s->batch_status[b] = st;
     s->batch_negative[b] = neg;
+    s->bat_ms[b] = (float)(now_ms() - t0); /* for a time budget's choice of batches (order_batches) */
+}
+
+/* The hook under a time budget: each call claims the next batch in priority order (whatever index the
+ * task pool gives it: the pool splits indices into one range a worker) and lights it, unless the
+ * deadline would pass before a batch of its last time ends (order_batches). */
+static void task_hook_sel(void *data, uint32_t i, uint32_t worker) {
+    (void)i;
+    glow_system *s = data;
+    const uint32_t r = atomic_fetch_add_explicit(&s->bat_next, 1u, memory_order_relaxed), b = s->bat_sel[r];
+    if (r >= s->bat_min && s->bat_deadline > 0.0) {
+        const double t = s->bat_ms[b] >= 0.0f ? (double)s->bat_ms[b] : (double)s->bat_mean_ms;
+        if (now_ms() + t > s->bat_deadline) {
+            s->batch_status[b] = ST_SKIPPED;
+            return;
+        }
+    }
+    task_hook(data, b, worker);
 }
 
 /* surfel flux for surfels [k*SURFEL_CHUNK, ...): leaves of the node arrays.
@@ -632,7 +664,7 @@ static void free_system(glow_system *s) {
                     s->xblocks, s->slots, s->sub_ratio, s->grad_uz, s->sub_nodes, s->mom, s->grad_cm, s->grp_age, s->grp_delta,
                     s->grp_drift_at, s->grp_centre,
                     s->grp_pack, s->grp_sel, s->grp_skip, s->rad_prev, s->uv0, s->det_out, s->rad_out, s->dep_max_node,
-                    s->sky_grid, s->sky_backup};
+                    s->sky_grid, s->sky_backup, s->bat_age, s->bat_centre, s->bat_pack, s->bat_sel, s->bat_ms};
     for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; ++i) glow__ctx_free(ctx, bufs[i]);
     glow__ctx_free(ctx, s);
 }
@@ -778,6 +810,7 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
         s->deps = xh ? xh->dependency_count : 0u;
     }
     atomic_init(&s->attached, 0);
+    atomic_init(&s->bat_next, 0);
     s->batch = batch;
     s->nbatches = div_up(s->S, batch);
     s->luma = luma;
@@ -832,6 +865,12 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     s->mat_albedo_scale = alloc_array(s, s->M ? s->M : 1u, 3 * sizeof(float), &ok);
     s->batch_status = alloc_array(s, s->nbatches, 1, &ok);
     s->batch_negative = alloc_array(s, s->nbatches, sizeof(uint32_t), &ok);
+    const size_t NB = s->nbatches ? s->nbatches : 1u;
+    s->bat_age = alloc_array(s, NB, sizeof(uint32_t), &ok);
+    s->bat_centre = alloc_array(s, NB, 3 * sizeof(float), &ok);
+    s->bat_pack = alloc_array(s, NB, sizeof(uint64_t), &ok);
+    s->bat_sel = alloc_array(s, NB, sizeof(uint32_t), &ok);
+    s->bat_ms = alloc_array(s, NB, sizeof(float), &ok);
     size_t used = 0;
     for (size_t i = 0; i < s->grid_cells; ++i) used += gmap[i] != GLOW_MAP_EMPTY;
     for (size_t i = 0; i < s->lm_texels; ++i) used += lmap[i] != GLOW_MAP_EMPTY;
@@ -982,6 +1021,17 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
             s->grp_delta[g] = INFINITY;
             s->grp_drift_at[g] = 0.0;
         }
+        for (uint32_t b = 0; b < s->nbatches; ++b) { /* the hook's batches, for a time budget */
+            const uint32_t first = b * s->batch, end = first + s->batch < s->S ? first + s->batch : s->S;
+            double c[3] = {0, 0, 0};
+            for (uint32_t i = first; i < end; ++i)
+                for (int k = 0; k < 3; ++k) c[k] += s->pos4[4 * (size_t)i + (size_t)k];
+            for (int k = 0; k < 3; ++k) s->bat_centre[3 * (size_t)b + (size_t)k] = (float)(c[k] / (double)(end - first));
+            s->bat_age[b] = 0;
+            s->bat_sel[b] = b;
+            s->bat_ms[b] = -1.0f;
+        }
+        s->bat_count = s->nbatches;
         memset(s->rad_prev, 0, (N + s->P ? N + s->P : 1u) * sizeof(float));
         double d2 = 0.0;
         for (int k = 0; k < 3; ++k) d2 += (double)(m->bounds_max[k] - m->bounds_min[k]) * (m->bounds_max[k] - m->bounds_min[k]);
@@ -1088,6 +1138,7 @@ void glow_system_destroy(glow_system *s) {
 const glow_bake *glow__system_bake(const glow_system *s) { return s->bake; }
 const char *glow__system_label(const glow_system *s) { return s->label; }
 uint32_t glow__system_cache_count(const glow_system *s) { return s->C; }
+uint32_t glow__system_surfel_count(const glow_system *s) { return s->S; }
 
 /* ------------------------------------------------------------------------------ neighbours */
 /* The proxies' radiance from the attached neighbours' nodes, as their last updates left it; a proxy
@@ -1418,10 +1469,10 @@ void glow_sky_grid_rows(const float *visibility, uint32_t grid_caches, const flo
     }
 }
 
-uint32_t glow_budget_choose(const float *centre, uint32_t *age, const uint8_t *skip, uint32_t groups, const float *focus,
-                            uint32_t focus_count, float focus_radius, uint32_t max_groups, uint64_t *scratch,
-                            uint32_t *out_sel) {
-    if (!centre || !age || !scratch || !out_sel || (focus_count && !focus)) return 0;
+/* The candidates of a budget (groups of caches, or the hook's batches) by priority, into `out` as
+ * (~priority bits) << 32 | index: ascending = first. Returns how many (those not skipped). */
+static uint32_t budget_keys(const float *centre, const uint32_t *age, const uint8_t *skip, uint32_t groups,
+                            const float *focus, uint32_t focus_count, float focus_radius, uint64_t *out) {
     const float inv_r2 = focus_radius > 0.0f ? 1.0f / (focus_radius * focus_radius) : 0.0f;
     uint32_t n = 0;
     for (uint32_t g = 0; g < groups; ++g) {
@@ -1436,8 +1487,16 @@ uint32_t glow_budget_choose(const float *centre, uint32_t *age, const uint8_t *s
         const float key = ((float)age[g] + 1.0f) * (1.0f + 4.0f * f); /* >= 1: its bits order as it does */
         uint32_t bits;
         memcpy(&bits, &key, sizeof bits);
-        scratch[n++] = ((uint64_t)(0xFFFFFFFFu - bits) << 32) | g; /* highest priority, then lowest index, first */
+        out[n++] = ((uint64_t)(0xFFFFFFFFu - bits) << 32) | g; /* highest priority, then lowest index, first */
     }
+    return n;
+}
+
+uint32_t glow_budget_choose(const float *centre, uint32_t *age, const uint8_t *skip, uint32_t groups, const float *focus,
+                            uint32_t focus_count, float focus_radius, uint32_t max_groups, uint64_t *scratch,
+                            uint32_t *out_sel) {
+    if (!centre || !age || !scratch || !out_sel || (focus_count && !focus)) return 0;
+    const uint32_t n = budget_keys(centre, age, skip, groups, focus, focus_count, focus_radius, scratch);
     const uint32_t k = max_groups < n ? max_groups : n;
     if (k < n) qsort(scratch, n, sizeof *scratch, cmp_u64);
     for (uint32_t i = 0; i < k; ++i) out_sel[i] = (uint32_t)(scratch[i] & 0xFFFFFFFFu);
@@ -1484,7 +1543,8 @@ static void schedule(glow_system *s, const glow_update_desc *d, glow_update_stat
          * Sponza level, 5,500 caches: 1.1-1.8 ms of gathers). */
         if (teach_groups(s) < k) k = teach_groups(s);
     } else if (d->budget_ms > 0.0f) {
-        const double left = (double)d->budget_ms - (s->ema_other_ms > 0.0 ? s->ema_other_ms : s->first_other_ms);
+        const double left = (double)d->budget_ms - (s->ema_other_ms > 0.0 ? s->ema_other_ms : s->first_other_ms) -
+                            s->hook_ms; /* the hook has run: its time this update */
         const double per = s->ema_cache_ms_per_group * (double)s->params.bounce_iterations;
         double kt = left > 0.0 ? floor(left / per) : 0.0;
         if (kt < 1.0) kt = 1.0; /* always some progress */
@@ -1508,6 +1568,65 @@ static void schedule(glow_system *s, const glow_update_desc *d, glow_update_stat
     st->caches_gathered = gathered;
     st->caches_skipped_converged = conv_caches;
     st->caches_skipped_budget = s->C - gathered - conv_caches;
+}
+
+/* The host's hook under a time budget (budget_ms): fewer batches than one a worker would leave workers
+ * idle, so at least that many (or all). */
+static uint32_t hook_min_batches(const glow_system *s) {
+    const uint32_t w = glow__ctx_workers(s->ctx);
+    return w < s->nbatches ? (w ? w : 1u) : s->nbatches;
+}
+
+/* The order in which this update's hook claims its batches (s->bat_sel) and its deadline. Without a
+ * time budget, all, in index order, no deadline. With one, by priority (the stalest and those nearest
+ * the focus first, as the groups of caches: budget_keys), and a batch starts only if it would end,
+ * at the time it took when last lit, within half of what the budget leaves after the stages it
+ * cannot cut (surfel flux, pull, outputs: the last updates' times), counted from the hook's start;
+ * the first hook_min_batches always start. So the hook lights every surfel when that fits, and
+ * otherwise the batches of highest priority that fit; the others keep their last direct light, and
+ * the gathers get the rest. A deadline, not a count from estimated times: the host's cost varies by
+ * batch (lit surfels trace rays, unlit ones do not: 0.016 to 0.25 ms a batch of 1,024 on the 4x4
+ * Sponza level) and by update (a batch's time doubles when another system's loading has evicted the
+ * host's scene from the caches), and choosing by the last times chose 17 batches for 0.6 ms that
+ * took 2.1 ms. Before 2026-11-30 the hook always lit every surfel, and its time alone could exceed the
+ * budget: the exact host, with 8 footprint points a surfel, took 1.5-2.2 ms of a half-tile system of
+ * that level under a 2 ms budget. */
+static void order_batches(glow_system *s, const glow_update_desc *d) {
+    const uint32_t B = s->nbatches, kmin = hook_min_batches(s);
+    atomic_store_explicit(&s->bat_next, 0u, memory_order_relaxed);
+    s->bat_deadline = 0.0;
+    s->bat_min = B;
+    if (!(d->budget_ms > 0.0f) || B <= kmin) {
+        for (uint32_t b = 0; b < B; ++b) s->bat_sel[b] = b;
+        return;
+    }
+    double sum = 0.0;
+    uint32_t seen = 0;
+    for (uint32_t b = 0; b < B; ++b)
+        if (s->bat_ms[b] >= 0.0f) {
+            sum += s->bat_ms[b];
+            ++seen;
+        }
+    s->bat_mean_ms = seen ? (float)(sum / seen) : 0.0f;
+    const float r = d->focus_radius > 0.0f ? d->focus_radius : 0.1f * s->scene_diag;
+    const uint32_t n = budget_keys(s->bat_centre, s->bat_age, NULL, B, d->focus, d->focus_count, r, s->bat_pack);
+    qsort(s->bat_pack, n, sizeof *s->bat_pack, cmp_u64);
+    for (uint32_t i = 0; i < n; ++i) s->bat_sel[i] = (uint32_t)(s->bat_pack[i] & 0xFFFFFFFFu);
+    /* the other stages' time: until an update has measured it (a system just streamed in), half the
+     * budget, a guess (the 4x4 level's half-tile systems: 0.9-1.2 ms of a 2 ms budget in their first) */
+    double other = s->ema_other_ms > 0.0 ? s->ema_other_ms : s->first_other_ms;
+    if (!(other > 0.0)) other = 0.5 * (double)d->budget_ms;
+    const double half = 0.5 * ((double)d->budget_ms - other);
+    s->bat_min = kmin;
+    s->bat_deadline = now_ms() + (half > 0.0 ? half : 0.0);
+}
+
+double glow__system_uncut_ms(const glow_system *s) {
+    const glow_update_stats *st = &s->stats;
+    double ms = st->total_ms - st->cache_lighting_ms;
+    if (s->bat_count > 0) /* the hook's cut: all but its fewest batches */
+        ms -= s->hook_ms * (1.0 - fmin(1.0, (double)hook_min_batches(s) / (double)s->bat_count));
+    return ms;
 }
 
 static glow_result system_update(glow_system *s, const glow_update_desc *desc) {
@@ -1540,11 +1659,20 @@ static glow_result system_update(glow_system *s, const glow_update_desc *desc) {
     st.links = 0;
     const double t_begin = now_ms();
 
-    /* 1. direct light from the host, into the spare buffer, checked before it is used */
+    /* 1. direct light from the host, into the spare buffer, checked before it is used; under a time
+     * budget maybe only some batches (order_batches), the others keeping their last light */
+    double hook_ms = 0.0;
+    s->bat_count = 0;
     if (s->hooks.light_surfels && !(flags & GLOW_UPDATE_FLAG_KEEP_LIGHTING)) {
-        glow__ctx_run(s->ctx, task_hook, s, s->nbatches);
-        uint32_t neg = 0;
-        for (uint32_t b = 0; b < s->nbatches; ++b) {
+        const uint32_t B = s->nbatches;
+        const double th = now_ms();
+        order_batches(s, d);
+        glow__ctx_run(s->ctx, task_hook_sel, s, B);
+        uint32_t neg = 0, k = 0;
+        for (uint32_t i = 0; i < B; ++i) { /* the batches lit first, in claim order */
+            const uint32_t b = s->bat_sel[i];
+            if (s->batch_status[b] == ST_SKIPPED) continue;
+            s->bat_sel[k++] = b;
             if (s->batch_status[b] != ST_OK) {
                 uint32_t first = b * s->batch;
                 GLOW__LOG_ERROR(s->ctx, GLOW_ERROR_HOST_CALLBACK,
@@ -1562,11 +1690,24 @@ static glow_result system_update(glow_system *s, const glow_update_desc *desc) {
             GLOW__LOG_WARNING(s->ctx, GLOW_ERROR_HOST_CALLBACK,
                               "glow_system_update(%s): light_surfels returned %u negative value(s); clamped to 0",
                               s->label, neg);
-        float *t = s->direct;
-        s->direct = s->direct_spare;
-        s->direct_spare = t;
+        if (k == B) {
+            float *t = s->direct;
+            s->direct = s->direct_spare;
+            s->direct_spare = t;
+        } else { /* the batches lit; the others keep their last light */
+            for (uint32_t i = 0; i < k; ++i) {
+                const size_t first = (size_t)s->bat_sel[i] * s->batch;
+                const size_t count = s->S - first < s->batch ? s->S - first : s->batch;
+                memcpy(s->direct + 3 * first, s->direct_spare + 3 * first, 3 * count * sizeof(float));
+            }
+        }
         s->direct_revision++;
+        for (uint32_t b = 0; b < B; ++b) s->bat_age[b]++;
+        for (uint32_t i = 0; i < k; ++i) s->bat_age[s->bat_sel[i]] = 0;
+        s->bat_count = k;
+        hook_ms = now_ms() - th;
     }
+    s->hook_ms = hook_ms;
     if (s->sky_applied) { /* the grid caches' rows without the sky, bit for bit (set_sky) */
         memcpy(s->cache_sh, s->sky_backup, (size_t)s->meta->grid_cache_count * s->coeffs * sizeof(float));
         s->sky_applied = false;
@@ -1641,8 +1782,17 @@ static glow_result system_update(glow_system *s, const glow_update_desc *desc) {
     st.output_ms = t5 - t4;
     st.total_ms = t5 - t_begin;
     st.updates++;
+    st.surfels_skipped_budget = 0;
+    if (s->hooks.light_surfels && s->bat_count && s->bat_count < s->nbatches) {
+        uint32_t lit = 0;
+        for (uint32_t i = 0; i < s->bat_count; ++i) {
+            const uint32_t first = s->bat_sel[i] * s->batch;
+            lit += s->S - first < s->batch ? s->S - first : s->batch;
+        }
+        st.surfels_skipped_budget = s->S - lit;
+    }
     if (budgeted) { /* recent times, for the next budget_ms: the other stages, and cache lighting per group */
-        const double other = st.total_ms - st.cache_lighting_ms, per = s->sel_count ? st.cache_lighting_ms / s->sel_count : 0.0;
+        const double other = fmax(st.total_ms - st.cache_lighting_ms - hook_ms, 0.0), per = s->sel_count ? st.cache_lighting_ms / s->sel_count : 0.0;
         /* the system's first update pays first touches (the host's, the pages'): not a sample; later
          * outliers (a descheduled thread) count at most twice the average */
         if (st.updates > 1)

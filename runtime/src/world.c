@@ -20,8 +20,8 @@
 
 typedef struct member_state {
     uint32_t stale;  /* world updates since it was last updated */
-    double est_ms;   /* its last update's time outside the cache gathers (what a budget cannot cut:
-                        surfel lighting, pull, outputs); 0 = never updated */
+    double est_ms;   /* what a budget cannot cut of its last update (glow__system_uncut_ms: all but the
+                        cache gathers and the hook's batches beyond its fewest); 0 = never updated */
     float lo[3], hi[3]; /* its bake's bounds */
 } member_state;
 
@@ -225,6 +225,7 @@ static void add_stats(glow_update_stats *sum, const glow_update_stats *st) {
     sum->caches_skipped_budget += st->caches_skipped_budget;
     sum->caches_skipped_converged += st->caches_skipped_converged;
     sum->outputs_skipped += st->outputs_skipped;
+    sum->surfels_skipped_budget += st->surfels_skipped_budget;
     sum->link_mode = st->link_mode;
     sum->kernel = st->kernel;
 }
@@ -234,7 +235,7 @@ static void add_stats(glow_update_stats *sum, const glow_update_stats *st) {
  * (0 inside), r the focus radius (0: a tenth of the members' bounds diagonal), as the groups of caches
  * within a system (glow_update_desc); ties by order added. The first always updates, with the whole
  * budget as its own; each next one only when the part of its last update that a budget cannot cut
- * (all but the cache gathers) fits what is left, with what is left as its budget (its gathers take
+ * (all but the cache gathers and the hook's batches beyond its fewest) fits what is left, with what is left as its budget (its gathers take
  * the rest). A member never updated (just streamed in: no light yet) comes first, before any
  * priority, and is held to the same rule with its time estimated from the members that have one (the
  * mean of their times per cache, times its caches); while no member has a time (the world's first
@@ -302,6 +303,7 @@ glow_result glow_world_update(glow_world *w, const glow_update_desc *desc) {
             if (n > 0 && est > 0.0 && (left <= 0.0 || est > left)) { /* does not fit: keeps its outputs */
                 w->ms[i].stale++;
                 sum.caches_skipped_budget += glow__system_cache_count(w->sys[i]);
+                sum.surfels_skipped_budget += glow__system_surfel_count(w->sys[i]);
                 continue;
             }
             d.budget_ms = (float)fmax(left, 1e-3);
@@ -320,7 +322,7 @@ glow_result glow_world_update(glow_world *w, const glow_update_desc *desc) {
         glow_system_get_stats(w->sys[i], &st);
         add_stats(&sum, &st);
         w->ms[i].stale = 0;
-        w->ms[i].est_ms = fmax(st.total_ms - st.cache_lighting_ms, 1e-3);
+        w->ms[i].est_ms = fmax(glow__system_uncut_ms(w->sys[i]), 1e-3);
         left -= st.total_ms;
         w->updated++;
     }

@@ -17,6 +17,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 #include <zlib.h>
 
@@ -1847,6 +1848,108 @@ static void test_budget(void **state) {
     env_close(&e);
 }
 
+/* A hook that costs a fixed time a batch (busy-waiting 0.4 ms) and stamps each surfel with the update
+ * that lit it; its light is light_at x (1 + update / 64), so the direct light says which call wrote it. */
+typedef struct slow_ctl {
+    uint32_t update;     /* set by the test before each update */
+    uint32_t *stamp;     /* [S] the update that last lit the surfel (0: never) */
+    atomic_uint surfels; /* surfels lit in the current update */
+} slow_ctl;
+
+static float slow_scale(uint32_t update) { return 1.0f + (float)update / 64.0f; }
+
+static glow_result slow_hook(void *user, const glow_surfel_batch *b, float *out, uint32_t worker) {
+    (void)worker;
+    slow_ctl *h = user;
+    struct timespec t0, t;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    do clock_gettime(CLOCK_MONOTONIC, &t);
+    while ((double)(t.tv_sec - t0.tv_sec) * 1e3 + (double)(t.tv_nsec - t0.tv_nsec) * 1e-6 < 0.4);
+    for (uint32_t i = 0; i < b->count; ++i) {
+        light_at(b->positions + 4 * (size_t)i, b->normals + 4 * (size_t)i, slow_scale(h->update), out + 3 * (size_t)i);
+        h->stamp[b->first + i] = h->update;
+    }
+    atomic_fetch_add(&h->surfels, b->count);
+    return GLOW_OK;
+}
+
+/* A time budget cuts the host's hook (docs/runtime.md, "Budgets"): when lighting every surfel would
+ * take more than half of what the budget leaves, the hook lights the stalest batches first (at least
+ * one a worker) and the others keep their last direct light, byte for byte; the stats count the
+ * surfels left; without a time budget (or with one that fits) every surfel is lit. */
+static void test_hook_budget(void **state) {
+    (void)state;
+    env e;
+    env_open(&e); /* 2 workers */
+    const uint32_t S = e.meta->surfel_count, batch = 64, B = (S + batch - 1) / batch;
+    assert_true(B >= 16);
+    slow_ctl h = {.stamp = calloc(S, sizeof(uint32_t))};
+    assert_non_null(h.stamp);
+    atomic_init(&h.surfels, 0u);
+    glow_system *s = NULL;
+    assert_int_equal(glow_system_create(e.ctx, &(glow_system_desc){.bake = e.bake, .surfel_batch_size = batch,
+                                                                    .lighting = {slow_hook, &h}, .label = "slow"},
+                                        &s),
+                     GLOW_OK);
+    glow_surfel_view sv;
+    assert_int_equal(glow_system_get_surfels(s, &sv), GLOW_OK);
+    glow_update_stats st;
+    /* every surfel's direct light is the one its stamp's call wrote (the kept ones included) */
+#define CHECK_DIRECT()                                                                                       \
+    do {                                                                                                     \
+        glow_solver_tables t;                                                                                \
+        assert_int_equal(glow_system_get_solver_tables(s, &t), GLOW_OK);                                     \
+        for (uint32_t i = 0; i < S; ++i) {                                                                   \
+            float want[3] = {0, 0, 0};                                                                       \
+            if (h.stamp[i]) light_at(sv.positions + 4 * (size_t)i, sv.normals + 4 * (size_t)i, slow_scale(h.stamp[i]), want); \
+            assert_memory_equal(t.direct_irradiance + 3 * (size_t)i, want, sizeof want);                     \
+        }                                                                                                    \
+    } while (0)
+    /* a caches budget alone does not cut the hook */
+    h.update = 1;
+    assert_int_equal(glow_system_update(s, &(glow_update_desc){.max_caches = 16}), GLOW_OK);
+    assert_int_equal(glow_system_get_stats(s, &st), GLOW_OK);
+    assert_int_equal(st.surfels_skipped_budget, 0);
+    assert_int_equal(atomic_load(&h.surfels), S);
+    CHECK_DIRECT();
+    /* 2 ms: lighting all takes B x 0.4 ms / 2 workers (6.4 ms on the Cornell fixture's 2048 surfels),
+     * far more than half the budget: some batches, the stalest first, so every one within B / 2 updates */
+    const glow_update_desc tight = {.budget_ms = 2.0f};
+    for (uint32_t u = 2; u < 2 + B / 2; ++u) {
+        h.update = u;
+        atomic_store(&h.surfels, 0u);
+        assert_int_equal(glow_system_update(s, &tight), GLOW_OK);
+        assert_int_equal(glow_system_get_stats(s, &st), GLOW_OK);
+        const uint32_t lit = atomic_load(&h.surfels);
+        print_message("update %u: %u of %u surfels lit, hook %.2f ms\n", u, lit, S, st.host_ms);
+        assert_true(lit >= 2 * batch && lit < S); /* one batch a worker at least; never all */
+        assert_int_equal(st.surfels_skipped_budget, S - lit);
+        CHECK_DIRECT();
+    }
+    for (uint32_t i = 0; i < S; ++i) assert_true(h.stamp[i] >= 2); /* every batch lit again */
+    /* a budget far below the other stages: still one batch a worker */
+    h.update = 2 + B / 2;
+    atomic_store(&h.surfels, 0u);
+    assert_int_equal(glow_system_update(s, &(glow_update_desc){.budget_ms = 1e-3f}), GLOW_OK);
+    assert_int_equal(atomic_load(&h.surfels), 2 * batch);
+    CHECK_DIRECT();
+    /* a budget that fits the whole hook, and no budget: every surfel */
+    const glow_update_desc roomy = {.budget_ms = 1000.0f};
+    for (uint32_t u = 3 + B / 2; u < 6 + B / 2; ++u) {
+        h.update = u;
+        atomic_store(&h.surfels, 0u);
+        assert_int_equal(glow_system_update(s, u + 1 < 6 + B / 2 ? &roomy : NULL), GLOW_OK);
+        assert_int_equal(glow_system_get_stats(s, &st), GLOW_OK);
+        assert_int_equal(atomic_load(&h.surfels), S);
+        assert_int_equal(st.surfels_skipped_budget, 0);
+        CHECK_DIRECT();
+    }
+#undef CHECK_DIRECT
+    glow_system_destroy(s);
+    free(h.stamp);
+    env_close(&e);
+}
+
 /* glow_system_set_emission_texture: surfels of a material take scale x the host's texture at their
  * material UV (glow_surfel_view.uv0); NULL restores; bad input changes nothing; bakes without material
  * UVs refuse. */
@@ -1934,6 +2037,7 @@ int main(void) {
         cmocka_unit_test(test_solver_tables),
         cmocka_unit_test(test_emission_texture),
         cmocka_unit_test(test_budget),
+        cmocka_unit_test(test_hook_budget),
         cmocka_unit_test(test_bake_caches_sections),
         cmocka_unit_test(test_null_out_pointers_logged),
         cmocka_unit_test(test_band_counts),

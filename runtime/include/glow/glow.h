@@ -500,7 +500,10 @@ typedef struct glow_update_desc {
     uint32_t flags;          /* glow_update_flags, OR-ed; 0 = none */
     uint32_t max_caches;     /* at most this many caches gathered (rounded up to whole groups); 0 = no cap */
     float budget_ms;         /* aim the whole update at this many ms: the caches that fit after the other
-                                stages, from the last updates' times (the first update gathers all); 0 = none.
+                                stages, from the last updates' times (the first update gathers all); and
+                                when lighting every surfel would take more than half of what the budget
+                                leaves, the host hook's batches that fit in that half, by the same priority
+                                (the others keep their last direct light: surfels_skipped_budget); 0 = none.
                                 With max_caches too, the smaller wins */
     const float *focus;      /* focus_count points (x, y, z: the camera, points of interest), or NULL */
     uint32_t focus_count;
@@ -531,6 +534,10 @@ typedef struct glow_update_stats {
      * changed since they were last written (a budgeted update that gathered no cache, with the node
      * radiance bit for bit the same): the outputs are those of the update before, and output_ms 0 */
     uint32_t outputs_skipped;
+    /* \since 0.2: surfels whose direct light the last update did not ask the hook for (a time budget
+     * lights the hook's batches by priority when lighting them all would take more than half of what the
+     * budget leaves: docs/runtime.md, "Budgets"); they keep the light of their last call */
+    uint32_t surfels_skipped_budget;
 } glow_update_stats;
 
 /** Attaches `neighbour` as dependency `dependency` of `system` (glow_bake_info.dependency_count; a
@@ -678,8 +685,8 @@ GLOW_API glow_system *glow_world_system(const glow_world *world, uint32_t index)
  * members go by priority, the stalest and those nearest the focus points first (as the groups of
  * caches within a system; docs/runtime.md "A world of systems"): the first updates with the whole
  * budget as its own, each next one only if the part of its last update that a budget cannot cut (all
- * but the cache gathers) fits what is left, with what is left as its budget; the others keep their
- * outputs (glow_world_stats.systems_updated). Flags, focus points and converged_epsilon go to
+ * but the cache gathers and the hook's batches beyond one a worker) fits what is left, with what is
+ * left as its budget; the others keep their outputs (glow_world_stats.systems_updated). Flags, focus points and converged_epsilon go to
  * each. A member whose update fails (its hook, GLOW_ERROR_HOST_CALLBACK) keeps its last good outputs
  * and the others still update. Allocates nothing.
  * \returns GLOW_OK, or the first member's error; GLOW_ERROR_INVALID_ARGUMENT for a NULL world, a
