@@ -161,6 +161,12 @@ struct glow_system {
     double bat_deadline;   /* now_ms() by which a batch must end to start (0: none) */
     float bat_mean_ms;     /* a batch never lit counts this (the mean of those lit) */
     double hook_ms;        /* this update's hook time (0: not called) */
+    bool hook_uncut;       /* GLOW_HOOK_BUDGET=off (benchmarking): a time budget never cuts the hook */
+    uint8_t *bat_current;  /* [nbatches] 1: lit since the host's light last changed (since the last call
+                              without KEEP_LIGHTING, which may not light it); KEEP_LIGHTING updates light
+                              the others (and none when all are current, as before the hook was cut) */
+    uint32_t bat_stale;    /* how many are not current */
+    uint32_t hook_skipped; /* surfels of this update's candidate batches the deadline left */
     float scene_diag;
     /* a system of a world (XREF): proxy node p (index N + p) reads node proxies[p].node of the system
      * attached as dependency proxies[p].dependency (glow_system_set_neighbour); rad holds N + P nodes */
@@ -664,7 +670,7 @@ static void free_system(glow_system *s) {
                     s->xblocks, s->slots, s->sub_ratio, s->grad_uz, s->sub_nodes, s->mom, s->grad_cm, s->grp_age, s->grp_delta,
                     s->grp_drift_at, s->grp_centre,
                     s->grp_pack, s->grp_sel, s->grp_skip, s->rad_prev, s->uv0, s->det_out, s->rad_out, s->dep_max_node,
-                    s->sky_grid, s->sky_backup, s->bat_age, s->bat_centre, s->bat_pack, s->bat_sel, s->bat_ms};
+                    s->sky_grid, s->sky_backup, s->bat_age, s->bat_centre, s->bat_pack, s->bat_sel, s->bat_ms, s->bat_current};
     for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; ++i) glow__ctx_free(ctx, bufs[i]);
     glow__ctx_free(ctx, s);
 }
@@ -821,6 +827,8 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     s->isa = glow__cl_best_isa();
     s->link_mode = link_mode;
     { /* benchmarking knob (documented in docs/runtime.md): GLOW_CACHE_KERNEL=generic|avx2|avx512 */
+        const char *hb = getenv("GLOW_HOOK_BUDGET"); /* benchmarking knob, docs/runtime.md "Budgets" */
+        s->hook_uncut = hb && !strcmp(hb, "off");
         const char *k = getenv("GLOW_CACHE_KERNEL");
         glow__cl_isa want = s->isa;
         if (k && !strcmp(k, "generic")) want = GLOW__CL_GENERIC;
@@ -871,6 +879,7 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     s->bat_pack = alloc_array(s, NB, sizeof(uint64_t), &ok);
     s->bat_sel = alloc_array(s, NB, sizeof(uint32_t), &ok);
     s->bat_ms = alloc_array(s, NB, sizeof(float), &ok);
+    s->bat_current = alloc_array(s, NB, 1, &ok);
     size_t used = 0;
     for (size_t i = 0; i < s->grid_cells; ++i) used += gmap[i] != GLOW_MAP_EMPTY;
     for (size_t i = 0; i < s->lm_texels; ++i) used += lmap[i] != GLOW_MAP_EMPTY;
@@ -1030,6 +1039,7 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
             s->bat_age[b] = 0;
             s->bat_sel[b] = b;
             s->bat_ms[b] = -1.0f;
+            s->bat_current[b] = 1; /* a first update with KEEP_LIGHTING calls no hook, as before */
         }
         s->bat_count = s->nbatches;
         memset(s->rad_prev, 0, (N + s->P ? N + s->P : 1u) * sizeof(float));
@@ -1591,14 +1601,18 @@ static uint32_t hook_min_batches(const glow_system *s) {
  * took 2.1 ms. Before 2026-11-30 the hook always lit every surfel, and its time alone could exceed the
  * budget: the exact host, with 8 footprint points a surfel, took 1.5-2.2 ms of a half-tile system of
  * that level under a 2 ms budget. */
-static void order_batches(glow_system *s, const glow_update_desc *d) {
+/* With `keep` (GLOW_UPDATE_FLAG_KEEP_LIGHTING) the candidates are the batches not current (bat_current)
+ * only. Returns how many candidates (s->bat_sel[0..n)). */
+static uint32_t order_batches(glow_system *s, const glow_update_desc *d, bool keep) {
     const uint32_t B = s->nbatches, kmin = hook_min_batches(s);
     atomic_store_explicit(&s->bat_next, 0u, memory_order_relaxed);
     s->bat_deadline = 0.0;
     s->bat_min = B;
-    if (!(d->budget_ms > 0.0f) || B <= kmin) {
-        for (uint32_t b = 0; b < B; ++b) s->bat_sel[b] = b;
-        return;
+    if (!(d->budget_ms > 0.0f) || B <= kmin || s->hook_uncut) {
+        uint32_t n = 0;
+        for (uint32_t b = 0; b < B; ++b)
+            if (!keep || !s->bat_current[b]) s->bat_sel[n++] = b;
+        return n;
     }
     double sum = 0.0;
     uint32_t seen = 0;
@@ -1609,7 +1623,8 @@ static void order_batches(glow_system *s, const glow_update_desc *d) {
         }
     s->bat_mean_ms = seen ? (float)(sum / seen) : 0.0f;
     const float r = d->focus_radius > 0.0f ? d->focus_radius : 0.1f * s->scene_diag;
-    const uint32_t n = budget_keys(s->bat_centre, s->bat_age, NULL, B, d->focus, d->focus_count, r, s->bat_pack);
+    const uint32_t n = budget_keys(s->bat_centre, s->bat_age, keep ? s->bat_current : NULL, B, d->focus,
+                                   d->focus_count, r, s->bat_pack);
     qsort(s->bat_pack, n, sizeof *s->bat_pack, cmp_u64);
     for (uint32_t i = 0; i < n; ++i) s->bat_sel[i] = (uint32_t)(s->bat_pack[i] & 0xFFFFFFFFu);
     /* the other stages' time: until an update has measured it (a system just streamed in), half the
@@ -1619,6 +1634,7 @@ static void order_batches(glow_system *s, const glow_update_desc *d) {
     const double half = 0.5 * ((double)d->budget_ms - other);
     s->bat_min = kmin;
     s->bat_deadline = now_ms() + (half > 0.0 ? half : 0.0);
+    return n;
 }
 
 double glow__system_uncut_ms(const glow_system *s) {
@@ -1663,15 +1679,21 @@ static glow_result system_update(glow_system *s, const glow_update_desc *desc) {
      * budget maybe only some batches (order_batches), the others keeping their last light */
     double hook_ms = 0.0;
     s->bat_count = 0;
-    if (s->hooks.light_surfels && !(flags & GLOW_UPDATE_FLAG_KEEP_LIGHTING)) {
+    s->hook_skipped = 0;
+    const bool keep = (flags & GLOW_UPDATE_FLAG_KEEP_LIGHTING) != 0;
+    if (s->hooks.light_surfels && (!keep || s->bat_stale)) { /* KEEP_LIGHTING: the batches not current */
         const uint32_t B = s->nbatches;
         const double th = now_ms();
-        order_batches(s, d);
-        glow__ctx_run(s->ctx, task_hook_sel, s, B);
+        const uint32_t n = order_batches(s, d, keep);
+        glow__ctx_run(s->ctx, task_hook_sel, s, n);
         uint32_t neg = 0, k = 0;
-        for (uint32_t i = 0; i < B; ++i) { /* the batches lit first, in claim order */
+        for (uint32_t i = 0; i < n; ++i) { /* the batches lit first, in claim order */
             const uint32_t b = s->bat_sel[i];
-            if (s->batch_status[b] == ST_SKIPPED) continue;
+            if (s->batch_status[b] == ST_SKIPPED) {
+                const uint32_t first = b * s->batch;
+                s->hook_skipped += s->S - first < s->batch ? s->S - first : s->batch;
+                continue;
+            }
             s->bat_sel[k++] = b;
             if (s->batch_status[b] != ST_OK) {
                 uint32_t first = b * s->batch;
@@ -1703,7 +1725,13 @@ static glow_result system_update(glow_system *s, const glow_update_desc *desc) {
         }
         s->direct_revision++;
         for (uint32_t b = 0; b < B; ++b) s->bat_age[b]++;
-        for (uint32_t i = 0; i < k; ++i) s->bat_age[s->bat_sel[i]] = 0;
+        if (!keep) memset(s->bat_current, 0, B); /* the host's light may have changed */
+        for (uint32_t i = 0; i < k; ++i) {
+            s->bat_age[s->bat_sel[i]] = 0;
+            s->bat_current[s->bat_sel[i]] = 1;
+        }
+        s->bat_stale = 0;
+        for (uint32_t b = 0; b < B; ++b) s->bat_stale += !s->bat_current[b];
         s->bat_count = k;
         hook_ms = now_ms() - th;
     }
@@ -1782,15 +1810,7 @@ static glow_result system_update(glow_system *s, const glow_update_desc *desc) {
     st.output_ms = t5 - t4;
     st.total_ms = t5 - t_begin;
     st.updates++;
-    st.surfels_skipped_budget = 0;
-    if (s->hooks.light_surfels && s->bat_count && s->bat_count < s->nbatches) {
-        uint32_t lit = 0;
-        for (uint32_t i = 0; i < s->bat_count; ++i) {
-            const uint32_t first = s->bat_sel[i] * s->batch;
-            lit += s->S - first < s->batch ? s->S - first : s->batch;
-        }
-        st.surfels_skipped_budget = s->S - lit;
-    }
+    st.surfels_skipped_budget = s->hook_skipped;
     if (budgeted) { /* recent times, for the next budget_ms: the other stages, and cache lighting per group */
         const double other = fmax(st.total_ms - st.cache_lighting_ms - hook_ms, 0.0), per = s->sel_count ? st.cache_lighting_ms / s->sel_count : 0.0;
         /* the system's first update pays first touches (the host's, the pages'): not a sample; later

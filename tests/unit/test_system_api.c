@@ -1927,18 +1927,33 @@ static void test_hook_budget(void **state) {
         CHECK_DIRECT();
     }
     for (uint32_t i = 0; i < S; ++i) assert_true(h.stamp[i] >= 2); /* every batch lit again */
+    /* KEEP_LIGHTING after a cut (the host's light unchanged since the last call): the batches that call
+     * left are lit in later updates, under the budget, and then none (no call at all) */
+    const uint32_t changed = 2 + B / 2 - 1; /* the last update without KEEP_LIGHTING */
+    const glow_update_desc tight_keep = {.budget_ms = 2.0f, .flags = GLOW_UPDATE_FLAG_KEEP_LIGHTING};
+    uint32_t keeps = 0;
+    for (uint32_t u = 100;; ++u) {
+        h.update = u;
+        atomic_store(&h.surfels, 0u);
+        assert_int_equal(glow_system_update(s, &tight_keep), GLOW_OK);
+        if (atomic_load(&h.surfels) == 0) break;
+        assert_true(++keeps < B);
+    }
+    assert_true(keeps >= 2); /* the cut left more than one update's worth */
+    for (uint32_t i = 0; i < S; ++i) assert_true(h.stamp[i] == changed || h.stamp[i] >= 100); /* all current */
+    CHECK_DIRECT();
     /* a budget far below the other stages: still one batch a worker */
-    h.update = 2 + B / 2;
+    h.update = 200;
     atomic_store(&h.surfels, 0u);
     assert_int_equal(glow_system_update(s, &(glow_update_desc){.budget_ms = 1e-3f}), GLOW_OK);
     assert_int_equal(atomic_load(&h.surfels), 2 * batch);
     CHECK_DIRECT();
     /* a budget that fits the whole hook, and no budget: every surfel */
     const glow_update_desc roomy = {.budget_ms = 1000.0f};
-    for (uint32_t u = 3 + B / 2; u < 6 + B / 2; ++u) {
+    for (uint32_t u = 201; u < 204; ++u) {
         h.update = u;
         atomic_store(&h.surfels, 0u);
-        assert_int_equal(glow_system_update(s, u + 1 < 6 + B / 2 ? &roomy : NULL), GLOW_OK);
+        assert_int_equal(glow_system_update(s, u < 203 ? &roomy : NULL), GLOW_OK);
         assert_int_equal(glow_system_get_stats(s, &st), GLOW_OK);
         assert_int_equal(atomic_load(&h.surfels), S);
         assert_int_equal(st.surfels_skipped_budget, 0);

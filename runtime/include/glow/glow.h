@@ -483,7 +483,10 @@ GLOW_API glow_result glow_system_set_material(glow_system *system, uint32_t mate
 typedef enum glow_update_flags {
     GLOW_UPDATE_FLAG_NONE = 0,
     GLOW_UPDATE_FLAG_RESET_BOUNCE = 1,  /* forget the indirect light of previous updates first */
-    GLOW_UPDATE_FLAG_KEEP_LIGHTING = 2, /* reuse the last direct irradiance (do not call the hook) */
+    GLOW_UPDATE_FLAG_KEEP_LIGHTING = 2, /* the host's lights did not change since the last call: reuse the
+                                           last direct irradiance (do not call the hook), except for the
+                                           batches a time budget left unlit since that call, which are
+                                           still lit (under the budget) */
     GLOW_UPDATE_FLAGS_FORCE_U32 = 0x7FFFFFFF
 } glow_update_flags;
 
