@@ -516,6 +516,8 @@ static int run_world(options *o, glow_scene_desc *scene, glow_logger logger) {
         ud.focus_count = 1;
     }
     const float near_r = 0.1f * diag;
+    /* the caches near the focus: walking, or standing at the scene camera (or --focus) */
+    const bool near = budget && (walk || ud.focus_count > 0);
     bool member[WORLD_MAX] = {false}, pending[WORLD_MAX] = {false}; /* pending: streamed in, not updated yet */
     uint32_t n_in = 0, n_out = 0;
     double f_chg = 0.0, f_twin = 0.0, f_beyond = 0.0, f_max = 0.0; /* --walk: flicker near the focus */
@@ -605,7 +607,7 @@ static int run_world(options *o, glow_scene_desc *scene, glow_logger logger) {
                 den += fabs(y);
                 float d[3];
                 for (int k = 0; k < 3; ++k) d[k] = ws->cinfo[s][c].position[k] - o->focus[k];
-                if (walk && d[0] * d[0] + d[1] * d[1] + d[2] * d[2] <= near_r * near_r) {
+                if (near && d[0] * d[0] + d[1] * d[1] + d[2] * d[2] <= near_r * near_r) {
                     numn += fabs(x - y);
                     denn += fabs(y);
                     if (had) { /* the stability suite's flicker metrics, the twin as the reference */
@@ -687,7 +689,7 @@ static int run_world(options *o, glow_scene_desc *scene, glow_logger logger) {
                 glow_json_num(js, "first_updates_max_ms", sf.in_max);
                 cJSON_AddNumberToObject(js, "first_updates_over_1_25x_budget", sf.in_over);
             }
-            if (walk) {
+            if (near) { /* "walk_" also for a focus that stands still (the names predate it) */
                 glow_json_num(jb, "walk_near_radius", near_r);
                 glow_json_num(jb, "walk_near_error_mean", en_mean);
                 glow_json_num(jb, "walk_near_error_median", en_med);
@@ -715,7 +717,11 @@ static int run_world(options *o, glow_scene_desc *scene, glow_logger logger) {
             printf("walk: the focus crosses the world (%.3g, %.3g, %.3g) -> (%.3g, %.3g, %.3g); caches within %.3g of it: "
                    "error mean %.4f, median %.4f, last quarter of the walk %.4f\n",
                    walk_a[0], walk_a[1], walk_a[2], walk_b[0], walk_b[1], walk_b[2], (double)near_r, en_mean, en_med, en_last);
-        if (walk && f_n)
+        if (!walk && near)
+            printf("focus (%.3g, %.3g, %.3g), still: caches within %.3g of it: error mean %.4f, median %.4f, last quarter "
+                   "of the run %.4f\n",
+                   (double)o->focus[0], (double)o->focus[1], (double)o->focus[2], (double)near_r, en_mean, en_med, en_last);
+        if (near && f_n)
             printf("flicker near the focus (the stability suite's metrics, the twin as the reference): change per update "
                    "%.2f %% of the mean (the twin's %.2f %%), beyond the twin's change %.2f %% (largest %.2f %%), over %u "
                    "updates\n",
