@@ -235,11 +235,7 @@ static void add_stats(glow_update_stats *sum, const glow_update_stats *st) {
  * (0 inside), r the focus radius (0: a tenth of the members' bounds diagonal), as the groups of caches
  * within a system (glow_update_desc); ties by order added. The first always updates, with the whole
  * budget as its own; each next one only when the part of its last update that a budget cannot cut
- * (all but the cache gathers and the hook's batches beyond its fewest) fits half of what is left (so
- * that what it can cut gets as much again; until 2026-11-30 it had only to fit, and a member squeezed
- * into a frame's leftovers gathered a group or two, yet counted as updated and lost its staleness: a
- * still sun on the 4x4 level then converged near the camera to 17 % off the unbudgeted solver in 240
- * updates of 2 ms, 0.16 % since), with what is left as its budget (its gathers take
+ * (all but the cache gathers and the hook's batches beyond its fewest) fits what is left, with what is left as its budget (its gathers take
  * the rest). A member never updated (just streamed in: no light yet) comes first, before any
  * priority, and is held to the same rule with its time estimated from the members that have one (the
  * mean of their times per cache, times its caches); while no member has a time (the world's first
@@ -304,7 +300,7 @@ glow_result glow_world_update(glow_world *w, const glow_update_desc *desc) {
             double est = w->ms[i].est_ms;
             if (est == 0.0) /* never updated: no time yet (and no light), estimated from the others' */
                 est = known_ms > 0.0 ? known_ms / fmax(known_caches, 1.0) * glow__system_cache_count(w->sys[i]) : 0.0;
-            if (n > 0 && est > 0.0 && (left <= 0.0 || 2.0 * est > left)) { /* does not fit: keeps its outputs */
+            if (n > 0 && est > 0.0 && (left <= 0.0 || est > left)) { /* does not fit: keeps its outputs */
                 w->ms[i].stale++;
                 sum.caches_skipped_budget += glow__system_cache_count(w->sys[i]);
                 sum.surfels_skipped_budget += glow__system_surfel_count(w->sys[i]);
