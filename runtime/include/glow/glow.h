@@ -689,9 +689,9 @@ GLOW_API glow_system *glow_world_system(const glow_world *world, uint32_t index)
  * caches within a system; docs/runtime.md "A world of systems"): the first updates with the whole
  * budget as its own, each next one only if the part of its last update that a budget cannot cut (all
  * but the cache gathers and the hook's batches beyond one a worker) fits what is left, with what is
- * left as its budget; the others keep their outputs (glow_world_stats.systems_updated). Flags, focus points and converged_epsilon go to
- * each. A member whose update fails (its hook, GLOW_ERROR_HOST_CALLBACK) keeps its last good outputs
- * and the others still update. Allocates nothing.
+ * left as its budget; the others keep their outputs (glow_world_stats.systems_updated). Flags, focus
+ * points and converged_epsilon go to each. A member whose update fails (its hook,
+ * GLOW_ERROR_HOST_CALLBACK) keeps its last good outputs and the others still update. Allocates nothing.
  * \returns GLOW_OK, or the first member's error; GLOW_ERROR_INVALID_ARGUMENT for a NULL world, a
  * negative or non-finite budget_ms or focus_radius, or focus_count with NULL focus. \since 0.2 */
 GLOW_API glow_result glow_world_update(glow_world *world, const glow_update_desc *desc);
