@@ -1037,11 +1037,9 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
                 for (int k = 0; k < 3; ++k) c[k] += s->pos4[4 * (size_t)i + (size_t)k];
             for (int k = 0; k < 3; ++k) s->bat_centre[3 * (size_t)b + (size_t)k] = (float)(c[k] / (double)(end - first));
             s->bat_age[b] = 0;
-            s->bat_sel[b] = b;
             s->bat_ms[b] = -1.0f;
             s->bat_current[b] = 1; /* a first update with KEEP_LIGHTING calls no hook, as before */
         }
-        s->bat_count = s->nbatches;
         memset(s->rad_prev, 0, (N + s->P ? N + s->P : 1u) * sizeof(float));
         double d2 = 0.0;
         for (int k = 0; k < 3; ++k) d2 += (double)(m->bounds_max[k] - m->bounds_min[k]) * (m->bounds_max[k] - m->bounds_min[k]);

@@ -235,8 +235,8 @@ static void add_stats(glow_update_stats *sum, const glow_update_stats *st) {
  * (0 inside), r the focus radius (0: a tenth of the members' bounds diagonal), as the groups of caches
  * within a system (glow_update_desc); ties by order added. The first always updates, with the whole
  * budget as its own; each next one only when the part of its last update that a budget cannot cut
- * (all but the cache gathers and the hook's batches beyond its fewest) fits what is left, with what is left as its budget (its gathers take
- * the rest). A member never updated (just streamed in: no light yet) comes first, before any
+ * (all but the cache gathers and the hook's batches beyond its fewest) fits what is left, with what
+ * is left as its budget (its gathers take the rest). A member never updated (just streamed in: no light yet) comes first, before any
  * priority, and is held to the same rule with its time estimated from the members that have one (the
  * mean of their times per cache, times its caches); while no member has a time (the world's first
  * update) every member updates. Before 2026-11-30 a member never updated always updated wherever it
