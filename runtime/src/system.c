@@ -139,14 +139,16 @@ struct glow_system {
     uint64_t *grp_pack;    /* scratch: candidates as (~priority bits) << 32 | group: ascending = best first */
     uint32_t *grp_sel;     /* scratch: the selection, in group order */
     uint8_t *grp_skip;     /* scratch: converged groups this update */
+    float *grp_busy;       /* scratch: [sel_count] the time of task k of the selection's gather, ms */
     uint32_t sel_count;
     float *rad_prev;       /* [N] node luma at the last update, for the drift */
     float *rad_out;        /* [N][4] the node radiance the outputs were last written with (budgeted updates
                               skip the output stage when it and the caches are unchanged) */
     bool out_written;
     double drift;          /* Σ over updates of the node luma's relative L1 change */
-    double ema_other_ms, ema_cache_ms_per_group; /* recent stage times, for budget_ms (0 = none yet): the
-                              stages a budget cannot cut (all but the hook and the cache gathers), and a group */
+    double ema_other_ms;   /* recent times, for budget_ms (0 = none yet): the stages a budget cannot cut (all
+                              but the hook and the cache gathers), */
+    glow__gather_cost gather_cost; /* and the cache gathers (glow__gather_cost_learn) */
     double first_other_ms; /* the first budgeted update's other stages (first touches included): the estimate
                               until ema_other_ms has a sample */
     /* a time budget also cuts the host's hook (order_batches): batches of surfels lit by priority, as groups */
@@ -531,6 +533,7 @@ static void task_caches(void *data, uint32_t k, uint32_t worker) {
  * changed the caches' luma (DC): the convergence test of later updates */
 static void task_caches_sel(void *data, uint32_t k, uint32_t worker) {
     glow_system *s = data;
+    const double t0 = now_ms();
     const uint32_t g = s->grp_sel[k], first = g * GLOW_BUDGET_GROUP;
     const uint32_t count = s->C - first < GLOW_BUDGET_GROUP ? s->C - first : GLOW_BUDGET_GROUP;
     float before[GLOW_BUDGET_GROUP];
@@ -544,6 +547,7 @@ static void task_caches_sel(void *data, uint32_t k, uint32_t worker) {
         v += fabs((double)now);
     }
     s->grp_delta[g] = v > 0.0 ? (float)(d / v) : (d > 0.0 ? INFINITY : 0.0f);
+    s->grp_busy[k] = (float)(now_ms() - t0); /* the time budget's cost model (glow__gather_cost_learn) */
 }
 
 /* outputs: tasks of PLANE_CHUNK cells (the grid's, then the lightmap's texels), each writing all the
@@ -669,7 +673,7 @@ static void free_system(glow_system *s) {
                     s->mat_albedo_scale, s->batch_status, s->batch_negative, s->out_index, s->out_cache,
                     s->xblocks, s->slots, s->sub_ratio, s->grad_uz, s->sub_nodes, s->mom, s->grad_cm, s->grp_age, s->grp_delta,
                     s->grp_drift_at, s->grp_centre,
-                    s->grp_pack, s->grp_sel, s->grp_skip, s->rad_prev, s->uv0, s->det_out, s->rad_out, s->dep_max_node,
+                    s->grp_pack, s->grp_sel, s->grp_skip, s->grp_busy, s->rad_prev, s->uv0, s->det_out, s->rad_out, s->dep_max_node,
                     s->sky_grid, s->sky_backup, s->bat_age, s->bat_centre, s->bat_pack, s->bat_sel, s->bat_ms, s->bat_current};
     for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; ++i) glow__ctx_free(ctx, bufs[i]);
     glow__ctx_free(ctx, s);
@@ -931,6 +935,7 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     s->grp_pack = alloc_array(s, G, sizeof(uint64_t), &ok);
     s->grp_sel = alloc_array(s, G, sizeof(uint32_t), &ok);
     s->grp_skip = alloc_array(s, G, 1, &ok);
+    s->grp_busy = alloc_array(s, G, sizeof(float), &ok);
     s->rad_prev = alloc_array(s, N + s->P ? N + s->P : 1u, sizeof(float), &ok);
     if (s->deps) s->dep_max_node = alloc_array(s, s->deps, sizeof(uint32_t), &ok);
     s->rad_out = alloc_array(s, N ? N : 1u, 4 * sizeof(float), &ok);
@@ -1514,10 +1519,46 @@ uint32_t glow_budget_choose(const float *centre, uint32_t *age, const uint8_t *s
     return k;
 }
 
-/* Only selections large enough to amortise the dispatch teach the cost per group (below, after the
- * update): an eighth of the groups, at least 32 (or all, when fewer). */
+/* A system's first budgeted update (no gather cost known yet) gathers an eighth of its groups, at
+ * least 32 (or all, when fewer): enough to measure. */
 static uint32_t teach_groups(const glow_system *s) {
     return s->groups / 8u > 32u ? s->groups / 8u : (s->groups < 32u ? s->groups : 32u);
+}
+
+/* The gather's cost under a time budget (glow__gather_cost, runtime_internal.h). Every budgeted update
+ * that gathered teaches it, from its wall time and the groups' own times (task_caches_sel): a group's
+ * time is their sum over k, the dispatch what the wall time has beyond that sum spread over the
+ * workers. Before 2026-11-30 one figure, the wall time over k, was learnt, and only from selections of
+ * at least teach_groups (from a few groups it is mostly the workers' wake-up: 66 ns a link for one
+ * group of Sponza moderate against 3.8 for all, and learning it would shrink the next selection and
+ * collapse the budget). Once that figure was high (a cold first sample), a system chose fewer groups
+ * than teach_groups and never learnt again: on the 4x4 Sponza level under 2 ms, with a still camera,
+ * the system beside it kept 0.042-0.051 ms a group against the others' 0.004-0.006, gathered 17-21
+ * groups a turn against their 95-160, and some runs ended 2-17 % off the unbudgeted solver near the
+ * camera. A few groups cost more each than many (the first touches of the node radiance they share),
+ * so as an estimate for any selection their time per group is an upper bound: a sample teaches fully
+ * downwards, and upwards in proportion to k / teach (all from teach groups on). A sample above twice
+ * the estimate counts as twice (a descheduled worker). */
+void glow__gather_cost_learn(glow__gather_cost *c, uint32_t k, uint32_t teach, uint32_t workers, uint32_t iters,
+                             double wall_ms, double busy_ms) {
+    const uint32_t par = workers ? (k < workers ? k : workers) : 1u;
+    if (!k || !iters || !(wall_ms > 0.0) || !(busy_ms > 0.0)) return;
+    const double group = busy_ms / iters / k, dispatch = fmax(wall_ms / iters - busy_ms / iters / par, 0.0);
+    if (!(c->group_ms > 0.0)) {
+        c->group_ms = group;
+        c->dispatch_ms = dispatch;
+        return;
+    }
+    const double up = 0.2 * fmin(1.0, (double)k / (teach ? teach : 1u));
+    const double ag = group < c->group_ms ? 0.2 : up, ad = dispatch < c->dispatch_ms ? 0.2 : up;
+    c->group_ms = (1.0 - ag) * c->group_ms + ag * fmin(group, 2.0 * c->group_ms);
+    c->dispatch_ms = (1.0 - ad) * c->dispatch_ms + ad * fmin(dispatch, 2.0 * c->dispatch_ms + 0.01);
+}
+
+uint32_t glow__gather_cost_fit(const glow__gather_cost *c, double ms, uint32_t workers, uint32_t iters) {
+    const double it_ms = ms / (iters ? iters : 1u) - c->dispatch_ms;
+    const double k = it_ms > 0.0 && c->group_ms > 0.0 ? floor(it_ms * (workers ? workers : 1u) / c->group_ms) : 0.0;
+    return k < 1.0 ? 1u : (k > 4e9 ? 4000000000u : (uint32_t)k); /* always some progress */
 }
 
 /* Chooses the groups this update gathers (s->grp_sel[0..sel_count), in index order). No allocation. */
@@ -1544,7 +1585,7 @@ static void schedule(glow_system *s, const glow_update_desc *d, glow_update_stat
         const uint32_t kc = div_up(d->max_caches, GLOW_BUDGET_GROUP);
         if (kc < k) k = kc;
     }
-    if (d->budget_ms > 0.0f && !(s->ema_cache_ms_per_group > 0.0)) {
+    if (d->budget_ms > 0.0f && !(s->gather_cost.group_ms > 0.0)) {
         /* No cost per group yet (the system's first budgeted update, e.g. just streamed into a world):
          * the fewest groups that teach it (teach_groups), not all of them. Gathering every cache here
          * made a system streamed in under a 2 ms budget cost 2.4-3.4 ms (half-tile systems of the 4x4
@@ -1553,10 +1594,9 @@ static void schedule(glow_system *s, const glow_update_desc *d, glow_update_stat
     } else if (d->budget_ms > 0.0f) {
         const double left = (double)d->budget_ms - (s->ema_other_ms > 0.0 ? s->ema_other_ms : s->first_other_ms) -
                             s->hook_ms; /* the hook has run: its time this update */
-        const double per = s->ema_cache_ms_per_group * (double)s->params.bounce_iterations;
-        double kt = left > 0.0 ? floor(left / per) : 0.0;
-        if (kt < 1.0) kt = 1.0; /* always some progress */
-        if (kt < (double)k) k = (uint32_t)kt;
+        const uint32_t kt = glow__gather_cost_fit(&s->gather_cost, left, glow__ctx_workers(s->ctx),
+                                                  s->params.bounce_iterations);
+        if (kt < k) k = kt;
     }
     k = glow_budget_choose(s->grp_centre, s->grp_age, s->grp_skip, G, d->focus, d->focus_count, r, k, s->grp_pack,
                            s->grp_sel);
@@ -1747,6 +1787,7 @@ static glow_result system_update(glow_system *s, const glow_update_desc *desc) {
     st.surfel_lighting_ms += t - t_begin;
     st.host_ms = t - t_begin;
 
+    double busy_ms = 0.0; /* the gathered groups' own times (glow__gather_cost_learn) */
     for (uint32_t it = 0; it < s->params.bounce_iterations; ++it) {
         double t0 = now_ms();
         /* Skip-if-unchanged: the surfel flux and the pull read the direct light, the emission, the
@@ -1762,18 +1803,20 @@ static glow_result system_update(glow_system *s, const glow_update_desc *desc) {
         memcpy(s->flux_key, key, sizeof key);
         s->flux_valid = true;
         fill_proxies(s);
+        double ts = now_ms(); /* the schedule counts among the stages a budget cannot cut, not the gathers */
+        if (budgeted && it == 0) schedule(s, d, &st); /* after the first pull: the drift of this update's light */
         double t2 = now_ms();
         if (!budgeted) {
             glow__ctx_run(s->ctx, task_caches, s, div_up(s->C, CACHE_CHUNK));
             s->cache_revision++;
         } else {
-            if (it == 0) schedule(s, d, &st); /* after the first pull: the drift of this update's light */
             glow__ctx_run(s->ctx, task_caches_sel, s, s->sel_count);
+            for (uint32_t i = 0; i < s->sel_count; ++i) busy_ms += s->grp_busy[i];
             if (s->sel_count) s->cache_revision++;
         }
         double t3 = now_ms();
         st.surfel_lighting_ms += t1 - t0;
-        st.pull_ms += t2 - t1;
+        st.pull_ms += ts - t1;
         st.cache_lighting_ms += t3 - t2;
         st.links += (uint64_t)(budgeted ? st.caches_gathered : s->C) * s->meta->links_per_cache;
     }
@@ -1810,19 +1853,15 @@ static glow_result system_update(glow_system *s, const glow_update_desc *desc) {
     st.updates++;
     st.surfels_skipped_budget = s->hook_skipped;
     if (budgeted) { /* recent times, for the next budget_ms: the other stages, and cache lighting per group */
-        const double other = fmax(st.total_ms - st.cache_lighting_ms - hook_ms, 0.0), per = s->sel_count ? st.cache_lighting_ms / s->sel_count : 0.0;
+        const double other = fmax(st.total_ms - st.cache_lighting_ms - hook_ms, 0.0);
         /* the system's first update pays first touches (the host's, the pages'): not a sample; later
          * outliers (a descheduled thread) count at most twice the average */
         if (st.updates > 1)
             s->ema_other_ms = s->ema_other_ms > 0.0 ? 0.8 * s->ema_other_ms + 0.2 * fmin(other, 2.0 * s->ema_other_ms) : other;
         else
             s->first_other_ms = other; /* an over-estimate until then: the second update keeps within the budget */
-        /* Only selections large enough to amortise the dispatch teach the cost per group: from a few
-         * groups the per-group time is mostly the workers' wake-up (Sponza moderate, 2 threads: 66 ns a
-         * link for one group against 3.8 for all), and learning from them would shrink the next
-         * selection, raise the per-group time again and collapse the budget. */
-        if (per > 0.0 && s->sel_count >= teach_groups(s))
-            s->ema_cache_ms_per_group = s->ema_cache_ms_per_group > 0.0 ? 0.8 * s->ema_cache_ms_per_group + 0.2 * per : per;
+        glow__gather_cost_learn(&s->gather_cost, s->sel_count, teach_groups(s), glow__ctx_workers(s->ctx),
+                                s->params.bounce_iterations, st.cache_lighting_ms, busy_ms);
     }
     s->stats = st;
     s->out.update_index = st.updates;
