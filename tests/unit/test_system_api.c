@@ -1696,6 +1696,31 @@ static void test_bake_logger(void **state) {
     remove(out);
 }
 
+/* The planes hold each cell's and texel's cache row (what glow__cl_write_planes writes), empty ones 0:
+ * after budgeted updates that rewrote only the gathered groups' cells and texels (task_output_sel), as
+ * after whole writes. Returns how many cells and texels were checked. */
+static size_t check_planes(const glow_cache_outputs *o) {
+    const size_t nc = o->coeff_count, ng = (size_t)o->grid_dims[0] * o->grid_dims[1] * o->grid_dims[2],
+                 nl = (size_t)o->lightmap_width * o->lightmap_height * (o->lightmap_pages ? o->lightmap_pages : 1u);
+    size_t used = 0;
+    for (int grid = 0; grid < 2; ++grid) {
+        const float *pl = grid ? o->grid_sh : o->lightmap_sh;
+        const uint32_t *map = grid ? o->grid_map : o->lightmap_map;
+        const size_t n = grid ? ng : nl;
+        if (!pl) continue;
+        for (size_t t = 0; t < n; ++t) {
+            used += map[t] != 0xFFFFFFFFu;
+            for (size_t k = 0; k < nc; ++k) {
+                const float want = map[t] == 0xFFFFFFFFu ? 0.0f : o->cache_sh[(size_t)map[t] * nc + k];
+                if (memcmp(&pl[k * n + t], &want, sizeof want) != 0)
+                    fail_msg("%s %zu plane %zu: %g, cache row %g", grid ? "cell" : "texel", t, k, (double)pl[k * n + t],
+                             (double)want);
+            }
+        }
+    }
+    return used;
+}
+
 /* glow_update_desc budgets: a caches cap gathers exactly that many (whole groups), the stalest first
  * (round robin under steady light), the focus first, deterministic; converged groups are skipped until
  * the light changes; a steady budgeted run converges to the unbudgeted one; bad budgets are refused;
@@ -1739,6 +1764,7 @@ static void test_budget(void **state) {
                 changed |= o->cache_sh[(size_t)c * o->coeff_count] != prev[c];
             seen[g] += changed;
         }
+        assert_true(check_planes(o) > C / 2); /* the first update writes whole planes, the others groups' */
     }
     uint32_t once = 0;
     for (uint32_t g = 0; g < 4 * (G / 4); ++g) once += seen[g] == 1;
