@@ -687,8 +687,16 @@ static void *alloc_array(glow_system *s, size_t count, size_t elem, bool *ok) {
         return NULL;
     }
     void *p = glow__ctx_alloc(s->ctx, count * elem, 64);
-    if (!p) *ok = false;
-    else s->memory_bytes += count * elem;
+    if (!p) {
+        *ok = false;
+        return NULL;
+    }
+    /* Every page touched here, at create (the loader's time), not in the first updates: a buffer that
+     * create leaves for the update to fill (rad_out, the scratch) otherwise takes its pages' first-touch
+     * faults inside a budgeted update. On this 2-core VM a streamed-in system's first update took 135
+     * minor faults in its output stage, 2.5 ms against 0.35 (the 4x4 level under 2 ms, --stream 20). */
+    memset(p, 0, count * elem);
+    s->memory_bytes += count * elem;
     return p;
 }
 
