@@ -237,8 +237,66 @@ static void test_automatic_factor(void **state) {
     remove(g_mtl);
 }
 
+/* Budgeted updates rewrite only the gathered groups' cells and texels (system.c, task_output_sel; the
+ * detail whole). Their outputs must be the bytes of a twin that writes everything (GLOW_SEL_OUTPUTS=off),
+ * update after update of a capped run whose surfels' light changes. */
+static void test_budget_outputs(void **state) {
+    (void)state;
+    write_scene();
+    char path[256];
+    snprintf(path, sizeof path, "/tmp/glow_test_detail_budget_%d.glow", (int)getpid());
+    glow_pc_settings st = {.surfels = 4096, .links = 64, .bands = 3, .threads = 2, .seed = 1, .texel_density = 8.0f,
+                           .grid_spacing = 1.0f, .lightmap_detail = 3, .texel_adapt = 1.0f};
+    glow_pc_stats stats;
+    if (glow_pc_bake(g_obj, path, &st, &stats) != GLOW_OK) fail_msg("bake: %s", stats.error);
+    glow_context *ctx = NULL;
+    glow_bake *bake = NULL;
+    glow_system *sel = NULL, *whole = NULL;
+    assert_int_equal(glow_context_create(&(glow_context_desc){.api_version = GLOW_VERSION}, &ctx), GLOW_OK);
+    assert_int_equal(glow_bake_load_file(ctx, path, &bake), GLOW_OK);
+    assert_int_equal(glow_system_create(ctx, &(glow_system_desc){.bake = bake}, &sel), GLOW_OK);
+    setenv("GLOW_SEL_OUTPUTS", "off", 1);
+    assert_int_equal(glow_system_create(ctx, &(glow_system_desc){.bake = bake}, &whole), GLOW_OK);
+    unsetenv("GLOW_SEL_OUTPUTS");
+    const glow_cache_outputs *a = glow_system_outputs(sel), *b = glow_system_outputs(whole);
+    assert_non_null(a->lightmap_detail);
+    const size_t pages = a->lightmap_pages ? a->lightmap_pages : 1u;
+    const size_t det = (size_t)a->detail_width * a->detail_height * pages * 4u;
+    const size_t lm = (size_t)a->lightmap_width * a->lightmap_height * pages * a->coeff_count;
+    const size_t grid = (size_t)a->grid_dims[0] * a->grid_dims[1] * a->grid_dims[2] * a->coeff_count;
+    printf("  %u caches, detail %ux%u: budgeted updates of a quarter of the caches\n", a->cache_count, a->detail_width,
+           a->detail_height);
+    const glow_update_desc cap = {.max_caches = a->cache_count / 4u};
+    glow_bake_info info;
+    assert_int_equal(glow_bake_get_info(bake, &info), GLOW_OK);
+    const uint32_t S = info.surfel_count, run = S / 4u;
+    float *emit = malloc((size_t)run * 3u * sizeof(float));
+    assert_non_null(emit);
+    for (int u = 0; u < 12; ++u) {
+        /* a run of surfels changes its light (no surface here reflects: only their own radiance moves) */
+        for (size_t i = 0; i < (size_t)run * 3u; ++i) emit[i] = 0.5f + 0.1f * (float)u;
+        const uint32_t first = (uint32_t)(u % 4) * run;
+        assert_int_equal(glow_system_set_surfel_emission(sel, first, run, emit), GLOW_OK);
+        assert_int_equal(glow_system_set_surfel_emission(whole, first, run, emit), GLOW_OK);
+        assert_int_equal(glow_system_update(sel, &cap), GLOW_OK);
+        assert_int_equal(glow_system_update(whole, &cap), GLOW_OK);
+        assert_memory_equal(a->cache_sh, b->cache_sh, (size_t)a->cache_count * a->coeff_count * sizeof(float));
+        assert_memory_equal(a->lightmap_sh, b->lightmap_sh, lm * sizeof(float));
+        if (grid) assert_memory_equal(a->grid_sh, b->grid_sh, grid * sizeof(float));
+        assert_memory_equal(a->lightmap_detail, b->lightmap_detail, det * sizeof(float));
+    }
+    free(emit);
+    glow_system_destroy(sel);
+    glow_system_destroy(whole);
+    glow_bake_destroy(bake);
+    glow_context_destroy(ctx);
+    remove(path);
+    remove(g_obj);
+    remove(g_mtl);
+}
+
 int main(void) {
     const struct CMUnitTest tests[] = {cmocka_unit_test(test_strip_against_view_factor),
-                                       cmocka_unit_test(test_automatic_factor)};
+                                       cmocka_unit_test(test_automatic_factor), cmocka_unit_test(test_budget_outputs)};
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
