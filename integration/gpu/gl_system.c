@@ -78,7 +78,8 @@ struct glow_gl_system {
     uint32_t drift_groups, caches_converged;
     int delta_pending;           /* DELTA holds the last budgeted update's changes, not yet read */
     int timed_budget;            /* the last update was budgeted: its timings may teach the budget */
-    double ema_other_ms, ema_cache_ms_per_group; /* budget_ms: GPU times of earlier updates (0 = none yet) */
+    double ema_other_ms;          /* budget_ms: GPU times of earlier updates (0 = none yet), */
+    glow_budget_cost gather_cost; /* and the gathers' model, as the CPU solver's (one iteration's times) */
     /* light across systems: proxy node N + p reads a neighbour's flux (proxy_fill.comp); PROXY_MAP holds
      * (neighbour node, N + p) sorted by dependency, dependency d's entries at [dep_first[d], dep_first[d+1]) */
     uint32_t P, deps, dep_first[MAX_DEPS + 1];
@@ -811,12 +812,13 @@ static void learn_budget(glow_gl_system *s) {
         return;
     }
     s->timed_budget = 0;
-    const double cache = t_cache - t_pull, other = (t_out - t_begin) - cache, per = cache / s->sel_groups;
+    const double cache = t_cache - t_pull, other = (t_out - t_begin) - cache;
     if (s->updates > 1)
         s->ema_other_ms = s->ema_other_ms > 0.0 ? 0.8 * s->ema_other_ms + 0.2 * fmin(other, 2.0 * s->ema_other_ms) : other;
+    /* every selection teaches (glow_budget_cost_learn: a small one upwards only in proportion to its size);
+     * the GPU's groups are not timed one by one, so the wall time is their time (workers 1) */
     const uint32_t enough = s->groups / 8u > 32u ? s->groups / 8u : (s->groups < 32u ? s->groups : 32u);
-    if (per > 0.0 && s->sel_groups >= enough)
-        s->ema_cache_ms_per_group = s->ema_cache_ms_per_group > 0.0 ? 0.8 * s->ema_cache_ms_per_group + 0.2 * per : per;
+    glow_budget_cost_learn(&s->gather_cost, s->sel_groups, enough, 1u, 1u, cache, cache);
 }
 
 static void bind(glow_gl_system *s, int binding, int b) { s->gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, (GLuint)binding, s->buf[b]); }
@@ -982,11 +984,9 @@ glow_result glow_gl_system_update(glow_gl_system *s, const glow_update_desc *des
         if (budgeted && it == 0) {
             const float r = desc->focus_radius > 0.0f ? desc->focus_radius : 0.1f * t->scene_diag; /* as on the CPU */
             uint32_t kmax = desc->max_caches ? (desc->max_caches + GLOW_BUDGET_GROUP - 1u) / GLOW_BUDGET_GROUP : s->groups;
-            if (desc->budget_ms > 0.0f && s->ema_cache_ms_per_group > 0.0) { /* as the CPU solver */
-                const double left = (double)desc->budget_ms - s->ema_other_ms;
-                double kt = left > 0.0 ? floor(left / (s->ema_cache_ms_per_group * iters)) : 0.0;
-                if (kt < 1.0) kt = 1.0; /* always some progress */
-                if (kt < (double)kmax) kmax = (uint32_t)kt;
+            if (desc->budget_ms > 0.0f && s->gather_cost.group_ms > 0.0) { /* as the CPU solver */
+                const uint32_t kt = glow_budget_cost_fit(&s->gather_cost, (double)desc->budget_ms - s->ema_other_ms, 1u, iters);
+                if (kt < kmax) kmax = kt;
             }
             if (s->delta_pending) { /* the last budgeted gather's change per group (long finished: no wait) */
                 gl->MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);

@@ -54,16 +54,6 @@ uint32_t glow__ctx_workers(const glow_context *ctx);
 /* Runs fn(data, i, worker) for i in [0, count) on the host's parallel_for or the built-in pool and
  * returns when all are done. Not reentrant (a task must not call it). */
 void glow__ctx_run(glow_context *ctx, glow_task_fn fn, void *data, uint32_t count);
-/* A time budget's model of the cache gathers (system.c): one bounce iteration that gathers k groups of
- * caches on w workers takes dispatch_ms + group_ms * k / min(k, w). learn: from an update that gathered
- * k groups in wall_ms (all its bounce iterations) whose tasks took busy_ms together; teach: the
- * selection size from which a sample counts fully upwards. fit: how many groups fit ms (at least 1). */
-typedef struct glow__gather_cost {
-    double group_ms, dispatch_ms; /* 0: not known yet */
-} glow__gather_cost;
-void glow__gather_cost_learn(glow__gather_cost *c, uint32_t k, uint32_t teach, uint32_t workers, uint32_t iters,
-                             double wall_ms, double busy_ms);
-uint32_t glow__gather_cost_fit(const glow__gather_cost *c, double ms, uint32_t workers, uint32_t iters);
 /* Starts the built-in pool now if the context uses one (systems call it at create, so no update
  * ever allocates); returns it, or NULL when work runs on the host's tasks or serially. */
 struct glow__taskpool *glow__ctx_start_pool(glow_context *ctx);

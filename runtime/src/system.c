@@ -151,7 +151,7 @@ struct glow_system {
     double drift;          /* Σ over updates of the node luma's relative L1 change */
     double ema_other_ms;   /* recent times, for budget_ms (0 = none yet): the stages a budget cannot cut (all
                               but the hook and the cache gathers), */
-    glow__gather_cost gather_cost; /* and the cache gathers (glow__gather_cost_learn) */
+    glow_budget_cost gather_cost; /* and the cache gathers (glow_budget_cost_learn) */
     double first_other_ms; /* the first budgeted update's other stages (first touches included): the estimate
                               until ema_other_ms has a sample */
     /* a time budget also cuts the host's hook (order_batches): batches of surfels lit by priority, as groups */
@@ -551,7 +551,7 @@ static void task_caches_sel(void *data, uint32_t k, uint32_t worker) {
         v += fabs((double)now);
     }
     s->grp_delta[g] = v > 0.0 ? (float)(d / v) : (d > 0.0 ? INFINITY : 0.0f);
-    s->grp_busy[k] = (float)(now_ms() - t0); /* the time budget's cost model (glow__gather_cost_learn) */
+    s->grp_busy[k] = (float)(now_ms() - t0); /* the time budget's cost model (glow_budget_cost_learn) */
 }
 
 /* outputs: tasks of PLANE_CHUNK cells (the grid's, then the lightmap's texels), each writing all the
@@ -1574,7 +1574,7 @@ static uint32_t teach_groups(const glow_system *s) {
     return s->groups / 8u > 32u ? s->groups / 8u : (s->groups < 32u ? s->groups : 32u);
 }
 
-/* The gather's cost under a time budget (glow__gather_cost, runtime_internal.h). Every budgeted update
+/* The gather's cost under a time budget (glow_budget_cost, glow_backend.h). Every budgeted update
  * that gathered teaches it, from its wall time and the groups' own times (task_caches_sel): a group's
  * time is their sum over k, the dispatch what the wall time has beyond that sum spread over the
  * workers. Before 2026-11-30 one figure, the wall time over k, was learnt, and only from selections of
@@ -1588,10 +1588,10 @@ static uint32_t teach_groups(const glow_system *s) {
  * so as an estimate for any selection their time per group is an upper bound: a sample teaches fully
  * downwards, and upwards in proportion to k / teach (all from teach groups on). A sample above twice
  * the estimate counts as twice (a descheduled worker). */
-void glow__gather_cost_learn(glow__gather_cost *c, uint32_t k, uint32_t teach, uint32_t workers, uint32_t iters,
-                             double wall_ms, double busy_ms) {
+void glow_budget_cost_learn(glow_budget_cost *c, uint32_t k, uint32_t teach, uint32_t workers, uint32_t iters,
+                            double wall_ms, double busy_ms) {
     const uint32_t par = workers ? (k < workers ? k : workers) : 1u;
-    if (!k || !iters || !(wall_ms > 0.0) || !(busy_ms > 0.0)) return;
+    if (!c || !k || !iters || !(wall_ms > 0.0) || !(busy_ms > 0.0) || !isfinite(wall_ms) || !isfinite(busy_ms)) return;
     const double group = busy_ms / iters / k, dispatch = fmax(wall_ms / iters - busy_ms / iters / par, 0.0);
     if (!(c->group_ms > 0.0)) {
         c->group_ms = group;
@@ -1604,7 +1604,8 @@ void glow__gather_cost_learn(glow__gather_cost *c, uint32_t k, uint32_t teach, u
     c->dispatch_ms = (1.0 - ad) * c->dispatch_ms + ad * fmin(dispatch, 2.0 * c->dispatch_ms + 0.01);
 }
 
-uint32_t glow__gather_cost_fit(const glow__gather_cost *c, double ms, uint32_t workers, uint32_t iters) {
+uint32_t glow_budget_cost_fit(const glow_budget_cost *c, double ms, uint32_t workers, uint32_t iters) {
+    if (!c) return 1u;
     const double it_ms = ms / (iters ? iters : 1u) - c->dispatch_ms;
     const double k = it_ms > 0.0 && c->group_ms > 0.0 ? floor(it_ms * (workers ? workers : 1u) / c->group_ms) : 0.0;
     return k < 1.0 ? 1u : (k > 4e9 ? 4000000000u : (uint32_t)k); /* always some progress */
@@ -1643,7 +1644,7 @@ static void schedule(glow_system *s, const glow_update_desc *d, glow_update_stat
     } else if (d->budget_ms > 0.0f) {
         const double left = (double)d->budget_ms - (s->ema_other_ms > 0.0 ? s->ema_other_ms : s->first_other_ms) -
                             s->hook_ms; /* the hook has run: its time this update */
-        const uint32_t kt = glow__gather_cost_fit(&s->gather_cost, left, glow__ctx_workers(s->ctx),
+        const uint32_t kt = glow_budget_cost_fit(&s->gather_cost, left, glow__ctx_workers(s->ctx),
                                                   s->params.bounce_iterations);
         if (kt < k) k = kt;
     }
@@ -1836,7 +1837,7 @@ static glow_result system_update(glow_system *s, const glow_update_desc *desc) {
     st.surfel_lighting_ms += t - t_begin;
     st.host_ms = t - t_begin;
 
-    double busy_ms = 0.0; /* the gathered groups' own times (glow__gather_cost_learn) */
+    double busy_ms = 0.0; /* the gathered groups' own times (glow_budget_cost_learn) */
     for (uint32_t it = 0; it < s->params.bounce_iterations; ++it) {
         double t0 = now_ms();
         /* Skip-if-unchanged: the surfel flux and the pull read the direct light, the emission, the
@@ -1918,7 +1919,7 @@ static glow_result system_update(glow_system *s, const glow_update_desc *desc) {
             s->ema_other_ms = s->ema_other_ms > 0.0 ? 0.8 * s->ema_other_ms + 0.2 * fmin(other, 2.0 * s->ema_other_ms) : other;
         else
             s->first_other_ms = other; /* an over-estimate until then: the second update keeps within the budget */
-        glow__gather_cost_learn(&s->gather_cost, s->sel_count, teach_groups(s), glow__ctx_workers(s->ctx),
+        glow_budget_cost_learn(&s->gather_cost, s->sel_count, teach_groups(s), glow__ctx_workers(s->ctx),
                                 s->params.bounce_iterations, st.cache_lighting_ms, busy_ms);
     }
     s->stats = st;

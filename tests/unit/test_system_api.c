@@ -1903,41 +1903,45 @@ static glow_result slow_hook(void *user, const glow_surfel_batch *b, float *out,
  * take more than half of what the budget leaves, the hook lights the stalest batches first (at least
  * one a worker) and the others keep their last direct light, byte for byte; the stats count the
  * surfels left; without a time budget (or with one that fits) every surfel is lit. */
-/* The time budget's model of the cache gathers (glow__gather_cost): what it learns from an update, and
- * that an estimate too high is unlearnt by the small selections it leads to. Before 2026-11-30 only
+/* The time budget's model of the cache gathers (glow_budget_cost, glow_backend.h): what it learns from
+ * an update, and that an estimate too high is unlearnt by the small selections it leads to. Before
+ * 2026-11-30 only
  * selections of at least `teach` groups taught it, and a system whose estimate was 5-10x too high
  * chose fewer groups than that for good (the 4x4 level's still camera, docs/results.md). */
 static void test_gather_cost(void **state) {
     (void)state;
     /* truth: 0.01 ms a group on one worker, 0.02 ms of dispatch an iteration, 2 workers */
-    glow__gather_cost c = {0.0, 0.0};
-    assert_int_equal(glow__gather_cost_fit(&c, 1.0, 2, 1), 1u); /* unknown: at least one */
-    glow__gather_cost_learn(&c, 64, 40, 2, 1, 0.02 + 64 * 0.01 / 2, 64 * 0.01);
+    glow_budget_cost c = {0.0, 0.0};
+    assert_int_equal(glow_budget_cost_fit(&c, 1.0, 2, 1), 1u); /* unknown: at least one */
+    glow_budget_cost_learn(&c, 64, 40, 2, 1, 0.02 + 64 * 0.01 / 2, 64 * 0.01);
     assert_true(fabs(c.group_ms - 0.01) < 1e-12 && fabs(c.dispatch_ms - 0.02) < 1e-12);
-    uint32_t k = glow__gather_cost_fit(&c, 0.34, 2, 1);
+    uint32_t k = glow_budget_cost_fit(&c, 0.34, 2, 1);
     assert_true(k == 63u || k == 64u);
-    k = glow__gather_cost_fit(&c, 2 * 0.34, 2, 2); /* two bounce iterations: the same groups in twice the time */
+    k = glow_budget_cost_fit(&c, 2 * 0.34, 2, 2); /* two bounce iterations: the same groups in twice the time */
     assert_true(k == 63u || k == 64u);
-    assert_int_equal(glow__gather_cost_fit(&c, 0.01, 2, 1), 1u); /* less than the dispatch: still one */
+    assert_int_equal(glow_budget_cost_fit(&c, 0.01, 2, 1), 1u); /* less than the dispatch: still one */
     /* bad samples change nothing */
-    glow__gather_cost_learn(&c, 0, 40, 2, 1, 1.0, 1.0);
-    glow__gather_cost_learn(&c, 8, 40, 2, 1, NAN, 1.0);
-    glow__gather_cost_learn(&c, 8, 40, 2, 0, 1.0, 1.0);
+    glow_budget_cost_learn(&c, 0, 40, 2, 1, 1.0, 1.0);
+    glow_budget_cost_learn(&c, 8, 40, 2, 1, NAN, 1.0);
+    glow_budget_cost_learn(&c, 8, 40, 2, 0, 1.0, 1.0);
+    glow_budget_cost_learn(&c, 8, 40, 2, 1, INFINITY, 1.0);
+    glow_budget_cost_learn(NULL, 8, 40, 2, 1, 1.0, 1.0);
+    assert_int_equal(glow_budget_cost_fit(NULL, 1.0, 2, 1), 1u);
     assert_true(fabs(c.group_ms - 0.01) < 1e-12 && fabs(c.dispatch_ms - 0.02) < 1e-12);
     /* upwards: a small selection's dearer groups (cold) teach in proportion to its size, an outlier
      * counts at most twice the estimate */
-    glow__gather_cost_learn(&c, 4, 40, 2, 1, 0.02 + 4 * 0.03 / 2, 4 * 0.03);
+    glow_budget_cost_learn(&c, 4, 40, 2, 1, 0.02 + 4 * 0.03 / 2, 4 * 0.03);
     assert_true(c.group_ms > 0.01 && c.group_ms < 0.0105);
-    c = (glow__gather_cost){0.01, 0.02};
-    glow__gather_cost_learn(&c, 64, 40, 2, 1, 0.02 + 64 * 1.0 / 2, 64 * 1.0);
+    c = (glow_budget_cost){0.01, 0.02};
+    glow_budget_cost_learn(&c, 64, 40, 2, 1, 0.02 + 64 * 1.0 / 2, 64 * 1.0);
     assert_true(c.group_ms > 0.0119 && c.group_ms < 0.0121);
     /* an estimate 5x too high gathers 12 groups where 60 would fit; those 12 (a little dearer each than
      * many) bring it back within 50 % of the truth in 15 updates */
-    c = (glow__gather_cost){0.05, 0.02};
-    assert_true(glow__gather_cost_fit(&c, 0.32, 2, 1) <= 12u);
-    for (int i = 0; i < 15; ++i) glow__gather_cost_learn(&c, 12, 40, 2, 1, 0.02 + 12 * 0.012 / 2, 12 * 0.012);
+    c = (glow_budget_cost){0.05, 0.02};
+    assert_true(glow_budget_cost_fit(&c, 0.32, 2, 1) <= 12u);
+    for (int i = 0; i < 15; ++i) glow_budget_cost_learn(&c, 12, 40, 2, 1, 0.02 + 12 * 0.012 / 2, 12 * 0.012);
     assert_true(c.group_ms < 0.015 && c.group_ms >= 0.012);
-    assert_true(glow__gather_cost_fit(&c, 0.32, 2, 1) >= 40u);
+    assert_true(glow_budget_cost_fit(&c, 0.32, 2, 1) >= 40u);
 }
 
 static void test_hook_budget(void **state) {

@@ -121,6 +121,24 @@ GLOW_API uint32_t glow_budget_choose(const float *centre, uint32_t *age, const u
                                      const float *focus, uint32_t focus_count, float focus_radius, uint32_t max_groups,
                                      uint64_t *scratch, uint32_t *out_sel);
 
+/** A time budget's model of the cache gathers, for backends that gather on their own; the CPU solver
+ * keeps one per system. One bounce iteration that gathers k groups on `workers` parallel workers takes
+ * dispatch_ms + group_ms * k / min(k, workers). Both 0 until the first sample. \since 0.2 */
+typedef struct glow_budget_cost {
+    double group_ms;    /* one group's gather on one worker, ms */
+    double dispatch_ms; /* a gather's time beyond its groups' (wake-up and join), ms */
+} glow_budget_cost;
+/** Teaches `cost` from one update that gathered `k` groups in `iters` bounce iterations: `wall_ms` all
+ * of them, `busy_ms` the groups' own times summed (a backend that cannot time its groups passes
+ * wall_ms and workers 1). A sample lowers the estimate fully (EMA 0.2) and raises it in proportion to
+ * min(1, k / teach): a few groups cost more each than many, so their figure bounds a larger selection's
+ * from above; a sample above twice the estimate counts as twice. Samples with k, iters or a time of 0
+ * (or not finite) change nothing. \since 0.2 */
+GLOW_API void glow_budget_cost_learn(glow_budget_cost *cost, uint32_t k, uint32_t teach, uint32_t workers,
+                                     uint32_t iters, double wall_ms, double busy_ms);
+/** How many groups fit `ms` (all `iters` iterations) by `cost`: at least 1. \since 0.2 */
+GLOW_API uint32_t glow_budget_cost_fit(const glow_budget_cost *cost, double ms, uint32_t workers, uint32_t iters);
+
 /** The visible sky of the grid caches as cache rows (cache_sh's layout: luma² Y, chroma² Co, chroma²
  * Cg per cache): per grid cache c, V_c ⊗ L (glow_sh_sky_visible of `visibility` [grid_caches][9] with
  * the sky `sh_rgb`) in YCoCg, coefficients past the bands dropped. glow_system_set_sky adds these rows
