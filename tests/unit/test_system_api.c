@@ -1905,9 +1905,9 @@ static glow_result slow_hook(void *user, const glow_surfel_batch *b, float *out,
  * surfels left; without a time budget (or with one that fits) every surfel is lit. */
 /* The time budget's model of the cache gathers (glow_budget_cost, glow_backend.h): what it learns from
  * an update, and that an estimate too high is unlearnt by the small selections it leads to. Before
- * 2026-11-30 only
- * selections of at least `teach` groups taught it, and a system whose estimate was 5-10x too high
- * chose fewer groups than that for good (the 4x4 level's still camera, docs/results.md). */
+ * 2026-11-30 only selections of at least `teach` groups taught it, and a system whose estimate was
+ * 5-10x too high chose fewer groups than that for good (the 4x4 level's still camera,
+ * docs/results.md). */
 static void test_gather_cost(void **state) {
     (void)state;
     /* truth: 0.01 ms a group on one worker, 0.02 ms of dispatch an iteration, 2 workers */
