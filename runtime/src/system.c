@@ -579,6 +579,12 @@ static void detail_range(glow_system *s, uint32_t first, uint32_t end) {
     }
 }
 
+/* the detail's chunk c: DETAIL_CHUNK texels (task_output, task_output_sel) */
+static void detail_chunk(glow_system *s, uint32_t c) {
+    const uint32_t first = c * DETAIL_CHUNK, T = s->det->texel_count;
+    detail_range(s, first, T - first < DETAIL_CHUNK ? T : first + DETAIL_CHUNK);
+}
+
 static uint32_t output_tasks(const glow_system *s, uint32_t *grid_tasks, uint32_t *plane_tasks) {
     const uint32_t g = div_up(s->grid_cells, PLANE_CHUNK), p = g + div_up(s->lm_texels, PLANE_CHUNK);
     if (grid_tasks) *grid_tasks = g;
@@ -592,8 +598,7 @@ static void task_output(void *data, uint32_t q, uint32_t worker) {
     uint32_t g, planes;
     output_tasks(s, &g, &planes);
     if (q >= planes) { /* the lightmap detail */
-        const uint32_t first = (q - planes) * DETAIL_CHUNK, T = s->det->texel_count;
-        detail_range(s, first, T - first < DETAIL_CHUNK ? T : first + DETAIL_CHUNK);
+        detail_chunk(s, q - planes);
         return;
     }
     const bool grid = q < g;
@@ -610,8 +615,7 @@ static void task_output_sel(void *data, uint32_t q, uint32_t worker) {
     (void)worker;
     glow_system *s = data;
     if (q >= s->sel_count) {
-        const uint32_t first = (q - s->sel_count) * DETAIL_CHUNK, T = s->det->texel_count;
-        detail_range(s, first, T - first < DETAIL_CHUNK ? T : first + DETAIL_CHUNK);
+        detail_chunk(s, q - s->sel_count);
         return;
     }
     const uint32_t g = s->grp_sel[q], nc = s->coeffs;
@@ -691,7 +695,8 @@ static void *alloc_array(glow_system *s, size_t count, size_t elem, bool *ok) {
         *ok = false;
         return NULL;
     }
-    /* Every page touched here, at create (the loader's time), not in the first updates: a buffer that
+    /* Zeroed: every page touched here, at create (the loader's time), not in the first updates (and
+     * create relies on the zeros: caches, light and outputs start dark). A buffer that
      * create leaves for the update to fill (rad_out, the scratch) otherwise takes its pages' first-touch
      * faults inside a budgeted update. On this 2-core VM a streamed-in system's first update took 135
      * minor faults in its output stage, 2.5 ms against 0.35 (the 4x4 level under 2 ms, --stream 20). */
@@ -757,7 +762,7 @@ static bool gradient_moments(glow_system *s) {
             const double *a = mo + 10 * (size_t)s->nodes[n].child[0], *b = mo + 10 * (size_t)s->nodes[n].child[1];
             for (int k = 0; k < 10; ++k) mo[10 * (size_t)n + k] = a[k] + b[k];
         }
-    memset(s->grad_cm, 0, ((size_t)s->sub_count + 3u) / 4u * 48u * sizeof(float)); /* with a last block's padding */
+    /* grad_cm starts zeroed (alloc_array), a last block's padding too */
     for (uint32_t k = 0; k < s->sub_count; ++k) {
         float cm[12] = {0}; /* 0 where the moments give none */
         gradient_cm_of(mo + 10 * (size_t)s->sub_nodes[k], cm);
@@ -1027,11 +1032,7 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
             s->uv0[2 * i + 1] = (float)(b0 * uv[1] + b1 * uv[3] + b2 * uv[5]);
         }
     }
-    memset(s->direct, 0, S * 3 * sizeof(float));
-    memset(s->direct_spare, 0, S * 3 * sizeof(float));
-    memset(s->flux, 0, N * 3 * sizeof(float));
-    memset(s->rad, 0, (N + s->P) * 4 * sizeof(float));
-    if (s->deps) memset(s->dep_max_node, 0, s->deps * sizeof *s->dep_max_node);
+    /* direct, flux, rad, dep_max_node and every other buffer start zeroed (alloc_array) */
     for (uint32_t p = 0; p < s->P; ++p) {
         uint32_t *mx = &s->dep_max_node[s->proxies[p].dependency];
         if (s->proxies[p].node + 1u > *mx) *mx = s->proxies[p].node + 1u;
@@ -1039,9 +1040,7 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     for (size_t n = 0; n < N; ++n) s->inv_pi_area[n] = 1.0f / (PI_F * s->nodes[n].area);
     if (s->gradient) {
         s->subsets = glow__bake_link_subsets(desc->bake);
-        if (s->sub_ratio) memset(s->sub_ratio, 0, (N + s->P) * 4 * sizeof(uint16_t)); /* u = 0: scale 1 */
-        if (s->grad_uz) memset(s->grad_uz, 0, (N + s->P + 2u) * sizeof(uint16_t));
-        memset(s->mom, 0, N * 3 * sizeof(float));
+        /* sub_ratio, grad_uz and mom start zeroed (sub_ratio's u = 0: scale 1) */
         if (!gradient_moments(s)) {
             GLOW__LOG_ERROR(ctx, GLOW_ERROR_OUT_OF_MEMORY, "glow_system_create(%s): out of memory (link gradients)",
                             label);
@@ -1061,8 +1060,7 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
         for (size_t n = N; n < N + s->P; ++n)
             for (int i = 0; i < 4; ++i) s->sub_ratio[4 * n + (size_t)i] = 0x3C00u;
     }
-    memset(s->cache_sh, 0, (size_t)s->C * s->coeffs * sizeof(float));
-    { /* budget state: every group stale and unconverged; centres for the focus */
+    { /* budget state: every group stale and unconverged; centres for the focus (cache_sh, rad_prev start zeroed) */
         const glow_bake_cache *cc = glow__bake_caches(desc->bake);
         for (uint32_t g = 0; g < s->groups; ++g) {
             const uint32_t first = g * GLOW_BUDGET_GROUP, end = first + GLOW_BUDGET_GROUP < s->C ? first + GLOW_BUDGET_GROUP : s->C;
@@ -1084,7 +1082,6 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
             s->bat_ms[b] = -1.0f;
             s->bat_current[b] = 1; /* a first update with KEEP_LIGHTING calls no hook, as before */
         }
-        memset(s->rad_prev, 0, (N + s->P ? N + s->P : 1u) * sizeof(float));
         double d2 = 0.0;
         for (int k = 0; k < 3; ++k) d2 += (double)(m->bounds_max[k] - m->bounds_min[k]) * (m->bounds_max[k] - m->bounds_min[k]);
         s->scene_diag = (float)sqrt(d2);
@@ -1104,7 +1101,6 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
         }
     { /* the pairs by group (a counting sort; grp_sel is scratch until the first update) */
         const size_t pairs = s->grid_used + s->lm_used;
-        memset(s->grp_out_off, 0, ((size_t)s->groups + 1u) * sizeof(uint32_t));
         for (size_t p = 0; p < pairs; ++p) s->grp_out_off[s->out_cache[p] / GLOW_BUDGET_GROUP + 1u]++;
         for (uint32_t g = 0; g < s->groups; ++g) {
             s->grp_out_off[g + 1u] += s->grp_out_off[g];
@@ -1112,10 +1108,7 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
         }
         for (size_t p = 0; p < pairs; ++p) s->grp_out[s->grp_sel[s->out_cache[p] / GLOW_BUDGET_GROUP]++] = (uint32_t)p;
     }
-    if (s->grid_cells) memset(s->grid_sh, 0, s->grid_cells * s->coeffs * sizeof(float));
-    if (s->lm_texels) memset(s->lm_sh, 0, s->lm_texels * s->coeffs * sizeof(float));
-    if (s->det) { /* RGB 0 until the first update; A = 1 where a detail texel covers a surface */
-        memset(s->det_out, 0, (size_t)s->det->width * s->det->height * m->lightmap_count * 4 * sizeof(float));
+    if (s->det) { /* planes 0 until the first update; the detail's RGB too, A = 1 where it covers a surface */
         for (uint32_t i = 0; i < s->det->texel_count; ++i) s->det_out[4 * (size_t)s->det_texel[i] + 3] = 1.0f;
     }
     glow__ctx_start_pool(ctx); /* threads start here, never in an update */
