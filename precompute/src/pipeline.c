@@ -2142,6 +2142,8 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
     char **made = NULL; /* files this bake wrote */
     cJSON **objs = NULL; /* the manifest entries of the systems baked now, completed after the bakes */
     double *rec = NULL;  /* per system: what its bake reports (SYS_REC numbers), exchanged between ranks */
+    glow_pc_stats *sst = NULL; /* distributed: each baked system's summary, exchanged with rec and added to the
+                                  world's in index order, so the summary is a one-process bake's for any ranks */
     const glow_pc_distribution *dist = set->distribution && set->distribution->ranks > 1 ? set->distribution : NULL;
     uint32_t to_bake = 0;
     cJSON *root = cJSON_CreateObject(), *list = NULL, *prev = read_previous(out_path);
@@ -2187,6 +2189,7 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
         goto done;
     }
     if (!(made = calloc(sp.n + 1, sizeof *made)) || !(objs = calloc(sp.n + 1, sizeof *objs)) ||
+        (dist && !(sst = calloc(sp.n + 1, sizeof *sst))) ||
         !(rec = calloc(((size_t)sp.n + 1) * SYS_REC, sizeof *rec))) {
         res = GLOW_ERROR_OUT_OF_MEMORY;
         goto done;
@@ -2418,9 +2421,13 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
                 sys_base_free(&bases[s]); /* the systems that link it read trees[s] */
                 if (res == GLOW_OK) {
                     if (mine && !(made[nmade++] = strdup(path))) res = GLOW_ERROR_OUT_OF_MEMORY;
-                    const bool big = ss.surfels > largest;
-                    if (big) largest = ss.surfels;
-                    sys_stats_add(stats, &ss, big);
+                    if (dist) {
+                        sst[s] = ss;
+                    } else {
+                        const bool big = ss.surfels > largest;
+                        if (big) largest = ss.surfels;
+                        sys_stats_add(stats, &ss, big);
+                    }
                     glow__infof(log, "system %u: %u triangles, area %.6g, %u surfels, %u caches (%u grid, %u lightmap), "
                                 "%.3g texels/unit, %u neighbours, %llu proxy nodes -> %s", s, sub.tri_count, sub.area,
                                 ss.surfels, ss.caches, ss.grid_caches, ss.lightmap_caches, (double)ss.texel_density, nd,
@@ -2467,34 +2474,42 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
         if (o) cJSON_AddItemToArray(list, o);
     }
     if (res == GLOW_OK && dist && to_bake) { /* every rank's figures for the systems it baked */
+        /* one item a system: its SYS_REC numbers, then its whole summary (the ranks run one binary) */
+        const size_t item = SYS_REC * sizeof(double) + (sizeof(glow_pc_stats) + 7u) / 8u * 8u;
         size_t *off = calloc((size_t)dist->ranks + 1, sizeof *off);
-        double *buf = malloc(((size_t)to_bake + 1) * SYS_REC * sizeof *buf);
+        unsigned char *buf = malloc(((size_t)to_bake + 1) * item);
         uint32_t *order = malloc(((size_t)to_bake + 1) * sizeof *order); /* systems by rank, then index */
         if (!off || !buf || !order) {
             res = GLOW_ERROR_OUT_OF_MEMORY;
         } else {
             uint32_t k = 0;
             for (uint32_t r = 0; r < dist->ranks; ++r) {
-                off[r] = (size_t)k * SYS_REC * sizeof *buf;
+                off[r] = (size_t)k * item;
                 for (uint32_t s2 = 0, b = 0; s2 < sp.n; ++s2)
                     if (objs[s2] && (b++ % dist->ranks) == r) order[k++] = s2;
             }
-            off[dist->ranks] = (size_t)k * SYS_REC * sizeof *buf;
-            for (uint32_t i = 0; i < k; ++i) memcpy(buf + (size_t)i * SYS_REC, rec + (size_t)order[i] * SYS_REC, SYS_REC * sizeof *buf);
+            off[dist->ranks] = (size_t)k * item;
+            for (uint32_t i = 0; i < k; ++i) {
+                memcpy(buf + (size_t)i * item, rec + (size_t)order[i] * SYS_REC, SYS_REC * sizeof(double));
+                memcpy(buf + (size_t)i * item + SYS_REC * sizeof(double), &sst[order[i]], sizeof *sst);
+            }
             res = dist->share(dist->user, buf, off);
             if (res != GLOW_OK) glow__errorf(log, "%s: the systems' figures could not be exchanged between the ranks", out_path);
             for (uint32_t i = 0; res == GLOW_OK && i < k; ++i) {
-                const double *r = buf + (size_t)i * SYS_REC;
-                double *dst = rec + (size_t)order[i] * SYS_REC;
-                memcpy(dst, r, SYS_REC * sizeof *dst);
-                const size_t at = (size_t)i * SYS_REC * sizeof *buf;
-                if (at < off[dist->rank] || at >= off[dist->rank + 1]) { /* another rank's system: into the totals */
-                    stats->surfels += (uint32_t)r[0];
-                    stats->caches += (uint32_t)r[1];
-                    stats->grid_caches += (uint32_t)r[2];
-                    stats->lightmap_caches += (uint32_t)r[3];
-                    stats->file_size += (uint64_t)r[5];
+                glow_pc_stats *x = &sst[order[i]];
+                memcpy(rec + (size_t)order[i] * SYS_REC, buf + (size_t)i * item, SYS_REC * sizeof(double));
+                memcpy(x, buf + (size_t)i * item + SYS_REC * sizeof(double), sizeof *x);
+                if ((size_t)i * item < off[dist->rank] || (size_t)i * item >= off[dist->rank + 1]) {
+                    /* the stage times and peak memory stay this process's own */
+                    memset(x->stage_seconds, 0, sizeof x->stage_seconds);
+                    memset(x->stage_peak_rss, 0, sizeof x->stage_peak_rss);
                 }
+            }
+            for (uint32_t s2 = 0; res == GLOW_OK && s2 < sp.n; ++s2) { /* in index order, as one process adds them */
+                if (!objs[s2]) continue;
+                const bool big = sst[s2].surfels > largest;
+                if (big) largest = sst[s2].surfels;
+                sys_stats_add(stats, &sst[s2], big);
             }
         }
         free(order);
@@ -2561,6 +2576,7 @@ done:
     free(made);
     free(objs);
     free(rec);
+    free(sst);
     for (uint32_t s = 0; bases && s < sp.n; ++s) sys_base_free(&bases[s]);
     free(bases);
     for (uint32_t s = 0; trees && s < sp.n; ++s) sys_tree_free(&trees[s]);

@@ -59,7 +59,9 @@ typedef enum glow_pc_link_visibility {
  * one-process bake's for any number of ranks (each cache's links depend on nothing but the cache).
  * A bake split into systems (system_area) gives whole systems to the ranks instead (the k-th system to
  * bake to rank k mod ranks), each rank writes the systems it baked (out_path's folder must be shared),
- * share() exchanges their figures and rank 0 writes the manifest.
+ * share() exchanges their figures and rank 0 writes the manifest. Every rank's summary (glow_pc_stats)
+ * then holds the whole world's figures as a one-process bake's would, but for the stage times and peak
+ * memory, which are the rank's own.
  * No MPI in the library: the host supplies the exchange. */
 typedef struct glow_pc_distribution {
     uint32_t rank, ranks; /* this process's rank, 0 <= rank < ranks */
