@@ -2,6 +2,8 @@
 #ifndef GLOW_CACHE_LIGHTING_H
 #define GLOW_CACHE_LIGHTING_H
 
+#include <string.h>
+
 #include "runtime_internal.h"
 #include "sh_kernel.h"
 
@@ -64,6 +66,34 @@ void glow__cl_light_caches(const glow__cl_args *a, uint32_t first, uint32_t coun
 #define GLOW__CL_EMPTY 0xFFFFFFFFu
 void glow__cl_write_planes(glow__cl_isa isa, float *dst, size_t stride, const uint32_t *map, size_t first, size_t end,
                            const float *sh, uint32_t nc);
+/* The same as IEEE halves (GLOW_OUTPUT_PLANES_F16): glow__f16 of each value. The AVX2 and AVX-512
+ * builds convert with F16C, whose bits glow__f16 reproduces. */
+void glow__cl_write_planes_f16(glow__cl_isa isa, uint16_t *dst, size_t stride, const uint32_t *map, size_t first,
+                               size_t end, const float *sh, uint32_t nc);
+
+/* x as an IEEE half: clamped to [-65504, 65504] first (a NaN to 65504, as x86's minps then maxps),
+ * then rounded to nearest even, subnormal halves included: the bits F16C's vcvtps2ph gives for the
+ * clamped value with _MM_FROUND_TO_NEAREST_INT. (The bake's link codes use their own conversions.) */
+static inline uint16_t glow__f16(float x) {
+    x = x < 65504.0f ? x : 65504.0f;
+    x = x > -65504.0f ? x : -65504.0f;
+    uint32_t u;
+    memcpy(&u, &x, sizeof u);
+    const uint32_t sign = (u >> 16) & 0x8000u;
+    u &= 0x7FFFFFFFu;
+    if (u < (113u << 23)) { /* below 2^-14: a subnormal half or zero; the float addition rounds to nearest even */
+        const float magic = 0.5f; /* 2^-1: its last mantissa bit weighs 2^-24, the smallest half */
+        float a;
+        memcpy(&a, &u, sizeof a);
+        a += magic;
+        uint32_t b;
+        memcpy(&b, &a, sizeof b);
+        return (uint16_t)(sign | (b - 0x3F000000u));
+    }
+    const uint32_t odd = (u >> 13) & 1u; /* ties to even */
+    u += 0xC8000FFFu + odd;                /* the exponent rebiased (-112 << 23) and half an ulp less one */
+    return (uint16_t)(sign | (u >> 13));
+}
 glow__cl_isa glow__cl_best_isa(void);
 int glow__cl_isa_supported(glow__cl_isa isa); /* this CPU runs it */
 const char *glow__cl_isa_name(glow__cl_isa isa);

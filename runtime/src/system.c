@@ -103,7 +103,9 @@ struct glow_system {
     float *sky_grid, *sky_backup;
     bool sky_on, sky_applied;
     uint64_t sky_revision, sky_out_revision;
+    glow_output_planes planes; /* the planes' format: grid_sh / lm_sh (F32), grid_h / lm_h (F16) or none */
     float *grid_sh, *lm_sh;
+    uint16_t *grid_h, *lm_h;
     uint32_t *grid_map, *lm_map;
     size_t grid_cells, lm_texels;
     /* the non-empty cells/texels as (index, cache) pairs, for other backends (glow_solver_tables:
@@ -586,7 +588,8 @@ static void detail_chunk(glow_system *s, uint32_t c) {
 }
 
 static uint32_t output_tasks(const glow_system *s, uint32_t *grid_tasks, uint32_t *plane_tasks) {
-    const uint32_t g = div_up(s->grid_cells, PLANE_CHUNK), p = g + div_up(s->lm_texels, PLANE_CHUNK);
+    const bool none = s->planes == GLOW_OUTPUT_PLANES_NONE;
+    const uint32_t g = none ? 0u : div_up(s->grid_cells, PLANE_CHUNK), p = g + (none ? 0u : div_up(s->lm_texels, PLANE_CHUNK));
     if (grid_tasks) *grid_tasks = g;
     if (plane_tasks) *plane_tasks = p;
     return p + (s->det ? div_up(s->det->texel_count, DETAIL_CHUNK) : 0u);
@@ -603,8 +606,13 @@ static void task_output(void *data, uint32_t q, uint32_t worker) {
     }
     const bool grid = q < g;
     const size_t n = grid ? s->grid_cells : s->lm_texels, first = (size_t)(grid ? q : q - g) * PLANE_CHUNK;
-    glow__cl_write_planes(s->isa, grid ? s->grid_sh : s->lm_sh, n, grid ? s->grid_map : s->lm_map, first,
-                          n - first < PLANE_CHUNK ? n : first + PLANE_CHUNK, s->cache_sh, s->coeffs);
+    const size_t end = n - first < PLANE_CHUNK ? n : first + PLANE_CHUNK;
+    if (s->planes == GLOW_OUTPUT_PLANES_F16)
+        glow__cl_write_planes_f16(s->isa, grid ? s->grid_h : s->lm_h, n, grid ? s->grid_map : s->lm_map, first, end,
+                                  s->cache_sh, s->coeffs);
+    else
+        glow__cl_write_planes(s->isa, grid ? s->grid_sh : s->lm_sh, n, grid ? s->grid_map : s->lm_map, first, end,
+                              s->cache_sh, s->coeffs);
 }
 
 /* outputs of a budgeted update whose outputs were written last from the same caches but the gathered
@@ -619,13 +627,20 @@ static void task_output_sel(void *data, uint32_t q, uint32_t worker) {
         return;
     }
     const uint32_t g = s->grp_sel[q], nc = s->coeffs;
+    if (s->planes == GLOW_OUTPUT_PLANES_NONE) return;
+    const bool f16 = s->planes == GLOW_OUTPUT_PLANES_F16;
     for (uint32_t i = s->grp_out_off[g]; i < s->grp_out_off[g + 1u]; ++i) {
         const uint32_t p = s->grp_out[i];
         const bool grid = p < s->grid_used;
         const size_t n = grid ? s->grid_cells : s->lm_texels, t = s->out_index[p];
-        float *restrict dst = (grid ? s->grid_sh : s->lm_sh) + t;
         const float *restrict src = s->cache_sh + (size_t)s->out_cache[p] * nc;
-        for (uint32_t k = 0; k < nc; ++k) dst[k * n] = src[k];
+        if (f16) {
+            uint16_t *restrict dst = (grid ? s->grid_h : s->lm_h) + t;
+            for (uint32_t k = 0; k < nc; ++k) dst[k * n] = glow__f16(src[k]);
+        } else {
+            float *restrict dst = (grid ? s->grid_sh : s->lm_sh) + t;
+            for (uint32_t k = 0; k < nc; ++k) dst[k * n] = src[k];
+        }
     }
 }
 
@@ -709,7 +724,7 @@ static void free_system(glow_system *s) {
     glow_context *ctx = s->ctx;
     void *bufs[] = {s->pos4, s->nrm4, s->mat, s->tri, s->feedback, s->albedo, s->emis_base, s->emis,
                     s->direct, s->direct_spare, s->fb_w, s->rho_ind_max, s->flux, s->rad, s->inv_pi_area, s->leaf_area,
-                    s->cache_sh, s->grid_sh, s->lm_sh, s->grid_map, s->lm_map, s->mat_emis_scale,
+                    s->cache_sh, s->grid_sh, s->lm_sh, s->grid_h, s->lm_h, s->grid_map, s->lm_map, s->mat_emis_scale,
                     s->mat_albedo_scale, s->batch_status, s->batch_negative, s->out_index, s->out_cache,
                     s->grp_out, s->grp_out_off, s->xblocks, s->slots, s->sub_ratio, s->grad_uz, s->sub_nodes, s->mom, s->grad_cm, s->grp_age, s->grp_delta,
                     s->grp_drift_at, s->grp_centre,
@@ -812,6 +827,12 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
                         (unsigned)desc->link_mode);
         return GLOW_ERROR_INVALID_ARGUMENT;
     }
+    if (desc->output_planes != GLOW_OUTPUT_PLANES_F32 && desc->output_planes != GLOW_OUTPUT_PLANES_F16 &&
+        desc->output_planes != GLOW_OUTPUT_PLANES_NONE) {
+        GLOW__LOG_ERROR(ctx, GLOW_ERROR_INVALID_ARGUMENT, "glow_system_create(%s): unknown output_planes %u", label,
+                        (unsigned)desc->output_planes);
+        return GLOW_ERROR_INVALID_ARGUMENT;
+    }
     if (link_mode == GLOW_LINK_MODE_SH && (!(m->link_kind & GLOW_LINK_KIND_FULL_SH) || !glow__bake_shlk_blocks(desc->bake))) {
         GLOW__LOG_ERROR(ctx, GLOW_ERROR_UNSUPPORTED,
                         "glow_system_create(%s): GLOW_LINK_MODE_SH needs full-SH links, and this bake has none "
@@ -911,8 +932,14 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
         if (glow_bake_get_sky_transfer(s->bake, &sky) == GLOW_OK && sky.grid_visibility && sky.grid_cache_count)
             s->sky_V = sky.grid_visibility; /* sky_grid and sky_backup: the first glow_system_set_sky */
     }
-    s->grid_sh = alloc_array(s, s->grid_cells, (size_t)s->coeffs * sizeof(float), &ok);
-    s->lm_sh = alloc_array(s, s->lm_texels, (size_t)s->coeffs * sizeof(float), &ok);
+    s->planes = desc->output_planes;
+    if (s->planes == GLOW_OUTPUT_PLANES_F32) {
+        s->grid_sh = alloc_array(s, s->grid_cells, (size_t)s->coeffs * sizeof(float), &ok);
+        s->lm_sh = alloc_array(s, s->lm_texels, (size_t)s->coeffs * sizeof(float), &ok);
+    } else if (s->planes == GLOW_OUTPUT_PLANES_F16) {
+        s->grid_h = alloc_array(s, s->grid_cells, (size_t)s->coeffs * sizeof(uint16_t), &ok);
+        s->lm_h = alloc_array(s, s->lm_texels, (size_t)s->coeffs * sizeof(uint16_t), &ok);
+    }
     s->grid_map = alloc_array(s, s->grid_cells, sizeof(uint32_t), &ok);
     s->lm_map = alloc_array(s, s->lm_texels, sizeof(uint32_t), &ok);
     s->mat_emis_scale = alloc_array(s, s->M ? s->M : 1u, 3 * sizeof(float), &ok);
@@ -1131,6 +1158,9 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
                                   .grid_spacing = m->grid_spacing,
                                   .grid_sh = s->grid_cells ? s->grid_sh : NULL,
                                   .lightmap_sh = s->lm_texels ? s->lm_sh : NULL,
+                                  .output_planes = s->planes,
+                                  .grid_sh_f16 = s->grid_cells ? s->grid_h : NULL,
+                                  .lightmap_sh_f16 = s->lm_texels ? s->lm_h : NULL,
                                   .grid_map = s->grid_cells ? s->grid_map : NULL,
                                   .grid_visibility = s->grid_cells ? glow__bake_grid_visibility(desc->bake) : NULL,
                                   .lightmap_map = s->lm_texels ? s->lm_map : NULL};

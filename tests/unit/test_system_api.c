@@ -25,6 +25,7 @@
 #include "glow/glow.h"
 #include "glow/glow_backend.h"
 #include "glow/glow_precompute.h"
+#include "cache_lighting.h"
 #include "runtime_internal.h"
 
 #ifndef M_PI
@@ -1001,6 +1002,181 @@ static void test_no_allocation_in_update(void **state) {
     glow_system_destroy(p);
     env_close(&e);
     assert_int_equal(atomic_load(&c.allocs), atomic_load(&c.frees)); /* everything freed */
+}
+
+/* ------------------------------------------------------------------------------ output planes */
+/* The IEEE half of x by plain arithmetic, the reference for glow__f16: clamped to +-65504 (NaN to
+ * 65504), then |x| scaled by a power of two (exact) to an integer of 11 significant bits (or, below
+ * 2^-14, of the subnormal step 2^-24) and rounded by nearbyint, to nearest even. */
+static uint16_t ref_f16(float x) {
+    if (!(x < 65504.0f)) x = 65504.0f;
+    if (x < -65504.0f) x = -65504.0f;
+    const uint16_t sign = signbit(x) ? 0x8000u : 0u;
+    const double a = fabs((double)x);
+    if (a < ldexp(1.0, -14)) return (uint16_t)(sign | (uint16_t)nearbyint(a * ldexp(1.0, 24)));
+    int E;
+    (void)frexp(a, &E);
+    int e = E - 1; /* a in [2^e, 2^(e+1)) */
+    double q = nearbyint(a * ldexp(1.0, 10 - e));
+    if (q == 2048.0) q = 1024.0, ++e;
+    return (uint16_t)(sign | (uint16_t)((uint32_t)(e + 15) << 10 | ((uint32_t)q - 1024u)));
+}
+static float half_value(uint16_t h) { /* a finite half's exact value */
+    const int e = (h >> 10) & 31, m = h & 1023;
+    const double v = e ? ldexp(1024.0 + m, e - 25) : ldexp((double)m, -24);
+    return (float)((h & 0x8000u) ? -v : v);
+}
+#if (defined(__x86_64__) || defined(__i386__)) && defined(__GNUC__) && !defined(__clang__)
+#include <immintrin.h>
+__attribute__((target("f16c"))) static uint16_t f16c_of(float x) { /* the hardware's, after the same clamp */
+    x = x < 65504.0f ? x : 65504.0f;
+    x = x > -65504.0f ? x : -65504.0f;
+    return (uint16_t)_cvtss_sh(x, _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC);
+}
+#define HAVE_F16C_REF 1
+#endif
+
+/* glow__f16 (the F16 planes' scalar conversion) against the reference: every finite half, every
+ * midpoint between neighbouring halves (ties to even) and a float either side, 2^20 scattered bit
+ * patterns (NaN, infinities, huge and subnormal values among them); and against F16C where the CPU has
+ * it, which the AVX2 and AVX-512 plane writers use. */
+static void test_f16_conversion(void **state) {
+    (void)state;
+#ifdef HAVE_F16C_REF
+    __builtin_cpu_init();
+    const bool hw = __builtin_cpu_supports("f16c");
+#else
+    const bool hw = false;
+#endif
+    uint32_t checked = 0;
+#define CHECK_F16(v)                                                                                                     \
+    do {                                                                                                                 \
+        const float v_ = (v);                                                                                            \
+        const uint16_t want_ = ref_f16(v_), got_ = glow__f16(v_);                                                        \
+        if (got_ != want_) fail_msg("glow__f16(%a) = 0x%04x, want 0x%04x", (double)v_, got_, want_);                     \
+        if (hw && f16c_of(v_) != want_) fail_msg("F16C(%a) = 0x%04x, reference 0x%04x", (double)v_, f16c_of(v_), want_); \
+        ++checked;                                                                                                       \
+    } while (0)
+#ifndef HAVE_F16C_REF
+#define f16c_of(v) ((void)(v), (uint16_t)0)
+#endif
+    for (uint32_t h = 0; h < 0x10000u; ++h) {
+        if (((h >> 10) & 31u) == 31u) continue; /* infinities and NaNs are no half values */
+        const float v = half_value((uint16_t)h);
+        if (glow__f16(v) != h) fail_msg("half 0x%04x (%a) came back as 0x%04x", h, (double)v, glow__f16(v));
+        CHECK_F16(v);
+        if ((h & 0x7FFFu) < 0x7BFFu) { /* the midpoint to the next half away from zero, and its neighbours */
+            const float mid = (float)(((double)v + (double)half_value((uint16_t)(h + 1u))) / 2.0);
+            CHECK_F16(mid);
+            CHECK_F16(nextafterf(mid, 0.0f));
+            CHECK_F16(nextafterf(mid, (h & 0x8000u) ? -INFINITY : INFINITY));
+        }
+    }
+    uint32_t r = 0x9E3779B9u;
+    for (uint32_t i = 0; i < (1u << 20); ++i) {
+        r ^= r << 13, r ^= r >> 17, r ^= r << 5;
+        float v;
+        memcpy(&v, &r, sizeof v);
+        CHECK_F16(v);
+    }
+    CHECK_F16(65519.0f); /* would round to infinity unclamped */
+    CHECK_F16(-1e30f);
+    CHECK_F16(INFINITY);
+    CHECK_F16(NAN);
+    CHECK_F16(-0.0f);
+    assert_int_equal(glow__f16(NAN), 0x7BFFu);
+    assert_int_equal(glow__f16(-0.0f), 0x8000u);
+    assert_int_equal(glow__f16(5.9604645e-08f), 0x0001u); /* the smallest subnormal half */
+    assert_int_equal(glow__f16(2.9802322e-08f), 0x0000u); /* half of it: a tie, to even (zero) */
+    print_message("%u values, F16C %s\n", checked, hw ? "compared" : "not on this CPU");
+#undef CHECK_F16
+}
+
+/* glow_system_desc.output_planes: F16 planes hold glow__f16 of the F32 planes, value for value, after
+ * full updates and after budgeted ones that rewrite only the gathered groups' texels; NONE has no
+ * planes; the cache rows are the same bytes in all three. For the best kernel build and the generic
+ * one (GLOW_CACHE_KERNEL), whose plane writers differ. An unknown format is refused. */
+static void test_output_planes(void **state) {
+    (void)state;
+    env e;
+    env_open(&e);
+    glow_system *bad = (glow_system *)1;
+    assert_int_equal(glow_system_create(e.ctx, &(glow_system_desc){.bake = e.bake, .output_planes = (glow_output_planes)3}, &bad),
+                     GLOW_ERROR_INVALID_ARGUMENT);
+    assert_null(bad);
+    assert_int_equal(e.log.errors, 1);
+    assert_non_null(strstr(e.log.last_msg, "unknown output_planes"));
+    rec_reset(&e.log);
+    const char *kernels[] = {NULL, "generic"};
+    for (int kk = 0; kk < 2; ++kk) {
+        if (kernels[kk]) setenv("GLOW_CACHE_KERNEL", kernels[kk], 1);
+        else unsetenv("GLOW_CACHE_KERNEL");
+        glow_system *sys[3] = {NULL, NULL, NULL};
+        const glow_output_planes fmt[3] = {GLOW_OUTPUT_PLANES_F32, GLOW_OUTPUT_PLANES_F16, GLOW_OUTPUT_PLANES_NONE};
+        for (int i = 0; i < 3; ++i)
+            assert_int_equal(glow_system_create(e.ctx, &(glow_system_desc){.bake = e.bake, .output_planes = fmt[i]}, &sys[i]),
+                             GLOW_OK);
+        glow_surfel_view v;
+        assert_int_equal(glow_system_get_surfels(sys[0], &v), GLOW_OK);
+        float *E = malloc(3 * (size_t)v.count * sizeof *E);
+        assert_non_null(E);
+        const glow_cache_outputs *o[3];
+        for (int i = 0; i < 3; ++i) o[i] = glow_system_outputs(sys[i]);
+        assert_int_equal(o[0]->output_planes, GLOW_OUTPUT_PLANES_F32);
+        assert_int_equal(o[1]->output_planes, GLOW_OUTPUT_PLANES_F16);
+        assert_int_equal(o[2]->output_planes, GLOW_OUTPUT_PLANES_NONE);
+        assert_non_null(o[0]->grid_sh);
+        assert_non_null(o[0]->lightmap_sh);
+        assert_null(o[0]->grid_sh_f16);
+        assert_null(o[0]->lightmap_sh_f16);
+        assert_null(o[1]->grid_sh);
+        assert_null(o[1]->lightmap_sh);
+        assert_non_null(o[1]->grid_sh_f16);
+        assert_non_null(o[1]->lightmap_sh_f16);
+        assert_true(!o[2]->grid_sh && !o[2]->lightmap_sh && !o[2]->grid_sh_f16 && !o[2]->lightmap_sh_f16);
+        assert_non_null(o[2]->grid_map); /* the maps and rows stay: glow_sample_* reads them */
+        const size_t nc = o[0]->coeff_count, C = o[0]->cache_count;
+        const size_t ng = (size_t)o[0]->grid_dims[0] * o[0]->grid_dims[1] * o[0]->grid_dims[2] * nc;
+        const size_t nl = (size_t)o[0]->lightmap_width * o[0]->lightmap_height * o[0]->lightmap_pages * nc;
+        assert_true(ng > 0 && nl > 0);
+        size_t beyond = 0; /* values over a half's largest, which F16 clamps */
+        for (int step = 0; step < 9; ++step) {
+            /* the light changes every update; updates 3-8 gather a quarter of the caches each (the
+             * selective outputs); updates 2 (whole planes) and 7-8 (selective) are 1e7 times as bright,
+             * beyond the halves' range */
+            const float scale = step == 2 || step >= 7 ? 1e7f : 1.0f + 0.25f * (float)step;
+            for (uint32_t i = 0; i < v.count; ++i)
+                light_at(v.positions + 4 * (size_t)i, v.normals + 4 * (size_t)i, scale, E + 3 * (size_t)i);
+            const glow_update_desc cap = {.max_caches = (uint32_t)(C / 4u)};
+            for (int i = 0; i < 3; ++i) {
+                assert_int_equal(glow_system_set_surfel_irradiance(sys[i], 0, v.count, E), GLOW_OK);
+                assert_int_equal(glow_system_update(sys[i], step < 3 ? NULL : &cap), GLOW_OK);
+            }
+            assert_memory_equal(o[0]->cache_sh, o[1]->cache_sh, C * nc * sizeof(float));
+            assert_memory_equal(o[0]->cache_sh, o[2]->cache_sh, C * nc * sizeof(float));
+            size_t nonzero = 0;
+            for (size_t j = 0; j < ng + nl; ++j) {
+                const float f = j < ng ? o[0]->grid_sh[j] : o[0]->lightmap_sh[j - ng];
+                const uint16_t h = j < ng ? o[1]->grid_sh_f16[j] : o[1]->lightmap_sh_f16[j - ng];
+                if (h != ref_f16(f))
+                    fail_msg("kernel %s, update %d: %s value %zu is 0x%04x, the half of %a is 0x%04x", kernels[kk] ? kernels[kk] : "best",
+                             step, j < ng ? "grid" : "lightmap", j < ng ? j : j - ng, h, (double)f, ref_f16(f));
+                nonzero += f != 0.0f;
+                beyond += fabsf(f) > 65504.0f;
+            }
+            assert_true(nonzero > (ng + nl) / 8u); /* light reached the planes */
+        }
+        glow_update_stats a, b;
+        assert_int_equal(glow_system_get_stats(sys[0], &a), GLOW_OK);
+        assert_int_equal(glow_system_get_stats(sys[1], &b), GLOW_OK);
+        assert_true(beyond > 0);
+        assert_true(a.caches_skipped_budget > 0); /* the budget cut: the selective outputs ran */
+        assert_true(a.memory_bytes >= b.memory_bytes + (ng + nl) * 2u); /* half the planes' bytes */
+        free(E);
+        for (int i = 0; i < 3; ++i) glow_system_destroy(sys[i]);
+    }
+    unsetenv("GLOW_CACHE_KERNEL");
+    env_close(&e);
 }
 
 /* ------------------------------------------------------------------------------ determinism */
@@ -2121,6 +2297,8 @@ int main(void) {
         cmocka_unit_test(test_budget),
         cmocka_unit_test(test_hook_budget),
         cmocka_unit_test(test_gather_cost),
+        cmocka_unit_test(test_f16_conversion),
+        cmocka_unit_test(test_output_planes),
         cmocka_unit_test(test_bake_caches_sections),
         cmocka_unit_test(test_null_out_pointers_logged),
         cmocka_unit_test(test_band_counts),

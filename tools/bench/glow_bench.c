@@ -39,6 +39,7 @@ typedef struct options {
     glow_host_kind host;
     uint32_t surfel_samples; /* the exact host's footprint points (glow_host_desc); 0 = its default */
     glow_link_mode link_mode;
+    glow_output_planes planes;
     int json, quiet, no_probe_machine, gl, gl_finish;
     uint32_t probe_count;
     float probes[MAX_PROBES][3];
@@ -58,7 +59,7 @@ static void usage(FILE *f) {
     fprintf(f,
             "usage: glow-bench BAKE SCENE [--frames N] [--warmup N] [--threads N] [--luma L] [--chroma C]\n"
             "                  [--iterations K] [--host exact|shadow-map] [--surfel-samples K] [--link-mode compact|expanded|sh]\n"
-            "                  [--probe X,Y,Z]... [--no-machine] [--backend cpu|gl]\n"
+            "                  [--probe X,Y,Z]... [--no-machine] [--backend cpu|gl] [--planes f32|f16|none]\n"
             "                  [--budget-ms MS] [--budget-caches N] [--converge EPS] [--focus X,Y,Z] [--still [--keep-lighting]]\n"
             "                  [--walk [--stream R]]\n"
             "                  [--json] [-q]\n"
@@ -73,6 +74,8 @@ static void usage(FILE *f) {
             "                  a moving light costs one ray per surfel per update, a still one none)\n"
             "  --link-mode     links projected every update (compact, default), expanded at create (more memory),\n"
             "                  or the bake's full-SH links (sh: needs glow-bake --sh-links)\n"
+            "  --planes        the grid and lightmap output planes as floats (f32, default), IEEE halves (f16) or\n"
+            "                  none (hosts that read the cache rows; glow_system_desc.output_planes)\n"
             "  --probe X,Y,Z   print the indirect light at this point (repeatable; default: 3 points)\n"
             "  --no-machine    skip the STREAM-triad, FMA-peak and cache-line round-trip probes\n"
             "  --backend gl    the GL 4.5 solver (glow_gl.h) on a headless context (EGL, else OSMesa; GLOW_GLCTX=egl|osmesa),\n"
@@ -141,6 +144,14 @@ static int parse_args(int argc, char **argv, options *o) {
             o->link_mode = !strcmp(v, "expanded") ? GLOW_LINK_MODE_EXPANDED
                          : !strcmp(v, "sh")       ? GLOW_LINK_MODE_SH
                                                   : GLOW_LINK_MODE_COMPACT;
+            ++i;
+        } else if (!strcmp(a, "--planes")) {
+            if (!v || (strcmp(v, "f32") && strcmp(v, "f16") && strcmp(v, "none"))) {
+                fprintf(stderr, "glow-bench: --planes must be f32, f16 or none\n");
+                return 0;
+            }
+            o->planes = !strcmp(v, "f16") ? GLOW_OUTPUT_PLANES_F16 : !strcmp(v, "none") ? GLOW_OUTPUT_PLANES_NONE
+                                                                                       : GLOW_OUTPUT_PLANES_F32;
             ++i;
         } else if (!strcmp(a, "--probe")) {
             float p[3];
@@ -380,7 +391,8 @@ static glow_result world_system(const options *o, glow_context *ctx, const world
                                 glow_host *host, const glow_system_params *params, glow_system **out) {
     const cJSON *file = cJSON_GetObjectItemCaseSensitive(cJSON_GetArrayItem(systems, (int)i), "file");
     const glow_system_desc sd = {.bake = ws->bake[i], .lighting = glow_host_hooks(host), .sh_bands_luma = o->luma,
-                                 .sh_bands_chroma = o->chroma, .label = file->valuestring, .link_mode = o->link_mode};
+                                 .sh_bands_chroma = o->chroma, .label = file->valuestring, .link_mode = o->link_mode,
+                                 .output_planes = o->planes};
     glow_result r = glow_system_create(ctx, &sd, out);
     return r == GLOW_OK ? glow_system_set_params(*out, params) : r;
 }
@@ -830,7 +842,8 @@ int main(int argc, char **argv) {
     hd.surfel_samples = o.surfel_samples;
     if (!o.gl && (r = glow_host_create(&hd, &host)) != GLOW_OK) goto done;
     glow_system_desc sd = {.bake = bake, .lighting = o.gl ? (glow_lighting_hooks){0} : glow_host_hooks(host), .sh_bands_luma = o.luma,
-                           .sh_bands_chroma = o.chroma, .label = o.bake, .link_mode = o.link_mode};
+                           .sh_bands_chroma = o.chroma, .label = o.bake, .link_mode = o.link_mode,
+                           .output_planes = o.planes};
     if ((r = glow_system_create(ctx, &sd, &sys)) != GLOW_OK) goto done;
     if ((r = glow_system_set_params(sys, &(glow_system_params){.bounce_intensity = 1.0f,
                                                                 .emission_scale = scene.emission_scale,
@@ -1062,7 +1075,7 @@ int main(int argc, char **argv) {
         if (threads > 1) line_rt = glow_probe_line_round_trip(200000u); /* ~0.1 s on this VM */
     }
     /* probes: indirect light (diffuse, normal +Y) from the grid */
-    if (o.probe_count == 0 && out->grid_sh) {
+    if (o.probe_count == 0 && out->grid_map) {
         for (int k = 0; k < 3; ++k) {
             float t = (float)(k + 1) / 4.0f;
             for (int a = 0; a < 3; ++a)
@@ -1085,7 +1098,7 @@ int main(int argc, char **argv) {
     float *coeffs = calloc(out->coeff_count, sizeof(float));
     if (!coeffs) goto done;
     for (uint32_t k = 0; k < o.probe_count; ++k) {
-        probe_ok[k] = out->grid_sh && glow_sample_grid(out, o.probes[k], coeffs) == GLOW_OK;
+        probe_ok[k] = out->grid_map && glow_sample_grid(out, o.probes[k], coeffs) == GLOW_OK;
         const float up[3] = {0, 1, 0};
         if (probe_ok[k]) glow_shade_sh(coeffs, out->sh_bands_luma, out->sh_bands_chroma, up, 1.0f, probe_rgb[k]);
         else probe_rgb[k][0] = probe_rgb[k][1] = probe_rgb[k][2] = 0.0f;
@@ -1187,8 +1200,9 @@ int main(int argc, char **argv) {
                    (double)st.memory_bytes / (1024.0 * 1024.0), o.gl_finish ? "glFinish + CPU clock" : "timer queries");
         else
 #endif
-        printf("links %s, kernel %s, system memory %.1f MiB\n", link_mode_name(st.link_mode),
-               st.kernel ? st.kernel : "-", (double)st.memory_bytes / (1024.0 * 1024.0));
+        printf("links %s, kernel %s, output planes %s, system memory %.1f MiB\n", link_mode_name(st.link_mode),
+               st.kernel ? st.kernel : "-", o.planes == GLOW_OUTPUT_PLANES_F16 ? "f16" : o.planes == GLOW_OUTPUT_PLANES_NONE ? "none" : "f32",
+               (double)st.memory_bytes / (1024.0 * 1024.0));
         printf("median of %u updates (ms):\n", n);
         printf("  light move (host, outside update) %8.3f%s\n", m_move, o.gl ? "  (GPU shadow maps: CPU time to submit)" : "");
         printf("  surfel lighting                   %8.3f  (host hook %.3f)\n", m_light, m_host);

@@ -365,6 +365,22 @@ typedef enum glow_link_mode {
     GLOW_LINK_MODE_FORCE_U32 = 0x7FFFFFFF
 } glow_link_mode;
 
+/* The format of a system's output planes (glow_cache_outputs' grid and lightmap planes), which a host
+ * uploads to textures. The cache rows (cache_sh), the maps and every glow_sample_* function are the same
+ * in each: they read cache_sh, not the planes. \since 0.2 */
+typedef enum glow_output_planes {
+    GLOW_OUTPUT_PLANES_F32 = 0,  /* 32-bit floats: grid_sh and lightmap_sh (upload as GL_FLOAT) */
+    GLOW_OUTPUT_PLANES_F16,      /* IEEE halves: grid_sh_f16 and lightmap_sh_f16 (upload as GL_HALF_FLOAT to
+                                    R16F / RGBA16F textures without a conversion), rounded to nearest even,
+                                    values beyond +-65504 clamped to it; grid_sh and lightmap_sh are NULL.
+                                    Half the bytes to write and upload; 2^-11 relative rounding, far below
+                                    the solver's error against the referee */
+    GLOW_OUTPUT_PLANES_NONE,     /* no grid or lightmap planes (their pointers NULL): for hosts that read
+                                    cache_sh through the maps (glow_sample_*) or upload the cache rows and
+                                    maps themselves; the output stage then writes only the lightmap detail */
+    GLOW_OUTPUT_PLANES_FORCE_U32 = 0x7FFFFFFF
+} glow_output_planes;
+
 typedef struct glow_system_desc {
     const glow_bake *bake;        /* required; borrowed: must outlive the system */
     glow_lighting_hooks lighting; /* NULL light_surfels = the host pushes irradiance with
@@ -374,12 +390,13 @@ typedef struct glow_system_desc {
     uint32_t surfel_batch_size;   /* surfels per hook call; 0 = 1024 */
     const char *label;            /* copied; names the system in log messages; NULL = "system" */
     glow_link_mode link_mode;     /* 0 = GLOW_LINK_MODE_COMPACT */
+    glow_output_planes output_planes; /* 0 = GLOW_OUTPUT_PLANES_F32 \since 0.2 */
 } glow_system_desc;
 
 /** Creates a solver for `desc->bake`: allocates every buffer, decodes nothing per frame.
  * Outputs start at zero (no light) until the first update.
  * \returns GLOW_OK; GLOW_ERROR_INVALID_ARGUMENT (NULL, band counts out of range, a bake without
- * runtime-projection links, an unknown link_mode); GLOW_ERROR_UNSUPPORTED (GLOW_LINK_MODE_SH with a
+ * runtime-projection links, an unknown link_mode or output_planes); GLOW_ERROR_UNSUPPORTED (GLOW_LINK_MODE_SH with a
  * bake without full-SH links); GLOW_ERROR_OUT_OF_MEMORY. *out_system is NULL on failure.
  * \threadsafety Any thread; several systems may share one bake. \since 0.1 */
 GLOW_API glow_result glow_system_create(glow_context *context, const glow_system_desc *desc,
@@ -593,9 +610,11 @@ typedef struct glow_cache_outputs {
     uint32_t grid_dims[3];       /* 0 when the bake has no grid */
     float grid_origin[3];        /* centre of cell (0,0,0), m */
     float grid_spacing;          /* m */
-    const float *grid_sh;        /* [coeff_count][dz][dy][dx], x fastest; NULL without a grid */
+    const float *grid_sh;        /* [coeff_count][dz][dy][dx], x fastest; NULL without a grid (or with
+                                    output planes other than F32: output_planes, below) */
     uint32_t lightmap_width, lightmap_height; /* 0 without a lightmap */
-    const float *lightmap_sh;    /* [coeff_count][height][width], row-major; NULL without a lightmap */
+    const float *lightmap_sh;    /* [coeff_count][height][width], row-major; NULL without a lightmap
+                                    (or with output planes other than F32) */
     const uint32_t *grid_map;    /* [dz][dy][dx]: cache index of each cell, 0xFFFFFFFF = empty */
     const uint32_t *lightmap_map;/* [height][width]: cache index of each texel (gutter and seam texels
                                     name the cache they copy), 0xFFFFFFFF = empty */
@@ -635,6 +654,12 @@ typedef struct glow_cache_outputs {
      * before. A triangle's page: glow_bake_geometry.lightmap_page; lookups: glow_sample_lightmap_page,
      * glow_sample_lightmap_detail_page. Gutter and seam copies stay within their page. */
     uint32_t lightmap_pages;
+    /* \since 0.2: the planes' format (glow_system_desc.output_planes). With GLOW_OUTPUT_PLANES_F16 the
+     * grid and lightmap planes are these, in grid_sh's and lightmap_sh's layouts, and those two are NULL;
+     * with GLOW_OUTPUT_PLANES_NONE all four are NULL. */
+    glow_output_planes output_planes;
+    const uint16_t *grid_sh_f16;     /* [coeff_count][dz][dy][dx] IEEE halves, or NULL */
+    const uint16_t *lightmap_sh_f16; /* [coeff_count][pages][height][width] IEEE halves, or NULL */
 } glow_cache_outputs;
 /** The outputs, owned by the system, valid (and unchanged) until the next update or destroy.
  * NULL for a NULL system. \threadsafety Read concurrently, but not during an update. \since 0.1 */
