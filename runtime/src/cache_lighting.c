@@ -477,25 +477,23 @@ void glow__cl_light_range_generic(const glow__cl_args *a, uint32_t first, uint32
  * once and its values go to nc planes, each written in order. The former plane-at-a-time writer
  * gathered one float per texel and plane (nc passes over the map, a cache line touched per value). */
 static const float glow__cl_zero_row[GLOW__CL_SCALE_FLOATS] = {0};
-/* dst: floats, or halves (f16: GLOW_OUTPUT_PLANES_F16) */
-static inline __attribute__((always_inline)) void write_planes_generic_any(void *dst, size_t stride, const uint32_t *map,
-                                                                           size_t first, size_t end, const float *sh,
-                                                                           uint32_t nc, bool f16) {
-    for (size_t t = first; t < end; ++t) {
-        const float *r = map[t] == GLOW__CL_EMPTY ? glow__cl_zero_row : sh + (size_t)map[t] * nc;
-        for (uint32_t k = 0; k < nc; ++k) {
-            if (f16) ((uint16_t *)dst)[(size_t)k * stride + t] = glow__f16(r[k]);
-            else ((float *)dst)[(size_t)k * stride + t] = r[k];
-        }
-    }
-}
 static void write_planes_generic(float *dst, size_t stride, const uint32_t *map, size_t first, size_t end, const float *sh,
                                  uint32_t nc) {
-    write_planes_generic_any(dst, stride, map, first, end, sh, nc, false);
+    for (size_t t = first; t < end; ++t) {
+        const float *r = map[t] == GLOW__CL_EMPTY ? glow__cl_zero_row : sh + (size_t)map[t] * nc;
+        for (uint32_t k = 0; k < nc; ++k) dst[(size_t)k * stride + t] = r[k];
+    }
 }
-static void write_planes_generic_f16(uint16_t *dst, size_t stride, const uint32_t *map, size_t first, size_t end,
-                                     const float *sh, uint32_t nc) {
-    write_planes_generic_any(dst, stride, map, first, end, sh, nc, true);
+/* RGBA16F texels [first, end) (glow__cl_write_rgba16f): the page and the place in it kept as t goes */
+static void write_rgba16f_generic(uint16_t *dst, size_t ps, const uint32_t *map, size_t first, size_t end, const float *sh,
+                                  uint32_t nc) {
+    const uint32_t Q = (nc + 3u) / 4u;
+    size_t g = first / ps, r = first - g * ps;
+    for (size_t t = first; t < end; ++t) {
+        const float *row = map[t] == GLOW__CL_EMPTY ? glow__cl_zero_row : sh + (size_t)map[t] * nc;
+        glow__rgba16f_put(dst + (g * Q * ps + r) * 4u, ps, nc, row);
+        if (++r == ps) r = 0, ++g;
+    }
 }
 #ifdef GLOW__HAVE_AVX2_KERNEL
 /* Eight texels at a time: four coefficients of each of the eight rows (two rows to a 256-bit
@@ -514,19 +512,8 @@ static void write_planes_generic_f16(uint16_t *dst, size_t stride, const uint32_
         (o2) = _mm256_castpd_ps(_mm256_unpacklo_pd(t1_, t3_));                                                          \
         (o3) = _mm256_castpd_ps(_mm256_unpackhi_pd(t1_, t3_));                                                          \
     } while (0)
-/* eight values to plane position d of dst: floats, or halves by F16C after glow__f16's clamp */
-__attribute__((target("avx2,f16c"), always_inline)) static inline void store_plane8(void *dst, size_t d, __m256 v, bool f16) {
-    if (f16) {
-        v = _mm256_max_ps(_mm256_min_ps(v, _mm256_set1_ps(65504.0f)), _mm256_set1_ps(-65504.0f));
-        _mm_storeu_si128((__m128i *)((uint16_t *)dst + d), _mm256_cvtps_ph(v, _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC));
-    } else {
-        _mm256_storeu_ps((float *)dst + d, v);
-    }
-}
-__attribute__((target("avx2,f16c"), always_inline)) static inline void write_planes_avx2_any(void *dst, size_t stride,
-                                                                                       const uint32_t *map, size_t first,
-                                                                                       size_t end, const float *sh,
-                                                                                       uint32_t nc, bool f16) {
+__attribute__((target("avx2"))) static void write_planes_avx2(float *dst, size_t stride, const uint32_t *map, size_t first,
+                                                              size_t end, const float *sh, uint32_t nc) {
     size_t t = first;
     const uint32_t nc4 = nc & ~3u, m = nc - nc4;
     const __m128i tail = _mm_cmpgt_epi32(_mm_set1_epi32((int)m), _mm_setr_epi32(0, 1, 2, 3));
@@ -536,35 +523,49 @@ __attribute__((target("avx2,f16c"), always_inline)) static inline void write_pla
         r0 = GLOW__ROW(0), r1 = GLOW__ROW(1), r2 = GLOW__ROW(2), r3 = GLOW__ROW(3);
         r4 = GLOW__ROW(4), r5 = GLOW__ROW(5), r6 = GLOW__ROW(6), r7 = GLOW__ROW(7);
 #undef GLOW__ROW
-        size_t d = t;
+        float *d = dst + t;
         __m256 o0, o1, o2, o3;
         for (uint32_t k = 0; k < nc4; k += 4u, d += 4u * stride) {
             GLOW__TRANSPOSE_4x8(_mm_loadu_ps(r0 + k), _mm_loadu_ps(r1 + k), _mm_loadu_ps(r2 + k), _mm_loadu_ps(r3 + k),
                                 _mm_loadu_ps(r4 + k), _mm_loadu_ps(r5 + k), _mm_loadu_ps(r6 + k), _mm_loadu_ps(r7 + k), o0,
                                 o1, o2, o3);
-            store_plane8(dst, d, o0, f16);
-            store_plane8(dst, d + stride, o1, f16);
-            store_plane8(dst, d + 2 * stride, o2, f16);
-            store_plane8(dst, d + 3 * stride, o3, f16);
+            _mm256_storeu_ps(d, o0);
+            _mm256_storeu_ps(d + stride, o1);
+            _mm256_storeu_ps(d + 2 * stride, o2);
+            _mm256_storeu_ps(d + 3 * stride, o3);
         }
         if (m) { /* masked: a row's end may be the array's */
             GLOW__TRANSPOSE_4x8(_mm_maskload_ps(r0 + nc4, tail), _mm_maskload_ps(r1 + nc4, tail), _mm_maskload_ps(r2 + nc4, tail),
                                 _mm_maskload_ps(r3 + nc4, tail), _mm_maskload_ps(r4 + nc4, tail), _mm_maskload_ps(r5 + nc4, tail),
                                 _mm_maskload_ps(r6 + nc4, tail), _mm_maskload_ps(r7 + nc4, tail), o0, o1, o2, o3);
-            store_plane8(dst, d, o0, f16);
-            if (m > 1u) store_plane8(dst, d + stride, o1, f16);
-            if (m > 2u) store_plane8(dst, d + 2 * stride, o2, f16);
+            _mm256_storeu_ps(d, o0);
+            if (m > 1u) _mm256_storeu_ps(d + stride, o1);
+            if (m > 2u) _mm256_storeu_ps(d + 2 * stride, o2);
         }
     }
-    write_planes_generic_any(dst, stride, map, t, end, sh, nc, f16);
+    write_planes_generic(dst, stride, map, t, end, sh, nc);
 }
-__attribute__((target("avx2,f16c"))) static void write_planes_avx2(float *dst, size_t stride, const uint32_t *map,
-                                                                   size_t first, size_t end, const float *sh, uint32_t nc) {
-    write_planes_avx2_any(dst, stride, map, first, end, sh, nc, false);
-}
-__attribute__((target("avx2,f16c"))) static void write_planes_avx2_f16(uint16_t *dst, size_t stride, const uint32_t *map,
-                                                                       size_t first, size_t end, const float *sh, uint32_t nc) {
-    write_planes_avx2_any(dst, stride, map, first, end, sh, nc, true);
+/* RGBA16F texels: each plane's four values of a row clamped as glow__f16 does (minps, maxps), then
+ * F16C's conversion to nearest even, one 8-byte store; the last plane's values past nc loaded as 0 */
+__attribute__((target("avx2,f16c"))) static void write_rgba16f_avx2(uint16_t *dst, size_t ps, const uint32_t *map,
+                                                                    size_t first, size_t end, const float *sh, uint32_t nc) {
+    const uint32_t Q = (nc + 3u) / 4u, nc4 = nc & ~3u;
+    const __m128i tail = _mm_cmpgt_epi32(_mm_set1_epi32((int)(nc - nc4)), _mm_setr_epi32(0, 1, 2, 3));
+    const __m128 hi = _mm_set1_ps(65504.0f), lo = _mm_set1_ps(-65504.0f);
+    size_t g = first / ps, r = first - g * ps;
+    for (size_t t = first; t < end; ++t) {
+        const float *row = map[t] == GLOW__CL_EMPTY ? glow__cl_zero_row : sh + (size_t)map[t] * nc;
+        uint16_t *d = dst + (g * Q * ps + r) * 4u;
+        for (uint32_t k = 0; k < nc4; k += 4u, d += ps * 4u) {
+            const __m128 v = _mm_max_ps(_mm_min_ps(_mm_loadu_ps(row + k), hi), lo);
+            _mm_storel_epi64((__m128i *)d, _mm_cvtps_ph(v, _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC));
+        }
+        if (nc4 < nc) {
+            const __m128 v = _mm_max_ps(_mm_min_ps(_mm_maskload_ps(row + nc4, tail), hi), lo);
+            _mm_storel_epi64((__m128i *)d, _mm_cvtps_ph(v, _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC));
+        }
+        if (++r == ps) r = 0, ++g;
+    }
 }
 #undef GLOW__TRANSPOSE_4x8
 #endif
@@ -581,16 +582,17 @@ void glow__cl_write_planes(glow__cl_isa isa, float *dst, size_t stride, const ui
     write_planes_generic(dst, stride, map, first, end, sh, nc);
 }
 
-void glow__cl_write_planes_f16(glow__cl_isa isa, uint16_t *dst, size_t stride, const uint32_t *map, size_t first,
-                               size_t end, const float *sh, uint32_t nc) {
+void glow__cl_write_rgba16f(glow__cl_isa isa, uint16_t *dst, size_t n, uint32_t pages, const uint32_t *map, size_t first,
+                            size_t end, const float *sh, uint32_t nc) {
+    const size_t ps = n / (pages ? pages : 1u);
 #ifdef GLOW__HAVE_AVX2_KERNEL
     if (isa == GLOW__CL_AVX2 || isa == GLOW__CL_AVX512) {
-        write_planes_avx2_f16(dst, stride, map, first, end, sh, nc);
+        write_rgba16f_avx2(dst, ps, map, first, end, sh, nc);
         return;
     }
 #endif
     (void)isa;
-    write_planes_generic_f16(dst, stride, map, first, end, sh, nc);
+    write_rgba16f_generic(dst, ps, map, first, end, sh, nc);
 }
 
 static int has_avx2(void) {

@@ -66,10 +66,12 @@ void glow__cl_light_caches(const glow__cl_args *a, uint32_t first, uint32_t coun
 #define GLOW__CL_EMPTY 0xFFFFFFFFu
 void glow__cl_write_planes(glow__cl_isa isa, float *dst, size_t stride, const uint32_t *map, size_t first, size_t end,
                            const float *sh, uint32_t nc);
-/* The same as IEEE halves (GLOW_OUTPUT_PLANES_F16): glow__f16 of each value. The AVX2 and AVX-512
- * builds convert with F16C, whose bits glow__f16 reproduces. */
-void glow__cl_write_planes_f16(glow__cl_isa isa, uint16_t *dst, size_t stride, const uint32_t *map, size_t first,
-                               size_t end, const float *sh, uint32_t nc);
+/* The same values as RGBA16F texels (GLOW_OUTPUT_PLANES_RGBA16F): a table of n cells or texels in
+ * pages of ps = n / pages, Q = (nc + 3) / 4 planes; coefficient k of texel t = g ps + r (page g) goes to
+ * halves ((g Q + k / 4) ps + r) 4 + k % 4, as glow__f16 of it (padding 0). The AVX2 and AVX-512 builds
+ * convert with F16C, whose bits glow__f16 reproduces. */
+void glow__cl_write_rgba16f(glow__cl_isa isa, uint16_t *dst, size_t n, uint32_t pages, const uint32_t *map, size_t first,
+                            size_t end, const float *sh, uint32_t nc);
 
 /* x as an IEEE half: clamped to [-65504, 65504] first (a NaN to 65504, as x86's minps then maxps),
  * then rounded to nearest even, subnormal halves included: the bits F16C's vcvtps2ph gives for the
@@ -93,6 +95,17 @@ static inline uint16_t glow__f16(float x) {
     const uint32_t odd = (u >> 13) & 1u; /* ties to even */
     u += 0xC8000FFFu + odd;                /* the exponent rebiased (-112 << 23) and half an ulp less one */
     return (uint16_t)(sign | (u >> 13));
+}
+
+/* One texel of glow__cl_write_rgba16f's layout from its cache row (nc floats): d is its place in the
+ * first plane (glow__rgba16f_at), ps the texels of a plane's page. */
+static inline void glow__rgba16f_put(uint16_t *d, size_t ps, uint32_t nc, const float *row) {
+    for (uint32_t q = 0; 4u * q < nc; ++q, d += ps * 4u)
+        for (uint32_t c = 0; c < 4u; ++c) d[c] = 4u * q + c < nc ? glow__f16(row[4u * q + c]) : (uint16_t)0u;
+}
+static inline size_t glow__rgba16f_at(size_t ps, uint32_t nc, size_t t) {
+    const size_t g = t / ps;
+    return (g * ((nc + 3u) / 4u) * ps + (t - g * ps)) * 4u;
 }
 glow__cl_isa glow__cl_best_isa(void);
 int glow__cl_isa_supported(glow__cl_isa isa); /* this CPU runs it */

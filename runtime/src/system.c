@@ -103,7 +103,7 @@ struct glow_system {
     float *sky_grid, *sky_backup;
     bool sky_on, sky_applied;
     uint64_t sky_revision, sky_out_revision;
-    glow_output_planes planes; /* the planes' format: grid_sh / lm_sh (F32), grid_h / lm_h (F16) or none */
+    glow_output_planes planes; /* the planes' format: grid_sh / lm_sh (F32), grid_h / lm_h (RGBA16F) or none */
     float *grid_sh, *lm_sh;
     uint16_t *grid_h, *lm_h;
     uint32_t *grid_map, *lm_map;
@@ -607,9 +607,9 @@ static void task_output(void *data, uint32_t q, uint32_t worker) {
     const bool grid = q < g;
     const size_t n = grid ? s->grid_cells : s->lm_texels, first = (size_t)(grid ? q : q - g) * PLANE_CHUNK;
     const size_t end = n - first < PLANE_CHUNK ? n : first + PLANE_CHUNK;
-    if (s->planes == GLOW_OUTPUT_PLANES_F16)
-        glow__cl_write_planes_f16(s->isa, grid ? s->grid_h : s->lm_h, n, grid ? s->grid_map : s->lm_map, first, end,
-                                  s->cache_sh, s->coeffs);
+    if (s->planes == GLOW_OUTPUT_PLANES_RGBA16F)
+        glow__cl_write_rgba16f(s->isa, grid ? s->grid_h : s->lm_h, n, grid ? 1u : s->out.lightmap_pages,
+                               grid ? s->grid_map : s->lm_map, first, end, s->cache_sh, s->coeffs);
     else
         glow__cl_write_planes(s->isa, grid ? s->grid_sh : s->lm_sh, n, grid ? s->grid_map : s->lm_map, first, end,
                               s->cache_sh, s->coeffs);
@@ -628,15 +628,15 @@ static void task_output_sel(void *data, uint32_t q, uint32_t worker) {
     }
     const uint32_t g = s->grp_sel[q], nc = s->coeffs;
     if (s->planes == GLOW_OUTPUT_PLANES_NONE) return;
-    const bool f16 = s->planes == GLOW_OUTPUT_PLANES_F16;
+    const bool f16 = s->planes == GLOW_OUTPUT_PLANES_RGBA16F;
     for (uint32_t i = s->grp_out_off[g]; i < s->grp_out_off[g + 1u]; ++i) {
         const uint32_t p = s->grp_out[i];
         const bool grid = p < s->grid_used;
         const size_t n = grid ? s->grid_cells : s->lm_texels, t = s->out_index[p];
         const float *restrict src = s->cache_sh + (size_t)s->out_cache[p] * nc;
         if (f16) {
-            uint16_t *restrict dst = (grid ? s->grid_h : s->lm_h) + t;
-            for (uint32_t k = 0; k < nc; ++k) dst[k * n] = glow__f16(src[k]);
+            const size_t ps = grid ? n : n / s->out.lightmap_pages;
+            glow__rgba16f_put((grid ? s->grid_h : s->lm_h) + glow__rgba16f_at(ps, nc, t), ps, nc, src);
         } else {
             float *restrict dst = (grid ? s->grid_sh : s->lm_sh) + t;
             for (uint32_t k = 0; k < nc; ++k) dst[k * n] = src[k];
@@ -827,7 +827,7 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
                         (unsigned)desc->link_mode);
         return GLOW_ERROR_INVALID_ARGUMENT;
     }
-    if (desc->output_planes != GLOW_OUTPUT_PLANES_F32 && desc->output_planes != GLOW_OUTPUT_PLANES_F16 &&
+    if (desc->output_planes != GLOW_OUTPUT_PLANES_F32 && desc->output_planes != GLOW_OUTPUT_PLANES_RGBA16F &&
         desc->output_planes != GLOW_OUTPUT_PLANES_NONE) {
         GLOW__LOG_ERROR(ctx, GLOW_ERROR_INVALID_ARGUMENT, "glow_system_create(%s): unknown output_planes %u", label,
                         (unsigned)desc->output_planes);
@@ -936,9 +936,10 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
     if (s->planes == GLOW_OUTPUT_PLANES_F32) {
         s->grid_sh = alloc_array(s, s->grid_cells, (size_t)s->coeffs * sizeof(float), &ok);
         s->lm_sh = alloc_array(s, s->lm_texels, (size_t)s->coeffs * sizeof(float), &ok);
-    } else if (s->planes == GLOW_OUTPUT_PLANES_F16) {
-        s->grid_h = alloc_array(s, s->grid_cells, (size_t)s->coeffs * sizeof(uint16_t), &ok);
-        s->lm_h = alloc_array(s, s->lm_texels, (size_t)s->coeffs * sizeof(uint16_t), &ok);
+    } else if (s->planes == GLOW_OUTPUT_PLANES_RGBA16F) { /* Q planes of 4 halves */
+        const size_t q4 = (size_t)(s->coeffs + 3u) / 4u * 4u;
+        s->grid_h = alloc_array(s, s->grid_cells, q4 * sizeof(uint16_t), &ok);
+        s->lm_h = alloc_array(s, s->lm_texels, q4 * sizeof(uint16_t), &ok);
     }
     s->grid_map = alloc_array(s, s->grid_cells, sizeof(uint32_t), &ok);
     s->lm_map = alloc_array(s, s->lm_texels, sizeof(uint32_t), &ok);
@@ -1159,8 +1160,8 @@ glow_result glow_system_create(glow_context *ctx, const glow_system_desc *desc, 
                                   .grid_sh = s->grid_cells ? s->grid_sh : NULL,
                                   .lightmap_sh = s->lm_texels ? s->lm_sh : NULL,
                                   .output_planes = s->planes,
-                                  .grid_sh_f16 = s->grid_cells ? s->grid_h : NULL,
-                                  .lightmap_sh_f16 = s->lm_texels ? s->lm_h : NULL,
+                                  .grid_rgba16f = s->grid_cells ? s->grid_h : NULL,
+                                  .lightmap_rgba16f = s->lm_texels ? s->lm_h : NULL,
                                   .grid_map = s->grid_cells ? s->grid_map : NULL,
                                   .grid_visibility = s->grid_cells ? glow__bake_grid_visibility(desc->bake) : NULL,
                                   .lightmap_map = s->lm_texels ? s->lm_map : NULL};

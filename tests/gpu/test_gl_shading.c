@@ -11,7 +11,9 @@
  *     weights renormalised in a different order; glow_sample_lightmap_detail at the same uvs on the
  *     GPU's lightmap detail vs glow_sample_lightmap_detail: |diff| <= 1e-5 · (max |result|);
  *   - a lightmap of pages (glow-bake --lightmap-max-size, format 1.7): glow_sample_lightmap_page and
- *     glow_sample_lightmap_detail_page at 512 random pages and uvs vs the C ones, the same bounds.
+ *     glow_sample_lightmap_detail_page at 512 random pages and uvs vs the C ones, the same bounds;
+ *   - a CPU system's RGBA16F output planes uploaded as they are into RGBA16F textures hold what the GL
+ *     system's textures hold (one page and several), to the halves' precision.
  * Exits 77 (skipped) without a GL 4.5 context. */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -117,6 +119,78 @@ static void test_basis_and_lobes(void **state) {
     gl.DeleteProgram(p);
 }
 
+/* The surfels' irradiance: a position-dependent colour, so the SH vary. */
+static void light_cornell(glow_system *sys) {
+    glow_surfel_view v;
+    glow_system_get_surfels(sys, &v);
+    float *e = malloc((size_t)v.count * 3 * sizeof *e);
+    for (uint32_t i = 0; i < v.count; ++i) {
+        const float *p = v.positions + 4 * (size_t)i;
+        e[3 * i] = 4.0f + 3.0f * p[0], e[3 * i + 1] = 2.0f + p[1], e[3 * i + 2] = 3.0f - 2.0f * p[2];
+        for (int c = 0; c < 3; ++c) e[3 * i + c] = fmaxf(e[3 * i + c], 0.0f);
+    }
+    assert_int_equal(glow_system_set_surfel_irradiance(sys, 0, v.count, e), GLOW_OK);
+    free(e);
+}
+
+/* A CPU system's RGBA16F output planes (glow_system_desc.output_planes) uploaded as they are (one
+ * glTextureSubImage3D each, GL_RGBA, GL_HALF_FLOAT) into RGBA16F textures of the GL system's sizes hold,
+ * read back as floats, what the GL system's own RGBA32F textures hold for the same bake and light, texel
+ * for texel and plane for plane (pages included): so they are in the layout glow_shading.glsl reads.
+ * Bound: the halves' rounding (2^-11 relative, checked at 2^-10) plus the CPU/GPU agreement (1e-4 of the
+ * largest value). */
+static void check_rgba16f_upload(glow_context *ctx, const glow_bake *bake, uint32_t luma, uint32_t chroma,
+                                 const glow_gl_outputs *go) {
+    glow_system *h;
+    assert_int_equal(glow_system_create(ctx, &(glow_system_desc){.bake = bake, .sh_bands_luma = luma, .sh_bands_chroma = chroma,
+                                                                 .output_planes = GLOW_OUTPUT_PLANES_RGBA16F},
+                                        &h),
+                     GLOW_OK);
+    light_cornell(h);
+    for (int u = 0; u < 3; ++u) assert_int_equal(glow_system_update(h, NULL), GLOW_OK);
+    const glow_cache_outputs *o = glow_system_outputs(h);
+    const uint32_t Q = go->planes, nc = o->coeff_count, P = o->lightmap_pages;
+    assert_int_equal(Q, (nc + 3u) / 4u);
+    assert_non_null(o->grid_rgba16f);
+    assert_non_null(o->lightmap_rgba16f);
+    const GLsizei dims[2][3] = {{(GLsizei)go->grid_dims[0], (GLsizei)go->grid_dims[1], (GLsizei)(go->grid_dims[2] * Q)},
+                                {(GLsizei)go->lightmap_width, (GLsizei)go->lightmap_height, (GLsizei)(Q * P)}};
+    const GLenum target[2] = {GL_TEXTURE_3D, GL_TEXTURE_2D_ARRAY};
+    const uint16_t *src[2] = {o->grid_rgba16f, o->lightmap_rgba16f};
+    const GLuint theirs[2] = {go->grid_texture, go->lightmap_texture};
+    for (int w = 0; w < 2; ++w) {
+        GLuint t;
+        gl.CreateTextures(target[w], 1, &t);
+        gl.TextureStorage3D(t, 1, GL_RGBA16F, dims[w][0], dims[w][1], dims[w][2]);
+        gl.TextureSubImage3D(t, 0, 0, 0, 0, dims[w][0], dims[w][1], dims[w][2], GL_RGBA, GL_HALF_FLOAT, src[w]);
+        const size_t n = (size_t)dims[w][0] * dims[w][1] * dims[w][2] * 4u;
+        float *a = malloc(n * sizeof *a), *b = malloc(n * sizeof *b);
+        gl.GetTextureImage(t, 0, GL_RGBA, GL_FLOAT, (GLsizei)(n * sizeof *a), a);
+        gl.GetTextureImage(theirs[w], 0, GL_RGBA, GL_FLOAT, (GLsizei)(n * sizeof *b), b);
+        assert_int_equal(gl.GetError(), GL_NO_ERROR);
+        double scale = 0.0, worst = 0.0;
+        for (size_t i = 0; i < n; ++i) scale = fmax(scale, fabs((double)b[i]));
+        const size_t per_plane = n / 4u / ((size_t)Q * (w ? P : 1u)); /* texels of one plane (of a page) */
+        size_t checked = 0;
+        for (size_t i = 0; i < n; ++i) {
+            const size_t q = (i / 4u / per_plane) % Q, k = 4u * q + i % 4u; /* the coefficient */
+            if (k >= nc) continue;
+            const double d = fabs((double)a[i] - b[i]);
+            if (d > ldexp(fabs((double)b[i]), -10) + 1e-4 * scale)
+                fail_msg("%s value %zu (plane %zu, coefficient %zu): RGBA16F upload %g, GL system %g", w ? "lightmap" : "grid",
+                         i, q, k, (double)a[i], (double)b[i]);
+            worst = fmax(worst, d);
+            checked += b[i] != 0.0f;
+        }
+        printf("  RGBA16F %s planes uploaded as they are: %zu values agree with the GL system's, worst %.2e (max %.3g)\n",
+               w ? "lightmap" : "grid", checked, worst, scale);
+        assert_true(scale > 0.0 && checked > n / 16u);
+        free(a), free(b);
+        gl.DeleteTextures(1, &t);
+    }
+    glow_system_destroy(h);
+}
+
 /* Bakes builtin:cornell with `st`, loads it into a CPU system with `luma`/`chroma` bands (0: the bake's)
  * lit by a position-dependent colour (so the SH vary), and a GL system on it updated 3 times. */
 static void lit_cornell(const glow_pc_settings *st, uint32_t luma, uint32_t chroma, glow_context **ctx, glow_bake **bake,
@@ -130,16 +204,7 @@ static void lit_cornell(const glow_pc_settings *st, uint32_t luma, uint32_t chro
     remove(path);
     assert_int_equal(glow_system_create(*ctx, &(glow_system_desc){.bake = *bake, .sh_bands_luma = luma, .sh_bands_chroma = chroma}, sys),
                      GLOW_OK);
-    glow_surfel_view v;
-    glow_system_get_surfels(*sys, &v);
-    float *e = malloc((size_t)v.count * 3 * sizeof *e);
-    for (uint32_t i = 0; i < v.count; ++i) {
-        const float *p = v.positions + 4 * (size_t)i;
-        e[3 * i] = 4.0f + 3.0f * p[0], e[3 * i + 1] = 2.0f + p[1], e[3 * i + 2] = 3.0f - 2.0f * p[2];
-        for (int c = 0; c < 3; ++c) e[3 * i + c] = fmaxf(e[3 * i + c], 0.0f);
-    }
-    assert_int_equal(glow_system_set_surfel_irradiance(*sys, 0, v.count, e), GLOW_OK);
-    free(e);
+    light_cornell(*sys);
     assert_int_equal(glow_gl_system_create(&(glow_gl_desc){.system = *sys, .get_proc_address = glow_glctx_get_proc_address(g_ctx)}, gs),
                      GLOW_OK);
     for (int u = 0; u < 3; ++u) assert_int_equal(glow_gl_system_update(*gs, NULL), GLOW_OK);
@@ -154,6 +219,7 @@ static void test_sampling(void **state) {
     const glow_pc_settings st = {.quality = GLOW_PC_QUALITY_LOW, .surfels = 4096, .links = 96, .bands = 3, .threads = 2, .seed = 1};
     lit_cornell(&st, 3, 2, &ctx, &bake, &sys, &gs);
     const glow_gl_outputs *go = glow_gl_system_outputs(gs);
+    check_rgba16f_upload(ctx, bake, 3, 2, go);
     /* the C reference on the GPU's caches */
     glow_cache_outputs co = *glow_system_outputs(sys);
     const size_t ncs = (size_t)co.cache_count * co.coeff_count;
@@ -365,6 +431,7 @@ static void test_sampling_pages(void **state) {
     assert_true(P >= 3);
     assert_int_equal(go->lightmap_pages, P);
     assert_int_not_equal(go->lightmap_detail_texture, 0);
+    check_rgba16f_upload(ctx, bake, 3, 2, go);
     const size_t ncs = (size_t)co.cache_count * co.coeff_count;
     float *sh = malloc(ncs * sizeof *sh);
     assert_int_equal(glow_gl_system_read_cache_sh(gs, sh, ncs), GLOW_OK);

@@ -114,6 +114,16 @@ static int bake_to_memory(const char *scene, uint32_t surfels, void **bytes, siz
     return r;
 }
 
+/* builtin:cornell baked with `ps` into memory (the test fails if the bake does) */
+static void cornell_with(const glow_pc_settings *ps, const char *tag, void **bytes, size_t *size) {
+    char path[256];
+    snprintf(path, sizeof path, "/tmp/glow_test_system_api_%d_%s.glow", (int)getpid(), tag);
+    glow_pc_stats st;
+    if (glow_pc_bake("builtin:cornell", path, ps, &st) != GLOW_OK) fail_msg("bake failed: %s", st.error);
+    assert_int_equal(read_file(path, bytes, size), 0);
+    unlink(path);
+}
+
 static int group_setup(void **state) {
     (void)state;
     return bake_to_memory("builtin:cornell", 2048, &g_fix.bytes, &g_fix.size);
@@ -205,17 +215,12 @@ static void gradient_update(const void *bytes, size_t size, uint32_t workers, co
 
 static void test_link_gradients(void **state) {
     (void)state;
-    char path[256];
-    snprintf(path, sizeof path, "/tmp/glow_test_system_api_%d_gradient.glow", (int)getpid());
-    glow_pc_settings ps = {.quality = GLOW_PC_QUALITY_LOW, .surfels = 2048, .links = 64, .bands = 3,
-                           .grid_spacing = 0.5f, .texel_density = 3.0f, .threads = 2, .seed = 5,
-                           .link_gradients = true};
-    glow_pc_stats st;
-    if (glow_pc_bake("builtin:cornell", path, &ps, &st) != GLOW_OK) fail_msg("bake failed: %s", st.error);
+    const glow_pc_settings ps = {.quality = GLOW_PC_QUALITY_LOW, .surfels = 2048, .links = 64, .bands = 3,
+                                 .grid_spacing = 0.5f, .texel_density = 3.0f, .threads = 2, .seed = 5,
+                                 .link_gradients = true};
     void *bytes;
     size_t size;
-    assert_int_equal(read_file(path, &bytes, &size), 0);
-    unlink(path);
+    cornell_with(&ps, "gradient", &bytes, &size);
     env e;
     env_open_with(&e, bytes, size, NULL, NULL);
     const glow_bake_meta *m = e.meta;
@@ -1036,7 +1041,7 @@ __attribute__((target("f16c"))) static uint16_t f16c_of(float x) { /* the hardwa
 #define HAVE_F16C_REF 1
 #endif
 
-/* glow__f16 (the F16 planes' scalar conversion) against the reference: every finite half, every
+/* glow__f16 (the RGBA16F planes' scalar conversion) against the reference: every finite half, every
  * midpoint between neighbouring halves (ties to even) and a float either side, 2^20 scattered bit
  * patterns (NaN, infinities, huge and subnormal values among them); and against F16C where the CPU has
  * it, which the AVX2 and AVX-512 plane writers use. */
@@ -1092,14 +1097,16 @@ static void test_f16_conversion(void **state) {
 #undef CHECK_F16
 }
 
-/* glow_system_desc.output_planes: F16 planes hold glow__f16 of the F32 planes, value for value, after
- * full updates and after budgeted ones that rewrite only the gathered groups' texels; NONE has no
- * planes; the cache rows are the same bytes in all three. For the best kernel build and the generic
- * one (GLOW_CACHE_KERNEL), whose plane writers differ. An unknown format is refused. */
-static void test_output_planes(void **state) {
-    (void)state;
+/* glow_system_desc.output_planes: RGBA16F planes hold the halves of the F32 planes' values, each at its
+ * place in glow.h's layout (coefficient k of texel t of page g at component k % 4 of plane k / 4, page
+ * g's planes one after the other; the last plane's padding 0), after full updates and after budgeted
+ * ones that rewrite only the gathered groups' texels; NONE has no planes; the cache rows are the same
+ * bytes in all three. For the best kernel build and the generic one (GLOW_CACHE_KERNEL), whose plane
+ * writers differ; on the fixture's bake (one lightmap page) and on one of several pages. An unknown
+ * format is refused. */
+static void output_planes_on(const void *bytes, size_t size, bool paged) {
     env e;
-    env_open(&e);
+    env_open_with(&e, bytes, size, NULL, NULL);
     glow_system *bad = (glow_system *)1;
     assert_int_equal(glow_system_create(e.ctx, &(glow_system_desc){.bake = e.bake, .output_planes = (glow_output_planes)3}, &bad),
                      GLOW_ERROR_INVALID_ARGUMENT);
@@ -1112,7 +1119,7 @@ static void test_output_planes(void **state) {
         if (kernels[kk]) setenv("GLOW_CACHE_KERNEL", kernels[kk], 1);
         else unsetenv("GLOW_CACHE_KERNEL");
         glow_system *sys[3] = {NULL, NULL, NULL};
-        const glow_output_planes fmt[3] = {GLOW_OUTPUT_PLANES_F32, GLOW_OUTPUT_PLANES_F16, GLOW_OUTPUT_PLANES_NONE};
+        const glow_output_planes fmt[3] = {GLOW_OUTPUT_PLANES_F32, GLOW_OUTPUT_PLANES_RGBA16F, GLOW_OUTPUT_PLANES_NONE};
         for (int i = 0; i < 3; ++i)
             assert_int_equal(glow_system_create(e.ctx, &(glow_system_desc){.bake = e.bake, .output_planes = fmt[i]}, &sys[i]),
                              GLOW_OK);
@@ -1123,22 +1130,23 @@ static void test_output_planes(void **state) {
         const glow_cache_outputs *o[3];
         for (int i = 0; i < 3; ++i) o[i] = glow_system_outputs(sys[i]);
         assert_int_equal(o[0]->output_planes, GLOW_OUTPUT_PLANES_F32);
-        assert_int_equal(o[1]->output_planes, GLOW_OUTPUT_PLANES_F16);
+        assert_int_equal(o[1]->output_planes, GLOW_OUTPUT_PLANES_RGBA16F);
         assert_int_equal(o[2]->output_planes, GLOW_OUTPUT_PLANES_NONE);
         assert_non_null(o[0]->grid_sh);
         assert_non_null(o[0]->lightmap_sh);
-        assert_null(o[0]->grid_sh_f16);
-        assert_null(o[0]->lightmap_sh_f16);
+        assert_null(o[0]->grid_rgba16f);
+        assert_null(o[0]->lightmap_rgba16f);
         assert_null(o[1]->grid_sh);
         assert_null(o[1]->lightmap_sh);
-        assert_non_null(o[1]->grid_sh_f16);
-        assert_non_null(o[1]->lightmap_sh_f16);
-        assert_true(!o[2]->grid_sh && !o[2]->lightmap_sh && !o[2]->grid_sh_f16 && !o[2]->lightmap_sh_f16);
+        assert_non_null(o[1]->grid_rgba16f);
+        assert_non_null(o[1]->lightmap_rgba16f);
+        assert_true(!o[2]->grid_sh && !o[2]->lightmap_sh && !o[2]->grid_rgba16f && !o[2]->lightmap_rgba16f);
         assert_non_null(o[2]->grid_map); /* the maps and rows stay: glow_sample_* reads them */
         const size_t nc = o[0]->coeff_count, C = o[0]->cache_count;
-        const size_t ng = (size_t)o[0]->grid_dims[0] * o[0]->grid_dims[1] * o[0]->grid_dims[2] * nc;
-        const size_t nl = (size_t)o[0]->lightmap_width * o[0]->lightmap_height * o[0]->lightmap_pages * nc;
-        assert_true(ng > 0 && nl > 0);
+        const size_t gc = (size_t)o[0]->grid_dims[0] * o[0]->grid_dims[1] * o[0]->grid_dims[2];
+        const size_t lp = (size_t)o[0]->lightmap_width * o[0]->lightmap_height, P = o[0]->lightmap_pages;
+        const size_t ng = gc * nc, nl = lp * P * nc, Q = (nc + 3u) / 4u;
+        assert_true(ng > 0 && nl > 0 && (paged ? P >= 3 : P == 1));
         size_t beyond = 0; /* values over a half's largest, which F16 clamps */
         for (int step = 0; step < 9; ++step) {
             /* the light changes every update; updates 3-8 gather a quarter of the caches each (the
@@ -1155,14 +1163,23 @@ static void test_output_planes(void **state) {
             assert_memory_equal(o[0]->cache_sh, o[1]->cache_sh, C * nc * sizeof(float));
             assert_memory_equal(o[0]->cache_sh, o[2]->cache_sh, C * nc * sizeof(float));
             size_t nonzero = 0;
-            for (size_t j = 0; j < ng + nl; ++j) {
-                const float f = j < ng ? o[0]->grid_sh[j] : o[0]->lightmap_sh[j - ng];
-                const uint16_t h = j < ng ? o[1]->grid_sh_f16[j] : o[1]->lightmap_sh_f16[j - ng];
-                if (h != ref_f16(f))
-                    fail_msg("kernel %s, update %d: %s value %zu is 0x%04x, the half of %a is 0x%04x", kernels[kk] ? kernels[kk] : "best",
-                             step, j < ng ? "grid" : "lightmap", j < ng ? j : j - ng, h, (double)f, ref_f16(f));
-                nonzero += f != 0.0f;
-                beyond += fabsf(f) > 65504.0f;
+            for (int lm = 0; lm < 2; ++lm) { /* the grid (one page of gc cells), then the lightmap's pages */
+                const size_t ps = lm ? lp : gc, pages = lm ? P : 1u, n = ps * pages;
+                const float *f32 = lm ? o[0]->lightmap_sh : o[0]->grid_sh;
+                const uint16_t *h16 = lm ? o[1]->lightmap_rgba16f : o[1]->grid_rgba16f;
+                for (size_t t = 0; t < n; ++t) {
+                    const size_t g = t / ps, r = t % ps;
+                    for (size_t k = 0; k < 4u * Q; ++k) {
+                        const float f = k < nc ? f32[k * n + t] : 0.0f; /* the float planes: [k][page][texel] */
+                        const uint16_t h = h16[((g * Q + k / 4u) * ps + r) * 4u + k % 4u];
+                        if (h != ref_f16(f))
+                            fail_msg("kernel %s, update %d: %s texel %zu coefficient %zu is 0x%04x, the half of %a is 0x%04x",
+                                     kernels[kk] ? kernels[kk] : "best", step, lm ? "lightmap" : "grid", t, k, h, (double)f,
+                                     ref_f16(f));
+                        nonzero += k < nc && f != 0.0f;
+                        beyond += fabsf(f) > 65504.0f;
+                    }
+                }
             }
             assert_true(nonzero > (ng + nl) / 8u); /* light reached the planes */
         }
@@ -1171,12 +1188,24 @@ static void test_output_planes(void **state) {
         assert_int_equal(glow_system_get_stats(sys[1], &b), GLOW_OK);
         assert_true(beyond > 0);
         assert_true(a.caches_skipped_budget > 0); /* the budget cut: the selective outputs ran */
-        assert_true(a.memory_bytes >= b.memory_bytes + (ng + nl) * 2u); /* half the planes' bytes */
+        assert_int_equal(a.memory_bytes - b.memory_bytes, (ng + nl) * 4u - (gc + lp * P) * Q * 8u); /* halves, padded */
         free(E);
         for (int i = 0; i < 3; ++i) glow_system_destroy(sys[i]);
     }
     unsetenv("GLOW_CACHE_KERNEL");
     env_close(&e);
+}
+static void test_output_planes(void **state) {
+    (void)state;
+    output_planes_on(g_fix.bytes, g_fix.size, false);
+    const glow_pc_settings ps = {.quality = GLOW_PC_QUALITY_LOW, .surfels = 1024, .links = 32, .bands = 3, .threads = 2,
+                                 .seed = 1, .grid_spacing = 0.5f, .lightmap_caches = 1000, .no_sky = true,
+                                 .lightmap_max_size = 28};
+    void *bytes;
+    size_t size;
+    cornell_with(&ps, "pages", &bytes, &size);
+    output_planes_on(bytes, size, true);
+    free(bytes);
 }
 
 /* ------------------------------------------------------------------------------ determinism */

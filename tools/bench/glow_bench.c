@@ -59,7 +59,7 @@ static void usage(FILE *f) {
     fprintf(f,
             "usage: glow-bench BAKE SCENE [--frames N] [--warmup N] [--threads N] [--luma L] [--chroma C]\n"
             "                  [--iterations K] [--host exact|shadow-map] [--surfel-samples K] [--link-mode compact|expanded|sh]\n"
-            "                  [--probe X,Y,Z]... [--no-machine] [--backend cpu|gl] [--planes f32|f16|none]\n"
+            "                  [--probe X,Y,Z]... [--no-machine] [--backend cpu|gl] [--planes f32|rgba16f|none]\n"
             "                  [--budget-ms MS] [--budget-caches N] [--converge EPS] [--focus X,Y,Z] [--still [--keep-lighting]]\n"
             "                  [--walk [--stream R]]\n"
             "                  [--json] [-q]\n"
@@ -74,8 +74,9 @@ static void usage(FILE *f) {
             "                  a moving light costs one ray per surfel per update, a still one none)\n"
             "  --link-mode     links projected every update (compact, default), expanded at create (more memory),\n"
             "                  or the bake's full-SH links (sh: needs glow-bake --sh-links)\n"
-            "  --planes        the grid and lightmap output planes as floats (f32, default), IEEE halves (f16) or\n"
-            "                  none (hosts that read the cache rows; glow_system_desc.output_planes)\n"
+            "  --planes        the grid and lightmap output planes as floats (f32, default), IEEE halves packed for\n"
+            "                  RGBA16F textures (rgba16f) or none (hosts that read the cache rows;\n"
+            "                  glow_system_desc.output_planes)\n"
             "  --probe X,Y,Z   print the indirect light at this point (repeatable; default: 3 points)\n"
             "  --no-machine    skip the STREAM-triad, FMA-peak and cache-line round-trip probes\n"
             "  --backend gl    the GL 4.5 solver (glow_gl.h) on a headless context (EGL, else OSMesa; GLOW_GLCTX=egl|osmesa),\n"
@@ -146,12 +147,13 @@ static int parse_args(int argc, char **argv, options *o) {
                                                   : GLOW_LINK_MODE_COMPACT;
             ++i;
         } else if (!strcmp(a, "--planes")) {
-            if (!v || (strcmp(v, "f32") && strcmp(v, "f16") && strcmp(v, "none"))) {
-                fprintf(stderr, "glow-bench: --planes must be f32, f16 or none\n");
+            if (!v || (strcmp(v, "f32") && strcmp(v, "rgba16f") && strcmp(v, "none"))) {
+                fprintf(stderr, "glow-bench: --planes must be f32, rgba16f or none\n");
                 return 0;
             }
-            o->planes = !strcmp(v, "f16") ? GLOW_OUTPUT_PLANES_F16 : !strcmp(v, "none") ? GLOW_OUTPUT_PLANES_NONE
-                                                                                       : GLOW_OUTPUT_PLANES_F32;
+            o->planes = !strcmp(v, "rgba16f") ? GLOW_OUTPUT_PLANES_RGBA16F
+                      : !strcmp(v, "none")    ? GLOW_OUTPUT_PLANES_NONE
+                                              : GLOW_OUTPUT_PLANES_F32;
             ++i;
         } else if (!strcmp(a, "--probe")) {
             float p[3];
@@ -1201,7 +1203,7 @@ int main(int argc, char **argv) {
         else
 #endif
         printf("links %s, kernel %s, output planes %s, system memory %.1f MiB\n", link_mode_name(st.link_mode),
-               st.kernel ? st.kernel : "-", o.planes == GLOW_OUTPUT_PLANES_F16 ? "f16" : o.planes == GLOW_OUTPUT_PLANES_NONE ? "none" : "f32",
+               st.kernel ? st.kernel : "-", o.planes == GLOW_OUTPUT_PLANES_RGBA16F ? "rgba16f" : o.planes == GLOW_OUTPUT_PLANES_NONE ? "none" : "f32",
                (double)st.memory_bytes / (1024.0 * 1024.0));
         printf("median of %u updates (ms):\n", n);
         printf("  light move (host, outside update) %8.3f%s\n", m_move, o.gl ? "  (GPU shadow maps: CPU time to submit)" : "");

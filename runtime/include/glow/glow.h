@@ -369,12 +369,15 @@ typedef enum glow_link_mode {
  * uploads to textures. The cache rows (cache_sh), the maps and every glow_sample_* function are the same
  * in each: they read cache_sh, not the planes. \since 0.2 */
 typedef enum glow_output_planes {
-    GLOW_OUTPUT_PLANES_F32 = 0,  /* 32-bit floats: grid_sh and lightmap_sh (upload as GL_FLOAT) */
-    GLOW_OUTPUT_PLANES_F16,      /* IEEE halves: grid_sh_f16 and lightmap_sh_f16 (upload as GL_HALF_FLOAT to
-                                    R16F / RGBA16F textures without a conversion), rounded to nearest even,
-                                    values beyond +-65504 clamped to it; grid_sh and lightmap_sh are NULL.
-                                    Half the bytes to write and upload; 2^-11 relative rounding, far below
-                                    the solver's error against the referee */
+    GLOW_OUTPUT_PLANES_F32 = 0,  /* 32-bit floats, one plane per coefficient: grid_sh and lightmap_sh */
+    GLOW_OUTPUT_PLANES_RGBA16F,  /* IEEE halves packed 4 coefficients a texel, in the layout of the textures
+                                    glow_shading.glsl reads (grid_rgba16f, lightmap_rgba16f, below): one
+                                    glTextureSubImage3D(..., GL_RGBA, GL_HALF_FLOAT, ...) each into an RGBA16F
+                                    3D texture and 2D array, no conversion or repacking. Rounded to nearest
+                                    even, values beyond +-65504 clamped to it; grid_sh and lightmap_sh are
+                                    NULL. About half the float planes' bytes (27 coefficients: 28 halves,
+                                    56 bytes a texel, against 108); 2^-11 relative rounding, far below the
+                                    solver's error against the referee */
     GLOW_OUTPUT_PLANES_NONE,     /* no grid or lightmap planes (their pointers NULL): for hosts that read
                                     cache_sh through the maps (glow_sample_*) or upload the cache rows and
                                     maps themselves; the output stage then writes only the lightmap detail */
@@ -654,12 +657,16 @@ typedef struct glow_cache_outputs {
      * before. A triangle's page: glow_bake_geometry.lightmap_page; lookups: glow_sample_lightmap_page,
      * glow_sample_lightmap_detail_page. Gutter and seam copies stay within their page. */
     uint32_t lightmap_pages;
-    /* \since 0.2: the planes' format (glow_system_desc.output_planes). With GLOW_OUTPUT_PLANES_F16 the
-     * grid and lightmap planes are these, in grid_sh's and lightmap_sh's layouts, and those two are NULL;
-     * with GLOW_OUTPUT_PLANES_NONE all four are NULL. */
+    /* \since 0.2: the planes' format (glow_system_desc.output_planes). With GLOW_OUTPUT_PLANES_RGBA16F
+     * these two hold the planes (grid_sh and lightmap_sh are NULL) as IEEE halves, coefficient k of a
+     * cell or texel at component k % 4 of RGBA texel plane q = k / 4 (Q = (coeff_count + 3) / 4 planes;
+     * the last plane's components past coeff_count are 0), as glow_shading.glsl reads them; with
+     * GLOW_OUTPUT_PLANES_NONE all four are NULL. */
     glow_output_planes output_planes;
-    const uint16_t *grid_sh_f16;     /* [coeff_count][dz][dy][dx] IEEE halves, or NULL */
-    const uint16_t *lightmap_sh_f16; /* [coeff_count][pages][height][width] IEEE halves, or NULL */
+    const uint16_t *grid_rgba16f;     /* [Q][dz][dy][dx][4]: a 3D texture dx x dy x (dz Q), plane q at
+                                         z + q dz; or NULL */
+    const uint16_t *lightmap_rgba16f; /* [pages][Q][height][width][4]: a 2D array texture of pages x Q
+                                         layers, plane q of page g at layer g Q + q; or NULL */
 } glow_cache_outputs;
 /** The outputs, owned by the system, valid (and unchanged) until the next update or destroy.
  * NULL for a NULL system. \threadsafety Read concurrently, but not during an update. \since 0.1 */
