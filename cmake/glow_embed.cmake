@@ -54,8 +54,8 @@ foreach(k IN LISTS KERNELS)
       file(WRITE "${VALIDATE_DIR}/${name}_l${lb}c${cb}.comp"
            "#version 450 core\n#define GLOW_GLSL 1\n#define GLOW_LUMA_BANDS ${lb}\n#define GLOW_CHROMA_BANDS ${cb}\n${vsrc}")
     endforeach()
-    # the bake-dependent paths (gl_system.c's prelude), at 3/3 bands
-    foreach(def LINK_SUBSETS LINK_GRADIENT)
+    # the bake- and flag-dependent paths (gl_system.c's prelude), at 3/3 bands
+    foreach(def LINK_SUBSETS LINK_GRADIENT OUTPUT_RGBA16F)
       file(WRITE "${VALIDATE_DIR}/${name}_l3c3_${def}.comp"
            "#version 450 core\n#define GLOW_GLSL 1\n#define GLOW_LUMA_BANDS 3\n#define GLOW_CHROMA_BANDS 3\n#define GLOW_${def} 1\n${vsrc}")
     endforeach()

@@ -13,13 +13,23 @@ layout(local_size_x = GLOW_OUTPUT_GROUP) in;
 
 layout(std430, binding = GLOW_BINDING_OUTPUT_PAIRS) readonly buffer GlowPairs { uvec2 glow_pairs[]; };
 layout(std430, binding = GLOW_BINDING_CACHE_SH) readonly buffer GlowCacheSh { float glow_cache_sh[]; };
-layout(rgba32f, binding = GLOW_IMAGE_GRID) uniform writeonly image3D glow_grid;
-layout(rgba32f, binding = GLOW_IMAGE_LIGHTMAP) uniform writeonly image2DArray glow_lightmap;
+/* GLOW_OUTPUT_RGBA16F (GLOW_GL_FLAG_RGBA16F_OUTPUTS): the textures are RGBA16F, and a value beyond a
+ * half's largest is clamped to it first (as the CPU's GLOW_OUTPUT_PLANES_RGBA16F planes), not stored as
+ * an infinity */
+#ifdef GLOW_OUTPUT_RGBA16F
+#define GLOW_OUT_FORMAT rgba16f
+#define GLOW_OUT_VALUE(x) clamp((x), -65504.0, 65504.0)
+#else
+#define GLOW_OUT_FORMAT rgba32f
+#define GLOW_OUT_VALUE(x) (x)
+#endif
+layout(GLOW_OUT_FORMAT, binding = GLOW_IMAGE_GRID) uniform writeonly image3D glow_grid;
+layout(GLOW_OUT_FORMAT, binding = GLOW_IMAGE_LIGHTMAP) uniform writeonly image2DArray glow_lightmap;
 /* a refined grid's brick atlas: corner (x, y, z) of brick b, plane p, at
  * (S (b % ax) + x, S (b / ax) + y, z + S p), S = refine + 1, ax = fine_atlas_x */
-layout(rgba32f, binding = GLOW_IMAGE_GRID_FINE) uniform writeonly image3D glow_grid_fine;
+layout(GLOW_OUT_FORMAT, binding = GLOW_IMAGE_GRID_FINE) uniform writeonly image3D glow_grid_fine;
 
-float glow_coeff(uint base, uint k) { return k < glow_p.coeff_count ? glow_cache_sh[base + k] : 0.0; }
+float glow_coeff(uint base, uint k) { return k < glow_p.coeff_count ? GLOW_OUT_VALUE(glow_cache_sh[base + k]) : 0.0; }
 
 void main() {
     uint i = glow_global_index(GLOW_OUTPUT_GROUP);

@@ -46,6 +46,8 @@ struct glow_gl_system {
     uint32_t flags;
     glow_solver_tables t;
     uint32_t S, N, C, levels, planes;
+    GLenum out_fmt;     /* the output textures' format: GL_RGBA32F, or GL_RGBA16F (GLOW_GL_FLAG_RGBA16F_OUTPUTS) */
+    uint32_t out_texel; /* its bytes a texel */
     GLuint prog[K_COUNT];
     GLint level_loc, tail_loc, proxy_loc, list_loc, delta_loc, drift_loc, grad_loc, sky_loc;
     /* the visible sky of the grid caches (glow_gl_system_set_sky), as the CPU solver's glow_system_set_sky:
@@ -146,11 +148,12 @@ static GLuint build_program(glow_gl_system *s, int k, const char *hook, glow_res
         *err = GLOW_ERROR_UNSUPPORTED;
         return 0;
     }
-    char prelude[320];
+    char prelude[360];
     snprintf(prelude, sizeof prelude,
-             "#version 450 core\n#define GLOW_GLSL 1\n#define GLOW_LUMA_BANDS %u\n#define GLOW_CHROMA_BANDS %u\n%s%s#line 1 0\n",
+             "#version 450 core\n#define GLOW_GLSL 1\n#define GLOW_LUMA_BANDS %u\n#define GLOW_CHROMA_BANDS %u\n%s%s%s#line 1 0\n",
              s->t.sh_bands_luma, s->t.sh_bands_chroma, s->t.link_subsets ? "#define GLOW_LINK_SUBSETS 1\n" : "",
-             s->t.link_gradients ? "#define GLOW_LINK_GRADIENT 1\n" : "");
+             s->t.link_gradients ? "#define GLOW_LINK_GRADIENT 1\n" : "",
+             s->out_fmt == GL_RGBA16F ? "#define GLOW_OUTPUT_RGBA16F 1\n" : "");
     const char *strings[6];
     GLint lengths[6];
     int n = 0;
@@ -282,7 +285,7 @@ static void nearest(glow_gl_system *s, GLuint tex) {
     s->gl.TextureParameteri(tex, GL_TEXTURE_WRAP_R, GL_CLAMP_TO_EDGE);
 }
 
-/* Checks a host texture: target, RGBA32F, size. */
+/* Checks a host texture: target, format (RGBA32F, or RGBA16F with GLOW_GL_FLAG_RGBA16F_OUTPUTS), size. */
 static int check_host_texture(glow_gl_system *s, GLuint tex, GLenum target, int w, int h, int d, const char *what) {
     glow_glfns *gl = &s->gl;
     while (gl->GetError() != GL_NO_ERROR) {}
@@ -291,10 +294,11 @@ static int check_host_texture(glow_gl_system *s, GLuint tex, GLenum target, int 
     gl->GetTextureLevelParameteriv(tex, 0, GL_TEXTURE_WIDTH, &tw);
     gl->GetTextureLevelParameteriv(tex, 0, GL_TEXTURE_HEIGHT, &th);
     gl->GetTextureLevelParameteriv(tex, 0, GL_TEXTURE_DEPTH, &td);
-    if (gl->GetError() != GL_NO_ERROR || fmt != GL_RGBA32F || tw != w || th != h || td != d) {
+    if (gl->GetError() != GL_NO_ERROR || fmt != (GLint)s->out_fmt || tw != w || th != h || td != d) {
         LOG_ERR(s, GLOW_ERROR_INVALID_ARGUMENT,
-                "host %s texture %u: need %s RGBA32F %d x %d x %d, it is format 0x%x %d x %d x %d", what, tex,
-                target == GL_TEXTURE_3D ? "GL_TEXTURE_3D" : "GL_TEXTURE_2D_ARRAY", w, h, d, fmt, tw, th, td);
+                "host %s texture %u: need %s %s %d x %d x %d, it is format 0x%x %d x %d x %d", what, tex,
+                target == GL_TEXTURE_3D ? "GL_TEXTURE_3D" : "GL_TEXTURE_2D_ARRAY",
+                s->out_fmt == GL_RGBA16F ? "RGBA16F" : "RGBA32F", w, h, d, fmt, tw, th, td);
         return 0;
     }
     return 1;
@@ -312,6 +316,8 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
     s->sys = desc->system;
     s->logger = desc->logger;
     s->flags = desc->flags;
+    s->out_fmt = (s->flags & GLOW_GL_FLAG_RGBA16F_OUTPUTS) ? GL_RGBA16F : GL_RGBA32F;
+    s->out_texel = s->out_fmt == GL_RGBA16F ? 8u : 16u;
     snprintf(s->label, sizeof s->label, "%s", desc->label ? desc->label : "gl");
     { /* before any GL call: what the bake needs that this backend lacks */
         glow_solver_tables tt;
@@ -572,6 +578,7 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
                                .sh_bands_chroma = t->sh_bands_chroma,
                                .coeff_count = t->coeff_count,
                                .planes = s->planes,
+                               .output_internal_format = s->out_fmt,
                                .cache_sh_buffer = s->buf[B_CACHE],
                                .flux_buffer = s->buf[B_FLUX],
                                .cache_count = s->C,
@@ -590,9 +597,9 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
             s->grid_tex = desc->grid_texture;
         } else {
             gl->CreateTextures(GL_TEXTURE_3D, 1, &s->grid_tex);
-            gl->TextureStorage3D(s->grid_tex, 1, GL_RGBA32F, (GLsizei)dx, (GLsizei)dy, (GLsizei)(dz * s->planes));
+            gl->TextureStorage3D(s->grid_tex, 1, s->out_fmt, (GLsizei)dx, (GLsizei)dy, (GLsizei)(dz * s->planes));
             s->own_grid = 1;
-            s->gpu_bytes += (size_t)dx * dy * dz * s->planes * 16u;
+            s->gpu_bytes += (size_t)dx * dy * dz * s->planes * s->out_texel;
         }
         gl->ClearTexImage(s->grid_tex, 0, GL_RGBA, GL_FLOAT, zero4);
         /* mask: per cell and octant, the corners that hold a cache and are visible (GVIS) */
@@ -656,11 +663,11 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
             gl->TextureSubImage3D(s->fine_mask_tex, 0, 0, 0, 0, (GLsizei)(ax * R), (GLsizei)(ay * R), (GLsizei)R,
                                   GL_RG_INTEGER, GL_UNSIGNED_INT, fm);
             gl->CreateTextures(GL_TEXTURE_3D, 1, &s->fine_tex);
-            gl->TextureStorage3D(s->fine_tex, 1, GL_RGBA32F, (GLsizei)(ax * S), (GLsizei)(ay * S), (GLsizei)(S * s->planes));
+            gl->TextureStorage3D(s->fine_tex, 1, s->out_fmt, (GLsizei)(ax * S), (GLsizei)(ay * S), (GLsizei)(S * s->planes));
             gl->ClearTexImage(s->fine_tex, 0, GL_RGBA, GL_FLOAT, zero4);
             free(bi), free(fm);
             nearest(s, s->brick_tex), nearest(s, s->fine_mask_tex), nearest(s, s->fine_tex);
-            s->gpu_bytes += cells * 4u + (size_t)ax * ay * R * R * R * 8u + (size_t)ax * ay * S * S * S * s->planes * 16u;
+            s->gpu_bytes += cells * 4u + (size_t)ax * ay * R * R * R * 8u + (size_t)ax * ay * S * S * S * s->planes * s->out_texel;
             s->out.grid_refine = R;
             s->out.grid_fine_atlas_x = ax;
             s->out.grid_brick_texture = s->brick_tex;
@@ -683,9 +690,9 @@ glow_result glow_gl_system_create(const glow_gl_desc *desc, glow_gl_system **out
             s->lm_tex = desc->lightmap_texture;
         } else {
             gl->CreateTextures(GL_TEXTURE_2D_ARRAY, 1, &s->lm_tex);
-            gl->TextureStorage3D(s->lm_tex, 1, GL_RGBA32F, (GLsizei)W, (GLsizei)H, (GLsizei)(s->planes * lm_pages));
+            gl->TextureStorage3D(s->lm_tex, 1, s->out_fmt, (GLsizei)W, (GLsizei)H, (GLsizei)(s->planes * lm_pages));
             s->own_lm = 1;
-            s->gpu_bytes += (size_t)W * HP * s->planes * 16u;
+            s->gpu_bytes += (size_t)W * HP * s->planes * s->out_texel;
         }
         gl->ClearTexImage(s->lm_tex, 0, GL_RGBA, GL_FLOAT, zero4);
         uint8_t *valid = malloc((size_t)W * HP);
@@ -1081,11 +1088,11 @@ glow_result glow_gl_system_update(glow_gl_system *s, const glow_update_desc *des
     /* 5. outputs (seam/gutter texels are pairs too) */
     if (t->grid_used + t->lightmap_used + s->fine_used) {
         gl->UseProgram(s->prog[K_OUTPUT]);
-        if (s->fine_tex) gl->BindImageTexture(GLOW_IMAGE_GRID_FINE, s->fine_tex, 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+        if (s->fine_tex) gl->BindImageTexture(GLOW_IMAGE_GRID_FINE, s->fine_tex, 0, GL_TRUE, 0, GL_WRITE_ONLY, s->out_fmt);
         bind(s, GLOW_BINDING_OUTPUT_PAIRS, B_PAIRS);
         bind(s, GLOW_BINDING_CACHE_SH, B_CACHE);
-        if (s->grid_tex) gl->BindImageTexture(GLOW_IMAGE_GRID, s->grid_tex, 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-        if (s->lm_tex) gl->BindImageTexture(GLOW_IMAGE_LIGHTMAP, s->lm_tex, 0, GL_TRUE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+        if (s->grid_tex) gl->BindImageTexture(GLOW_IMAGE_GRID, s->grid_tex, 0, GL_TRUE, 0, GL_WRITE_ONLY, s->out_fmt);
+        if (s->lm_tex) gl->BindImageTexture(GLOW_IMAGE_LIGHTMAP, s->lm_tex, 0, GL_TRUE, 0, GL_WRITE_ONLY, s->out_fmt);
         dispatch(s, (t->grid_used + t->lightmap_used + s->fine_used + GLOW_OUTPUT_GROUP - 1u) / GLOW_OUTPUT_GROUP);
         gl->MemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT |
                           GL_TEXTURE_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);

@@ -13,7 +13,8 @@
  *   - a lightmap of pages (glow-bake --lightmap-max-size, format 1.7): glow_sample_lightmap_page and
  *     glow_sample_lightmap_detail_page at 512 random pages and uvs vs the C ones, the same bounds;
  *   - a CPU system's RGBA16F output planes uploaded as they are into RGBA16F textures hold what the GL
- *     system's textures hold (one page and several), to the halves' precision.
+ *     system's textures hold (one page and several), to the halves' precision, and so do a GL system's
+ *     own RGBA16F textures (GLOW_GL_FLAG_RGBA16F_OUTPUTS).
  * Exits 77 (skipped) without a GL 4.5 context. */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -139,8 +140,8 @@ static void light_cornell(glow_system *sys) {
  * for texel and plane for plane (pages included): so they are in the layout glow_shading.glsl reads.
  * Bound: the halves' rounding (2^-11 relative, checked at 2^-10) plus the CPU/GPU agreement (1e-4 of the
  * largest value). */
-static void check_rgba16f_upload(glow_context *ctx, const glow_bake *bake, uint32_t luma, uint32_t chroma,
-                                 const glow_gl_outputs *go) {
+static void check_rgba16f_upload(glow_context *ctx, const glow_bake *bake, glow_system *sys, uint32_t luma,
+                                 uint32_t chroma, const glow_gl_outputs *go) {
     glow_system *h;
     assert_int_equal(glow_system_create(ctx, &(glow_system_desc){.bake = bake, .sh_bands_luma = luma, .sh_bands_chroma = chroma,
                                                                  .output_planes = GLOW_OUTPUT_PLANES_RGBA16F},
@@ -189,6 +190,54 @@ static void check_rgba16f_upload(glow_context *ctx, const glow_bake *bake, uint3
         gl.DeleteTextures(1, &t);
     }
     glow_system_destroy(h);
+    /* The GL system's own textures in RGBA16F (GLOW_GL_FLAG_RGBA16F_OUTPUTS): the float textures' values,
+     * rounded to halves, everywhere (padding and empty texels included); a host RGBA32F texture is then
+     * refused */
+    assert_int_equal(go->output_internal_format, GL_RGBA32F);
+    glow_gl_system *g16;
+    const glow_gl_loader load = glow_glctx_get_proc_address(g_ctx);
+    assert_int_equal(glow_gl_system_create(&(glow_gl_desc){.system = sys, .get_proc_address = load,
+                                                           .flags = GLOW_GL_FLAG_RGBA16F_OUTPUTS},
+                                           &g16),
+                     GLOW_OK);
+    for (int u = 0; u < 3; ++u) assert_int_equal(glow_gl_system_update(g16, NULL), GLOW_OK);
+    const glow_gl_outputs *o16 = glow_gl_system_outputs(g16);
+    assert_int_equal(o16->output_internal_format, GL_RGBA16F);
+    const GLuint mine[2] = {o16->grid_texture, o16->lightmap_texture};
+    for (int w = 0; w < 2; ++w) {
+        GLint fmt = 0;
+        gl.GetTextureLevelParameteriv(mine[w], 0, GL_TEXTURE_INTERNAL_FORMAT, &fmt);
+        assert_int_equal(fmt, GL_RGBA16F);
+        const size_t n = (size_t)dims[w][0] * dims[w][1] * dims[w][2] * 4u;
+        float *a = malloc(n * sizeof *a), *b = malloc(n * sizeof *b);
+        gl.GetTextureImage(mine[w], 0, GL_RGBA, GL_FLOAT, (GLsizei)(n * sizeof *a), a);
+        gl.GetTextureImage(theirs[w], 0, GL_RGBA, GL_FLOAT, (GLsizei)(n * sizeof *b), b);
+        double worst = 0.0, scale = 0.0;
+        size_t nonzero = 0;
+        for (size_t i = 0; i < n; ++i) {
+            const double d = fabs((double)a[i] - b[i]);
+            if (d > ldexp(fabs((double)b[i]), -10) + 1e-7)
+                fail_msg("GL RGBA16F %s value %zu: %g, the RGBA32F texture's %g", w ? "lightmap" : "grid", i, (double)a[i],
+                         (double)b[i]);
+            worst = fmax(worst, d), scale = fmax(scale, fabs((double)b[i]));
+            nonzero += a[i] != 0.0f;
+        }
+        printf("  GL system's own RGBA16F %s texture: %zu values within a half's rounding of RGBA32F, worst %.2e (max %.3g)\n",
+               w ? "lightmap" : "grid", nonzero, worst, scale);
+        assert_true(nonzero > n / 16u);
+        free(a), free(b);
+    }
+    GLuint f32tex;
+    gl.CreateTextures(GL_TEXTURE_3D, 1, &f32tex);
+    gl.TextureStorage3D(f32tex, 1, GL_RGBA32F, dims[0][0], dims[0][1], dims[0][2]);
+    glow_gl_system *bad = NULL;
+    assert_int_equal(glow_gl_system_create(&(glow_gl_desc){.system = sys, .get_proc_address = load,
+                                                           .flags = GLOW_GL_FLAG_RGBA16F_OUTPUTS, .grid_texture = f32tex},
+                                           &bad),
+                     GLOW_ERROR_INVALID_ARGUMENT);
+    assert_null(bad);
+    gl.DeleteTextures(1, &f32tex);
+    glow_gl_system_destroy(g16);
 }
 
 /* Bakes builtin:cornell with `st`, loads it into a CPU system with `luma`/`chroma` bands (0: the bake's)
@@ -219,7 +268,7 @@ static void test_sampling(void **state) {
     const glow_pc_settings st = {.quality = GLOW_PC_QUALITY_LOW, .surfels = 4096, .links = 96, .bands = 3, .threads = 2, .seed = 1};
     lit_cornell(&st, 3, 2, &ctx, &bake, &sys, &gs);
     const glow_gl_outputs *go = glow_gl_system_outputs(gs);
-    check_rgba16f_upload(ctx, bake, 3, 2, go);
+    check_rgba16f_upload(ctx, bake, sys, 3, 2, go);
     /* the C reference on the GPU's caches */
     glow_cache_outputs co = *glow_system_outputs(sys);
     const size_t ncs = (size_t)co.cache_count * co.coeff_count;
@@ -431,7 +480,7 @@ static void test_sampling_pages(void **state) {
     assert_true(P >= 3);
     assert_int_equal(go->lightmap_pages, P);
     assert_int_not_equal(go->lightmap_detail_texture, 0);
-    check_rgba16f_upload(ctx, bake, 3, 2, go);
+    check_rgba16f_upload(ctx, bake, sys, 3, 2, go);
     const size_t ncs = (size_t)co.cache_count * co.coeff_count;
     float *sh = malloc(ncs * sizeof *sh);
     assert_int_equal(glow_gl_system_read_cache_sh(gs, sh, ncs), GLOW_OK);

@@ -80,6 +80,10 @@ extern "C" {
                                          drivers whose timestamps are not ordered with compute work (Mesa's
                                          llvmpipe resolves them on its rasteriser thread, so the split between
                                          stages is wrong there); adds a full sync per stage */
+#define GLOW_GL_FLAG_RGBA16F_OUTPUTS 8u /* \since 0.2: the grid, lightmap and refined-grid textures in RGBA16F
+                                           instead of RGBA32F (host-owned ones too): half their memory and their
+                                           lookups' bandwidth; values clamped to +-65504, then the driver's
+                                           rounding. glow_shading.glsl reads either. The detail stays RGBA32F */
 
 typedef struct glow_gl_desc {
     glow_system *system;             /* required, borrowed: the CPU system of the same bake (must outlive) */
@@ -127,6 +131,9 @@ typedef struct glow_gl_outputs {
      * lightmap_height and detail_height stay a page's. glow_shading.glsl glow_sample_lightmap_page and
      * glow_sample_lightmap_detail_page take the page (a triangle's: glow_bake_geometry.lightmap_page). */
     uint32_t lightmap_pages;
+    /* \since 0.2: the grid, lightmap and fine-grid textures' internal format: GL_RGBA32F (0x8814), or
+     * GL_RGBA16F (0x881A) with GLOW_GL_FLAG_RGBA16F_OUTPUTS */
+    uint32_t output_internal_format;
 } glow_gl_outputs;
 
 /* GPU time of the last update, per stage, from GL timer queries (ms). */
