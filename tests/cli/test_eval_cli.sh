@@ -75,6 +75,13 @@ expect 0 "bench: --walk" "$BIN/glow-bench" "$T/cornell.glow" "$SCENE" --frames 8
 python3 -c "import json,sys; b=json.load(open(sys.argv[1]))['budget']; assert b['walk_near_radius'] > 0 and 0 <= b['walk_near_error_mean'] <= b['walk_near_error_max'], b" "$T/out" \
   && pass "  the walk reports the error near its focus" || fail "  walk JSON: $(head -c 300 "$T/out")"
 expect 2 "bench: --walk without a budget" "$BIN/glow-bench" "$T/cornell.glow" "$SCENE" --walk
+# the output planes' format (glow_system_desc.output_planes): named in the report, refused when unknown
+for p in rgba16f none; do
+  expect 0 "bench: --planes $p" "$BIN/glow-bench" "$T/cornell.glow" "$SCENE" --frames 2 --warmup 1 --no-machine --json --planes $p
+  python3 -c "import json,sys; j=json.load(open(sys.argv[1])); assert j['output_planes'] == sys.argv[2], j.get('output_planes')" "$T/out" "$p" \
+    && pass "  the report says $p" || fail "  output_planes: $(grep -o '"output_planes"[^,]*' "$T/out")"
+done
+expect 2 "bench: --planes f8" "$BIN/glow-bench" "$T/cornell.glow" "$SCENE" --planes f8; err_has "--planes must be"
 expect 0 "render: Glow's indirect only" "$BIN/glow-render" "$SCENE" --glow "$T/cornell.glow" --out "$T/gi" "${R[@]}" --bounces 64 --indirect-only
 cmp -s "$T/glow_indirect.exr" "$T/gi_indirect.exr" && pass "  indirect-only gives the same indirect image" || fail "  indirect images differ"
 cmp -s "$T/glow_direct.exr" "$T/ref_direct.exr" && pass "  Glow's direct image is the reference's" || fail "  direct images differ"

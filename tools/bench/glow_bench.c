@@ -55,6 +55,10 @@ static const char *link_mode_name(uint32_t mode) {
     return mode == GLOW_LINK_MODE_EXPANDED ? "expanded" : mode == GLOW_LINK_MODE_SH ? "sh" : "compact";
 }
 
+static const char *planes_name(glow_output_planes p) {
+    return p == GLOW_OUTPUT_PLANES_RGBA16F ? "rgba16f" : p == GLOW_OUTPUT_PLANES_NONE ? "none" : "f32";
+}
+
 static void usage(FILE *f) {
     fprintf(f,
             "usage: glow-bench BAKE SCENE [--frames N] [--warmup N] [--threads N] [--luma L] [--chroma C]\n"
@@ -1131,6 +1135,7 @@ int main(int argc, char **argv) {
         {
             cJSON_AddStringToObject(jo, "backend", "cpu");
             cJSON_AddStringToObject(jo, "link_mode", link_mode_name(st.link_mode));
+            cJSON_AddStringToObject(jo, "output_planes", planes_name(o.planes));
             cJSON_AddStringToObject(jo, "kernel", st.kernel ? st.kernel : "-");
             cJSON_AddNumberToObject(jo, "system_memory_bytes", (double)st.memory_bytes);
         }
@@ -1203,7 +1208,7 @@ int main(int argc, char **argv) {
         else
 #endif
         printf("links %s, kernel %s, output planes %s, system memory %.1f MiB\n", link_mode_name(st.link_mode),
-               st.kernel ? st.kernel : "-", o.planes == GLOW_OUTPUT_PLANES_RGBA16F ? "rgba16f" : o.planes == GLOW_OUTPUT_PLANES_NONE ? "none" : "f32",
+               st.kernel ? st.kernel : "-", planes_name(o.planes),
                (double)st.memory_bytes / (1024.0 * 1024.0));
         printf("median of %u updates (ms):\n", n);
         printf("  light move (host, outside update) %8.3f%s\n", m_move, o.gl ? "  (GPU shadow maps: CPU time to submit)" : "");
