@@ -5,7 +5,7 @@
  * glow_sample_lightmap, glow_shade_sh); tests/gpu checks them against each other.
  *
  * THE TEXTURES (glow_gl.h, glow_gl_outputs): coefficients of a cache are Y luma², Co chroma², Cg chroma²
- * (incident radiance, W/(m²·sr), YCoCg), 4 per RGBA32F texel ("planes", GLOW_SH_PLANES of them):
+ * (incident radiance, W/(m²·sr), YCoCg), 4 per RGBA32F or RGBA16F texel ("planes", GLOW_SH_PLANES of them):
  *   grid      sampler3D, dims (dx, dy, dz · planes): plane p of cell (x,y,z) at texel (x, y, z + p·dz)
  *   grid mask usampler3D RG32UI (dx, dy, dz): for the cell whose lowest corner is (x,y,z) and each octant o
  *             of it, byte o (x: octants 0-3, y: 4-7) has bit k set when corner k may be blended (it holds a

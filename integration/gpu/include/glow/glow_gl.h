@@ -40,7 +40,7 @@
  * glow_system_set_surfel_irradiance; uploaded when it changed).
  *
  * OUTPUTS (glow_gl_outputs): coefficients as in glow_cache_outputs (Y luma², Co chroma², Cg chroma²,
- * incident radiance W/(m²·sr)), 4 per RGBA32F texel ("planes"):
+ * incident radiance W/(m²·sr)), 4 per RGBA32F texel ("planes"; RGBA16F with GLOW_GL_FLAG_RGBA16F_OUTPUTS):
  *   grid_texture      GL_TEXTURE_3D (dx, dy, dz · planes): plane p of cell (x,y,z) at (x, y, z + p·dz)
  *   grid_mask_texture GL_TEXTURE_3D RG32UI (dx, dy, dz): per cell and octant, the corners a lookup blends
  *   lightmap_texture  GL_TEXTURE_2D_ARRAY (w, h, planes · pages): plane p of page g at layer g·planes + p;
@@ -100,7 +100,7 @@ typedef struct glow_gl_system glow_gl_system;
 
 typedef struct glow_gl_outputs {
     uint32_t sh_bands_luma, sh_bands_chroma, coeff_count;
-    uint32_t planes;                      /* RGBA32F texels per cache: ceil(coeff_count / 4) */
+    uint32_t planes;                      /* RGBA texels per cache: ceil(coeff_count / 4) */
     uint32_t grid_texture, grid_mask_texture; /* 0 without a grid */
     uint32_t grid_dims[3];
     float grid_origin[3], grid_spacing;
@@ -119,7 +119,7 @@ typedef struct glow_gl_outputs {
     uint32_t detail_width, detail_height;
     /* \since 0.2, bakes with a refined grid (glow_cache_outputs.grid_refine = R; 0 otherwise), for
      * glow_shading.glsl glow_sample_grid_refined: grid_brick_texture GL_TEXTURE_3D R32UI (dx, dy, dz),
-     * each cell's brick or 0xFFFFFFFF; grid_fine_texture GL_TEXTURE_3D RGBA32F (S ax, S ay, S planes),
+     * each cell's brick or 0xFFFFFFFF; grid_fine_texture GL_TEXTURE_3D RGBA32F or 16F (S ax, S ay, S planes),
      * S = R + 1, ax = grid_fine_atlas_x: corner (x, y, z) of brick b, plane p, at (S (b % ax) + x,
      * S (b / ax) + y, z + S p); grid_fine_mask_texture GL_TEXTURE_3D RG32UI (R ax, R ay, R): per fine
      * cell and octant the corners a lookup blends (visible and holding a cache), as grid_mask_texture */
