@@ -139,13 +139,39 @@ glow_result glow_pc_settings_validate(const glow_pc_settings *s, char *msg, size
     for (uint32_t g = 0; g < s->system_group_count; ++g) {
         const char *e = s->system_groups[g], *eq = e ? strchr(e, '=') : NULL;
         if (!eq || eq == e || eq - e > 48 || !eq[1])
-            BAD("--system-group '%s': expected NAME=PATTERN[,PATTERN...] with a name of 1..48 characters", e ? e : "(null)");
+            BAD("system group '%s': expected NAME=PATTERN[,PATTERN...] with a name of 1..48 characters", e ? e : "(null)");
         for (const char *q = e; q < eq; ++q)
             if (!((*q >= 'A' && *q <= 'Z') || (*q >= 'a' && *q <= 'z') || (*q >= '0' && *q <= '9') || *q == '_' || *q == '-'))
-                BAD("--system-group '%s': the name may hold only A-Z a-z 0-9 _ -", e);
+                BAD("system group '%s': the name may hold only A-Z a-z 0-9 _ -", e);
         for (uint32_t h = 0; h < g; ++h)
-            if (!strncmp(s->system_groups[h], e, (size_t)(eq - e) + 1u)) BAD("--system-group '%.*s' is named twice", (int)(eq - e), e);
+            if (!strncmp(s->system_groups[h], e, (size_t)(eq - e) + 1u)) BAD("system group '%.*s' is named twice", (int)(eq - e), e);
     }
+    for (uint32_t g = 0; s->system_neighbours && g < s->system_group_count; ++g) {
+        const char *e = s->system_groups[g], *l = s->system_neighbours[g];
+        const int nl = (int)(strchr(e, '=') - e);
+        while (l && *l) { /* each declared name: another group's, once */
+            const char *c = strchr(l, ',');
+            const size_t len = c ? (size_t)(c - l) : strlen(l);
+            uint32_t h = 0;
+            while (h < s->system_group_count &&
+                   !(strncmp(s->system_groups[h], l, len) == 0 && s->system_groups[h][len] == '='))
+                ++h;
+            if (!len) BAD("system '%.*s': an empty neighbour name in '%s'", nl, e, s->system_neighbours[g]);
+            if (h == s->system_group_count)
+                BAD("system '%.*s': neighbour '%.*s' is no named system (unknown; the names are the groups')", nl, e,
+                    (int)len, l);
+            if (h == g) BAD("system '%.*s' names itself as its neighbour (a system's own light needs no dependency)", nl, e);
+            for (const char *q = s->system_neighbours[g]; q < l;) {
+                const char *qc = strchr(q, ',');
+                const size_t ql = qc ? (size_t)(qc - q) : strlen(q);
+                if (ql == len && !strncmp(q, l, len)) BAD("system '%.*s': neighbour '%.*s' is named twice", nl, e, (int)len, l);
+                q += ql + (qc ? 1 : 0);
+            }
+            l += len + (c ? 1 : 0);
+            if (c && !*l) BAD("system '%.*s': an empty neighbour name in '%s'", nl, e, s->system_neighbours[g]);
+        }
+    }
+    if (s->system_neighbours && !s->system_group_count) BAD("system_neighbours without system_groups");
     if (s->system_reach != 0.0f && !(s->system_reach > 0.0f && s->system_reach <= 4.0f))
         BAD("--system-reach %g is out of range (0..4 system diagonals)", (double)s->system_reach);
     if (s->system_area > 0.0f && s->sh_links)
@@ -1172,6 +1198,23 @@ static glow_result named_systems(const glow_pc_settings *set, const glow__scene 
     free(obj_group);
     free(count);
     return r;
+}
+
+/* Group g's declared neighbours (glow_pc_settings.system_neighbours: "" none), or NULL: automatic */
+static const char *sys_declared(const glow_pc_settings *set, int g) {
+    return g >= 0 && set->system_neighbours ? set->system_neighbours[g] : NULL;
+}
+
+/* Whether the list "NAME[,NAME...]" holds the name of `group` ("NAME=PATTERNS") */
+static bool sys_lists(const char *list, const char *group) {
+    const size_t nl = (size_t)(strchr(group, '=') - group);
+    while (*list) {
+        const char *c = strchr(list, ',');
+        const size_t len = c ? (size_t)(c - list) : strlen(list);
+        if (len == nl && !strncmp(list, group, nl)) return true;
+        list += len + (c ? 1 : 0);
+    }
+    return false;
 }
 
 /* The triangles order[first, first + count) of `world` as a scene of their own: copies of the per-corner
@@ -2279,10 +2322,13 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
             tree_key[s] = system_key(wkey ^ 0x7472656565ull, &sp.parts[s], &sub, foreign, nt);
         }
         sys_scene_free(&sub);
-        /* the neighbours: the most occluders first (ties: the lower index), at most dep_cap, by index */
+        /* the neighbours: the most occluders first (ties: the lower index), at most dep_cap, by index;
+         * of a system that declares its neighbours, only those */
         uint32_t *d = deps + (size_t)s * dep_cap, nd = 0;
+        const char *decl = sys_declared(set, sp.parts[s].group);
         for (uint32_t k = 0; k < sp.n; ++k) {
             if (!occ_count[k]) continue;
+            if (decl && !(sp.parts[k].group >= 0 && sys_lists(decl, set->system_groups[sp.parts[k].group]))) continue;
             uint32_t at = nd < dep_cap ? nd++ : dep_cap;
             if (at == dep_cap) { /* full: replace the weakest if this one beats it */
                 if (occ_count[k] <= occ_count[d[dep_cap - 1]]) continue;
@@ -2295,11 +2341,41 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
             for (uint32_t y = q; y > 0 && d[y - 1] > d[y]; --y) { const uint32_t t = d[y]; d[y] = d[y - 1]; d[y - 1] = t; }
         dep_count[s] = nd;
         dep_total += nd;
+        if (decl && writer) { /* a declared neighbour not linked: say why */
+            const char *e = set->system_groups[sp.parts[s].group];
+            const int el = (int)(strchr(e, '=') - e);
+            for (uint32_t g = 0; g < set->system_group_count; ++g) {
+                if (!sys_lists(decl, set->system_groups[g])) continue;
+                const char *gn = set->system_groups[g];
+                const int gl = (int)(strchr(gn, '=') - gn);
+                uint32_t k = 0;
+                while (k < sp.n && sp.parts[k].group != (int)g) ++k;
+                bool linked = false;
+                for (uint32_t q = 0; q < nd; ++q) linked |= d[q] == k;
+                if (k == sp.n)
+                    glow__warnf(log, "%s: system %.*s: declared neighbour %.*s is no system (its patterns match no "
+                                "object); no light from it", world->source, el, e, gl, gn);
+                else if (!occ_count[k])
+                    glow__warnf(log, "%s: system %.*s: declared neighbour %.*s is beyond its reach (--system-reach "
+                                "%g of its diagonal); no light from it", world->source, el, e, gl, gn, (double)W.reach);
+                else if (!linked)
+                    glow__warnf(log, "%s: system %.*s: declared neighbour %.*s is not linked: at most %u neighbours a "
+                                "system, those with the most triangles within its reach", world->source, el, e, gl, gn,
+                                dep_cap);
+            }
+        }
     }
     for (uint32_t s = 0; s < sp.n && res == GLOW_OK; ++s) {
         uint64_t h = own_key[s];
         HASH_VAL(h, dep_count[s]);
         for (uint32_t q = 0; q < dep_count[s]; ++q) HASH_VAL(h, tree_key[deps[(size_t)s * dep_cap + q]]);
+        const char *decl = sys_declared(set, sp.parts[s].group);
+        if (decl) { /* the declaration, which its manifest entry names: in the groups' order */
+            h = fnv64(h, "declared", 8);
+            for (uint32_t g = 0; g < set->system_group_count; ++g)
+                if (sys_lists(decl, set->system_groups[g]))
+                    h = fnv64(h, set->system_groups[g], (size_t)(strchr(set->system_groups[g], '=') - set->system_groups[g]) + 1u);
+        }
         full_key[s] = h;
     }
     /* Pass 2: the systems, each with its neighbours' trees (placed once, kept until the last system
@@ -2449,6 +2525,14 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
                     char nm[64];
                     snprintf(nm, sizeof nm, "%.*s", (int)(strchr(g, '=') - g), g);
                     cJSON_AddStringToObject(o, "name", nm);
+                    const char *decl = sys_declared(set, part->group);
+                    cJSON *dn = decl ? cJSON_AddArrayToObject(o, "declared_neighbours") : NULL;
+                    for (uint32_t h = 0; dn && h < set->system_group_count; ++h) /* in the groups' order */
+                        if (sys_lists(decl, set->system_groups[h])) {
+                            const char *gn = set->system_groups[h];
+                            snprintf(nm, sizeof nm, "%.*s", (int)(strchr(gn, '=') - gn), gn);
+                            cJSON_AddItemToArray(dn, cJSON_CreateString(nm));
+                        }
                 }
                 cJSON_AddStringToObject(o, "system_key", ownhex);
                 cJSON_AddStringToObject(o, "content_key", contenthex);

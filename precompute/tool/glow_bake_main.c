@@ -93,6 +93,9 @@ static const char *usage_text =
     "  --system-group NAME=PATTERN[,PATTERN...]  with --system-area: the objects of the file (OBJ o/g,\n"
     "                         glTF nodes) whose names match a pattern (* ? [...]) form system NAME,\n"
     "                         whole; the rest is split by area. Repeat for more groups\n"
+    "  --systems FILE.json    with --system-area: systems named by the user and their declared\n"
+    "                         neighbours, the systems whose light each links (instead of\n"
+    "                         --system-group); see docs/linker.md \"Systems named by the user\"\n"
     "  --system-reach F       with --system-area: other systems within F times a system's bounds\n"
     "                         diagonal occlude its rays and light its caches (default 0.5, up to 4)\n"
     "  --surfel-adapt F       surfels up to F times as dense where surfaces face each other within\n"
@@ -130,6 +133,107 @@ static int usage_error(const char *fmt, ...) {
     fputs("\n(see glow-bake --help)\n", stderr);
     va_end(ap);
     return 2;
+}
+
+/* --systems FILE.json: the systems named by the user and their declared neighbours
+ * (glow_pc_settings.system_groups and .system_neighbours):
+ *   {"glow_systems": 1,
+ *    "systems": [{"name": "hall", "objects": ["hall_*", "stairs"], "neighbours": ["tower"]}, ...]}
+ * "objects": fnmatch(3) patterns of the scene's object names; "neighbours" (optional; absent =
+ * automatic, every system within reach; [] = none): other systems of the file. The strings are kept for
+ * the bake (static arrays: the process's lifetime). Returns false with a message naming the file. */
+static bool load_systems(const char *path, const char **groups, const char **neighbours, uint32_t *count, char *err,
+                         size_t n) {
+    FILE *f = fopen(path, "rb");
+    if (!f) {
+        snprintf(err, n, "%s: cannot read the systems file: %s", path, strerror(errno));
+        return false;
+    }
+    char *text = NULL;
+    size_t len = 0, cap = 0;
+    for (;;) {
+        if (len + 4096 + 1 > cap) {
+            cap = cap ? 2 * cap : 8192;
+            char *t = cap <= ((size_t)64 << 20) ? realloc(text, cap) : NULL;
+            if (!t) {
+                snprintf(err, n, "%s: the systems file is too large (more than 64 MiB) or memory ran out", path);
+                free(text);
+                fclose(f);
+                return false;
+            }
+            text = t;
+        }
+        const size_t r = fread(text + len, 1, 4096, f);
+        len += r;
+        if (r < 4096) break;
+    }
+    const bool rerr = ferror(f) != 0;
+    fclose(f);
+    if (rerr) {
+        snprintf(err, n, "%s: cannot read the systems file", path);
+        free(text);
+        return false;
+    }
+    text[len] = 0;
+    const char *end = NULL;
+    cJSON *root = cJSON_ParseWithOpts(text, &end, 1);
+    bool ok = false;
+#define FAIL(...) do { snprintf(err, n, __VA_ARGS__); goto done; } while (0)
+    if (!root) {
+        unsigned line = 1;
+        for (const char *q = text; end && q < end && *q; ++q) line += *q == '\n';
+        FAIL("%s: line %u: not valid JSON", path, line);
+    }
+    const cJSON *ver = cJSON_GetObjectItemCaseSensitive(root, "glow_systems");
+    if (!cJSON_IsNumber(ver) || ver->valuedouble != 1.0)
+        FAIL("%s: not a systems file of version 1 (expected \"glow_systems\": 1)", path);
+    const cJSON *list = cJSON_GetObjectItemCaseSensitive(root, "systems"), *e;
+    if (!cJSON_IsArray(list) || !cJSON_GetArraySize(list)) FAIL("%s: \"systems\" must be a non-empty array", path);
+    if (cJSON_GetArraySize(list) > 256) FAIL("%s: %d systems; at most 256", path, cJSON_GetArraySize(list));
+    uint32_t i = 0;
+    cJSON_ArrayForEach(e, list) {
+        const cJSON *name = cJSON_GetObjectItemCaseSensitive(e, "name");
+        const cJSON *objs = cJSON_GetObjectItemCaseSensitive(e, "objects");
+        const cJSON *nb = cJSON_GetObjectItemCaseSensitive(e, "neighbours"), *x;
+        if (!cJSON_IsObject(e) || !cJSON_IsString(name)) FAIL("%s: systems[%u] has no \"name\" string", path, i);
+        if (!cJSON_IsArray(objs) || !cJSON_GetArraySize(objs))
+            FAIL("%s: system '%s': \"objects\" must be a non-empty array of name patterns", path, name->valuestring);
+        if (nb && !cJSON_IsArray(nb))
+            FAIL("%s: system '%s': \"neighbours\" must be an array of system names", path, name->valuestring);
+        size_t gl = strlen(name->valuestring) + 2, nl = 1;
+        cJSON_ArrayForEach(x, objs) {
+            if (!cJSON_IsString(x) || !*x->valuestring || strchr(x->valuestring, ','))
+                FAIL("%s: system '%s': every object pattern must be a non-empty string without ','", path,
+                     name->valuestring);
+            gl += strlen(x->valuestring) + 1;
+        }
+        cJSON_ArrayForEach(x, nb) {
+            if (!cJSON_IsString(x)) FAIL("%s: system '%s': every neighbour must be a system's name", path, name->valuestring);
+            nl += strlen(x->valuestring) + 1;
+        }
+        char *g = malloc(gl), *l = nb ? malloc(nl) : NULL;
+        if (!g || (nb && !l)) {
+            free(g);
+            free(l);
+            FAIL("%s: out of memory", path);
+        }
+        int at = snprintf(g, gl, "%s=", name->valuestring);
+        cJSON_ArrayForEach(x, objs) at += snprintf(g + at, gl - (size_t)at, "%s%s", x != objs->child ? "," : "", x->valuestring);
+        if (l) {
+            l[0] = 0;
+            at = 0;
+            cJSON_ArrayForEach(x, nb) at += snprintf(l + at, nl - (size_t)at, "%s%s", x != nb->child ? "," : "", x->valuestring);
+        }
+        groups[i] = g;
+        neighbours[i] = l;
+        *count = ++i;
+    }
+    ok = true;
+#undef FAIL
+done:
+    cJSON_Delete(root);
+    free(text);
+    return ok;
 }
 
 static bool parse_u32(const char *s, uint32_t lo, uint32_t hi, uint32_t *out) {
@@ -492,8 +596,10 @@ static int run_info(const char *path, bool json) {
 int main(int argc, char **argv) {
     glow_pc_settings s = {0};
     s.link_gradients = true; /* --link-subsets gradient: the CLI's default (docs/linker.md, "Link gradients") */
-    static const char *groups[256]; /* --system-group, pointing into argv */
+    static const char *groups[256]; /* --system-group, pointing into argv (or --systems' strings) */
+    static const char *neighbours[256]; /* --systems: each group's declared neighbours, NULL = automatic */
     s.system_groups = groups;
+    const char *systems_file = NULL;
     const char *scene = NULL, *out = NULL, *info = NULL;
     bool json = false, quiet = false, mpi = false;
     for (int i = 1; i < argc; ++i) {
@@ -611,6 +717,10 @@ int main(int argc, char **argv) {
             NEED_VALUE();
             if (s.system_group_count == 256) return usage_error("--system-group: at most 256 groups");
             groups[s.system_group_count++] = v;
+        } else if (!strcmp(a, "--systems")) {
+            NEED_VALUE();
+            if (systems_file) return usage_error("--systems is given twice");
+            systems_file = v;
         } else if (!strcmp(a, "--system-reach")) {
             NEED_VALUE();
             char *end = NULL;
@@ -674,6 +784,19 @@ int main(int argc, char **argv) {
         return usage_error("--sh-links with --system-area: full-SH links to neighbouring systems are not supported");
     if (!out) return usage_error("no output file given (-o OUT.glow)");
     char msg[512];
+    if (systems_file) {
+        if (s.system_group_count) return usage_error("--systems and --system-group: name the systems in one place");
+        if (!(s.system_area > 0.0f)) return usage_error("--systems needs --system-area");
+        if (!load_systems(systems_file, groups, neighbours, &s.system_group_count, msg, sizeof msg)) {
+            fprintf(stderr, "glow-bake: error: %s\n", msg);
+            return 1;
+        }
+        s.system_neighbours = neighbours;
+        if (glow_pc_settings_validate(&s, msg, sizeof msg) != GLOW_OK) { /* names, unknown or repeated ones */
+            fprintf(stderr, "glow-bake: error: %s: %s\n", systems_file, msg);
+            return 1;
+        }
+    }
     if (glow_pc_settings_validate(&s, msg, sizeof msg) != GLOW_OK) return usage_error("%s", msg);
 
     if (mpi && info) return usage_error("--mpi bakes; --info reads one bake file");

@@ -75,6 +75,22 @@ expect 0 "systems, 3 ranks into the same world (nothing to bake)" "${MPI[@]}" -n
 cmp -s "$T/s1/w.json" "$T/s3/w.json" && [ "$(ls "$T/s3" | wc -l)" = $((nsys + 1)) ] && pass "  the same manifest, the same $nsys bakes" \
   || fail "  manifest or files changed: $(ls "$T/s3")"
 
+# systems named by the user with declared neighbours (--systems): every rank reads the file, the same bytes
+NAMED="$(cd "$(dirname "$0")/../.." && pwd)/tests/data/scenes/named-objects.obj"
+cat > "$T/systems.json" <<'JSON'
+{"glow_systems": 1, "systems": [{"name": "houseA", "objects": ["house_a"], "neighbours": []},
+                                {"name": "houseB", "objects": ["house_b"], "neighbours": ["houseA"]}]}
+JSON
+DECL=("$NAMED" --system-area 30 --systems "$T/systems.json" --surfels 1024 --links 16 --lightmap-caches 300 --lightmap-detail 1 --threads 1 -q)
+mkdir -p "$T/d1" "$T/d2"
+expect 0 "declared neighbours (--systems), one process" "$B" "${DECL[@]}" -o "$T/d1/w.json"
+expect 0 "declared neighbours (--systems), 2 ranks" "${MPI[@]}" -np 2 "$B" --mpi "${DECL[@]}" -o "$T/d2/w.json"
+same=1
+dfiles=$(python3 -c "import json,sys; print(' '.join(x['file'] for x in json.load(open(sys.argv[1]))['systems']))" "$T/d1/w.json")
+for f in w.json $dfiles; do cmp -s "$T/d1/$f" "$T/d2/$f" || { same=0; fail "  $f differs"; }; done
+[ "$(echo $dfiles | wc -w)" -ge 3 ] || fail "  expected houseA, houseB and the ground's systems: $dfiles"
+[ $same = 1 ] && pass "  the manifest and the $(echo $dfiles | wc -w) systems' bakes: the same bytes"
+
 # rank 1 dies (SIGKILL) at its first exchange: mpirun stops the job
 out="$T/dead.glow"
 GLOW_BAKE_MPI_FAIL_RANK=1 "${MPI[@]}" -np 2 "$B" --mpi "${ARGS[@]}" -o "$out" >"$T/out" 2>"$T/err"

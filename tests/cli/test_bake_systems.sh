@@ -319,6 +319,76 @@ expect 0 "the same groups the other way round: an incremental re-bake" "$BIN/glo
   --system-area 30 --system-group 'flat=gro*' --system-group houseA=house_a "${BUDGET[@]}" -o "$T/named/w.json"
 grep -q "0 of them baked and 6 unchanged" "$T/out" \
   && pass "  all 6 systems kept" || { fail "  systems re-baked:"; grep systems "$T/out"; }
+# --systems FILE.json: the same groups with declared neighbours. houseB declares none, houseA only flat,
+# flat is automatic; the same groups without declarations (--system-group) link houseB to flat.
+SYS="$T/named/systems.json"
+cat > "$SYS" <<'JSON'
+{"glow_systems": 1,
+ "systems": [
+  {"name": "houseA", "objects": ["house_a"], "neighbours": ["flat"]},
+  {"name": "houseB", "objects": ["house_b"], "neighbours": []},
+  {"name": "flat", "objects": ["gro*"]}
+ ]}
+JSON
+mkdir -p "$T/decl" "$T/auto" "$T/decl2"
+expect 0 "declared neighbours (--systems)" "$BIN/glow-bake" "$NAMED" --system-area 30 --systems "$SYS" "${BUDGET[@]}" \
+  -o "$T/decl/w.json"
+expect 0 "  the same groups, automatic neighbours" "$BIN/glow-bake" "$NAMED" --system-area 30 --system-group houseA=house_a \
+  --system-group houseB=house_b --system-group 'flat=gro*' "${BUDGET[@]}" -o "$T/auto/w.json"
+python3 - "$T/decl/w.json" "$T/auto/w.json" <<'PY' && pass "  houseB links no neighbour (1 automatic), houseA only flat, flat both houses; the manifest names the declarations" || fail "  declared neighbours wrong"
+import json, sys
+d = {x["name"]: x for x in json.load(open(sys.argv[1]))["systems"] if "name" in x}
+a = {x["name"]: x for x in json.load(open(sys.argv[2]))["systems"] if "name" in x}
+assert set(d) == {"houseA", "houseB", "flat"}, d.keys()
+assert d["houseA"]["declared_neighbours"] == ["flat"] and d["houseB"]["declared_neighbours"] == [], d
+assert "declared_neighbours" not in d["flat"] and all("declared_neighbours" not in x for x in a.values()), d
+assert d["houseB"]["dependencies"] == [] and d["houseB"]["proxies"] == 0, d["houseB"]
+assert a["houseB"]["dependencies"] == [a["flat"]["system_key"]] and a["houseB"]["proxies"] > 0, a["houseB"]
+assert d["houseA"]["dependencies"] == [d["flat"]["system_key"]], d["houseA"]
+assert sorted(d["flat"]["dependencies"]) == sorted([d["houseA"]["system_key"], d["houseB"]["system_key"]]), d["flat"]
+assert d["flat"]["file"] == a["flat"]["file"] and d["houseB"]["file"] != a["houseB"]["file"], (d, a)
+PY
+sed 's/"neighbours": \["flat"\]/"neighbours": []/' "$SYS" > "$T/named/systems2.json"
+expect 0 "  houseA's declaration changed: an incremental re-bake" "$BIN/glow-bake" "$NAMED" --system-area 30 \
+  --systems "$T/named/systems2.json" "${BUDGET[@]}" -o "$T/decl/w.json"
+grep -q "systems   3, 1 of them baked and 2 unchanged" "$T/out" && pass "  only houseA baked again (1 of 3)" \
+  || { fail "  systems re-baked:"; grep systems "$T/out"; }
+expect 0 "  the same declarations into an empty world" "$BIN/glow-bake" "$NAMED" --system-area 30 \
+  --systems "$T/named/systems2.json" "${BUDGET[@]}" -o "$T/decl2/w.json"
+same=1
+for f in w.json $(files "$T/decl2/w.json"); do cmp -s "$T/decl/w.json" "$T/decl2/w.json" && cmp -s "$T/decl/$f" "$T/decl2/$f" || { same=0; fail "  $f differs"; }; done
+[ $same = 1 ] && [ "$(ls "$T/decl" | wc -l)" = "$(ls "$T/decl2" | wc -l)" ] && pass "  byte for byte the full bake, no stale file"
+systems_file() { printf '{"glow_systems": 1, "systems": [%s]}' "$1" > "$T/named/s.json"; }
+systems_file '{"name": "a", "objects": ["house_a"], "neighbours": ["c"]}, {"name": "b", "objects": ["house_b"], "neighbours": ["a"]},
+  {"name": "c", "objects": ["gro*"], "neighbours": ["b", "a"]}'
+mkdir -p "$T/cyc"
+expect 0 "declared neighbours in a cycle (a -> c -> b -> a): allowed, light goes both ways" "$BIN/glow-bake" "$NAMED" \
+  --system-area 30 --systems "$T/named/s.json" "${BUDGET[@]}" -o "$T/cyc/w.json"
+err_has "system b: declared neighbour a is beyond its reach"
+bad_systems() { # NAME MESSAGE JSON-SYSTEMS: exit 1, the message names the file, nothing written
+  systems_file "$3"
+  rm -rf "$T/bs" && mkdir -p "$T/bs"
+  expect 1 "$1" "$BIN/glow-bake" "$NAMED" --system-area 30 --systems "$T/named/s.json" "${BUDGET[@]}" -o "$T/bs/w.json"
+  err_has "s.json"; err_has "$2"
+  [ -z "$(ls "$T/bs")" ] && pass "  nothing written" || fail "  left behind: $(ls "$T/bs")"
+}
+bad_systems "--systems: an unknown neighbour" "neighbour 'towr' is no named system" \
+  '{"name": "a", "objects": ["house_a"], "neighbours": ["towr"]}'
+bad_systems "--systems: a system its own neighbour" "names itself" '{"name": "a", "objects": ["house_a"], "neighbours": ["a"]}'
+bad_systems "--systems: a neighbour named twice" "named twice" \
+  '{"name": "a", "objects": ["house_a"], "neighbours": ["b", "b"]}, {"name": "b", "objects": ["house_b"]}'
+bad_systems "--systems: a system named twice" "named twice" '{"name": "a", "objects": ["x"]}, {"name": "a", "objects": ["y"]}'
+bad_systems "--systems: no objects" '"objects" must be' '{"name": "a"}'
+bad_systems "--systems: neighbours not a list" '"neighbours" must be' '{"name": "a", "objects": ["x"], "neighbours": "b"}'
+bad_systems "--systems: not JSON" "line 1: not valid JSON" '{"name": "a" "objects": ["x"]}'
+printf '{"glow_systems": 2, "systems": []}' > "$T/named/s.json"
+expect 1 "--systems: another version" "$BIN/glow-bake" "$NAMED" --system-area 30 --systems "$T/named/s.json" "${BUDGET[@]}" \
+  -o "$T/bs/w.json"; err_has "version 1"
+expect 1 "--systems: no such file" "$BIN/glow-bake" "$NAMED" --system-area 30 --systems "$T/named/none.json" "${BUDGET[@]}" \
+  -o "$T/bs/w.json"; err_has "none.json: cannot read"
+expect 2 "--systems without --system-area" "$BIN/glow-bake" "$NAMED" --systems "$SYS" -o "$T/bs/w.json"; err_has "--system-area"
+expect 2 "--systems with --system-group" "$BIN/glow-bake" "$NAMED" --system-area 30 --systems "$SYS" --system-group a=b \
+  -o "$T/bs/w.json"; err_has "one place"
 expect 0 "a group that matches nothing: warned" "$BIN/glow-bake" "$NAMED" --system-area 500 --system-group none=nothing_* \
   "${BUDGET[@]}" -o "$T/named/n.json"; err_has "no object of the scene matches"
 expect 1 "--system-group on a built-in scene" "$BIN/glow-bake" builtin:pillar-hall --system-area 100 --system-group a=b \

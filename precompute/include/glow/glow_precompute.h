@@ -190,6 +190,17 @@ typedef struct glow_pc_settings {
                                    onto several pages of this size (up to 64, bake format 1.7) rather than
                                    to a lower density; a mesh's own second UV set stays one atlas
                                    (--lightmap-max-size). \since 0.2 */
+    /* with system_groups: each group's declared neighbours, the named systems whose light its caches
+       may link (its dependencies), as "NAME[,NAME...]" of other groups' names, "" for none; NULL (the
+       array, or a group's entry) = automatic: every system within its reach, as for the systems split
+       by area. A declared neighbour is linked only within the reach (system_reach: the distance
+       limit); one beyond it is warned about. Occluders are not declared: every triangle within the
+       reach blocks a system's rays. Dependencies may be mutual or form longer cycles (light goes both
+       ways; a system's tree never depends on its neighbours); a group naming itself, a name that is no
+       group's, or a name given twice is refused (GLOW_ERROR_INVALID_ARGUMENT). glow-bake --systems
+       FILE.json fills this and system_groups (docs/linker.md "Systems named by the user").
+       \since 0.2 */
+    const char *const *system_neighbours;
 } glow_pc_settings;
 
 typedef struct glow_pc_stats {
