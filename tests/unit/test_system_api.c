@@ -1842,6 +1842,38 @@ static void test_bake_presets(void **state) {
     s.quality = (glow_pc_quality)(GLOW_PC_QUALITY_FINE + 1);
     assert_int_equal(glow_pc_settings_validate(&s, msg, sizeof msg), GLOW_ERROR_INVALID_ARGUMENT);
     assert_non_null(strstr(msg, "fine"));
+
+    /* declared neighbours (system_neighbours): other groups' names, once each; cycles allowed */
+    static const char *const groups[3] = {"hall=hall_*", "tower=tower*", "crypt=crypt"};
+    static const struct {
+        const char *nb[3];
+        const char *error; /* NULL: valid */
+    } cases[] = {
+        {{"tower", "hall,crypt", NULL}, NULL},       /* a cycle hall -> tower -> hall, crypt automatic */
+        {{"", "", ""}, NULL},                         /* none at all */
+        {{"tower,crypt", "crypt", "hall"}, NULL},
+        {{"towr", NULL, NULL}, "neighbour 'towr' is no named system"},
+        {{"tower", "tower", NULL}, "'tower' names itself"},
+        {{"tower,tower", NULL, NULL}, "'tower' is named twice"},
+        {{"tower,", NULL, NULL}, "empty neighbour name"},
+        {{",tower", NULL, NULL}, "empty neighbour name"},
+        {{"hal", NULL, NULL}, "'hal' is no named system"},     /* a prefix of a name is no name */
+        {{"hall_", NULL, NULL}, "'hall_' is no named system"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof *cases; ++i) {
+        glow_pc_settings g = {.system_area = 100.0f, .system_groups = groups, .system_group_count = 3,
+                              .system_neighbours = cases[i].nb};
+        msg[0] = 0;
+        const glow_result r = glow_pc_settings_validate(&g, msg, sizeof msg);
+        if (!cases[i].error) {
+            assert_int_equal(r, GLOW_OK);
+        } else {
+            assert_int_equal(r, GLOW_ERROR_INVALID_ARGUMENT);
+            if (!strstr(msg, cases[i].error)) fail_msg("case %zu: '%s' lacks '%s'", i, msg, cases[i].error);
+        }
+    }
+    glow_pc_settings g = {.system_area = 100.0f, .system_neighbours = cases[0].nb}; /* neighbours of no groups */
+    assert_int_equal(glow_pc_settings_validate(&g, msg, sizeof msg), GLOW_ERROR_INVALID_ARGUMENT);
 }
 
 
