@@ -2378,6 +2378,27 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
         }
         full_key[s] = h;
     }
+    if (res == GLOW_OK && dist && dist->will_write) { /* the files any rank may write: the systems not kept */
+        char **wl = calloc(sp.n + 1, sizeof *wl);
+        uint32_t nw = 0;
+        for (uint32_t s = 0; wl && s < sp.n; ++s) {
+            uint64_t key = full_key[s];
+            HASH_VAL(key, src_key[s]);
+            char path[4200];
+            sys_file_path(out_path, set, &sp.parts[s], key, path, sizeof path);
+            const char *base = strrchr(path, '/');
+            if (prev && previous_entry(prev, base ? base + 1 : path, path)) continue; /* kept as it is */
+            if (!(wl[nw++] = strdup(path))) break;
+        }
+        if (!wl || (nw && !wl[nw - 1])) {
+            glow__errorf(log, "%s: out of memory for the list of the world's files", out_path);
+            res = GLOW_ERROR_OUT_OF_MEMORY;
+        } else {
+            dist->will_write(dist->user, (const char *const *)wl, nw);
+        }
+        for (uint32_t i = 0; wl && i < nw; ++i) free(wl[i]);
+        free(wl);
+    }
     /* Pass 2: the systems, each with its neighbours' trees (placed once, kept until the last system
      * that links them) */
     for (uint32_t s = 0; s < sp.n; ++s) {
@@ -2631,6 +2652,7 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
             glow__errorf(log, "%s: out of memory for the world manifest", out_path);
             res = GLOW_ERROR_OUT_OF_MEMORY;
         } else {
+            if (dist && dist->will_write) dist->will_write(dist->user, NULL, 0); /* every system is written */
             res = write_manifest(out_path, text, log);
             cJSON_free(text);
         }

@@ -814,6 +814,7 @@ int main(int argc, char **argv) {
             return 1;
         }
         s.distribution = &dist;
+        glow_bake_mpi_output(out);
         if (dist.rank != 0) quiet = true; /* rank 0 reports progress and the summary */
     }
 #endif

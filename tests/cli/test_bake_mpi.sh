@@ -100,5 +100,32 @@ err_has "rank 1 of 2"
 err_has "rank 0 of 2: stopped: another rank of this MPI bake failed"
 ls "$T"/dead.glow* >/dev/null 2>&1 && fail "  output left behind: $(ls "$T"/dead.glow*)" || pass "  no output, no temporary file"
 
+# a world bake: the ranks write their systems before the manifest. Rank 1 dies at the closing exchange,
+# after every system is written: no part of the new world may stay, and an old world stays whole.
+mkdir -p "$T/dw"
+GLOW_BAKE_MPI_FAIL_RANK=1 "${MPI[@]}" -np 2 "$B" --mpi "${SYS[@]}" -o "$T/dw/w.json" >"$T/out" 2>"$T/err"
+rc=$?
+[ "$rc" != 0 ] && [ "$rc" != 124 ] && pass "a rank dies in a world bake: the job fails (exit $rc)" || fail "a rank dies in a world bake: exit $rc"
+err_has "rank 0 of 2: stopped"
+[ -z "$(ls -A "$T/dw")" ] && pass "  no system file, manifest or temporary left" || fail "  left behind: $(ls -A "$T/dw")"
+cp -p "$T/s1"/* "$T/dw/"
+( cd "$T/dw" && ls -A | sort && md5sum * ) > "$T/dw.before"
+GLOW_BAKE_MPI_FAIL_RANK=1 "${MPI[@]}" -np 2 "$B" --mpi "${SYS[@]}" --seed 7 -o "$T/dw/w.json" >"$T/out" 2>"$T/err"
+rc=$?
+[ "$rc" != 0 ] && [ "$rc" != 124 ] && pass "a rank dies re-baking a world (another seed: every system new) (exit $rc)" \
+  || fail "a rank dies re-baking a world: exit $rc"
+( cd "$T/dw" && ls -A | sort && md5sum * ) > "$T/dw.after"
+cmp -s "$T/dw.before" "$T/dw.after" && pass "  the old world whole: its manifest and $nsys files, nothing added" \
+  || { fail "  the old world changed:"; diff "$T/dw.before" "$T/dw.after" | head -5; }
+# rank 0 dies after it wrote the manifest: rank 1, stopped at the closing barrier, keeps the world
+rm -rf "$T/dw" && mkdir -p "$T/dw"
+GLOW_BAKE_MPI_FAIL_RANK=0 GLOW_BAKE_MPI_FAIL_AT=end "${MPI[@]}" -np 2 "$B" --mpi "${SYS[@]}" -o "$T/dw/w.json" >"$T/out" 2>"$T/err"
+rc=$?
+[ "$rc" != 0 ] && [ "$rc" != 124 ] && pass "rank 0 dies after writing the world (exit $rc)" || fail "rank 0 dies after writing the world: exit $rc"
+same=1
+for f in w.json $sysfiles; do cmp -s "$T/s1/$f" "$T/dw/$f" || { same=0; fail "  $f missing or differs"; }; done
+[ $same = 1 ] && [ "$(ls -A "$T/dw" | wc -l)" = $((nsys + 1)) ] && pass "  the world written stays: its manifest and $nsys files" \
+  || fail "  the world: $(ls -A "$T/dw")"
+
 [ "$fails" = 0 ] && echo "all passed" || echo "$fails failed"
 exit $((fails > 0))

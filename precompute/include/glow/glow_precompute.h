@@ -71,6 +71,14 @@ typedef struct glow_pc_distribution {
        with that code and writes nothing. */
     glow_result (*share)(void *user, void *buf, const size_t *offsets);
     void *user;
+    /* optional, for a world bake (system_area): called on every rank before the first system's bake is
+       written, with every file of the new world that any rank may write (the systems baked or
+       re-indexed now; the unchanged ones keep their files, which have other names), and on the rank
+       that writes the manifest once more with (NULL, 0) just before it writes it. Until then, a
+       launcher that stops this rank because another failed can remove those files (and their
+       "<path>.tmp.<pid>" temporaries) so that a failed job leaves no part of the new world and the
+       old world whole. The list is only valid during the call. \since 0.2 */
+    void (*will_write)(void *user, const char *const *paths, uint32_t count);
 } glow_pc_distribution;
 
 typedef struct glow_pc_settings {
