@@ -38,16 +38,22 @@ cmp -s "$T/one.glow" "$T/mpi2t.glow" && pass "  the same bytes" || fail "  bytes
 
 # a bake split into systems (--system-area): each system's links over the ranks, the same files
 SYS=(builtin:pillar-hall --system-area 100 --surfels 1024 --links 16 --lightmap-caches 300 --lightmap-detail 1 --threads 1 -q)
-mkdir -p "$T/s1" "$T/s2"
-expect 0 "systems, one process" "$B" "${SYS[@]}" -o "$T/s1/w.json"
-expect 0 "systems, 2 ranks" "${MPI[@]}" -np 2 "$B" --mpi "${SYS[@]}" -o "$T/s2/w.json"
-same=1
-sysfiles=$(python3 -c "import json,sys; print(' '.join(x['file'] for x in json.load(open(sys.argv[1]))['systems']))" "$T/s1/w.json")
-for f in w.json $sysfiles; do cmp -s "$T/s1/$f" "$T/s2/$f" || { same=0; fail "  $f differs"; }; done
+# world_twice LABEL A B ARGS...: a world bake into A in one process and into B over 2 ranks, then every
+# file compared; sets $files to the world's system files
+world_twice() {
+  local label=$1 a=$2 b=$3 f same=1; shift 3
+  mkdir -p "$a" "$b"
+  expect 0 "$label, one process" "$B" "$@" -o "$a/w.json"
+  expect 0 "$label, 2 ranks" "${MPI[@]}" -np 2 "$B" --mpi "$@" -o "$b/w.json"
+  files=$(python3 -c "import json,sys; print(' '.join(x['file'] for x in json.load(open(sys.argv[1]))['systems']))" "$a/w.json")
+  for f in w.json $files; do cmp -s "$a/$f" "$b/$f" || { same=0; fail "  $f differs"; }; done
+  [ $same = 1 ] && pass "  the manifest and the $(echo $files | wc -w) systems' bakes: the same bytes"
+}
+world_twice systems "$T/s1" "$T/s2" "${SYS[@]}"
+sysfiles=$files
 nsys=$(echo $sysfiles | wc -w)
 # (this said "= 4" until 2026-11-30, and printed nothing once the hall became 6 systems)
 [ "$nsys" -ge 2 ] || fail "  the hall was not split into systems ($nsys)"
-[ $same = 1 ] && pass "  the manifest and the $nsys systems' bakes: the same bytes"
 mkdir -p "$T/s3"
 expect 0 "systems, 3 ranks (whole systems per rank)" "${MPI[@]}" -np 3 "$B" --mpi "${SYS[@]}" --json -o "$T/s3/w.json"
 cp "$T/out" "$T/s3.json"
@@ -82,14 +88,8 @@ cat > "$T/systems.json" <<'JSON'
                                 {"name": "houseB", "objects": ["house_b"], "neighbours": ["houseA"]}]}
 JSON
 DECL=("$NAMED" --system-area 30 --systems "$T/systems.json" --surfels 1024 --links 16 --lightmap-caches 300 --lightmap-detail 1 --threads 1 -q)
-mkdir -p "$T/d1" "$T/d2"
-expect 0 "declared neighbours (--systems), one process" "$B" "${DECL[@]}" -o "$T/d1/w.json"
-expect 0 "declared neighbours (--systems), 2 ranks" "${MPI[@]}" -np 2 "$B" --mpi "${DECL[@]}" -o "$T/d2/w.json"
-same=1
-dfiles=$(python3 -c "import json,sys; print(' '.join(x['file'] for x in json.load(open(sys.argv[1]))['systems']))" "$T/d1/w.json")
-for f in w.json $dfiles; do cmp -s "$T/d1/$f" "$T/d2/$f" || { same=0; fail "  $f differs"; }; done
-[ "$(echo $dfiles | wc -w)" -ge 3 ] || fail "  expected houseA, houseB and the ground's systems: $dfiles"
-[ $same = 1 ] && pass "  the manifest and the $(echo $dfiles | wc -w) systems' bakes: the same bytes"
+world_twice "declared neighbours (--systems)" "$T/d1" "$T/d2" "${DECL[@]}"
+[ "$(echo $files | wc -w)" -ge 3 ] || fail "  expected houseA, houseB and the ground's systems: $files"
 
 # rank 1 dies (SIGKILL) at its first exchange: mpirun stops the job
 out="$T/dead.glow"
