@@ -2341,7 +2341,7 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
             for (uint32_t y = q; y > 0 && d[y - 1] > d[y]; --y) { const uint32_t t = d[y]; d[y] = d[y - 1]; d[y - 1] = t; }
         dep_count[s] = nd;
         dep_total += nd;
-        if (decl && writer) { /* a declared neighbour not linked: say why */
+        if (decl) { /* a declared neighbour not linked: say why (one that is no system: refused) */
             const char *e = set->system_groups[sp.parts[s].group];
             const int el = (int)(strchr(e, '=') - e);
             for (uint32_t g = 0; g < set->system_group_count; ++g) {
@@ -2352,10 +2352,12 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
                 while (k < sp.n && sp.parts[k].group != (int)g) ++k;
                 bool linked = false;
                 for (uint32_t q = 0; q < nd; ++q) linked |= d[q] == k;
-                if (k == sp.n)
-                    glow__warnf(log, "%s: system %.*s: declared neighbour %.*s is no system (its patterns match no "
-                                "object); no light from it", world->source, el, e, gl, gn);
-                else if (!occ_count[k])
+                if (k == sp.n) {
+                    glow__errorf(log, "%s: system %.*s: declared neighbour %.*s is missing: its patterns match no "
+                                 "object of the scene", world->source, el, e, gl, gn);
+                    res = GLOW_ERROR_INVALID_ARGUMENT;
+                } else if (!writer) {
+                } else if (!occ_count[k])
                     glow__warnf(log, "%s: system %.*s: declared neighbour %.*s is beyond its reach (--system-reach "
                                 "%g of its diagonal); no light from it", world->source, el, e, gl, gn, (double)W.reach);
                 else if (!linked)

@@ -831,6 +831,8 @@ int main(int argc, char **argv) {
                     stats.error[0] ? stats.error : glow_result_string(r));
         else
             fprintf(stderr, "glow-bake: error: %s\n", stats.error[0] ? stats.error : glow_result_string(r));
+        if (systems_file && r == GLOW_ERROR_INVALID_ARGUMENT)
+            fprintf(stderr, "glow-bake: (the systems and their neighbours are declared in %s)\n", systems_file);
 #ifdef GLOW_HAVE_MPI
         if (mpi) glow_bake_mpi_end(1);
 #endif

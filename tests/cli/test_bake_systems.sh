@@ -374,6 +374,8 @@ bad_systems() { # NAME MESSAGE JSON-SYSTEMS: exit 1, the message names the file,
 }
 bad_systems "--systems: an unknown neighbour" "neighbour 'towr' is no named system" \
   '{"name": "a", "objects": ["house_a"], "neighbours": ["towr"]}'
+bad_systems "--systems: a declared neighbour missing from the scene" "declared neighbour b is missing" \
+  '{"name": "a", "objects": ["house_a"], "neighbours": ["b"]}, {"name": "b", "objects": ["no_such_object"]}'
 bad_systems "--systems: a system its own neighbour" "names itself" '{"name": "a", "objects": ["house_a"], "neighbours": ["a"]}'
 bad_systems "--systems: a neighbour named twice" "named twice" \
   '{"name": "a", "objects": ["house_a"], "neighbours": ["b", "b"]}, {"name": "b", "objects": ["house_b"]}'
