@@ -1723,6 +1723,13 @@ static void sys_file_path(const char *out_path, const glow_pc_settings *set, con
     beside(out_path, name, path, n);
 }
 
+/* A system's file key: its content key and its triangles' indices in the file (the key in its file's
+ * name; the files a distributed bake may write are listed by it before they are baked) */
+static uint64_t sys_file_key(uint64_t content, uint64_t sources) {
+    HASH_VAL(content, sources);
+    return content;
+}
+
 /* forward: sys_tree_make and sys_tree_read are below, with the trees' merge */
 static bool sys_tree_make(const sys_base *b, bool coarsen, sys_tree *t);
 static bool sys_tree_read(const char *path, uint64_t key, sys_tree *t);
@@ -2384,8 +2391,7 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
         char **wl = calloc(sp.n + 1, sizeof *wl);
         uint32_t nw = 0;
         for (uint32_t s = 0; wl && s < sp.n; ++s) {
-            uint64_t key = full_key[s];
-            HASH_VAL(key, src_key[s]);
+            const uint64_t key = sys_file_key(full_key[s], src_key[s]);
             char path[4200];
             sys_file_path(out_path, set, &sp.parts[s], key, path, sizeof path);
             const char *base = strrchr(path, '/');
@@ -2414,8 +2420,7 @@ static glow_result bake_systems(const glow_pc_settings *set, const preset *p, co
         const sys_part *part = &sp.parts[s];
         const uint32_t *d = deps + (size_t)s * dep_cap, nd = dep_count[s];
         /* the file key: its content (full_key) and its triangles' indices in the file */
-        uint64_t key = full_key[s];
-        HASH_VAL(key, src_key[s]);
+        const uint64_t key = sys_file_key(full_key[s], src_key[s]);
         /* STEM.sDEPTH-PATH-KEY.glow beside the manifest, STEM: out_path less a ".json" or ".glow" ending */
         char path[4200], keyhex[20], ownhex[20], contenthex[20];
         snprintf(keyhex, sizeof keyhex, "%016llx", (unsigned long long)key);
